@@ -1,0 +1,111 @@
+"""Plane-strain linear elasticity of the two bodies, the way a DOLFINx demo writes it.
+
+Small strain, isotropic, each body with its own (E, nu):
+
+    sigma(u) = lambda tr(eps(u)) I + 2 mu eps(u),   eps(u) = sym(grad u),
+    a(u, v)  = int_Omega sigma(u) : eps(v) dx          (per unit thickness, N/m)
+
+Plane strain keeps eps_zz = 0, so sigma_zz = nu (sigma_xx + sigma_yy); the von Mises stress
+includes it. The stiffness is linear and assembled once; the contact terms are added to it
+at every Newton iteration.
+"""
+
+import dolfinx_solver  # noqa: F401  (must precede dolfinx)
+import dolfinx
+import dolfinx.fem.petsc
+import numpy as np
+import ufl
+from petsc4py import PETSc
+
+from meshes.model import BORE_SURFACE, HOUSING, HOUSING_EDGE, HUB, PIN, PIN_SURFACE
+
+
+def lame(E: float, nu: float) -> tuple[float, float]:
+    """Lame constants (Pa): lambda = E nu / ((1 + nu)(1 - 2 nu)), mu = E / (2 (1 + nu))."""
+    return E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+
+
+def piecewise(mesh, cell_tags, values: dict[int, float]) -> dolfinx.fem.Function:
+    """A DG0 function equal to values[tag] on the cells tagged `tag`."""
+    Q = dolfinx.fem.functionspace(mesh, ("DG", 0))
+    f = dolfinx.fem.Function(Q)
+    for tag, value in values.items():
+        f.x.array[cell_tags.find(tag)] = value
+    f.x.scatter_forward()
+    return f
+
+
+class Elasticity:
+    """Space, stiffness matrices and boundary dofs of the pin-in-bore model."""
+
+    def __init__(self, mesh, cell_tags, facet_tags, pin_material, bore_material):
+        self.mesh = mesh
+        self.V = V = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (2,)))
+        lam_pin, mu_pin = lame(pin_material.E, pin_material.nu)
+        lam_bore, mu_bore = lame(bore_material.E, bore_material.nu)
+        self.lmbda = piecewise(mesh, cell_tags, {PIN: lam_pin, HOUSING: lam_bore})
+        self.mu = piecewise(mesh, cell_tags, {PIN: mu_pin, HOUSING: mu_bore})
+
+        u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+        self.a = dolfinx.fem.form(ufl.inner(self.sigma(u), self.epsilon(v)) * ufl.dx)
+
+        fdim = mesh.topology.dim - 1
+        mesh.topology.create_connectivity(fdim, mesh.topology.dim)
+        self.dofs = {name: dolfinx.fem.locate_dofs_topological(V, fdim, facet_tags.find(tag))
+                     for name, tag in (("hub", HUB), ("housing_edge", HOUSING_EDGE),
+                                       ("pin_surface", PIN_SURFACE), ("bore_surface", BORE_SURFACE))}
+        self.pin_nodes = dolfinx.fem.locate_dofs_topological(V, mesh.topology.dim, cell_tags.find(PIN))
+        self.hub_displacement = dolfinx.fem.Constant(mesh, np.zeros(2))
+        self.bcs = [dolfinx.fem.dirichletbc(self.hub_displacement, self.dofs["hub"], V),
+                    dolfinx.fem.dirichletbc(np.zeros(2), self.dofs["housing_edge"], V)]
+
+        # K: full stiffness, for residuals and reactions. K_bc: rows and columns of prescribed
+        # dofs replaced by the identity, the Jacobian of the constrained problem.
+        self.K = dolfinx.fem.petsc.assemble_matrix(self.a)
+        self.K.assemble()
+        self.K_bc = dolfinx.fem.petsc.assemble_matrix(self.a, bcs=self.bcs)
+        self.K_bc.assemble()
+
+    def epsilon(self, u):
+        return ufl.sym(ufl.grad(u))
+
+    def sigma(self, u):
+        return self.lmbda * ufl.tr(self.epsilon(u)) * ufl.Identity(2) + 2 * self.mu * self.epsilon(u)
+
+    def von_mises(self, u) -> ufl.core.expr.Expr:
+        """sqrt(3/2 s:s) of the plane-strain stress, with sigma_zz = nu (sigma_xx + sigma_yy)."""
+        s2 = self.sigma(u)
+        nu = self.lmbda / (2 * (self.lmbda + self.mu))
+        s_zz = nu * ufl.tr(s2)
+        mean = (ufl.tr(s2) + s_zz) / 3
+        dev2 = s2 - mean * ufl.Identity(2)
+        return ufl.sqrt(1.5 * (ufl.inner(dev2, dev2) + (s_zz - mean) ** 2))
+
+    @property
+    def num_dofs(self) -> int:
+        imap = self.V.dofmap.index_map
+        return imap.size_global * self.V.dofmap.index_map_bs
+
+    def set_boundary_values(self, x: PETSc.Vec, hub_displacement) -> None:
+        """Write the prescribed values (hub translation, clamped edge) into x."""
+        self.hub_displacement.value[:] = hub_displacement
+        dolfinx.fem.petsc.set_bc(x, self.bcs)
+
+    def pin_translation(self, shift) -> PETSc.Vec:
+        """A vector that translates every pin node by `shift` and leaves the housing at rest."""
+        f = dolfinx.fem.Function(self.V)
+        f.x.array.reshape(-1, 2)[self.pin_nodes] = shift
+        return f.x.petsc_vec.copy()
+
+    def internal_force(self, x: PETSc.Vec, out: PETSc.Vec) -> None:
+        """out = K x: the elastic internal forces (N/m per dof)."""
+        self.K.mult(x, out)
+
+    def hub_reaction(self, x: PETSc.Vec, work: PETSc.Vec) -> np.ndarray:
+        """Force (N/m) the hub exerts on the pin, summed over its dofs: (K x) at the hub."""
+        self.K.mult(x, work)
+        local = work.getArray(readonly=True)
+        bs = self.V.dofmap.index_map_bs
+        owned = self.dofs["hub"][self.dofs["hub"] < self.V.dofmap.index_map.size_local]
+        force = np.array([local[bs * owned + i].sum() for i in range(2)])
+        return self.mesh.comm.allreduce(force)

@@ -1,0 +1,56 @@
+"""From a scene to the DOLFINx objects: mesh, elasticity, contact, load stepper."""
+
+import dolfinx_solver  # noqa: F401  (must precede dolfinx)
+import dolfinx.io.gmsh
+from mpi4py import MPI
+
+from fem.contact import PinBoreContact
+from fem.elasticity import Elasticity
+from fem.scene import FemScene
+from fem.solver import LoadStepper
+from meshes import pin_in_bore
+from meshes.sizing import estimate_sizing
+
+DEFAULT_PENALTY_FACTOR = 100.0
+DEFAULT_GAP_TOLERANCE = 1e-4  # fraction of max_approach
+
+
+def sizing_of(scene: FemScene):
+    g = scene.geometry
+    return estimate_sizing(g.bore_radius, g.clearance, scene.effective_modulus,
+                           scene.load.max_approach, scene.mesh.contact_size, scene.mesh.grading)
+
+
+def mesh_of(scene: FemScene, comm=MPI.COMM_WORLD):
+    """Build the gmsh model on rank 0 and distribute it: (MeshData, Sizing)."""
+    sizing = sizing_of(scene)
+    with pin_in_bore.session():
+        if comm.rank == 0:
+            pin_in_bore.build(scene.geometry, sizing, scene.load.direction_deg, scene.mesh.layers)
+        data = dolfinx.io.gmsh.model_to_mesh(pin_in_bore.gmsh.model, comm, 0, gdim=scene.geometry.dim)
+    return data, sizing
+
+
+def penalty_of(scene: FemScene, contact_size: float) -> float:
+    """Penalty stiffness eps = factor * E* / h (Pa/m), h the element size on the contact arc."""
+    factor = scene.contact.penalty_factor or DEFAULT_PENALTY_FACTOR
+    return factor * scene.effective_modulus / contact_size
+
+
+def build(scene: FemScene, comm=MPI.COMM_WORLD):
+    """Everything needed to solve the scene: (stepper, elasticity, contact, sizing, mesh data)."""
+    data, sizing = mesh_of(scene, comm)
+    el = Elasticity(data.mesh, data.cell_tags, data.facet_tags,
+                    scene.materials.pin, scene.materials.bore)
+    owned = el.V.dofmap.index_map.size_local
+    surface = [d[d < owned] for d in (el.dofs["pin_surface"], el.dofs["bore_surface"])]
+    contact = PinBoreContact(el.V, *surface, scene.geometry.bore_radius,
+                             penalty_of(scene, sizing.contact_size), el.K.createVecRight())
+    tolerance = scene.contact.gap_tolerance or DEFAULT_GAP_TOLERANCE * scene.load.max_approach
+    stepper = LoadStepper(el, contact, clearance=scene.geometry.clearance,
+                          direction=scene.load.direction, method=scene.contact.method,
+                          gap_tolerance=tolerance, newton_max_it=scene.solver.newton_max_it,
+                          uzawa_max_it=scene.solver.uzawa_max_it,
+                          max_cutbacks=scene.solver.max_cutbacks,
+                          force_scale=scene.effective_modulus * scene.load.max_approach)
+    return stepper, el, contact, sizing, data

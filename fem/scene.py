@@ -1,0 +1,92 @@
+"""The FE scene (`kind = "fem"`): geometry, materials, contact, load, mesh, solver, output."""
+
+import math
+from typing import Literal
+
+import pydantic
+
+from meshes.model import Geometry, MeshOptions
+from pinbore.scene import Strict
+
+
+class Material(Strict):
+    """Linear elastic, isotropic."""
+
+    E: float = pydantic.Field(gt=0, description="Young's modulus (Pa)")
+    nu: float = pydantic.Field(gt=-1, lt=0.5, description="Poisson's ratio")
+
+
+class Materials(Strict):
+    pin: Material
+    bore: Material
+
+
+class Contact(Strict):
+    """Unilateral contact between the pin surface and the bore surface.
+
+    penalty_factor scales the penalty stiffness E*/h (h: element size on the contact arc).
+    gap_tolerance (m) is the largest penetration the augmented Lagrangian accepts.
+    """
+
+    method: Literal["penalty", "augmented-lagrangian"]
+    friction: float = pydantic.Field(ge=0)
+    penalty_factor: float | None = pydantic.Field(default=None, gt=0)
+    gap_tolerance: float | None = pydantic.Field(default=None, gt=0)
+
+    @pydantic.model_validator(mode="after")
+    def _supported(self):
+        if self.friction > 0:
+            raise ValueError("friction > 0 is not supported yet (frictional contact is issue 3)")
+        if self.gap_tolerance is not None and self.method != "augmented-lagrangian":
+            raise ValueError("gap_tolerance applies to method = \"augmented-lagrangian\" only")
+        return self
+
+
+class Load(Strict):
+    """The hub moves the clearance through free space, then pushes max_approach further."""
+
+    max_approach: float = pydantic.Field(gt=0, description="hub displacement beyond first touch (m)")
+    steps: int = pydantic.Field(ge=1)
+    direction_deg: float = pydantic.Field(ge=-360, le=360)
+
+    @property
+    def direction(self) -> tuple[float, float]:
+        a = math.radians(self.direction_deg)
+        return (math.cos(a), math.sin(a))
+
+
+class Solver(Strict):
+    newton_max_it: int = pydantic.Field(default=25, ge=1)
+    max_cutbacks: int = pydantic.Field(default=5, ge=0)
+    uzawa_max_it: int = pydantic.Field(default=25, ge=1)
+
+
+class Output(Strict):
+    fields: bool = False
+    picture: bool = True
+
+
+class FemScene(Strict):
+    kind: Literal["fem"]
+    geometry: Geometry
+    materials: Materials
+    contact: Contact
+    load: Load
+    mesh: MeshOptions = MeshOptions()
+    solver: Solver = Solver()
+    output: Output = Output()
+
+    @pydantic.model_validator(mode="after")
+    def _consistent(self):
+        wall = self.geometry.pin_radius - self.geometry.hub_radius
+        if self.mesh.contact_size is not None and self.mesh.contact_size >= wall:
+            raise ValueError("mesh.contact_size must be smaller than pin_radius - hub_radius")
+        if self.load.max_approach >= self.geometry.pin_radius - self.geometry.hub_radius:
+            raise ValueError("load.max_approach must be smaller than the pin wall (small strain)")
+        return self
+
+    @property
+    def effective_modulus(self) -> float:
+        """E* with 1/E* = (1-nu_pin^2)/E_pin + (1-nu_bore^2)/E_bore (Pa), plane strain."""
+        pin, bore = self.materials.pin, self.materials.bore
+        return 1.0 / ((1 - pin.nu**2) / pin.E + (1 - bore.nu**2) / bore.E)

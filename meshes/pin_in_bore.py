@@ -1,0 +1,121 @@
+"""Gmsh models of a pin in a bore.
+
+Geometry (2D, plane strain; 3D: the same section extruded over `length` along z):
+
+    housing: annulus  bore_radius  < r < housing_radius   (outer edge clamped)
+    pin:     annulus  hub_radius   < r < pin_radius       (inner edge = rigid hub)
+
+The two bodies do not touch: the clearance c = bore_radius - pin_radius separates them.
+The mesh is built in a frame where the load points along -y, so that the contact arc is
+centred on the angle -90 deg, and then rotated rigidly into the scene's load direction.
+Rotating the finished mesh keeps scenes that differ only in load direction exact rotations
+of each other.
+"""
+
+import contextlib
+import math
+
+import gmsh
+import numpy as np
+
+from meshes.model import (BORE_SURFACE, HOUSING, HOUSING_EDGE, HOUSING_ENDS, HUB, PIN,
+                          PIN_ENDS, PIN_SURFACE)
+from meshes.sizing import Sizing
+
+CANONICAL_DIRECTION_DEG = -90.0
+
+
+@contextlib.contextmanager
+def session():
+    """A quiet gmsh session (errors only), finalized however the block ends."""
+    gmsh.initialize(interruptible=False)
+    gmsh.option.setNumber("General.Verbosity", 1)
+    try:
+        yield
+    finally:
+        gmsh.finalize()
+
+
+def size_field(geometry, sizing: Sizing):
+    """Element size h(x, y): fine on the contact arc, growing linearly with the distance."""
+    radius = 0.5 * (geometry.pin_radius + geometry.bore_radius)
+    centre = math.radians(CANONICAL_DIRECTION_DEG)
+    arc_ends = [(radius * math.cos(centre + s * sizing.arc_half_angle),
+                 radius * math.sin(centre + s * sizing.arc_half_angle)) for s in (-1, 1)]
+    far = radius * math.pi / 24  # size on the circles away from the arc
+    wall = geometry.pin_radius - geometry.hub_radius
+
+    def h(x, y):
+        r = math.hypot(x, y)
+        offset = abs(math.remainder(math.atan2(y, x) - centre, 2 * math.pi))
+        if offset <= sizing.arc_half_angle:
+            distance = abs(r - radius)
+        else:
+            distance = min(math.hypot(x - ex, y - ey) for ex, ey in arc_ends)
+        size = min(sizing.contact_size + sizing.grading * distance,
+                   far + sizing.grading * abs(r - radius))
+        return min(size, wall / 3) if r < radius else size
+
+    return h
+
+
+def build(geometry, sizing: Sizing, direction_deg: float, layers: int | None = None) -> None:
+    """Build and mesh the model in the current gmsh session (see `session`).
+
+    3D: the section is extruded into `layers` equal layers along z (default 10).
+    """
+    gmsh.model.add("pin_in_bore")
+    occ = gmsh.model.occ
+    pin = occ.cut([(2, occ.addDisk(0, 0, 0, geometry.pin_radius, geometry.pin_radius))],
+                  [(2, occ.addDisk(0, 0, 0, geometry.hub_radius, geometry.hub_radius))])[0]
+    housing = occ.cut([(2, occ.addDisk(0, 0, 0, geometry.housing_radius, geometry.housing_radius))],
+                      [(2, occ.addDisk(0, 0, 0, geometry.bore_radius, geometry.bore_radius))])[0]
+    if geometry.dim == 3:
+        n = layers or 10
+        pin = [e for e in occ.extrude(pin, 0, 0, geometry.length, [n]) if e[0] == 3]
+        housing = [e for e in occ.extrude(housing, 0, 0, geometry.length, [n]) if e[0] == 3]
+    occ.synchronize()
+    _tag_groups(geometry, pin, housing)
+
+    h = size_field(geometry, sizing)
+    gmsh.model.mesh.setSizeCallback(lambda dim, tag, x, y, z, lc: h(x, y))
+    for option, value in (("Mesh.MeshSizeExtendFromBoundary", 0), ("Mesh.MeshSizeFromPoints", 0),
+                          ("Mesh.MeshSizeFromCurvature", 0), ("Mesh.Algorithm", 6)):
+        gmsh.option.setNumber(option, value)
+    gmsh.model.mesh.generate(geometry.dim)
+    _rotate_mesh(math.radians(direction_deg - CANONICAL_DIRECTION_DEG))
+
+
+def _tag_groups(geometry, pin, housing) -> None:
+    """Physical groups: the two bodies and their named boundaries, found by their radius."""
+    dim = geometry.dim
+    gmsh.model.addPhysicalGroup(dim, [t for _, t in pin], PIN, "pin")
+    gmsh.model.addPhysicalGroup(dim, [t for _, t in housing], HOUSING, "housing")
+    by_radius = {HUB: geometry.hub_radius, PIN_SURFACE: geometry.pin_radius,
+                 BORE_SURFACE: geometry.bore_radius, HOUSING_EDGE: geometry.housing_radius}
+    groups = {tag: [] for tag in by_radius} | {PIN_ENDS: [], HOUSING_ENDS: []}
+    for _, tag in gmsh.model.getEntities(dim - 1):
+        if dim == 3 and gmsh.model.getType(2, tag) == "Plane":
+            outer = gmsh.model.getBoundingBox(2, tag)[3]
+            split = 0.5 * (geometry.bore_radius + geometry.housing_radius)
+            groups[PIN_ENDS if outer < split else HOUSING_ENDS].append(tag)
+            continue
+        radius = math.hypot(*_point_on(dim - 1, tag)[:2])
+        groups[min(by_radius, key=lambda g: abs(by_radius[g] - radius))].append(tag)
+    names = {HUB: "hub", PIN_SURFACE: "pin_surface", BORE_SURFACE: "bore_surface",
+             HOUSING_EDGE: "housing_edge", PIN_ENDS: "pin_ends", HOUSING_ENDS: "housing_ends"}
+    for group, tags in groups.items():
+        if tags:
+            gmsh.model.addPhysicalGroup(dim - 1, tags, group, names[group])
+
+
+def _point_on(dim: int, tag: int) -> np.ndarray:
+    """A point of the entity, at the middle of its parameter range (exact, unlike a bbox)."""
+    low, high = gmsh.model.getParametrizationBounds(dim, tag)
+    return gmsh.model.getValue(dim, tag, 0.5 * (np.asarray(low) + np.asarray(high)))
+
+
+def _rotate_mesh(angle: float) -> None:
+    """Rotate every mesh node about the z axis by `angle` (rad)."""
+    c, s = math.cos(angle), math.sin(angle)
+    gmsh.model.mesh.affineTransform([c, -s, 0, 0, s, c, 0, 0, 0, 0, 1, 0])

@@ -1,0 +1,57 @@
+"""Reading scene files: TOML in SI units, validated into typed models.
+
+Every scene model derives from `Strict`: unknown keys are errors, missing keys are errors,
+and a broken rule is reported as one line `<file>: <key>: <rule>`.
+"""
+
+import tomllib
+from pathlib import Path
+
+import pydantic
+
+from pinbore.errors import InputError
+
+
+class Strict(pydantic.BaseModel):
+    """Base of every scene table: no unknown keys, no silent type coercion, immutable."""
+
+    model_config = pydantic.ConfigDict(extra="forbid", strict=True, frozen=True)
+
+
+def read_toml(path: str | Path) -> dict:
+    """The parsed TOML file, or an InputError naming the file and the problem."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as err:
+        raise InputError(f"{path}: cannot read scene file ({err.strerror})") from None
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise InputError(f"{path}: not valid TOML ({err})") from None
+
+
+def validate(model: type[pydantic.BaseModel], data: dict, source: str) -> pydantic.BaseModel:
+    """`model` built from `data`; the first validation error becomes one InputError line."""
+    try:
+        return model.model_validate(data)
+    except pydantic.ValidationError as err:
+        first = err.errors()[0]
+        key = ".".join(str(part) for part in first["loc"]) or "(scene)"
+        raise InputError(f"{source}: {key}: {_rule(first)}") from None
+
+
+def _rule(error: dict) -> str:
+    """Pydantic's message, phrased as the rule that was broken."""
+    kind = error["type"]
+    if kind == "missing":
+        return "required key is missing"
+    if kind == "extra_forbidden":
+        return "unknown key"
+    message = error["msg"]
+    return message.removeprefix("Value error, ")
+
+
+def load(model: type[pydantic.BaseModel], path: str | Path) -> pydantic.BaseModel:
+    """Read and validate a scene file."""
+    return validate(model, read_toml(path), str(path))
