@@ -106,8 +106,11 @@ class LoadStepper:
         self.contact.add_tangent(x, J)
         J.assemble()
 
-    def run(self, approaches, progress=None) -> Run:
-        """Solve for each approach in turn (m, increasing); cut back and retry on failure."""
+    def run(self, approaches, progress=None, on_step=None) -> Run:
+        """Solve for each approach in turn (m, increasing); cut back and retry on failure.
+
+        on_step(x, pressure, approach) is called after every converged step.
+        """
         run = Run()
         touch = self.el.pin_translation(self.clearance * self.direction)  # exact: no force yet
         history = [(0.0, touch, np.zeros_like(self.contact.lam))]
@@ -116,6 +119,8 @@ class LoadStepper:
             outcome = self._attempt(history, target)
             if isinstance(outcome, StepResult):
                 run.steps.append(outcome)
+                if on_step is not None:
+                    on_step(self.x, outcome.contact.pressure, target)
                 history = history[-1:] + [(target, self.x.copy(), self.contact.lam.copy())]
                 if target == approaches[target_index]:
                     target_index += 1
@@ -129,6 +134,8 @@ class LoadStepper:
             if cuts > self.max_cutbacks:
                 run.stop = Stop(target, f"{outcome}; gave up after {self.max_cutbacks} cutbacks "
                                         f"at approach {target:.6g} m")
+                history[-1][1].copy(self.x)  # leave the last converged state in x
+                self.contact.lam = history[-1][2]
                 break
             target = 0.5 * (history[-1][0] + target)
         return run

@@ -28,13 +28,13 @@ def preview_2d(path, geometry, direction_deg: float, zoom_half_angle: float) -> 
              ("contact arc", r * max(np.sin(min(zoom_half_angle, np.pi / 2)), 0.02))]
     for ax, (title, half) in zip(axes, views):
         centre = (0.0, 0.0) if half > r else (r * np.cos(a), r * np.sin(a))
-        ax.triplot(xy[:, 0], xy[:, 1], triangles, lw=0.25, color="0.2")
-        ax.set_xlim(centre[0] - half, centre[0] + half)
-        ax.set_ylim(centre[1] - half, centre[1] + half)
+        ax.triplot(1e3 * xy[:, 0], 1e3 * xy[:, 1], triangles, lw=0.25, color="0.2")
+        ax.set_xlim(1e3 * (centre[0] - half), 1e3 * (centre[0] + half))
+        ax.set_ylim(1e3 * (centre[1] - half), 1e3 * (centre[1] + half))
         ax.set_aspect("equal")
         ax.set_title(title)
-        ax.set_xlabel("x (m)")
-    axes[0].set_ylabel("y (m)")
+        ax.set_xlabel("x (mm)")
+    axes[0].set_ylabel("y (mm)")
     fig.suptitle(f"{triangles.shape[0]} triangles, {xy.shape[0]} nodes; load at {direction_deg:g} deg")
     fig.tight_layout()
     fig.savefig(path, dpi=110)

@@ -4,12 +4,13 @@ pinbore grades the mesh so that it is fine on the contact arc and coarse elsewhe
 is not known before solving, so it is estimated from the scene, generously, and used only to
 place elements (never in a result):
 
-1. force per length at the largest approach, from the Liu et al. (2007) elastic-foundation
-   law  P = (pi/2) E* d sqrt(d / (2 (c + d)));
+1. force per length at an approach d, from the Liu et al. (2007) elastic-foundation law
+   P = (pi/2) E* d sqrt(d / (2 (c + d)));
 2. contact half-angle from the Persson conformal solution
    P / (E* c) = 2 pi b^2 (1 + b^2) / (2 - ln(1 + b^2) - 2 b^4),  b = tan(eps/2);
-3. the refined arc covers 1.5 eps + 5 deg, and the element size resolves the contact
-   half-width with about 25 elements but never coarser than 0.5 deg of arc.
+3. the refined arc covers 1.5 eps + 5 deg at the largest approach; the element size resolves
+   the contact half-width at a tenth of the largest approach with 20 elements, and is never
+   coarser than 0.5 deg of arc.
 """
 
 import math
@@ -45,10 +46,13 @@ def persson_half_angle(load: float) -> float:
 
 def estimate_sizing(radius, clearance, e_star, max_approach, contact_size=None, grading=0.25):
     """Sizing for a pin of `radius` in a bore with `clearance`, pushed `max_approach` deep."""
-    d = max_approach
-    force = 0.5 * math.pi * e_star * d * math.sqrt(d / (2 * (clearance + d)))
-    eps = persson_half_angle(force / (e_star * clearance))
+    def half_angle(d):
+        force = 0.5 * math.pi * e_star * d * math.sqrt(d / (2 * (clearance + d)))
+        return persson_half_angle(force / (e_star * clearance))
+
     if contact_size is None:
-        contact_size = radius * min(math.sin(eps) / 25, math.radians(0.5))
-    arc = min(math.radians(95), 1.5 * eps + math.radians(5) + 4 * contact_size / radius)
+        contact_size = radius * min(math.sin(half_angle(0.1 * max_approach)) / 20,
+                                    math.radians(0.5))
+    arc = min(math.radians(95),
+              1.5 * half_angle(max_approach) + math.radians(5) + 4 * contact_size / radius)
     return Sizing(contact_size, arc, grading)

@@ -1,0 +1,69 @@
+# pinbore: `make` sets up .venv and runs the default scenes through to the report;
+# `make test` runs the test suite. `make help` lists every target.
+
+SHELL := /bin/bash
+VENV := .venv
+PY := $(VENV)/bin/python
+PINBORE := $(VENV)/bin/pinbore
+STAMP := $(VENV)/.installed
+NP ?= 1
+
+# Python 3.12 (DOLFINx wheels need >= 3.12): the first candidate that runs and is 3.12
+# (a pyenv shim on PATH may not run), from PATH, then the pyenv installs, newest first.
+PYTHON312 ?= $(shell for p in $$(command -v python3.12) \
+                 $$(ls -d $(HOME)/.pyenv/versions/3.12.*/bin/python3.12 2>/dev/null | sort -rV) \
+                 /usr/local/bin/python3.12 /usr/bin/python3.12; do \
+               "$$p" -c 'import sys; sys.exit(sys.version_info[:2] != (3, 12))' 2>/dev/null \
+               && { echo "$$p"; break; }; done)
+
+FEM_SCENES := $(basename $(notdir $(wildcard scenes/fem/*.toml)))
+FEM_CURVES := $(FEM_SCENES:%=build/fem/%/curve.csv)
+MESHES := $(FEM_SCENES:%=build/mesh/%/mesh.msh)
+STAGE_CODE := $(wildcard pinbore/*.py meshes/*.py fem/*.py)
+MPIEXEC := $(if $(filter-out 1,$(NP)),$(VENV)/bin/mpiexec -n $(NP))
+
+.PHONY: all venv mesh fem report bench test test-slow clean help
+.DELETE_ON_ERROR:
+
+all: report ## set up .venv, run the default scenes, build the report (the main job)
+
+help: ## list the targets
+	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-10s %s\n", $$1, $$2}'
+	@echo "  variables: NP=N runs FE scenes on N MPI ranks (make fem NP=2)"
+
+venv: $(STAMP) ## create .venv with Python 3.12 and the pinned dependencies
+
+$(STAMP): requirements.lock pyproject.toml
+	@test -n "$(PYTHON312)" || { echo "make: Python 3.12 not found (PATH or ~/.pyenv/versions/3.12.*); set PYTHON312=/path/to/python3.12" >&2; exit 2; }
+	$(PYTHON312) -m venv $(VENV)
+	$(VENV)/bin/pip install --quiet --disable-pip-version-check -r requirements.lock
+	$(VENV)/bin/pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e .
+	touch $@
+
+mesh: $(MESHES) ## build the meshes of the default FE scenes (build/mesh/<scene>/)
+
+build/mesh/%/mesh.msh: scenes/fem/%.toml $(STAGE_CODE) $(STAMP)
+	$(PINBORE) mesh $< --out build/mesh/$*
+
+fem: $(FEM_CURVES) ## solve the default FE scenes (build/fem/<scene>/)
+
+build/fem/%/curve.csv: scenes/fem/%.toml $(STAGE_CODE) $(STAMP)
+	$(MPIEXEC) $(PINBORE) fem $< --out build/fem/$*
+
+report: build/report/index.html ## build build/report/index.html from the results
+
+build/report/index.html: $(FEM_CURVES) $(MESHES) $(wildcard bench/*.csv) $(STAGE_CODE) $(STAMP)
+	$(PINBORE) report --build build --out build/report
+	@echo "report: $(abspath $@)"
+
+bench: $(STAMP) ## run the benchmarks: bench/*.csv and plots
+	$(PY) bench/fem2d.py --out bench
+
+test: $(STAMP) ## run the test suite (what CI runs)
+	$(PY) -m pytest -n 2 -m "not slow" tests
+
+test-slow: $(STAMP) ## run the long tests too
+	$(PY) -m pytest -n 2 tests
+
+clean: ## remove build/ (keeps .venv)
+	rm -rf build

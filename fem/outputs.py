@@ -1,0 +1,146 @@
+"""Files of an FE run: curve.csv, pressure.csv, result.json, fields (XDMF) and a picture."""
+
+import csv
+import json
+from pathlib import Path
+
+import dolfinx_solver  # noqa: F401  (must precede dolfinx)
+import dolfinx
+import dolfinx.io
+import matplotlib
+import numpy as np
+
+from fem.post import angle_from, half_angle
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+CURVE_COLUMNS = ["step", "approach_m", "force_per_length_N_per_m", "half_angle_deg",
+                 "newton_iterations", "uzawa_iterations", "gap_violation_m"]
+
+
+def curve_rows(run, direction_deg):
+    for i, step in enumerate(run.steps, start=1):
+        alpha = angle_from(direction_deg, step.contact.angle)
+        yield [i, step.approach, step.force, np.degrees(half_angle(alpha, step.contact.pressure)),
+               step.newton_iterations, step.uzawa_iterations, step.gap_violation]
+
+
+def write_curve(path: Path, run, direction_deg) -> None:
+    with open(path, "w", newline="") as f:
+        out = csv.writer(f)
+        out.writerow(CURVE_COLUMNS)
+        for row in curve_rows(run, direction_deg):
+            out.writerow([row[0], f"{row[1]:.9e}", f"{row[2]:.9e}", f"{row[3]:.6f}",
+                          row[4], row[5], f"{row[6]:.3e}"])
+
+
+def write_pressure(path: Path, run, direction_deg, arc_half_angle) -> None:
+    """Nodal pressure on the refined arc (where contact can be), by angle from the load."""
+    with open(path, "w", newline="") as f:
+        out = csv.writer(f)
+        out.writerow(["step", "angle_deg", "pressure_Pa"])
+        for i, step in enumerate(run.steps, start=1):
+            alpha = angle_from(direction_deg, step.contact.angle)
+            keep = np.flatnonzero(np.abs(alpha) <= arc_half_angle)
+            for j in keep[np.argsort(alpha[keep])]:
+                out.writerow([i, f"{np.degrees(alpha[j]):.6f}", f"{step.contact.pressure[j]:.9e}"])
+
+
+def write_result(path: Path, result: dict) -> None:
+    path.write_text(json.dumps(result, indent=2, sort_keys=False) + "\n")
+
+
+class FieldWriter:
+    """Displacement, von Mises stress and contact pressure per converged step, for ParaView."""
+
+    def __init__(self, path: Path, elasticity, contact):
+        mesh = elasticity.mesh
+        self.u = dolfinx.fem.Function(elasticity.V, name="displacement")
+        Q = dolfinx.fem.functionspace(mesh, ("DG", 0))
+        self.von_mises = dolfinx.fem.Function(Q, name="von_mises")
+        self.vm_expr = dolfinx.fem.Expression(elasticity.von_mises(self.u),
+                                              Q.element.interpolation_points)
+        W = dolfinx.fem.functionspace(mesh, ("Lagrange", 1))
+        self.pressure = dolfinx.fem.Function(W, name="contact_pressure")
+        # gathered pin nodes -> local scalar dofs (same layout as the blocked vector space)
+        local = elasticity.V.dofmap.index_map.global_to_local(contact.pin_rows[:, 0] // 2)
+        self.mine = np.flatnonzero(local >= 0)
+        self.local = local[self.mine]
+        self.file = dolfinx.io.XDMFFile(mesh.comm, str(path), "w")
+        self.file.write_mesh(mesh)
+
+    def write(self, x, pressure, approach):
+        x.copy(self.u.x.petsc_vec)
+        self.u.x.scatter_forward()
+        self.von_mises.interpolate(self.vm_expr)
+        self.pressure.x.array[:] = 0.0
+        self.pressure.x.array[self.local] = pressure[self.mine]
+        for f in (self.u, self.von_mises, self.pressure):
+            self.file.write_function(f, approach)
+
+    def close(self):
+        self.file.close()
+
+
+def deformed_triangles(elasticity, u, magnify, pin_shift):
+    """Cells of this rank drawn at X + pin_shift (pin only) + magnify (u - pin_shift)."""
+    mesh = elasticity.mesh
+    n_cells = mesh.topology.index_map(2).size_local
+    X = mesh.geometry.x[mesh.geometry.dofmap[:n_cells], :2]
+    disp = u.x.array.reshape(-1, 2)[elasticity.V.dofmap.list[:n_cells]]
+    on_pin = np.isin(elasticity.V.dofmap.list[:n_cells], elasticity.pin_nodes)[..., None]
+    rigid = np.where(on_pin, pin_shift, 0.0)
+    return X + rigid + magnify * (disp - rigid)
+
+
+def picture(path: Path, elasticity, x, run, scene, arc_half_angle):
+    """Deformed contact zone coloured by von Mises stress, beside the pressure profiles."""
+    comm = elasticity.mesh.comm
+    u = dolfinx.fem.Function(elasticity.V)
+    x.copy(u.x.petsc_vec)
+    u.x.scatter_forward()
+    Q = dolfinx.fem.functionspace(elasticity.mesh, ("DG", 0))
+    vm = dolfinx.fem.Function(Q)
+    vm.interpolate(dolfinx.fem.Expression(elasticity.von_mises(u), Q.element.interpolation_points))
+    g = scene.geometry
+    last = run.steps[-1]
+    direction = np.asarray(scene.load.direction)
+    eps = half_angle(angle_from(scene.load.direction_deg, last.contact.angle), last.contact.pressure)
+    view = 1.3 * g.bore_radius * max(np.sin(min(eps, np.pi / 2)), 0.02)
+    magnify = 0.1 * view / max(last.approach, 1e-30)
+    cells = deformed_triangles(elasticity, u, magnify, g.clearance * direction)
+    n_cells = cells.shape[0]
+    gathered = comm.gather((cells, vm.x.array[:n_cells]), root=0)
+    if comm.rank != 0:
+        return
+    cells = np.concatenate([c for c, _ in gathered])
+    values = np.concatenate([v for _, v in gathered])
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 5.5))
+    centre = g.bore_radius * direction
+    near = np.linalg.norm(cells.mean(axis=1) - centre, axis=1) < 2 * view
+    tri = np.arange(3 * near.sum()).reshape(-1, 3)
+    xy = 1e3 * cells[near].reshape(-1, 2)
+    shown = ax.tripcolor(xy[:, 0], xy[:, 1], tri, facecolors=values[near] / 1e6,
+                         cmap="viridis", edgecolors="none")
+    fig.colorbar(shown, ax=ax, label="von Mises stress (MPa)")
+    ax.set_xlim(1e3 * (centre[0] - view), 1e3 * (centre[0] + view))
+    ax.set_ylim(1e3 * (centre[1] - view), 1e3 * (centre[1] + view))
+    ax.set_aspect("equal")
+    ax.set_title(f"deformed contact zone, deformation x{magnify:.3g}\n"
+                 f"approach {last.approach:.3g} m, half-angle {np.degrees(eps):.1f} deg")
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    for i, step in enumerate(run.steps, start=1):
+        alpha = angle_from(scene.load.direction_deg, step.contact.angle)
+        keep = np.abs(alpha) <= arc_half_angle
+        order = np.argsort(alpha[keep])
+        bx.plot(np.degrees(alpha[keep][order]), step.contact.pressure[keep][order] / 1e6,
+                color=plt.cm.plasma(i / (len(run.steps) + 1)), lw=1)
+    bx.set_xlabel("angle from load direction (deg)")
+    bx.set_ylabel("contact pressure (MPa)")
+    bx.set_title("pressure on the bore, every load step")
+    bx.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)

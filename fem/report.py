@@ -1,0 +1,126 @@
+"""The report's FE section: meshes, load-approach curves, validation against Persson, pressures."""
+
+import csv
+import html
+import json
+from pathlib import Path
+
+import numpy as np
+
+from meshes.sizing import persson_half_angle
+from pinbore.report import figure, figure_data, png_data, plt, table
+
+
+def read_csv(path: Path) -> dict[str, np.ndarray]:
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]} if rows else {}
+
+
+def effective_modulus(scene) -> float:
+    pin, bore = scene["materials"]["pin"], scene["materials"]["bore"]
+    return 1 / ((1 - pin["nu"] ** 2) / pin["E"] + (1 - bore["nu"] ** 2) / bore["E"])
+
+
+def similar(scene) -> bool:
+    return scene["materials"]["pin"] == scene["materials"]["bore"]
+
+
+def load_runs(build_dir: Path):
+    runs = []
+    for result in sorted((build_dir / "fem").glob("*/result.json")):
+        folder = result.parent
+        runs.append((folder.name, json.loads(result.read_text()), read_csv(folder / "curve.csv"),
+                     folder))
+    return runs
+
+
+def curves_figure(runs) -> str:
+    fig, ax = plt.subplots(figsize=(8, 5))
+    for name, result, curve, _ in runs:
+        ax.plot(curve["approach_m"] * 1e6, curve["force_per_length_N_per_m"] / 1e3, "o-", ms=3,
+                label=f"{name} (c = {scene_clearance(result) * 1e6:.0f} um)")
+    ax.set_xlabel("approach beyond first touch (um)")
+    ax.set_ylabel("force per length (kN/m)")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    return figure_data(fig)
+
+
+def scene_clearance(result) -> float:
+    g = result["scene"]["geometry"]
+    return g["bore_radius"] - g["pin_radius"]
+
+
+def persson_figure(runs) -> tuple[str, list]:
+    """FE half-angle against load, beside the Persson closed form, for similar materials."""
+    fig, ax = plt.subplots(figsize=(8, 5))
+    rows = []
+    load = np.linspace(0, 3, 300)
+    ax.plot(load, [np.degrees(persson_half_angle(x)) for x in load], "k-", lw=1,
+            label="Persson / Ciavarella-Decuzzi (infinite plate)")
+    for name, result, curve, _ in runs:
+        if not similar(result["scene"]):
+            continue
+        scale = effective_modulus(result["scene"]) * scene_clearance(result)
+        x = curve["force_per_length_N_per_m"] / scale
+        ax.plot(x, curve["half_angle_deg"], "o", ms=4, label=f"FE {name}")
+        closed = np.degrees([persson_half_angle(v) for v in x])
+        rows.append([name, f"{curve['half_angle_deg'].min():.1f}-{curve['half_angle_deg'].max():.1f}",
+                     f"{np.max(np.abs(curve['half_angle_deg'] - closed)):.2f}"])
+    ax.set_xscale("symlog", linthresh=0.01)
+    ax.set_xlabel("P / (E* c)")
+    ax.set_ylabel("contact half-angle (deg)")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    return figure_data(fig), rows
+
+
+def section(build_dir: Path, bench_dir: Path) -> str:
+    runs = load_runs(build_dir)
+    parts = ["<h2>2D finite-element contact</h2>",
+             "<p>Plane strain, P1 elements, both bodies elastic. Contact: node-to-segment gap "
+             "between the pin nodes and the bore circle, penalty or augmented Lagrangian "
+             "(Uzawa), Newton (PETSc SNES, MUMPS) with load-step cutbacks. The approach is "
+             "the hub displacement beyond first touch; the force is the hub reaction along "
+             "the load, per unit length.</p>"]
+    if not runs:
+        return "".join(parts) + "<p class='note'>No FE results under build/fem: run <code>make fem</code>.</p>"
+    parts.append(table(
+        ["scene", "method", "c (um)", "dofs", "steps", "Newton its/step (median)",
+         "max gap violation (m)", "wall time (s)", "status"],
+        [[name, r["contact"]["method"], f"{scene_clearance(r) * 1e6:g}", r["dofs"],
+          r["steps_converged"], f"{np.median(r['newton_iterations']):g}",
+          f"{r['max_gap_violation_m']:.2e}", f"{r['wall_time_s']['total']:.2f}", r["status"]]
+         for name, r, _, _ in runs]))
+    parts.append(figure(curves_figure(runs),
+                        "Force per unit length against approach, every shipped FE scene "
+                        "(build/fem/&lt;scene&gt;/curve.csv)."))
+    data, rows = persson_figure(runs)
+    parts.append(figure(data, "Validation: contact half-angle against the dimensionless load, "
+                              "FE (similar materials) beside the Persson conformal solution for a "
+                              "pin in an infinite plate. The FE model has a housing of 20 radii and "
+                              "a rigid hub of 0.2 radius, which stiffens the pin: expect the FE "
+                              "angle up to about 1 deg below the closed form."))
+    if rows:
+        parts.append(table(["scene", "FE half-angle range (deg)", "max |FE - Persson| (deg)"], rows))
+    for name, result, _, folder in runs:
+        if (folder / "contact.png").exists():
+            parts.append(figure(png_data(folder / "contact.png"),
+                                f"Scene {html.escape(name)}: deformed contact zone coloured by "
+                                f"von Mises stress at the largest approach, and the contact "
+                                f"pressure along the bore at every load step."))
+    for preview in sorted((build_dir / "mesh").glob("*/preview.png")):
+        parts.append(figure(png_data(preview), f"Mesh of scene {html.escape(preview.parent.name)}: "
+                                               "whole model, pin and bore, contact arc."))
+    bench = bench_dir / "fem2d.csv"
+    if bench.exists():
+        with open(bench, newline="") as f:
+            rows = list(csv.reader(f))
+        parts.append("<h3>Benchmark: run time against error (make bench)</h3>")
+        parts.append(table(rows[0], rows[1:]))
+        if (bench_dir / "fem2d.png").exists():
+            parts.append(figure(png_data(bench_dir / "fem2d.png"),
+                                "Wall time against the error in force and half-angle, 2D FE, "
+                                "for several mesh sizes and both methods (bench/fem2d.csv)."))
+    return "".join(parts)

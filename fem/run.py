@@ -1,0 +1,89 @@
+"""`pinbore fem SCENE --out DIR`: solve a 2D pin-in-bore scene and write its results."""
+
+import math
+import platform
+import time
+from pathlib import Path
+
+import dolfinx_solver  # noqa: F401  (must precede dolfinx)
+import numpy as np
+from mpi4py import MPI
+from tqdm import tqdm
+
+from fem import model, outputs
+from fem.scene import FemScene
+from pinbore import scene as scenes
+from pinbore.errors import InputError
+from pinbore.output import atomic_directory
+
+
+def load_scene(path) -> FemScene:
+    scene = scenes.load(FemScene, path)
+    if scene.geometry.dim != 2:
+        raise InputError(f"{path}: geometry.dim: the FE solver is 2D so far (3D contact is "
+                         "issue 3); `pinbore mesh` builds the 3D mesh")
+    return scene
+
+
+def run(scene_path, out, comm=MPI.COMM_WORLD) -> int:
+    """Solve and write DIR; 0 when every step converged, 1 when the run stopped early."""
+    scene = load_scene(scene_path)
+    start = time.perf_counter()
+    with atomic_directory(out, comm) as tmp:
+        stepper, el, contact, sizing, data = model.build(scene, comm)
+        setup = time.perf_counter() - start
+        steps = scene.load.steps
+        approaches = [scene.load.max_approach * (k + 1) / steps for k in range(steps)]
+        fields = (outputs.FieldWriter(tmp / "fields.xdmf", el, contact)
+                  if scene.output.fields else None)
+        with tqdm(total=steps, desc=f"fem {Path(scene_path).stem}", unit="step",
+                  disable=comm.rank != 0 or None, leave=False) as bar:
+            result = stepper.run(approaches, bar, on_step=fields.write if fields else None)
+        if fields:
+            fields.close()
+        solve = time.perf_counter() - start - setup
+        if result.steps and scene.output.picture:
+            outputs.picture(tmp / "contact.png", el, stepper.x, result, scene, sizing.arc_half_angle)
+        if comm.rank == 0:
+            direction = scene.load.direction_deg
+            outputs.write_curve(tmp / "curve.csv", result, direction)
+            outputs.write_pressure(tmp / "pressure.csv", result, direction, sizing.arc_half_angle)
+            outputs.write_result(tmp / "result.json", summary(
+                scene, scene_path, result, el, contact, stepper, sizing, comm,
+                {"setup": setup, "solve": solve, "total": time.perf_counter() - start}))
+    if result.stop is not None:
+        if comm.rank == 0:
+            print(f"pinbore fem: {scene_path}: stopped early: {result.stop.message}; "
+                  f"kept {len(result.steps)} converged steps in {out} (marked incomplete)")
+        return 1
+    return 0
+
+
+def summary(scene, scene_path, result, el, contact, stepper, sizing, comm, wall):
+    steps = result.steps
+    return {
+        "scene_file": str(scene_path),
+        "scene": scene.model_dump(),
+        "status": "complete" if result.stop is None else "incomplete",
+        "stop": None if result.stop is None else {"approach_m": result.stop.approach,
+                                                  "message": result.stop.message},
+        "dofs": el.num_dofs,
+        "ranks": comm.size,
+        "mesh": {"contact_size_m": sizing.contact_size,
+                 "refined_arc_half_angle_deg": math.degrees(sizing.arc_half_angle),
+                 "cells": el.mesh.topology.index_map(2).size_global,
+                 "pin_surface_nodes": len(contact.pin_X)},
+        "contact": {"method": scene.contact.method, "penalty_Pa_per_m": contact.penalty,
+                    "gap_tolerance_m": stepper.gap_tolerance
+                    if scene.contact.method == "augmented-lagrangian" else None},
+        "steps_converged": len(steps),
+        "cutbacks": result.cutbacks,
+        "newton_iterations": [s.newton_iterations for s in steps],
+        "uzawa_iterations": [s.uzawa_iterations for s in steps],
+        "snes_reasons": [s.reasons for s in steps],
+        "gap_violation_m": [s.gap_violation for s in steps],
+        "max_gap_violation_m": max((s.gap_violation for s in steps), default=None),
+        "wall_time_s": wall,
+        "step_wall_time_s": [s.wall_time for s in steps],
+        "platform": {"python": platform.python_version(), "machine": platform.machine()},
+    }

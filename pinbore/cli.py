@@ -1,0 +1,75 @@
+"""The `pinbore` command: one subcommand per stage, plus the report.
+
+Bad input prints one line `pinbore <command>: <file>: <key>: <rule>` and exits with 2.
+"""
+
+import argparse
+import sys
+
+from pinbore.errors import InputError
+
+
+def _mesh(args) -> int:
+    from fem.model import sizing_of
+    from fem.scene import FemScene
+    from meshes import run as mesh_run
+    from pinbore import scene as scenes
+    from pinbore.output import atomic_directory
+
+    scene = scenes.load(FemScene, args.scene)
+    with atomic_directory(args.out) as tmp:
+        mesh_run.write(scene.geometry, sizing_of(scene), scene.load.direction_deg,
+                       scene.mesh.layers, tmp)
+    return 0
+
+
+def _fem(args) -> int:
+    from fem import run as fem_run
+
+    return fem_run.run(args.scene, args.out)
+
+
+def _report(args) -> int:
+    from pinbore import report
+
+    report.build(args.build, args.out)
+    return 0
+
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="pinbore", description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    m = sub.add_parser("mesh", help="build the gmsh model of an FE scene: mesh.msh, preview.png",
+                       description="Build the 2D or 3D gmsh model of an FE scene; write "
+                                   "DIR/mesh.msh and DIR/preview.png.")
+    m.add_argument("scene", help="FE scene file (TOML, kind = \"fem\")")
+    m.add_argument("--out", required=True, help="output directory (replaced when complete)")
+    m.set_defaults(func=_mesh)
+    f = sub.add_parser("fem", help="solve a 2D FE contact scene: curve.csv, pressure.csv, result.json",
+                       description="Solve the pin-in-bore contact of an FE scene; write "
+                                   "DIR/curve.csv, DIR/pressure.csv, DIR/result.json and, when "
+                                   "the scene asks, DIR/fields.xdmf and DIR/contact.png. Runs "
+                                   "under mpiexec -n N.")
+    f.add_argument("scene", help="FE scene file (TOML, kind = \"fem\")")
+    f.add_argument("--out", required=True, help="output directory (replaced when complete)")
+    f.set_defaults(func=_fem)
+    r = sub.add_parser("report", help="build the HTML report from the results under build/",
+                       description="Collect the results under BUILD into one self-contained "
+                                   "HTML page, OUT/index.html.")
+    r.add_argument("--build", default="build", help="where the stage results are (default: build)")
+    r.add_argument("--out", default="build/report", help="report directory (default: build/report)")
+    r.set_defaults(func=_report)
+    return p
+
+
+def main(argv=None) -> int:
+    args = parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except InputError as err:
+        print(f"pinbore {args.command}: {err}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
