@@ -111,6 +111,7 @@ class LoadStepper:
 
         on_step(x, pressure, approach) is called after every converged step.
         """
+        approaches = [float(a) for a in approaches]
         run = Run()
         touch = self.el.pin_translation(self.clearance * self.direction)  # exact: no force yet
         history = [(0.0, touch, np.zeros_like(self.contact.lam))]

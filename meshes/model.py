@@ -41,8 +41,14 @@ class Geometry(Strict):
 
 
 class MeshOptions(Strict):
-    """Element sizes. Left out, pinbore chooses them from the expected contact arc."""
+    """Element sizes. Left out, pinbore chooses them from the expected contact arc.
+
+    contact_size (m) on the contact arc; grading: growth of the size per unit distance from
+    it; refine: halve every element size this many times (convergence studies); layers: 3D
+    layers along the axis.
+    """
 
     contact_size: float | None = pydantic.Field(default=None, gt=0)
     grading: float = pydantic.Field(default=0.25, gt=0, le=1)
+    refine: int = pydantic.Field(default=0, ge=0, le=6)
     layers: int | None = pydantic.Field(default=None, ge=1)

@@ -37,24 +37,26 @@ def session():
 
 
 def size_field(geometry, sizing: Sizing):
-    """Element size h(x, y): fine on the contact arc, growing linearly with the distance."""
-    radius = 0.5 * (geometry.pin_radius + geometry.bore_radius)
+    """Element size h(x, y): fine on the contact arc of each body's own surface (pin or
+    bore), growing linearly with the distance from it."""
     centre = math.radians(CANONICAL_DIRECTION_DEG)
-    arc_ends = [(radius * math.cos(centre + s * sizing.arc_half_angle),
-                 radius * math.sin(centre + s * sizing.arc_half_angle)) for s in (-1, 1)]
-    far = radius * math.pi / 24  # size on the circles away from the arc
-    wall = geometry.pin_radius - geometry.hub_radius
+    middle = 0.5 * (geometry.pin_radius + geometry.bore_radius)
+    far = sizing.scale * middle * math.pi / 24  # size on the circles away from the arc
+    wall_size = sizing.scale * (geometry.pin_radius - geometry.hub_radius) / 3
 
     def h(x, y):
         r = math.hypot(x, y)
+        surface = geometry.pin_radius if r < middle else geometry.bore_radius
         offset = abs(math.remainder(math.atan2(y, x) - centre, 2 * math.pi))
         if offset <= sizing.arc_half_angle:
-            distance = abs(r - radius)
+            distance = abs(r - surface)
         else:
-            distance = min(math.hypot(x - ex, y - ey) for ex, ey in arc_ends)
+            distance = min(math.hypot(x - surface * math.cos(centre + s * sizing.arc_half_angle),
+                                      y - surface * math.sin(centre + s * sizing.arc_half_angle))
+                           for s in (-1, 1))
         size = min(sizing.contact_size + sizing.grading * distance,
-                   far + sizing.grading * abs(r - radius))
-        return min(size, wall / 3) if r < radius else size
+                   far + sizing.grading * abs(r - surface))
+        return min(size, wall_size) if r < middle else size
 
     return h
 
@@ -66,10 +68,30 @@ def build(geometry, sizing: Sizing, direction_deg: float, layers: int | None = N
     """
     gmsh.model.add("pin_in_bore")
     occ = gmsh.model.occ
-    pin = occ.cut([(2, occ.addDisk(0, 0, 0, geometry.pin_radius, geometry.pin_radius))],
-                  [(2, occ.addDisk(0, 0, 0, geometry.hub_radius, geometry.hub_radius))])[0]
-    housing = occ.cut([(2, occ.addDisk(0, 0, 0, geometry.housing_radius, geometry.housing_radius))],
-                      [(2, occ.addDisk(0, 0, 0, geometry.bore_radius, geometry.bore_radius))])[0]
+    # The pin and bore circles are split at the ends of the refined arc, so that gmsh meshes
+    # the fine arc as a curve of its own (on a whole circle it samples a narrow fine region
+    # too coarsely and the arc comes out uniform).
+    ends = (math.radians(CANONICAL_DIRECTION_DEG) - sizing.arc_half_angle,
+            math.radians(CANONICAL_DIRECTION_DEG) + sizing.arc_half_angle)
+
+    def split_circle(radius):
+        """A closed loop of arcs (each < 180 deg, as OCC asks) through shared points that
+        include the ends of the refined arc."""
+        span = ends[1] - ends[0]
+        rest = 2 * math.pi - span
+        angles = ([ends[0] + span * i / math.ceil(span / 2.5) for i in range(math.ceil(span / 2.5))]
+                  + [ends[1] + rest * i / math.ceil(rest / 2.5) for i in range(math.ceil(rest / 2.5))])
+        centre = occ.addPoint(0, 0, 0)
+        points = [occ.addPoint(radius * math.cos(a), radius * math.sin(a), 0) for a in angles]
+        arcs = [occ.addCircleArc(p, centre, q) for p, q in zip(points, points[1:] + points[:1])]
+        return occ.addCurveLoop(arcs)
+
+    def circle(radius):
+        return occ.addCurveLoop([occ.addCircle(0, 0, 0, radius)])
+
+    pin = [(2, occ.addPlaneSurface([split_circle(geometry.pin_radius), circle(geometry.hub_radius)]))]
+    housing = [(2, occ.addPlaneSurface([circle(geometry.housing_radius),
+                                        split_circle(geometry.bore_radius)]))]
     if geometry.dim == 3:
         n = layers or 10
         pin = [e for e in occ.extrude(pin, 0, 0, geometry.length, [n]) if e[0] == 3]

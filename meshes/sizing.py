@@ -4,8 +4,11 @@ pinbore grades the mesh so that it is fine on the contact arc and coarse elsewhe
 is not known before solving, so it is estimated from the scene, generously, and used only to
 place elements (never in a result):
 
-1. force per length at an approach d, from the Liu et al. (2007) elastic-foundation law
-   P = (pi/2) E* d sqrt(d / (2 (c + d)));
+1. force per length at an approach d: the larger of the Liu et al. (2007) elastic-foundation
+   law P = (pi/2) E* d sqrt(d / (2 (c + d))) (good for small clearance, it underestimates
+   the FE force several times at c/R = 0.1) and Johnson's line contact
+   d = (P / (pi E*)) [ln(4 pi E* c / P) - 1] (good for large clearance, no solution for
+   small clearance);
 2. contact half-angle from the Persson conformal solution
    P / (E* c) = 2 pi b^2 (1 + b^2) / (2 - ln(1 + b^2) - 2 b^4),  b = tan(eps/2);
 3. the refined arc covers 1.5 eps + 5 deg at the largest approach; the element size resolves
@@ -23,11 +26,13 @@ PERSSON_LIMIT_B = 0.913572  # b where the Persson denominator vanishes: eps -> 8
 
 @dataclass(frozen=True)
 class Sizing:
-    """Element size on the arc (m), the arc's half-angle (rad) and the growth rate away."""
+    """Element size on the arc (m), the arc's half-angle (rad), the growth rate away from it,
+    and a factor on every size (1/2^refine)."""
 
     contact_size: float
     arc_half_angle: float
     grading: float
+    scale: float = 1.0
 
 
 def persson_load(b: float) -> float:
@@ -44,10 +49,28 @@ def persson_half_angle(load: float) -> float:
     return 2 * math.atan(b)
 
 
-def estimate_sizing(radius, clearance, e_star, max_approach, contact_size=None, grading=0.25):
+def liu_force(e_star, clearance, d):
+    """Liu et al. 2007 force per length (N/m) at approach d (estimate for sizing only)."""
+    return 0.5 * math.pi * e_star * d * math.sqrt(d / (2 * (clearance + d)))
+
+
+def johnson_force(e_star, clearance, d):
+    """Force per length (N/m) of Johnson's equal-material line contact at approach d, or 0
+    where that approach exceeds the formula's largest (at P = 4 pi E* c / e^2)."""
+    def approach(p):
+        return p / (math.pi * e_star) * (math.log(4 * math.pi * e_star * clearance / p) - 1)
+
+    largest = 4 * math.pi * e_star * clearance / math.e**2
+    if approach(largest) < d:
+        return 0.0
+    return brentq(lambda p: approach(p) - d, largest * 1e-15, largest)
+
+
+def estimate_sizing(radius, clearance, e_star, max_approach, contact_size=None, grading=0.25,
+                    refine=0):
     """Sizing for a pin of `radius` in a bore with `clearance`, pushed `max_approach` deep."""
     def half_angle(d):
-        force = 0.5 * math.pi * e_star * d * math.sqrt(d / (2 * (clearance + d)))
+        force = max(liu_force(e_star, clearance, d), johnson_force(e_star, clearance, d))
         return persson_half_angle(force / (e_star * clearance))
 
     if contact_size is None:
@@ -55,4 +78,5 @@ def estimate_sizing(radius, clearance, e_star, max_approach, contact_size=None, 
                                     math.radians(0.5))
     arc = min(math.radians(95),
               1.5 * half_angle(max_approach) + math.radians(5) + 4 * contact_size / radius)
-    return Sizing(contact_size, arc, grading)
+    scale = 0.5**refine
+    return Sizing(contact_size * scale, arc, grading * scale, scale)

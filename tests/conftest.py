@@ -1,0 +1,92 @@
+"""Shared helpers: scenes as dicts, in-process FE solves, the CLI as a subprocess."""
+
+import copy
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+STEEL = {"E": 210e9, "nu": 0.3}
+
+BASE_SCENE = {
+    "kind": "fem",
+    "geometry": {"dim": 2, "pin_radius": 9.99e-3, "bore_radius": 10.0e-3,
+                 "housing_radius": 0.2, "hub_radius": 2.0e-3},
+    "materials": {"pin": dict(STEEL), "bore": dict(STEEL)},
+    "contact": {"method": "augmented-lagrangian", "friction": 0.0},
+    "load": {"max_approach": 1.0e-5, "steps": 4, "direction_deg": -90.0},
+    "output": {"picture": False},
+}
+
+
+def scene_dict(**tables) -> dict:
+    """BASE_SCENE with tables updated key by key, e.g. scene_dict(load={"steps": 2})."""
+    scene = copy.deepcopy(BASE_SCENE)
+    for table, values in tables.items():
+        if isinstance(values, dict) and isinstance(scene.get(table), dict):
+            scene[table].update(values)
+        else:
+            scene[table] = values
+    return scene
+
+
+def with_clearance(clearance: float, radius: float = 10.0e-3, **tables) -> dict:
+    scene = scene_dict(**tables)
+    scene["geometry"]["bore_radius"] = radius
+    scene["geometry"]["pin_radius"] = radius - clearance
+    return scene
+
+
+def effective_modulus(scene: dict) -> float:
+    pin, bore = scene["materials"]["pin"], scene["materials"]["bore"]
+    return 1 / ((1 - pin["nu"] ** 2) / pin["E"] + (1 - bore["nu"] ** 2) / bore["E"])
+
+
+class Solved:
+    """An in-process FE solve of a scene dict: the run and the objects behind it."""
+
+    def __init__(self, data: dict, approaches=None):
+        from fem import model
+        from fem.scene import FemScene
+        from pinbore.scene import validate
+
+        self.scene = validate(FemScene, data, "test scene")
+        self.stepper, self.el, self.contact, self.sizing, _ = model.build(self.scene)
+        load = self.scene.load
+        if approaches is None:
+            approaches = [load.max_approach * (k + 1) / load.steps for k in range(load.steps)]
+        self.run = self.stepper.run(list(approaches))
+        assert self.run.stop is None, self.run.stop
+
+    @property
+    def forces(self):
+        return [s.force for s in self.run.steps]
+
+    def half_angles_deg(self):
+        from fem.post import angle_from, half_angle
+
+        d = self.scene.load.direction_deg
+        return [math.degrees(half_angle(angle_from(d, s.contact.angle), s.contact.pressure))
+                for s in self.run.steps]
+
+
+def pinbore(*args, cwd=None) -> subprocess.CompletedProcess:
+    """Run the pinbore command (as installed in this interpreter's environment)."""
+    return subprocess.run([sys.executable, "-m", "pinbore.cli", *map(str, args)],
+                          capture_output=True, text=True, cwd=cwd)
+
+
+@pytest.fixture
+def write_scene(tmp_path):
+    """Write a scene dict (or raw text) to a TOML file and return its path."""
+    import tomli_w
+
+    def write(data, name="scene.toml"):
+        path = tmp_path / name
+        path.write_text(data if isinstance(data, str) else tomli_w.dumps(data))
+        return path
+
+    return write
