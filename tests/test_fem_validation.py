@@ -17,23 +17,24 @@ def persson_deg(solved, clearance):
     return np.degrees([persson_half_angle(f / scale) for f in solved.forces])
 
 
-@pytest.mark.parametrize("clearance, approaches", [
-    # geometric approach sequences whose half-angles run from about 15 to 60 deg
-    (1e-6, np.geomspace(0.9e-7, 2.6e-6, 6)),
-    (1e-5, np.geomspace(0.9e-6, 2.6e-5, 6)),
-    # c/R = 1e-2 to 36 deg only: beyond, the approach (> 1 % of R) is no longer small against
-    # the radius and the linear closed form drifts from the model (0.9 deg at 46 deg).
-    (1e-4, np.geomspace(0.9e-5, 5e-5, 4)),
+@pytest.mark.parametrize("clearance, approaches, largest", [
+    # geometric approach sequences whose half-angles run from about 15 deg up
+    (1e-6, np.geomspace(0.9e-7, 2.6e-6, 6), 58),
+    (1e-5, np.geomspace(0.9e-6, 2.6e-5, 6), 58),
+    (1e-4, np.geomspace(1.0e-5, 1.1e-4, 5), 44),
 ])
-def test_half_angle_matches_persson(clearance, approaches):
-    """Similar materials, housing 20 radii, small hub (0.05 R): within 0.75 deg of the
-    Persson / Ciavarella-Decuzzi infinite-plate solution (CalculiX: 0.5-1 deg)."""
+def test_half_angle_matches_persson(clearance, approaches, largest):
+    """Similar materials, housing 20 radii, small hub (0.05 R): the half-angle is within
+    0.75 deg of the Persson / Ciavarella-Decuzzi infinite-plate solution (CalculiX: 0.5-1 deg),
+    plus (c/R) sin(eps): the linear closed form neglects the clearance against the radius,
+    while the FE pin has moved by c, which shifts its points by up to c/R rad."""
     data = with_clearance(clearance, contact={"method": "penalty"}, geometry={"hub_radius": 0.5e-3},
                           load={"max_approach": float(approaches[-1])})
     solved = Solved(data, approaches)
     fe, closed = np.array(solved.half_angles_deg()), persson_deg(solved, clearance)
-    assert fe.min() < 17 and fe.max() > (35 if clearance == 1e-4 else 58)
-    np.testing.assert_allclose(fe, closed, atol=0.75)
+    assert fe.min() < 17 and fe.max() > largest
+    tolerance = 0.75 + np.degrees(clearance / RADIUS) * np.sin(np.radians(closed))
+    assert np.all(np.abs(fe - closed) <= tolerance), (fe - closed, tolerance)
 
 
 @pytest.mark.parametrize("clearance", [5e-4, 1e-3])
