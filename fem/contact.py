@@ -187,7 +187,7 @@ class PinBoreContact:
         return values[:n_pin].reshape(-1, 2), values[n_pin:].reshape(-1, 2)
 
     def _kinematics(self, u: PETSc.Vec):
-        """Current pin positions, closest bore points and gaps."""
+        """Current pin positions, closest bore points and gaps. Collective (gathers u)."""
         u_pin, u_bore = self._surface_displacements(u)
         x = self.pin_X + u_pin
         bore = Segments(self.bore_radius, self.bore_angles, u_bore)
@@ -220,14 +220,14 @@ class PinBoreContact:
 
     def add_residual(self, u: PETSc.Vec, F: PETSc.Vec) -> None:
         """F += f_c(u). Collective; call F.assemble() afterwards."""
+        rows, residual, _ = self._local_terms(u, with_tangent=False)
         if self.comm.rank == 0:
-            rows, residual, _ = self._local_terms(u, with_tangent=False)
             F.setValues(rows.ravel(), residual.ravel(), addv=PETSc.InsertMode.ADD_VALUES)
 
     def add_tangent(self, u: PETSc.Vec, J: PETSc.Mat) -> None:
         """J += K_c(u). Collective; call J.assemble() afterwards."""
+        rows, _, tangent = self._local_terms(u, with_tangent=True)
         if self.comm.rank == 0:
-            rows, _, tangent = self._local_terms(u, with_tangent=True)
             for r, block in zip(rows, tangent):
                 J.setValues(r, r, block, addv=PETSc.InsertMode.ADD_VALUES)
 

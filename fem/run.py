@@ -2,6 +2,7 @@
 
 import math
 import platform
+import sys
 import time
 from pathlib import Path
 
@@ -54,7 +55,8 @@ def run(scene_path, out, comm=MPI.COMM_WORLD) -> int:
     if result.stop is not None:
         if comm.rank == 0:
             print(f"pinbore fem: {scene_path}: stopped early: {result.stop.message}; "
-                  f"kept {len(result.steps)} converged steps in {out} (marked incomplete)")
+                  f"kept {len(result.steps)} converged steps in {out} (marked incomplete)",
+                  file=sys.stderr)
         return 1
     return 0
 

@@ -1,0 +1,135 @@
+"""The command line: outputs of `pinbore mesh` and `pinbore fem`, bad input, early stops."""
+
+import csv
+import json
+
+import gmsh
+import pytest
+from conftest import ROOT, pinbore, scene_dict
+
+from meshes.model import (BORE_SURFACE, HOUSING, HOUSING_EDGE, HOUSING_ENDS, HUB, PIN, PIN_ENDS,
+                          PIN_SURFACE)
+
+
+def test_fem_writes_curve_pressure_result_fields_picture(write_scene, tmp_path):
+    data = scene_dict(output={"fields": True, "picture": True})
+    out = tmp_path / "run"
+    done = pinbore("fem", write_scene(data), "--out", out)
+    assert done.returncode == 0, done.stderr
+    names = {p.name for p in out.iterdir()}
+    assert {"curve.csv", "pressure.csv", "result.json", "fields.xdmf", "fields.h5",
+            "contact.png"} <= names
+    rows = list(csv.DictReader(open(out / "curve.csv")))
+    assert len(rows) == data["load"]["steps"]
+    for column in ("step", "approach_m", "force_per_length_N_per_m", "half_angle_deg",
+                   "newton_iterations"):
+        assert column in rows[0]
+    forces = [float(r["force_per_length_N_per_m"]) for r in rows]
+    assert all(f > 0 for f in forces) and forces == sorted(forces)
+    pressure = list(csv.DictReader(open(out / "pressure.csv")))
+    assert set(pressure[0]) == {"step", "angle_deg", "pressure_Pa"}
+    result = json.loads((out / "result.json").read_text())
+    assert result["status"] == "complete" and result["dofs"] > 0
+    assert result["scene"]["geometry"]["pin_radius"] == data["geometry"]["pin_radius"]
+    assert len(result["snes_reasons"]) == len(rows)
+    assert not list(tmp_path.glob(".run.*"))  # no temporary directory left
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_mesh_has_every_physical_group(write_scene, tmp_path, dim):
+    data = scene_dict(geometry={"dim": dim, "length": 0.02}, mesh={"layers": 3})
+    out = tmp_path / "mesh"
+    done = pinbore("mesh", write_scene(data), "--out", out)
+    assert done.returncode == 0, done.stderr
+    assert (out / "preview.png").stat().st_size > 10_000
+    gmsh.initialize(interruptible=False)
+    try:
+        gmsh.open(str(out / "mesh.msh"))
+        groups = set(gmsh.model.getPhysicalGroups())
+    finally:
+        gmsh.finalize()
+    expected = {(dim, PIN), (dim, HOUSING), (dim - 1, HUB), (dim - 1, PIN_SURFACE),
+                (dim - 1, BORE_SURFACE), (dim - 1, HOUSING_EDGE)}
+    if dim == 3:
+        expected |= {(2, PIN_ENDS), (2, HOUSING_ENDS)}
+    assert groups == expected
+
+
+BAD = [
+    ("geometry", "pin_radius", 10.0e-3, "bore_radius must exceed pin_radius"),
+    ("geometry", "hub_radius", 9.99e-3, "hub_radius must be smaller than pin_radius"),
+    ("geometry", "housing_radius", 10.0e-3, "housing_radius must exceed bore_radius"),
+    ("materials.pin", "E", -1.0, "materials.pin.E"),
+    ("materials.bore", "nu", 0.5, "materials.bore.nu"),
+    ("materials.pin", "nu", -1.0, "materials.pin.nu"),
+    ("load", "steps", 0, "load.steps"),
+    ("contact", "method", "lagrange", "contact.method"),
+    ("contact", "friction", -0.1, "contact.friction"),
+    ("load", "max_approach", "1e-5", "load.max_approach"),
+]
+
+
+@pytest.mark.parametrize("table, key, value, message", BAD)
+def test_bad_value_is_one_line_exit_2_nothing_written(write_scene, tmp_path, table, key, value,
+                                                      message):
+    data = scene_dict()
+    section = data
+    for part in table.split("."):
+        section = section[part]
+    section[key] = value
+    out = tmp_path / "out"
+    done = pinbore("fem", write_scene(data), "--out", out)
+    assert done.returncode == 2
+    assert message in done.stderr and len(done.stderr.strip().splitlines()) == 1
+    assert "Traceback" not in done.stderr
+    assert not out.exists() and not list(tmp_path.glob(".out*"))
+
+
+def test_missing_and_unknown_keys(write_scene, tmp_path):
+    data = scene_dict()
+    del data["load"]["steps"]
+    done = pinbore("fem", write_scene(data), "--out", tmp_path / "out")
+    assert done.returncode == 2 and "load.steps: required key is missing" in done.stderr
+    data = scene_dict(contact={"stiffness": 1.0})
+    done = pinbore("fem", write_scene(data), "--out", tmp_path / "out")
+    assert done.returncode == 2 and "contact.stiffness: unknown key" in done.stderr
+
+
+def test_unreadable_and_malformed_files(write_scene, tmp_path):
+    done = pinbore("fem", tmp_path / "absent.toml", "--out", tmp_path / "out")
+    assert done.returncode == 2 and "cannot read scene file" in done.stderr
+    done = pinbore("mesh", write_scene("kind = \n"), "--out", tmp_path / "out")
+    assert done.returncode == 2 and "not valid TOML" in done.stderr
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_run_that_cannot_converge_keeps_what_converged_and_says_so(write_scene, tmp_path):
+    # One Newton iteration per solve cannot follow the contact: the first step fails at every
+    # cutback. The run must stop, say where and why, and leave a marked, complete output.
+    data = scene_dict(solver={"newton_max_it": 1, "max_cutbacks": 2})
+    out = tmp_path / "out"
+    done = pinbore("fem", write_scene(data), "--out", out)
+    assert done.returncode == 1
+    assert "stopped early" in done.stderr and "DIVERGED_MAX_IT" in done.stderr
+    result = json.loads((out / "result.json").read_text())
+    assert result["status"] == "incomplete" and result["cutbacks"] == 3
+    assert "gave up after 2 cutbacks" in result["stop"]["message"]
+    assert len(list(csv.reader(open(out / "curve.csv")))) == 1 + result["steps_converged"]
+
+
+def test_help_lists_every_command():
+    done = pinbore("--help")
+    assert done.returncode == 0
+    for command in ("mesh", "fem", "report"):
+        assert command in done.stdout
+        assert pinbore(command, "--help").returncode == 0
+
+
+def test_every_shipped_scene_is_valid():
+    from fem.scene import FemScene
+    from pinbore import scene
+
+    paths = sorted((ROOT / "scenes" / "fem").glob("*.toml"))
+    assert paths
+    for path in paths:
+        scene.load(FemScene, path)

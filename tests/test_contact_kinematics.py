@@ -1,0 +1,82 @@
+"""The contact building blocks against closed forms: gaps of circles, segment search across
+the angle seam, tributary lengths, the contact edge of a Hertz pressure profile."""
+
+import math
+
+import numpy as np
+import pytest
+
+from fem.contact import Segments, bracket, closest_point, gap_and_normal, tributary_lengths
+from fem.post import angle_from, half_angle
+
+R_BORE, R_PIN = 10.0e-3, 9.9e-3
+
+
+def circle_segments(n=720, displacement=None):
+    angles = np.sort(np.remainder(np.linspace(0, 2 * np.pi, n, endpoint=False) + 0.1, 2 * np.pi) - np.pi)
+    return Segments(R_BORE, angles, np.zeros((n, 2)) if displacement is None else displacement)
+
+
+def test_gap_of_a_translated_pin_is_exact():
+    """Undeformed bore, pin translated by t: g = R_bore - |X + t| exactly (no faceting)."""
+    theta = np.linspace(-np.pi, np.pi, 97)
+    t = np.array([3e-5, -8e-5])
+    x = R_PIN * np.stack([np.cos(theta), np.sin(theta)], 1) + t
+    bore = circle_segments(n=60)  # coarse: a chord would sit 1.4e-5 m inside the circle
+    g, nu, rho = gap_and_normal(x, bore, *closest_point(x, bore))
+    np.testing.assert_allclose(g, R_BORE - np.linalg.norm(x, axis=1), atol=1e-15)
+    np.testing.assert_allclose(nu, x / np.linalg.norm(x, axis=1)[:, None], atol=1e-12)
+    np.testing.assert_allclose(rho, R_BORE, rtol=1e-12)
+
+
+def test_gap_is_invariant_under_a_common_translation():
+    """Translating pin and bore together changes no gap: momentum is conserved. (A smooth
+    bore displacement: at the kinks of a rough one the closest point is ambiguous.)"""
+    n = 360
+    angles = circle_segments(n).angles
+    bore = circle_segments(n, 1e-6 * np.stack([np.cos(3 * angles), np.sin(2 * angles)], 1))
+    x = R_PIN * np.stack([np.cos(np.linspace(-3, 3, 50)), np.sin(np.linspace(-3, 3, 50))], 1)
+    g0 = gap_and_normal(x, bore, *closest_point(x, bore))[0]
+    shift = np.array([2e-5, 1e-5])
+    moved = Segments(bore.radius, bore.angles, bore.displacement + shift)
+    g1 = gap_and_normal(x + shift, moved, *closest_point(x + shift, moved))[0]
+    np.testing.assert_allclose(g1, g0, atol=1e-15)
+
+
+def test_uniform_radial_expansion_of_the_bore_opens_the_gap_by_as_much():
+    """Up to the linear interpolation of the displacement along a segment (dTheta^2 / 8)."""
+    n = 200
+    bore = circle_segments(n)
+    e_r = np.stack([np.cos(bore.angles), np.sin(bore.angles)], 1)
+    expanded = Segments(R_BORE, bore.angles, 2e-6 * e_r)
+    x = R_PIN * np.stack([np.cos(np.linspace(-3, 3, 31)), np.sin(np.linspace(-3, 3, 31))], 1)
+    g0 = gap_and_normal(x, bore, *closest_point(x, bore))[0]
+    g1 = gap_and_normal(x, expanded, *closest_point(x, expanded))[0]
+    np.testing.assert_allclose(g1 - g0, 2e-6, rtol=(2 * np.pi / n) ** 2 / 8)
+
+
+def test_bracket_across_the_angle_seam():
+    angles = np.array([-3.0, -1.0, 1.0, 3.0])
+    k, xi = bracket(np.array([3.1, -3.1, 0.0, -3.0]), angles)
+    gap = 2 * np.pi - 6.0
+    np.testing.assert_array_equal(k, [3, 3, 1, 0])
+    np.testing.assert_allclose(xi, [0.1 / gap, (gap - 0.1 + 1e-12) / gap, 0.5, 0.0], atol=1e-9)
+
+
+def test_tributary_lengths_sum_to_the_perimeter():
+    theta = np.sort(np.random.default_rng(0).uniform(-np.pi, np.pi, 300))
+    points = np.stack([np.cos(theta), np.sin(theta)], 1)
+    perimeter = np.linalg.norm(np.roll(points, -1, 0) - points, axis=1).sum()
+    assert tributary_lengths(points).sum() == pytest.approx(perimeter, rel=1e-13)
+
+
+@pytest.mark.parametrize("spacing_deg", [0.5, 0.1])
+def test_half_angle_of_a_sampled_hertz_profile(spacing_deg):
+    """p = p0 sqrt(1 - (alpha/eps)^2) sampled at nodes: the edge is found within a tenth of
+    the node spacing, whatever the load direction (here across the seam at 180 deg)."""
+    eps = math.radians(23.37)
+    alpha = np.radians(np.arange(-90, 90, spacing_deg) + 0.013)
+    p = 1e8 * np.sqrt(np.clip(1 - (alpha / eps) ** 2, 0, None))
+    theta = np.remainder(alpha + np.pi + np.pi, 2 * np.pi) - np.pi   # load at 180 deg
+    found = half_angle(angle_from(180.0, theta), p)
+    assert abs(found - eps) < 0.1 * math.radians(spacing_deg)
