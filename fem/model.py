@@ -2,6 +2,7 @@
 
 import dolfinx_solver  # noqa: F401  (must precede dolfinx)
 import dolfinx.io.gmsh
+import numpy as np
 from mpi4py import MPI
 
 from fem.contact import PinBoreContact
@@ -38,6 +39,18 @@ def penalty_of(scene: FemScene, contact_size: float) -> float:
     return factor * scene.effective_modulus / contact_size
 
 
+def residual_tolerance(scene: FemScene, penalty_per_node: float) -> float:
+    """Newton's absolute tolerance on the nodal forces (N/m).
+
+    A billionth of the force scale E* max_approach, but above the round-off floor of the
+    contact forces: a gap carries round-off of eps_machine R (node coordinates of size R),
+    which the penalty turns into forces of eps * h * eps_machine * R per node. Below that
+    floor Newton cannot go (measured: a coarse mesh stalled at 1e-4 N/m, cut back to nothing).
+    """
+    floor = 1e3 * np.finfo(float).eps * penalty_per_node * scene.geometry.bore_radius
+    return max(1e-9 * scene.effective_modulus * scene.load.max_approach, floor)
+
+
 def build(scene: FemScene, comm=MPI.COMM_WORLD):
     """Everything needed to solve the scene: (stepper, elasticity, contact, sizing, mesh data)."""
     data, sizing = mesh_of(scene, comm)
@@ -53,5 +66,5 @@ def build(scene: FemScene, comm=MPI.COMM_WORLD):
                           gap_tolerance=tolerance, newton_max_it=scene.solver.newton_max_it,
                           uzawa_max_it=scene.solver.uzawa_max_it,
                           max_cutbacks=scene.solver.max_cutbacks,
-                          force_scale=scene.effective_modulus * scene.load.max_approach)
+                          force_atol=residual_tolerance(scene, contact.penalty * sizing.contact_size))
     return stepper, el, contact, sizing, data

@@ -61,7 +61,7 @@ class Run:
 
 class LoadStepper:
     def __init__(self, elasticity: Elasticity, contact: PinBoreContact, *, clearance, direction,
-                 method, gap_tolerance, newton_max_it, uzawa_max_it, max_cutbacks, force_scale):
+                 method, gap_tolerance, newton_max_it, uzawa_max_it, max_cutbacks, force_atol):
         self.el, self.contact = elasticity, contact
         self.clearance, self.direction = clearance, np.asarray(direction, dtype=float)
         self.method, self.gap_tolerance = method, gap_tolerance
@@ -69,9 +69,9 @@ class LoadStepper:
         self.max_cutbacks = max_cutbacks
         self.x = elasticity.K.createVecRight()
         self.work = self.x.duplicate()
-        self.snes = self._make_snes(newton_max_it, force_scale)
+        self.snes = self._make_snes(newton_max_it, force_atol)
 
-    def _make_snes(self, max_it, force_scale):
+    def _make_snes(self, max_it, force_atol):
         comm = self.el.mesh.comm
         J = self.el.K_bc.duplicate(copy=True)
         J.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
@@ -79,8 +79,7 @@ class LoadStepper:
         snes.setOptionsPrefix("pinbore_")
         snes.setType("newtonls")
         snes.getLineSearch().setType("basic")
-        # Residuals are nodal forces (N/m); atol is a tiny fraction of the force scale.
-        snes.setTolerances(atol=1e-10 * force_scale, rtol=1e-9, stol=1e-14, max_it=max_it)
+        snes.setTolerances(atol=force_atol, rtol=1e-9, stol=1e-14, max_it=max_it)
         # Nodes entering contact under a stiff penalty can raise the residual a thousandfold
         # for an iteration; that is not divergence. max_it and the cutbacks catch real failure.
         snes.setDivergenceTolerance(PETSc.UNLIMITED)

@@ -1,0 +1,142 @@
+"""Benchmark of the 2D FE contact: run time against error, both methods, several meshes.
+
+Runs the default scene (scenes/fem/steel_c10um.toml, 10 load steps) through `pinbore fem`
+at several mesh levels, with the penalty method and the augmented Lagrangian, and once on
+2 MPI ranks. Writes OUT/fem2d.csv and OUT/fem2d.png:
+
+- wall time of the whole command (start-up, meshing, assembly, solve, output);
+- dofs, Newton iterations per load step (median and largest);
+- force error at the largest approach against the mesh-converged force (Richardson
+  extrapolation of the three finest levels, with their observed order);
+- half-angle error: the largest |FE - Persson| over the load steps, Persson evaluated at
+  the FE force (similar materials; the model's 0.2 R hub stiffens the pin, about 1 deg).
+"""
+
+import argparse
+import csv
+import json
+import math
+import subprocess
+import sys
+import tempfile
+import time
+import tomllib
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.ticker  # noqa: E402
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import tomli_w  # noqa: E402
+
+from meshes.sizing import persson_half_angle  # noqa: E402
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENE = ROOT / "scenes" / "fem" / "steel_c10um.toml"
+LEVELS = [("coarse", {"contact_size": 1.75e-4, "grading": 0.5}), ("default", {}),
+          ("refine 1", {"refine": 1}), ("refine 2", {"refine": 2})]
+METHODS = ["penalty", "augmented-lagrangian"]
+
+
+def run(scene: dict, workdir: Path, name: str, ranks: int = 1) -> dict:
+    path = workdir / f"{name}.toml"
+    path.write_text(tomli_w.dumps(scene))
+    out = workdir / name
+    command = [sys.executable, "-m", "pinbore.cli", "fem", str(path), "--out", str(out)]
+    if ranks > 1:
+        command = [str(Path(sys.executable).parent / "mpiexec"), "-n", str(ranks)] + command
+    start = time.perf_counter()
+    subprocess.run(command, check=True, capture_output=True)
+    wall = time.perf_counter() - start
+    rows = list(csv.DictReader(open(out / "curve.csv")))
+    result = json.loads((out / "result.json").read_text())
+    return {"wall": wall, "result": result,
+            "force": np.array([float(r["force_per_length_N_per_m"]) for r in rows]),
+            "angle": np.array([float(r["half_angle_deg"]) for r in rows])}
+
+
+def persson_error(scene: dict, force, angle) -> float:
+    m = scene["materials"]["pin"]
+    e_star = m["E"] / (2 * (1 - m["nu"] ** 2))
+    clearance = scene["geometry"]["bore_radius"] - scene["geometry"]["pin_radius"]
+    closed = np.degrees([persson_half_angle(f / (e_star * clearance)) for f in force])
+    return float(np.max(np.abs(angle - closed)))
+
+
+def main(out: Path) -> None:
+    base = tomllib.loads(SCENE.read_text())
+    base["output"] = {"picture": False, "fields": False}
+    records = []
+    with tempfile.TemporaryDirectory() as tmp:
+        cases = [(level, mesh, method, 1) for level, mesh in LEVELS for method in METHODS]
+        cases.append(("default", {}, "augmented-lagrangian", 2))
+        for i, (level, mesh, method, ranks) in enumerate(cases):
+            scene = json.loads(json.dumps(base))
+            scene["mesh"] = mesh
+            scene["contact"]["method"] = method
+            print(f"[{i + 1}/{len(cases)}] {level}, {method}, {ranks} rank(s)", flush=True)
+            records.append((level, method, ranks, scene, run(scene, Path(tmp), f"case{i}", ranks)))
+    # mesh-converged force from the three finest levels (same method)
+    rows = []
+    for method in METHODS:
+        finest = [r[4]["force"][-1] for r in records if r[1] == method and r[2] == 1][-3:]
+        order = math.log2(abs(finest[1] - finest[0]) / abs(finest[2] - finest[1]))
+        limit = finest[2] + (finest[2] - finest[1]) / (2**order - 1)
+        for level, m, ranks, scene, r in records:
+            if m != method:
+                continue
+            its = r["result"]["newton_iterations"]
+            rows.append([level, method, ranks, r["result"]["dofs"],
+                         f"{r['result']['mesh']['contact_size_m']:.3g}", f"{r['wall']:.2f}",
+                         f"{np.median(its):g}", max(its), f"{r['force'][-1]:.6e}",
+                         f"{abs(r['force'][-1] / limit - 1):.2e}",
+                         f"{persson_error(scene, r['force'], r['angle']):.3f}", f"{order:.2f}"])
+    out.mkdir(parents=True, exist_ok=True)
+    header = ["mesh", "method", "ranks", "dofs", "contact_size_m", "wall_time_s",
+              "newton_per_step_median", "newton_per_step_max", "force_N_per_m",
+              "force_error_rel", "half_angle_error_deg", "observed_order"]
+    with open(out / "fem2d.csv", "w", newline="") as f:
+        csv.writer(f).writerows([header] + rows)
+    plot(out / "fem2d.png", header, rows)
+    print((out / "fem2d.csv").read_text())
+
+
+def plot(path: Path, header, rows) -> None:
+    col = {h: i for i, h in enumerate(header)}
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.8))
+    for method, marker in zip(METHODS, "os"):
+        for ranks, fill in ((1, "full"), (2, "none")):
+            sel = [r for r in rows if r[col["method"]] == method and r[col["ranks"]] == ranks]
+            if not sel:
+                continue
+            t = [float(r[col["wall_time_s"]]) for r in sel]
+            label = f"{method}, {ranks} rank{'s' if ranks > 1 else ''}"
+            axes[0].loglog(t, [float(r[col["force_error_rel"]]) for r in sel], marker=marker,
+                           fillstyle=fill, label=label)
+            axes[1].semilogx(t, [float(r[col["half_angle_error_deg"]]) for r in sel],
+                             marker=marker, fillstyle=fill, label=label)
+            if method != METHODS[0] or ranks != 1:
+                continue
+            for r, x in zip(sel, t):
+                axes[0].annotate(f"{r[col['dofs']]} dofs", (x, float(r[col["force_error_rel"]])),
+                                 fontsize=7, xytext=(4, 4), textcoords="offset points")
+    axes[0].set_ylabel("force error at largest approach (vs Richardson limit)")
+    axes[1].set_ylabel("largest |half-angle - Persson| (deg)")
+    for ax in axes:
+        ax.set_xlabel("wall time of `pinbore fem` (s)")
+        ax.grid(alpha=0.3, which="both")
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
+        ax.xaxis.set_major_formatter(matplotlib.ticker.ScalarFormatter())
+        ax.legend(fontsize=8)
+    fig.suptitle("2D FE, scene steel_c10um (c = 10 um, 10 load steps)")
+    fig.tight_layout()
+    fig.savefig(path, dpi=110, metadata={"Software": None})
+    plt.close(fig)
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=ROOT / "bench")
+    main(parser.parse_args().out)
