@@ -56,7 +56,7 @@ def persson_figure(runs) -> tuple[str, list]:
     """FE half-angle against load, beside the Persson closed form, for similar materials."""
     fig, ax = plt.subplots(figsize=(8, 5))
     rows = []
-    load = np.linspace(0, 3, 300)
+    load = np.geomspace(1e-4, 3, 300)
     ax.plot(load, [np.degrees(persson_half_angle(x)) for x in load], "k-", lw=1,
             label="Persson / Ciavarella-Decuzzi (infinite plate)")
     for name, result, curve, _ in runs:
@@ -68,7 +68,7 @@ def persson_figure(runs) -> tuple[str, list]:
         closed = np.degrees([persson_half_angle(v) for v in x])
         rows.append([name, f"{curve['half_angle_deg'].min():.1f}-{curve['half_angle_deg'].max():.1f}",
                      f"{np.max(np.abs(curve['half_angle_deg'] - closed)):.2f}"])
-    ax.set_xscale("symlog", linthresh=0.01)
+    ax.set_xscale("log")
     ax.set_xlabel("P / (E* c)")
     ax.set_ylabel("contact half-angle (deg)")
     ax.grid(alpha=0.3)

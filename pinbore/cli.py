@@ -43,7 +43,7 @@ def parser() -> argparse.ArgumentParser:
                        description="Build the 2D or 3D gmsh model of an FE scene; write "
                                    "DIR/mesh.msh and DIR/preview.png.")
     m.add_argument("scene", help="FE scene file (TOML, kind = \"fem\")")
-    m.add_argument("--out", required=True, help="output directory (replaced when complete)")
+    m.add_argument("--out", required=True, metavar="DIR", help="output directory (replaced when complete)")
     m.set_defaults(func=_mesh)
     f = sub.add_parser("fem", help="solve a 2D FE contact scene: curve.csv, pressure.csv, result.json",
                        description="Solve the pin-in-bore contact of an FE scene; write "
@@ -51,7 +51,7 @@ def parser() -> argparse.ArgumentParser:
                                    "the scene asks, DIR/fields.xdmf and DIR/contact.png. Runs "
                                    "under mpiexec -n N.")
     f.add_argument("scene", help="FE scene file (TOML, kind = \"fem\")")
-    f.add_argument("--out", required=True, help="output directory (replaced when complete)")
+    f.add_argument("--out", required=True, metavar="DIR", help="output directory (replaced when complete)")
     f.set_defaults(func=_fem)
     r = sub.add_parser("report", help="build the HTML report from the results under build/",
                        description="Collect the results under BUILD into one self-contained "
