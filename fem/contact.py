@@ -82,14 +82,13 @@ class Segments:
     angles: np.ndarray          # (M,) sorted, in [-pi, pi)
     displacement: np.ndarray    # (M, 2)
 
-    def start_and_width(self, k):
-        width = np.diff(np.append(self.angles, self.angles[0] + 2 * np.pi))
-        return self.angles[k], width[k]
+    def __post_init__(self):
+        self.widths = np.diff(np.append(self.angles, self.angles[0] + 2 * np.pi))
 
     def point(self, k, xi):
         """Y(xi), Y'(xi) and Y''(xi) on segments k."""
-        start, width = self.start_and_width(k)
-        theta = start + xi * width
+        width = self.widths[k]
+        theta = self.angles[k] + xi * width
         e_r = np.stack([np.cos(theta), np.sin(theta)], axis=1)
         e_t = np.stack([-e_r[:, 1], e_r[:, 0]], axis=1)
         u0, u1 = self.displacement[k], self.displacement[(k + 1) % self.angles.size]
@@ -143,7 +142,9 @@ class ContactState:
 class PinBoreContact:
     """Contact terms between the pin-surface and bore-surface nodes of a P1 vector space.
 
-    pin_dofs / bore_dofs: local block (node) indices in V owned by this rank.
+    pin_dofs / bore_dofs: local block (node) indices in V owned by this rank. Every rank
+    holds both surfaces whole, sorted by angle: pin_X, pin_nodes (global node indices),
+    weights (tributary lengths), bore_angles, and the multipliers lam.
     """
 
     def __init__(self, V, pin_dofs, bore_dofs, bore_radius, penalty, template: PETSc.Vec):
@@ -158,11 +159,11 @@ class PinBoreContact:
         pin_angle = np.arctan2(self.pin_X[:, 1], self.pin_X[:, 0])
         bore_angle = np.arctan2(bore_X[:, 1], bore_X[:, 0])
         order_p, order_b = np.argsort(pin_angle), np.argsort(bore_angle)
-        self.pin_X, pin_nodes = self.pin_X[order_p], pin_nodes[order_p]
+        self.pin_X, self.pin_nodes = self.pin_X[order_p], pin_nodes[order_p]
         self.bore_angles, bore_nodes = bore_angle[order_b], bore_nodes[order_b]
         self.weights = tributary_lengths(self.pin_X)
         bs = V.dofmap.index_map_bs
-        self.pin_rows = (bs * pin_nodes[:, None] + np.arange(2)).astype(PETSc.IntType)
+        self.pin_rows = (bs * self.pin_nodes[:, None] + np.arange(2)).astype(PETSc.IntType)
         self.bore_rows = (bs * bore_nodes[:, None] + np.arange(2)).astype(PETSc.IntType)
         self.lam = np.zeros(len(self.pin_X))
         self._scatter, self._local = self._make_scatter(template)

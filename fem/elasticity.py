@@ -97,6 +97,10 @@ class Elasticity:
         f.x.array.reshape(-1, 2)[self.pin_nodes] = shift
         return f.x.petsc_vec.copy()
 
+    def zero_prescribed(self, F: PETSc.Vec) -> None:
+        """F = 0 at the prescribed dofs (their values are set, not solved for)."""
+        dolfinx.fem.petsc.set_bc(F, self.bcs, alpha=0.0)
+
     def internal_force(self, x: PETSc.Vec, out: PETSc.Vec) -> None:
         """out = K x: the elastic internal forces (N/m per dof)."""
         self.K.mult(x, out)

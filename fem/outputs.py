@@ -64,7 +64,7 @@ class FieldWriter:
         W = dolfinx.fem.functionspace(mesh, ("Lagrange", 1))
         self.pressure = dolfinx.fem.Function(W, name="contact_pressure")
         # gathered pin nodes -> local scalar dofs (same layout as the blocked vector space)
-        local = elasticity.V.dofmap.index_map.global_to_local(contact.pin_rows[:, 0] // 2)
+        local = elasticity.V.dofmap.index_map.global_to_local(contact.pin_nodes)
         self.mine = np.flatnonzero(local >= 0)
         self.local = local[self.mine]
         self.file = dolfinx.io.XDMFFile(mesh.comm, str(path), "w")

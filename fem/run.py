@@ -37,8 +37,9 @@ def run(scene_path, out, comm=MPI.COMM_WORLD) -> int:
         approaches = [scene.load.max_approach * (k + 1) / steps for k in range(steps)]
         fields = (outputs.FieldWriter(tmp / "fields.xdmf", el, contact)
                   if scene.output.fields else None)
+        # a progress bar on rank 0 when it writes to a terminal (tqdm decides: disable=None)
         with tqdm(total=steps, desc=f"fem {Path(scene_path).stem}", unit="step",
-                  disable=comm.rank != 0 or None, leave=False) as bar:
+                  disable=None if comm.rank == 0 else True, leave=False) as bar:
             result = stepper.run(approaches, bar, on_step=fields.write if fields else None)
         if fields:
             fields.close()

@@ -36,23 +36,26 @@ def _report(args) -> int:
     return 0
 
 
+def _scene_command(sub, name, func, summary, description):
+    """A subcommand that reads one scene file and writes an output directory."""
+    command = sub.add_parser(name, help=summary, description=description)
+    command.add_argument("scene", help="FE scene file (TOML, kind = \"fem\")")
+    command.add_argument("--out", required=True, metavar="DIR",
+                         help="output directory (replaced when complete)")
+    command.set_defaults(func=func)
+
+
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="pinbore", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
-    m = sub.add_parser("mesh", help="build the gmsh model of an FE scene: mesh.msh, preview.png",
-                       description="Build the 2D or 3D gmsh model of an FE scene; write "
-                                   "DIR/mesh.msh and DIR/preview.png.")
-    m.add_argument("scene", help="FE scene file (TOML, kind = \"fem\")")
-    m.add_argument("--out", required=True, metavar="DIR", help="output directory (replaced when complete)")
-    m.set_defaults(func=_mesh)
-    f = sub.add_parser("fem", help="solve a 2D FE contact scene: curve.csv, pressure.csv, result.json",
-                       description="Solve the pin-in-bore contact of an FE scene; write "
-                                   "DIR/curve.csv, DIR/pressure.csv, DIR/result.json and, when "
-                                   "the scene asks, DIR/fields.xdmf and DIR/contact.png. Runs "
-                                   "under mpiexec -n N.")
-    f.add_argument("scene", help="FE scene file (TOML, kind = \"fem\")")
-    f.add_argument("--out", required=True, metavar="DIR", help="output directory (replaced when complete)")
-    f.set_defaults(func=_fem)
+    _scene_command(sub, "mesh", _mesh, "build the gmsh model of an FE scene: mesh.msh, preview.png",
+                   "Build the 2D or 3D gmsh model of an FE scene; write DIR/mesh.msh and "
+                   "DIR/preview.png.")
+    _scene_command(sub, "fem", _fem,
+                   "solve a 2D FE contact scene: curve.csv, pressure.csv, result.json",
+                   "Solve the pin-in-bore contact of an FE scene; write DIR/curve.csv, "
+                   "DIR/pressure.csv, DIR/result.json and, when the scene asks, "
+                   "DIR/fields.xdmf and DIR/contact.png. Runs under mpiexec -n N.")
     r = sub.add_parser("report", help="build the HTML report from the results under build/",
                        description="Collect the results under BUILD into one self-contained "
                                    "HTML page, OUT/index.html.")
