@@ -19,7 +19,7 @@ PYTHON312 ?= $(shell for p in $$(command -v python3.12) \
 FEM_SCENES := $(basename $(notdir $(wildcard scenes/fem/*.toml)))
 FEM_CURVES := $(FEM_SCENES:%=build/fem/%/curve.csv)
 MESHES := $(FEM_SCENES:%=build/mesh/%/mesh.msh)
-STAGE_CODE := $(wildcard pinbore/*.py meshes/*.py fem/*.py)
+STAGE_CODE := $(wildcard pinbore/*.py laws/*.py meshes/*.py fem/*.py)
 MPIEXEC := $(if $(filter-out 1,$(NP)),$(VENV)/bin/mpiexec -n $(NP))
 
 .PHONY: all venv mesh fem report bench test test-slow clean help

@@ -32,7 +32,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import tomli_w  # noqa: E402
 
-from meshes.sizing import persson_half_angle, persson_load  # noqa: E402
+from laws.elastic import persson_half_angle, persson_load  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "fem" / "steel_c10um.toml"

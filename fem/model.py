@@ -17,10 +17,8 @@ DEFAULT_GAP_TOLERANCE = 1e-4  # fraction of max_approach
 
 
 def sizing_of(scene: FemScene):
-    g = scene.geometry
-    return estimate_sizing(g.bore_radius, g.clearance, scene.effective_modulus,
-                           scene.load.max_approach, scene.mesh.contact_size, scene.mesh.grading,
-                           scene.mesh.refine)
+    return estimate_sizing(scene.joint, scene.load.max_approach, scene.mesh.contact_size,
+                           scene.mesh.grading, scene.mesh.refine)
 
 
 def mesh_of(scene: FemScene, comm=MPI.COMM_WORLD):

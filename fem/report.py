@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from meshes.sizing import persson_half_angle
+from laws.elastic import persson_half_angle
 from pinbore.report import figure, figure_data, png_data, plt, table
 
 

@@ -5,6 +5,7 @@ from typing import Literal
 
 import pydantic
 
+from laws.elastic import Joint
 from meshes.model import Geometry, MeshOptions
 from pinbore.scene import Strict
 
@@ -86,7 +87,12 @@ class FemScene(Strict):
         return self
 
     @property
+    def joint(self) -> Joint:
+        """The joint of the contact laws (2D: per unit length; length = 1 m unless given)."""
+        g, pin, bore = self.geometry, self.materials.pin, self.materials.bore
+        return Joint(g.bore_radius, g.pin_radius, bore.E, bore.nu, pin.E, pin.nu, g.length or 1.0)
+
+    @property
     def effective_modulus(self) -> float:
         """E* with 1/E* = (1-nu_pin^2)/E_pin + (1-nu_bore^2)/E_bore (Pa), plane strain."""
-        pin, bore = self.materials.pin, self.materials.bore
-        return 1.0 / ((1 - pin.nu**2) / pin.E + (1 - bore.nu**2) / bore.E)
+        return self.joint.e_star

@@ -1,0 +1,4 @@
+"""Contact laws for revolute clearance joints: elastic (force against approach) and
+dissipative (hysteresis). Pure functions in SI units, the formula and its source in each
+docstring. This package imports nothing from the stages, so every stage may use it.
+"""

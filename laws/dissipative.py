@@ -1,0 +1,133 @@
+"""Dissipative normal laws: the elastic force with a hysteresis (damping) term.
+
+Hunt-Crossley type: F = F_el(d) (1 + chi d'/v0), d' the approach rate, v0 the impact speed
+(the approach rate at first contact), chi a function of the coefficient of restitution e;
+equivalently a damping eta = chi K / v0 on F_el = K d^n (review eqs. 4-8). The functions
+named after their authors return chi(e). None of them reproduces its target e exactly:
+`restitution` measures the effective e of any force law by integrating one impact.
+"""
+
+import math
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from laws.elastic import warn_once
+
+
+def _check(e: float) -> None:
+    if not 0 < e <= 1:
+        raise ValueError(f"coefficient of restitution e = {e} must be in (0, 1]")
+
+
+def hunt_crossley(e):
+    """Hunt & Crossley 1975: chi = 3 (1 - e) / 2."""
+    _check(e)
+    return 1.5 * (1 - e)
+
+
+def lankarani_nikravesh(e):
+    """Lankarani & Nikravesh 1990: chi = 3 (1 - e^2) / 4 (review eq. 7; derived for e near 1)."""
+    _check(e)
+    if e < 0.7:
+        warn_once("lankarani_nikravesh", f"e = {e} is far from 1, where the law was derived")
+    return 0.75 * (1 - e**2)
+
+
+def lee_wang(e):
+    """Lee & Wang 1983: chi = 3 (1 - e) / 4."""
+    _check(e)
+    return 0.75 * (1 - e)
+
+
+def herbert_mcwhannell(e):
+    """Herbert & McWhannell 1977: chi = 6 (1 - e) / ((2e - 1)^2 + 3)."""
+    _check(e)
+    return 6 * (1 - e) / ((2 * e - 1) ** 2 + 3)
+
+
+def zhiying_qishao(e):
+    """Zhiying & Qishao 2006 (review eq. 8): chi = 3 (1 - e^2) exp(2 (1 - e)) / 4."""
+    _check(e)
+    return 0.75 * (1 - e**2) * math.exp(2 * (1 - e))
+
+
+def gonthier(e):
+    """Gonthier et al. 2004: chi = (1 - e^2) / e."""
+    _check(e)
+    return (1 - e**2) / e
+
+
+def flores(e):
+    """Flores et al. 2011: chi = 8 (1 - e) / (5 e)."""
+    _check(e)
+    return 1.6 * (1 - e) / e
+
+
+def hu_guo(e):
+    """Hu & Guo 2015: chi = 3 (1 - e) / (2 e)."""
+    _check(e)
+    return 1.5 * (1 - e) / e
+
+
+HYSTERESIS = {f.__name__: f for f in (hunt_crossley, lankarani_nikravesh, lee_wang,
+                                       herbert_mcwhannell, zhiying_qishao, gonthier, flores,
+                                       hu_guo)}
+
+
+def hysteresis_force(elastic, rate, impact_speed, chi):
+    """F = F_el (1 + chi d' / v0): the Hunt-Crossley family (N, or N/m with F_el per length)."""
+    return elastic * (1 + chi * np.asarray(rate, float) / impact_speed)
+
+
+def kelvin_voigt(d, rate, stiffness, damping):
+    """Kelvin-Voigt (review eq. 2): F = K d + D d' (linear spring and dashpot; may pull)."""
+    return stiffness * np.asarray(d, float) + damping * np.asarray(rate, float)
+
+
+def kelvin_voigt_damping(e, stiffness, mass):
+    """D for a target e, separation at d = 0: a damped linear oscillator rebounds with
+    e = exp(-pi z / sqrt(1 - z^2)), so z = -ln e / sqrt(pi^2 + ln^2 e) and D = 2 z sqrt(K m)."""
+    _check(e)
+    z = -math.log(e) / math.hypot(math.pi, math.log(e))
+    return 2 * z * math.sqrt(stiffness * mass)
+
+
+def yigit(d, rate, stiffness, exponent, coefficient):
+    """Yigit, Ulsoy & Scott 1990 (review eq. 9): F = K d^n + 0.75 C K d d', n >= 1."""
+    d = np.asarray(d, float)
+    return stiffness * d**exponent + 0.75 * coefficient * stiffness * d * np.asarray(rate, float)
+
+
+def yigit_coefficient(e, stiffness, exponent, mass, speed):
+    """C of `yigit` for a target e at impact speed v0, by the energy balance of Lankarani and
+    Nikravesh (ours, first order in 1 - e): the damping term dissipates
+    2 * 0.75 C K int_0^dm d v(d) dd = 1.5 C K v0 dm^2 I_n, with v = v0 sqrt(1 - (d/dm)^(n+1)),
+    I_n = int_0^1 s sqrt(1 - s^(n+1)) ds, dm the elastic maximum approach; equal to
+    m v0^2 (1 - e^2) / 2."""
+    _check(e)
+    n = exponent
+    dm = ((n + 1) * mass * speed**2 / (2 * stiffness)) ** (1 / (n + 1))
+    s = np.linspace(0, 1, 20001)
+    integral = np.trapezoid(s * np.sqrt(np.clip(1 - s ** (n + 1), 0, None)), s)
+    return mass * speed * (1 - e**2) / (3 * stiffness * dm**2 * integral)
+
+
+def restitution(force, mass, speed):
+    """Effective coefficient of restitution of a force law F(d, d') in one impact: a mass m
+    meets the contact at speed v0 and leaves it when d returns to 0; e = |d'_out| / v0."""
+    def rhs(_, y):
+        return [y[1], -force(y[0], y[1]) / mass]
+
+    def leaves(_, y):
+        return y[0]
+    leaves.terminal, leaves.direction = True, -1
+
+    # time scale: the elastic contact duration is a few (m / K)^(1/2); integrate far enough
+    span = 1.0
+    while True:
+        sol = solve_ivp(rhs, (0, span), [0.0, speed], method="DOP853", rtol=1e-11, atol=1e-15,
+                        events=leaves, dense_output=False, first_step=span * 1e-9)
+        if sol.t_events[0].size:
+            return abs(sol.y_events[0][0][1]) / speed
+        span *= 10
