@@ -19,10 +19,11 @@ PYTHON312 ?= $(shell for p in $$(command -v python3.12) \
 FEM_SCENES := $(basename $(notdir $(wildcard scenes/fem/*.toml)))
 FEM_CURVES := $(FEM_SCENES:%=build/fem/%/curve.csv)
 MESHES := $(FEM_SCENES:%=build/mesh/%/mesh.msh)
+STUDY_CURVES := $(filter build/fem/study_%,$(FEM_CURVES))
 STAGE_CODE := $(wildcard pinbore/*.py laws/*.py meshes/*.py fem/*.py)
 MPIEXEC := $(if $(filter-out 1,$(NP)),$(VENV)/bin/mpiexec -n $(NP))
 
-.PHONY: all venv mesh fem report bench test test-slow clean help
+.PHONY: all venv mesh fem calibration report bench test test-slow clean help
 .DELETE_ON_ERROR:
 
 all: report ## set up .venv, run the default scenes, build the report (the main job)
@@ -50,14 +51,21 @@ fem: $(FEM_CURVES) ## solve the default FE scenes (build/fem/<scene>/)
 build/fem/%/curve.csv: scenes/fem/%.toml $(STAGE_CODE) $(STAMP)
 	$(MPIEXEC) $(PINBORE) fem $< --out build/fem/$*
 
+calibration: build/calibration/laws.json ## fit and rank the contact laws on the study curves
+
+build/calibration/laws.json: $(STUDY_CURVES) $(wildcard laws/*.py calibration/*.py) $(STAMP)
+	$(PINBORE) calibrate $(STUDY_CURVES) --out build/calibration
+
 report: build/report/index.html ## build build/report/index.html from the results
 
-build/report/index.html: $(FEM_CURVES) $(MESHES) $(wildcard bench/*.csv) $(STAGE_CODE) $(STAMP)
+build/report/index.html: $(FEM_CURVES) $(MESHES) build/calibration/laws.json $(wildcard bench/*.csv) \
+                         $(STAGE_CODE) $(wildcard calibration/*.py) $(STAMP)
 	$(PINBORE) report --build build --out build/report
 	@echo "report: $(abspath $@)"
 
-bench: $(STAMP) ## run the benchmarks: bench/*.csv and plots
+bench: $(STUDY_CURVES) $(STAMP) ## run the benchmarks: bench/*.csv and plots
 	$(PY) bench/fem2d.py --out bench
+	$(PY) bench/calibrate.py --out bench
 
 test: $(STAMP) ## run the test suite (what CI runs)
 	$(PY) -m pytest -n 2 -m "not slow" tests

@@ -29,6 +29,12 @@ def _fem(args) -> int:
     return fem_run.run(args.scene, args.out)
 
 
+def _calibrate(args) -> int:
+    from calibration import run as calibration_run
+
+    return calibration_run.run(args.curves, args.out, args.length)
+
+
 def _report(args) -> int:
     from pinbore import report
 
@@ -56,6 +62,16 @@ def parser() -> argparse.ArgumentParser:
                    "Solve the pin-in-bore contact of an FE scene; write DIR/curve.csv, "
                    "DIR/pressure.csv, DIR/result.json and, when the scene asks, "
                    "DIR/fields.xdmf and DIR/contact.png. Runs under mpiexec -n N.")
+    c = sub.add_parser("calibrate", help="fit and rank the contact laws on FE curves: laws.json",
+                       description="Fit every contact law to FE load-approach curves (2D, per "
+                                   "unit length; each curve.csv with its result.json beside it) "
+                                   "and rank them; write DIR/laws.json, DIR/ranking.csv, "
+                                   "DIR/curves.png, DIR/errors.png.")
+    c.add_argument("curves", nargs="+", help="curve.csv files written by `pinbore fem`")
+    c.add_argument("--out", required=True, metavar="DIR", help="output directory (replaced when complete)")
+    c.add_argument("--length", type=float, default=None,
+                   help="axial length (m) for the laws that need one; default: the bore diameter")
+    c.set_defaults(func=_calibrate)
     r = sub.add_parser("report", help="build the HTML report from the results under build/",
                        description="Collect the results under BUILD into one self-contained "
                                    "HTML page, OUT/index.html.")

@@ -1,0 +1,142 @@
+"""`pinbore calibrate CURVE.csv [...] --out DIR`: fit and rank the contact laws.
+
+Writes DIR/laws.json (every law: published-form errors per curve, fitted parameters with
+95 % confidence intervals and their errors, validity range, the curves used), DIR/ranking.csv
+(the best laws per curve and load range) and the figures DIR/curves.png, DIR/errors.png.
+"""
+
+import json
+import math
+import time
+import warnings
+
+import numpy as np
+
+from calibration import figures
+from calibration.curves import read_curve
+from calibration.fit import NotFitted, errors, fit, law_force
+from laws import elastic
+from pinbore.output import atomic_directory
+
+LAWS = list(elastic.PUBLISHED) + ["linear"]
+
+
+def evaluate(curves):
+    """Published and fitted errors of every law on every curve: {law: {...}}."""
+    table = {}
+    for name in LAWS:
+        try:
+            fitted, reason = fit(name, curves), None
+        except NotFitted as err:
+            fitted, reason = None, str(err)
+        table[name] = {
+            "published": None if name == "linear" else
+            {c.name: errors(law_force(name, c.approach, c.joint), c.force) for c in curves},
+            "fit": fitted,
+            "not_fitted": reason,
+            "fitted": None if fitted is None else
+            {c.name: errors(fitted.force(name, c.approach, c.joint), c.force) for c in curves},
+        }
+    return table
+
+
+def ranking(curves, table):
+    """Best published and best fitted law per curve and load range (lighter / heavier half)."""
+    rows = []
+    for c in curves:
+        half = c.approach.size // 2
+        for label, part in (("light", slice(0, half)), ("heavy", slice(half, None))):
+            d, p = c.approach[part], c.force[part]
+
+            def rms(name, fitted):
+                force = (table[name]["fit"].force(name, d, c.joint) if fitted
+                         else law_force(name, d, c.joint))
+                return errors(force, p).rms_rel
+
+            published = sorted((rms(n, False), n) for n in LAWS if n != "linear")
+            best_fit = min((rms(n, True), n) for n in LAWS if table[n]["fit"] is not None)
+            rows.append({"curve": c.name, "clearance_ratio": c.joint.clearance / c.joint.r_bore,
+                         "materials": "similar" if c.similar_materials else "dissimilar",
+                         "load_range": label,
+                         "force_min_N_per_m": float(p.min()), "force_max_N_per_m": float(p.max()),
+                         "best_published": published[0][1], "best_published_rms": published[0][0],
+                         "second_published": published[1][1], "second_published_rms": published[1][0],
+                         "best_fitted": best_fit[1], "best_fitted_rms": best_fit[0]})
+    return rows
+
+
+def laws_json(curves, table, length, caught, seconds):
+    clearance = [c.joint.clearance for c in curves]
+    validity = {
+        "clearance_m": [min(clearance), max(clearance)],
+        "clearance_ratio": [min(c.joint.clearance / c.joint.r_bore for c in curves),
+                            max(c.joint.clearance / c.joint.r_bore for c in curves)],
+        "approach_m": [float(min(c.approach.min() for c in curves)),
+                       float(max(c.approach.max() for c in curves))],
+        "housing_ratio": [min(c.housing_ratio for c in curves), max(c.housing_ratio for c in curves)],
+    }
+    laws = {}
+    for name in LAWS:
+        entry, f = table[name], table[name]["fit"]
+        doc = (law_force.__doc__ if name == "linear" else elastic.PUBLISHED[name].__doc__)
+        laws[name] = {
+            "formula": " ".join(doc.split()),
+            "published_errors": None if entry["published"] is None else
+            {k: vars(v) for k, v in entry["published"].items()},
+            "fitted": None if f is None else
+            {"model": "P = scale * P_law(d) * (d / reference_approach_m)^exponent_correction",
+             "scale": f.scale, "scale_ci95": list(f.scale_ci95),
+             "exponent_correction": f.exponent_correction,
+             "exponent_correction_ci95": list(f.exponent_correction_ci95),
+             "reference_approach_m": f.reference_approach, "points": f.points},
+            "not_fitted": entry["not_fitted"],
+            "fitted_errors": None if f is None else {k: vars(v) for k, v in entry["fitted"].items()},
+            "validity": validity,
+            "fitted_to": [c.name for c in curves],
+        }
+    return {
+        "units": {"approach": "m", "force": "N/m (per unit length, plane strain)"},
+        "length_m": length,
+        "length_note": "axial length given to the laws that need one (hertz: F/L; "
+                       "dubowsky_freudenstein); null: each curve's bore diameter",
+        "curves": [{"name": c.name, "clearance_m": c.joint.clearance, "bore_radius_m": c.joint.r_bore,
+                    "effective_modulus_Pa": c.joint.e_star, "housing_ratio": c.housing_ratio,
+                    "similar_materials": c.similar_materials,
+                    "approach_m": [float(c.approach.min()), float(c.approach.max())],
+                    "persson_half_angle_error_deg": persson_error(c)} for c in curves],
+        "laws": laws,
+        "warnings": sorted({str(w.message) for w in caught}),
+        "fit_seconds": seconds,
+    }
+
+
+def persson_error(curve):
+    """Largest |FE half-angle - Persson| (deg) for similar materials, else None."""
+    if curve.half_angle is None or not curve.similar_materials:
+        return None
+    scale = curve.joint.e_star * curve.joint.clearance
+    closed = np.degrees([elastic.persson_half_angle(p / scale) for p in curve.force])
+    return float(np.max(np.abs(curve.half_angle - closed)))
+
+
+def run(paths, out, length=None) -> int:
+    curves = [read_curve(p, length) for p in paths]
+    start = time.perf_counter()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        table = evaluate(curves)
+        rows = ranking(curves, table)
+    seconds = time.perf_counter() - start
+    with atomic_directory(out) as tmp:
+        (tmp / "laws.json").write_text(json.dumps(laws_json(curves, table, length, caught, seconds),
+                                                  indent=2) + "\n")
+        header = list(rows[0])
+        lines = [",".join(header)] + [",".join(_cell(r[h]) for h in header) for r in rows]
+        (tmp / "ranking.csv").write_text("\n".join(lines) + "\n")
+        figures.curves(tmp / "curves.png", curves, table, LAWS)
+        figures.error_maps(tmp / "errors.png", curves, table, LAWS)
+    return 0
+
+
+def _cell(value):
+    return f"{value:.4g}" if isinstance(value, float) and math.isfinite(value) else str(value)
