@@ -13,6 +13,14 @@ def _pct(value) -> str:
     return "–" if value is None or not np.isfinite(value) else f"{100 * value:.1f} %"
 
 
+def _pooled(errors: dict, points: dict) -> str:
+    """RMS over the curves, or where the law has no solution on some curve, which ones."""
+    short = [name for name, e in errors.items() if e["points"] < points[name]]
+    if short:
+        return f"no solution at some approaches of {len(short)} curve(s)"
+    return _pct(np.sqrt(np.mean([e["rms_rel"] ** 2 for e in errors.values()])))
+
+
 def section(build_dir: Path, bench_dir: Path) -> str:
     folder = build_dir / "calibration"
     parts = ["<h2>Contact laws calibrated on the FE curves</h2>"]
@@ -43,22 +51,19 @@ def section(build_dir: Path, bench_dir: Path) -> str:
     parts.append(figure(png_data(folder / "errors.png"),
                         "RMS relative force error of every law on every curve, as published (left) "
                         "and fitted (right); numbers in percent (build/calibration/errors.png)."))
+    points = {c["name"]: c["points"] for c in curves}
     rows = []
     for name, law in laws.items():
         published = law["published_errors"]
         fitted, f = law["fitted_errors"], law["fitted"]
         if f is None:
-            rows.append([name, _pct(np.sqrt(np.mean([e["rms_rel"] ** 2 for e in published.values()]))),
-                         "not fitted", law["not_fitted"], "–", "–"])
+            rows.append([name, _pooled(published, points), "not fitted", law["not_fitted"], "–", "–"])
             continue
-        rows.append([name,
-                     _pct(np.sqrt(np.mean([e["rms_rel"] ** 2 for e in published.values()])))
-                     if published else "fit only",
+        rows.append([name, _pooled(published, points) if published else "fit only",
                      f"{f['scale']:.3g} [{f['scale_ci95'][0]:.3g}, {f['scale_ci95'][1]:.3g}]",
                      f"{f['exponent_correction']:+.3f} [{f['exponent_correction_ci95'][0]:+.3f}, "
                      f"{f['exponent_correction_ci95'][1]:+.3f}]",
-                     _pct(np.sqrt(np.mean([e["rms_rel"] ** 2 for e in fitted.values()]))),
-                     _pct(max(e["max_rel"] for e in fitted.values()))])
+                     _pooled(fitted, points), _pct(max(e["max_rel"] for e in fitted.values()))])
     parts.append("<h3>Laws: errors over all curves and fitted parameters (95 % intervals)</h3>")
     parts.append(table(["law", "RMS error, published", "scale s", "exponent correction q",
                         "RMS error, fitted", "max error, fitted"], rows))

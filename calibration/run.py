@@ -49,9 +49,11 @@ def ranking(curves, table):
             d, p = c.approach[part], c.force[part]
 
             def rms(name, fitted):
+                """RMS error over the range; a law without a solution at every point is out."""
                 force = (table[name]["fit"].force(name, d, c.joint) if fitted
                          else law_force(name, d, c.joint))
-                return errors(force, p).rms_rel
+                e = errors(force, p)
+                return e.rms_rel if e.points == d.size else math.inf
 
             published = sorted((rms(n, False), n) for n in LAWS if n != "linear")
             best_fit = min((rms(n, True), n) for n in LAWS if table[n]["fit"] is not None)
@@ -99,7 +101,8 @@ def laws_json(curves, table, length, caught, seconds):
         "length_m": length,
         "length_note": "axial length given to the laws that need one (hertz: F/L; "
                        "dubowsky_freudenstein); null: each curve's bore diameter",
-        "curves": [{"name": c.name, "clearance_m": c.joint.clearance, "bore_radius_m": c.joint.r_bore,
+        "curves": [{"name": c.name, "points": int(c.approach.size),
+                    "clearance_m": c.joint.clearance, "bore_radius_m": c.joint.r_bore,
                     "effective_modulus_Pa": c.joint.e_star, "housing_ratio": c.housing_ratio,
                     "similar_materials": c.similar_materials,
                     "approach_m": [float(c.approach.min()), float(c.approach.max())],
