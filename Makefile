@@ -18,7 +18,7 @@ PYTHON312 ?= $(shell for p in $$(command -v python3.12) \
 
 FEM_SCENES := $(basename $(notdir $(wildcard scenes/fem/*.toml)))
 FEM_CURVES := $(FEM_SCENES:%=build/fem/%/curve.csv)
-MESHES := $(FEM_SCENES:%=build/mesh/%/mesh.msh)
+MESHES := $(filter-out build/mesh/study_%,$(FEM_SCENES:%=build/mesh/%/mesh.msh))
 STUDY_CURVES := $(filter build/fem/study_%,$(FEM_CURVES))
 STAGE_CODE := $(wildcard pinbore/*.py laws/*.py meshes/*.py fem/*.py)
 MPIEXEC := $(if $(filter-out 1,$(NP)),$(VENV)/bin/mpiexec -n $(NP))
@@ -41,7 +41,7 @@ $(STAMP): requirements.lock pyproject.toml
 	$(VENV)/bin/pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e .
 	touch $@
 
-mesh: $(MESHES) ## build the meshes of the default FE scenes (build/mesh/<scene>/)
+mesh: $(MESHES) ## build the meshes of the showcase FE scenes (build/mesh/<scene>/)
 
 build/mesh/%/mesh.msh: scenes/fem/%.toml $(STAGE_CODE) $(STAMP)
 	$(PINBORE) mesh $< --out build/mesh/$*

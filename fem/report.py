@@ -36,14 +36,15 @@ def load_runs(build_dir: Path):
 
 
 def curves_figure(runs) -> str:
-    fig, ax = plt.subplots(figsize=(8, 5))
+    fig, ax = plt.subplots(figsize=(9, 6))
+    ax.set_prop_cycle(color=plt.cm.tab20.colors)
     for name, result, curve, _ in runs:
         ax.plot(curve["approach_m"] * 1e6, curve["force_per_length_N_per_m"] / 1e3, "o-", ms=3,
                 label=f"{name} (c = {scene_clearance(result) * 1e6:.0f} um)")
     ax.set_xlabel("approach beyond first touch (um)")
     ax.set_ylabel("force per length (kN/m)")
     ax.grid(alpha=0.3)
-    ax.legend()
+    ax.legend(fontsize=8, ncol=2)
     return figure_data(fig)
 
 

@@ -36,7 +36,7 @@ def preview_2d(path, geometry, direction_deg: float, zoom_half_angle: float) -> 
         ax.set_xlabel("x (mm)")
     axes[0].set_ylabel("y (mm)")
     fig.suptitle(f"{triangles.shape[0]} triangles, {xy.shape[0]} nodes; load at {direction_deg:g} deg")
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0, 1, 0.95))
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
