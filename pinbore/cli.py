@@ -35,6 +35,12 @@ def _calibrate(args) -> int:
     return calibration_run.run(args.curves, args.out, args.length)
 
 
+def _reduced(args) -> int:
+    from reduced import run as reduced_run
+
+    return reduced_run.run(args.scene, args.out)
+
+
 def _report(args) -> int:
     from pinbore import report
 
@@ -45,7 +51,7 @@ def _report(args) -> int:
 def _scene_command(sub, name, func, summary, description):
     """A subcommand that reads one scene file and writes an output directory."""
     command = sub.add_parser(name, help=summary, description=description)
-    command.add_argument("scene", help="FE scene file (TOML, kind = \"fem\")")
+    command.add_argument("scene", help="scene file (TOML)")
     command.add_argument("--out", required=True, metavar="DIR",
                          help="output directory (replaced when complete)")
     command.set_defaults(func=func)
@@ -72,6 +78,10 @@ def parser() -> argparse.ArgumentParser:
     c.add_argument("--length", type=float, default=None,
                    help="axial length (m) for the laws that need one; default: the bore diameter")
     c.set_defaults(func=_calibrate)
+    _scene_command(sub, "reduced", _reduced,
+                   "integrate a mechanism with clearance joints: timeseries.csv, summary.json",
+                   "Integrate a planar mechanism with revolute clearance joints (scene kind = "
+                   "\"reduced\"); write DIR/timeseries.csv, DIR/summary.json and plots.")
     r = sub.add_parser("report", help="build the HTML report from the results under build/",
                        description="Collect the results under BUILD into one self-contained "
                                    "HTML page, OUT/index.html.")

@@ -1,0 +1,307 @@
+r"""The compiled core of the reduced model: equations of motion and the integrator.
+
+Planar rigid bodies with coordinates q = (x_k, y_k, phi_k) of their centres of mass,
+M = diag(m_k, m_k, J_k). Ideal joints and the drive are constraints Phi(q, t) = 0 with
+Lagrange multipliers (review eq. 21):
+
+    M q'' + Phi_q^T lambda = Q(q, q', t),
+    Phi_q q''  = gamma - 2 a Phi' - a^2 Phi          (Baumgarte, a the stabilisation rate).
+
+M is diagonal, so lambda comes from the small Schur system (Phi_q M^-1 Phi_q^T) lambda =
+Phi_q M^-1 Q - gamma~. Revolute joints Phi = r_i + A_i s_i - r_j - A_j s_j, prismatic joints
+n.(r + A s - P) = 0 and phi = phi_0, the drive phi = phi_0 + omega t.
+
+A revolute clearance joint is no constraint: the journal centre P_j moves inside the bearing
+(centre P_b, radius R_b, clearance c = R_b - R_j). With e = P_j - P_b, the penetration is
+delta = |e| - c, the normal n = e/|e|, the contact point P_b + R_b n. While delta > 0 the
+normal force is F_n = F_el(delta) (1 + chi delta'/v0)  (>= 0), F_el from a table of the
+elastic law (log-log interpolation, exact for a power law), chi the hysteresis factor of the
+damping law, v0 the approach rate at the onset of this impact; the friction force is
+F_t = mu c_d(|v_t|) F_n opposing the tangential slip v_t (Ambrosio's regularised Coulomb).
+While delta <= 0 no law is evaluated.
+
+Extra states integrate the energy dissipated in the joints and the work of the constraint
+forces (the drive), so the energy balance can be checked.
+
+Integrator: Dormand-Prince 5(4) with a PI step-size controller on (q, q'). A trial step with
+a stage beyond the tabulated law (NaN) is retried ten times shorter; only if the step size
+collapses that way has the run blown up. A step that would
+carry a joint from free flight into contact deeper than `onset_tol` is shortened (secant on
+delta) until it ends at the onset; there v0 is recorded. So every impact starts on a step
+boundary with a known impact speed.
+"""
+
+import math
+
+import numba
+import numpy as np
+
+# status codes
+OK, BLOWN_UP, TOO_MANY_STEPS, STEP_TOO_SMALL = 0, 1, 2, 3
+
+
+@numba.njit(cache=True)
+def rot(phi, sx, sy):
+    c, s = math.cos(phi), math.sin(phi)
+    return c * sx - s * sy, s * sx + c * sy
+
+
+@numba.njit(cache=True)
+def point(q, body, sx, sy):
+    """Global position of the point s of a body (body < 0: the ground, s global)."""
+    if body < 0:
+        return sx, sy
+    ax, ay = rot(q[3 * body + 2], sx, sy)
+    return q[3 * body] + ax, q[3 * body + 1] + ay
+
+
+@numba.njit(cache=True)
+def constraints(t, q, qd, revolute, prismatic, drive, alpha):
+    """Phi_q (m x n) and the right-hand side gamma - 2 a Phi' - a^2 Phi."""
+    n = q.size
+    m = 2 * revolute.shape[0] + 2 * prismatic.shape[0] + (1 if drive[0] >= 0 else 0)
+    jac = np.zeros((m, n))
+    phi = np.zeros(m)
+    phi_t = np.zeros(m)
+    gamma = np.zeros(m)
+    row = 0
+    for k in range(revolute.shape[0]):
+        for side, sign in ((0, 1.0), (3, -1.0)):
+            b = int(revolute[k, side])
+            sx, sy = revolute[k, side + 1], revolute[k, side + 2]
+            if b < 0:
+                phi[row] += sign * sx
+                phi[row + 1] += sign * sy
+                continue
+            ax, ay = rot(q[3 * b + 2], sx, sy)
+            phi[row] += sign * (q[3 * b] + ax)
+            phi[row + 1] += sign * (q[3 * b + 1] + ay)
+            jac[row, 3 * b] += sign
+            jac[row + 1, 3 * b + 1] += sign
+            jac[row, 3 * b + 2] += -sign * ay
+            jac[row + 1, 3 * b + 2] += sign * ax
+            w2 = qd[3 * b + 2] ** 2
+            gamma[row] += sign * ax * w2
+            gamma[row + 1] += sign * ay * w2
+        row += 2
+    for k in range(prismatic.shape[0]):
+        b = int(prismatic[k, 0])
+        ax, ay = rot(q[3 * b + 2], prismatic[k, 1], prismatic[k, 2])
+        nx, ny = -math.sin(prismatic[k, 5]), math.cos(prismatic[k, 5])
+        phi[row] = nx * (q[3 * b] + ax - prismatic[k, 3]) + ny * (q[3 * b + 1] + ay - prismatic[k, 4])
+        jac[row, 3 * b] = nx
+        jac[row, 3 * b + 1] = ny
+        jac[row, 3 * b + 2] = -nx * ay + ny * ax
+        gamma[row] = (nx * ax + ny * ay) * qd[3 * b + 2] ** 2
+        phi[row + 1] = q[3 * b + 2] - prismatic[k, 6]
+        jac[row + 1, 3 * b + 2] = 1.0
+        row += 2
+    if drive[0] >= 0:
+        b = int(drive[0])
+        phi[row] = q[3 * b + 2] - drive[2] - drive[1] * t
+        phi_t[row] = -drive[1]
+        jac[row, 3 * b + 2] = 1.0
+    rate = jac @ qd + phi_t
+    return jac, gamma - 2 * alpha * rate - alpha * alpha * phi, phi, phi_t
+
+
+@numba.njit(cache=True)
+def elastic_force(delta, grid_log0, grid_step, table):
+    """F_el(delta) from log F tabulated on a uniform grid of log delta: power law below the
+    grid, NaN above it (beyond the joint's scale, or the law's range), which stops the run."""
+    x = (math.log(delta) - grid_log0) / grid_step
+    if x > table.size - 1 or not math.isfinite(table[min(max(int(x) + 1, 0), table.size - 1)]):
+        return math.nan
+    i = min(max(int(math.floor(x)), 0), table.size - 2)
+    return math.exp(table[i] + (x - i) * (table[i + 1] - table[i]))
+
+
+@numba.njit(cache=True)
+def joint_kinematics(q, qd, joint):
+    """Penetration, normal, contact point, approach rate and slip of a clearance joint."""
+    bi, bj = int(joint[0]), int(joint[3])
+    pbx, pby = point(q, bi, joint[1], joint[2])
+    pjx, pjy = point(q, bj, joint[4], joint[5])
+    ex, ey = pjx - pbx, pjy - pby
+    e = math.hypot(ex, ey)
+    delta = e - joint[6]
+    if e == 0.0:
+        return delta, 1.0, 0.0, pbx, pby, 0.0, 0.0
+    nx, ny = ex / e, ey / e
+    cx, cy = pbx + joint[7] * nx, pby + joint[7] * ny
+    vx = vy = 0.0
+    for b, sign in ((bj, 1.0), (bi, -1.0)):
+        if b >= 0:
+            w = qd[3 * b + 2]
+            vx += sign * (qd[3 * b] - w * (cy - q[3 * b + 1]))
+            vy += sign * (qd[3 * b + 1] + w * (cx - q[3 * b]))
+    return delta, nx, ny, cx, cy, vx * nx + vy * ny, -vx * ny + vy * nx
+
+
+@numba.njit(cache=True)
+def joint_forces(q, qd, joint, impact_speed, grid_log0, grid_step, table):
+    """(delta, F_n, F_t, F_el, dissipated power, n_x, n_y, c_x, c_y) of a clearance joint."""
+    delta, nx, ny, cx, cy, rate, slip = joint_kinematics(q, qd, joint)
+    if delta <= 0.0:
+        return delta, 0.0, 0.0, 0.0, 0.0, nx, ny, cx, cy
+    f_el = elastic_force(delta, grid_log0, grid_step, table)
+    f_n = max(f_el * (1.0 + joint[8] * rate / impact_speed), 0.0)
+    f_t = 0.0
+    if joint[9] > 0.0:
+        speed = abs(slip)
+        v0, v1 = joint[10], joint[11]
+        cd = 0.0 if speed <= v0 else (speed - v0) / (v1 - v0) if speed <= v1 else 1.0
+        f_t = joint[9] * cd * f_n * (1.0 if slip > 0 else -1.0)
+    return delta, f_n, f_t, f_el, (f_n - f_el) * rate + f_t * slip, nx, ny, cx, cy
+
+
+@numba.njit(cache=True)
+def rhs(t, y, nq, minv, gravity, revolute, prismatic, drive, alpha, joints, speeds,
+        grid_log0, grid_step, tables):
+    q, qd = y[:nq], y[nq:2 * nq]
+    force = np.zeros(nq)
+    for b in range(nq // 3):
+        force[3 * b] = gravity[0] / minv[3 * b]
+        force[3 * b + 1] = gravity[1] / minv[3 * b + 1]
+    dissipation = 0.0
+    for k in range(joints.shape[0]):
+        delta, f_n, f_t, f_el, power, nx, ny, cx, cy = joint_forces(
+            q, qd, joints[k], speeds[k], grid_log0, grid_step, tables[k])
+        if delta <= 0.0:
+            continue
+        fx, fy = -f_n * nx + f_t * ny, -f_n * ny - f_t * nx   # on the journal
+        for b, sign in ((int(joints[k, 3]), 1.0), (int(joints[k, 0]), -1.0)):
+            if b >= 0:
+                force[3 * b] += sign * fx
+                force[3 * b + 1] += sign * fy
+                force[3 * b + 2] += sign * ((cx - q[3 * b]) * fy - (cy - q[3 * b + 1]) * fx)
+        dissipation += power
+    dy = np.empty_like(y)
+    if not np.all(np.isfinite(force)):
+        dy[:] = math.nan   # penetration beyond the tabulated law: the integrator stops
+        return dy
+    dy[:nq] = qd
+    jac, rhs_c, _, phi_t = constraints(t, q, qd, revolute, prismatic, drive, alpha)
+    if jac.shape[0] > 0:
+        scaled = jac * minv
+        lam = np.linalg.solve(scaled @ jac.T, scaled @ force - rhs_c)
+        dy[nq:2 * nq] = minv * (force - jac.T @ lam)
+        work = lam @ phi_t
+    else:
+        dy[nq:2 * nq] = minv * force
+        work = 0.0
+    dy[2 * nq] = dissipation
+    dy[2 * nq + 1] = work
+    return dy
+
+
+# Dormand-Prince 5(4) tableau
+C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
+A = np.array([[0, 0, 0, 0, 0, 0], [1 / 5, 0, 0, 0, 0, 0], [3 / 40, 9 / 40, 0, 0, 0, 0],
+              [44 / 45, -56 / 15, 32 / 9, 0, 0, 0],
+              [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0, 0],
+              [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656, 0],
+              [35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84]])
+B5 = np.array([35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0])
+E54 = B5 - np.array([5179 / 57600, 0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100, 1 / 40])
+
+
+@numba.njit(cache=True)
+def integrate(y0, t_end, nq, minv, gravity, revolute, prismatic, drive, alpha, joints,
+              grid_log0, grid_step, tables, rtol, atol, max_step, onset_tol, speed_floor,
+              max_steps):
+    """Adaptive DOPRI5 from t = 0. Returns times, states and impact speeds of every accepted
+    step, counters (accepted, rejected, rhs calls, impacts) and a status code."""
+    ny = y0.size
+    nj = joints.shape[0]
+    capacity = 4096
+    times = np.empty(capacity)
+    states = np.empty((capacity, ny))
+    speeds_out = np.empty((capacity, max(nj, 1)))
+    speeds = np.full(nj, speed_floor)
+    t, y = 0.0, y0.copy()
+    k = np.empty((7, ny))
+    k[0] = rhs(t, y, nq, minv, gravity, revolute, prismatic, drive, alpha, joints, speeds,
+               grid_log0, grid_step, tables)
+    calls, accepted, rejected, impacts = 1, 0, 0, 0
+    h = min(max_step, 1e-6)
+    err_prev = 1e-4
+    times[0], states[0], speeds_out[0, :nj] = t, y, speeds
+    count = 1
+    status = OK
+    last_nan = False
+    depth = np.zeros(nj)                  # penetration at the last accepted state
+    in_contact = np.zeros(nj, np.bool_)   # between an onset and the next separation
+    for j in range(nj):
+        depth[j] = joint_kinematics(y[:nq], y[nq:2 * nq], joints[j])[0]
+        in_contact[j] = depth[j] > -onset_tol
+    while t < t_end:
+        if accepted + rejected >= max_steps:
+            status = TOO_MANY_STEPS
+            break
+        h = min(h, t_end - t, max_step)
+        if h < 1e-15 * max(t, 1e-3):
+            status = BLOWN_UP if last_nan else STEP_TOO_SMALL
+            break
+        for s in range(1, 7):
+            ys = y + h * (A[s, :s] @ k[:s])
+            k[s] = rhs(t + C[s] * h, ys, nq, minv, gravity, revolute, prismatic, drive, alpha,
+                       joints, speeds, grid_log0, grid_step, tables)
+        calls += 6
+        y_new = y + h * (B5[:6] @ k[:6])
+        err_vec = h * (E54 @ k)
+        err = 0.0
+        for i in range(2 * nq):
+            scale = atol + rtol * max(abs(y[i]), abs(y_new[i]))
+            err += (err_vec[i] / scale) ** 2
+        err = math.sqrt(err / (2 * nq))
+        last_nan = not math.isfinite(err)
+        if last_nan:   # a stage went beyond the tabulated law: much smaller step
+            rejected += 1
+            h *= 0.1
+            continue
+        if err > 1.0:
+            rejected += 1
+            h *= max(0.2, 0.9 * err ** -0.2)
+            continue
+        # a free joint would end the step in contact: shorten the step to end at the onset
+        shorten = 1.0
+        for j in range(nj):
+            if not in_contact[j]:
+                d_new = joint_kinematics(y_new[:nq], y_new[nq:2 * nq], joints[j])[0]
+                if d_new > onset_tol:
+                    shorten = min(shorten, 0.99 * (-depth[j]) / (d_new - depth[j]))
+        if shorten < 1.0:
+            rejected += 1
+            h *= max(shorten, 1e-3)
+            continue
+        t += h
+        y = y_new
+        accepted += 1
+        k[0] = k[6]  # first same as last
+        for j in range(nj):
+            delta, _, _, _, _, rate, _ = joint_kinematics(y[:nq], y[nq:2 * nq], joints[j])
+            if not in_contact[j] and delta > -onset_tol:
+                in_contact[j] = True
+                speeds[j] = max(rate, speed_floor)
+                impacts += 1
+                k[0] = rhs(t, y, nq, minv, gravity, revolute, prismatic, drive, alpha, joints,
+                           speeds, grid_log0, grid_step, tables)
+                calls += 1
+            elif in_contact[j] and delta < -onset_tol:
+                in_contact[j] = False
+            depth[j] = delta
+        if count == capacity:
+            capacity *= 2
+            times2 = np.empty(capacity)
+            states2 = np.empty((capacity, ny))
+            speeds2 = np.empty((capacity, max(nj, 1)))
+            times2[:count], states2[:count], speeds2[:count] = times, states, speeds_out
+            times, states, speeds_out = times2, states2, speeds2
+        times[count], states[count], speeds_out[count, :nj] = t, y, speeds
+        count += 1
+        factor = 0.9 * err ** -0.14 * err_prev ** 0.08 if err > 0 else 5.0
+        h *= min(5.0, max(0.2, factor))
+        err_prev = max(err, 1e-4)
+    counters = np.array([accepted, rejected, calls, impacts])
+    return times[:count], states[:count], speeds_out[:count], counters, status, t

@@ -1,0 +1,179 @@
+"""From a reduced scene to the arrays of the compiled kernel, with consistent initial
+conditions (clearance joints start centred, velocities from the constraints)."""
+
+import json
+import math
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from laws import dissipative, elastic
+from pinbore.errors import InputError
+from reduced import kernel
+from reduced.scene import GROUND, ReducedScene
+
+GRID_POINTS = 600
+GRID_LOW = 1e-12       # m, smallest tabulated penetration (power law below)
+SPEED_FLOOR = 1e-3     # m/s, smallest impact speed in chi delta'/v0 (grazing contacts)
+BLOW_UP_FRACTION = 0.1  # a penetration beyond this fraction of the journal radius stops a run
+
+
+@dataclass
+class Model:
+    scene: ReducedScene
+    names: list[str]
+    minv: np.ndarray
+    gravity: np.ndarray
+    revolute: np.ndarray
+    prismatic: np.ndarray
+    drive: np.ndarray
+    joints: np.ndarray
+    grid_log0: float
+    grid_step: float
+    tables: np.ndarray
+    y0: np.ndarray
+
+    @property
+    def nq(self) -> int:
+        return self.minv.size
+
+    def elastic_energy(self, joint: int, delta: float) -> float:
+        """U(delta) = int_0^delta F_el, exact for the log-log interpolant the dynamics use:
+        on a segment F = F_i (d / d_i)^s_i, whose integral is F_i d_i ((d/d_i)^(s_i+1) - 1)/(s_i+1);
+        below the grid the first segment's power law continues to 0."""
+        if delta <= 0:
+            return 0.0
+        log_f = self.tables[joint]
+        d = np.exp(self.grid_log0 + self.grid_step * np.arange(log_f.size))
+        f = np.exp(log_f)
+        slope = np.diff(log_f) / self.grid_step
+        x = (math.log(delta) - self.grid_log0) / self.grid_step
+        i = min(max(int(math.floor(x)), 0), log_f.size - 2)
+        below = f[0] * d[0] / (slope[0] + 1)
+        whole = f[:i] * d[:i] * ((d[1:i + 1] / d[:i]) ** (slope[:i] + 1) - 1) / (slope[:i] + 1)
+        if delta < d[0]:
+            return below * (delta / d[0]) ** (slope[0] + 1)
+        part = f[i] * d[i] * ((delta / d[i]) ** (slope[i] + 1) - 1) / (slope[i] + 1)
+        return float(below + whole.sum() + part)
+
+
+def build(scene: ReducedScene, source: str, base: Path) -> Model:
+    names = [b.name for b in scene.bodies]
+    index = {name: i for i, name in enumerate(names)} | {GROUND: -1}
+    _check_connected(scene, names)
+    minv = np.array([[1 / b.mass, 1 / b.mass, 1 / b.inertia] for b in scene.bodies]).ravel()
+    revolute = np.array([[index[j.body_i], *j.point_i, index[j.body_j], *j.point_j]
+                         for j in scene.joints if j.type == "revolute"], float).reshape(-1, 6)
+    prismatic = np.array([[index[j.body], *j.point, *j.axis_point, math.radians(j.axis_deg),
+                           math.radians(scene.bodies[index[j.body]].angle_deg)]
+                          for j in scene.joints if j.type == "prismatic"], float).reshape(-1, 7)
+    drive = (np.array([index[scene.drive.body], scene.drive.speed_rpm * 2 * math.pi / 60,
+                       math.radians(scene.drive.angle0_deg)]) if scene.drive
+             else np.array([-1.0, 0.0, 0.0]))
+    laws_data = _laws_file(scene, base, source)
+    joints, tables = [], []
+    # penetrations up to a tenth of the journal radius are tabulated; beyond, the run has blown up
+    top = max((BLOW_UP_FRACTION * c.journal_radius for c in scene.clearance_joints), default=1.0)
+    grid_log0 = math.log(GRID_LOW)
+    grid_step = (math.log(top) - grid_log0) / (GRID_POINTS - 1)
+    deltas = np.exp(grid_log0 + grid_step * np.arange(GRID_POINTS))
+    for c in scene.clearance_joints:
+        chi = 0.0 if c.damping_law == "none" else dissipative.HYSTERESIS[c.damping_law](c.restitution)
+        mu = c.friction_coefficient if c.friction_law != "none" else 0.0
+        joints.append([index[c.bearing_body], *c.bearing_point, index[c.journal_body],
+                       *c.journal_point, c.bearing_radius - c.journal_radius, c.bearing_radius,
+                       chi, mu, c.friction_v0, c.friction_v1])
+        force = normal_force(c, deltas, laws_data, source)
+        force[deltas > BLOW_UP_FRACTION * c.journal_radius] = np.nan
+        tables.append(np.log(force))
+    model = Model(scene, names, minv, np.asarray(scene.gravity, float), revolute, prismatic, drive,
+                  np.array(joints, float).reshape(-1, 12), grid_log0, grid_step,
+                  np.array(tables).reshape(len(joints), GRID_POINTS), np.empty(0))
+    model.y0 = initial_state(model)
+    return model
+
+
+def normal_force(c, deltas, laws_data, source) -> np.ndarray:
+    """Elastic normal force (N) of a clearance joint at the penetrations `deltas`."""
+    joint = elastic.Joint(c.bearing_radius, c.journal_radius, c.E, c.nu, c.E, c.nu, c.length)
+    if c.normal_law == "hertz_point":
+        return elastic.hertz_point(deltas, joint)
+    if c.normal_law.startswith("calibrated:"):
+        name = c.normal_law.split(":", 1)[1]
+        entry = laws_data["laws"].get(name)
+        if entry is None or entry["fitted"] is None:
+            valid = [k for k, v in laws_data["laws"].items() if v["fitted"] is not None]
+            raise InputError(f"{source}: clearance_joints.normal_law: {c.normal_law!r} is not a "
+                             f"fitted law of the laws file; valid: calibrated:{', calibrated:'.join(valid)}")
+        fit = entry["fitted"]
+        base = elastic.linear(deltas, joint.e_star) if name == "linear" else elastic.PUBLISHED[name](deltas, joint)
+        per_length = fit["scale"] * base * (deltas / fit["reference_approach_m"]) ** fit["exponent_correction"]
+        return per_length * c.length
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the range is enforced by the table (NaN beyond it)
+        return elastic.PUBLISHED[c.normal_law](deltas, joint) * c.length
+
+
+def _laws_file(scene, base: Path, source: str):
+    if scene.laws_file is None:
+        return None
+    path = (base / scene.laws_file) if not Path(scene.laws_file).is_absolute() else Path(scene.laws_file)
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError) as err:
+        raise InputError(f"{source}: laws_file: cannot read {path} ({err})") from None
+
+
+def _check_connected(scene, names) -> None:
+    """Every body must be linked to the others (through joints, clearance joints, the ground)."""
+    links = {name: set() for name in names + [GROUND]}
+    pairs = [(j.body_i, j.body_j) if j.type == "revolute" else (j.body, GROUND) for j in scene.joints]
+    pairs += [(c.bearing_body, c.journal_body) for c in scene.clearance_joints]
+    if scene.drive:
+        pairs.append((scene.drive.body, GROUND))
+    for a, b in pairs:
+        links[a].add(b)
+        links[b].add(a)
+    start = names[0]
+    seen, todo = {start}, [start]
+    while todo:
+        for other in links[todo.pop()] - seen:
+            seen.add(other)
+            todo.append(other)
+    lost = [n for n in names if n not in seen]
+    if lost:
+        raise InputError(f"bodies: {', '.join(lost)} not connected to {start} by any joint "
+                         "(disconnected mechanism)")
+
+
+def _as_revolutes(model: Model, starts=("ideal", "free")) -> np.ndarray:
+    """Ideal revolutes plus the clearance joints whose start is in `starts`, closed."""
+    keep = [j for j, c in enumerate(model.scene.clearance_joints) if c.start in starts]
+    closed = model.joints[keep][:, [0, 1, 2, 3, 4, 5]]
+    return np.vstack([model.revolute, closed]) if closed.size else model.revolute
+
+
+def initial_state(model: Model) -> np.ndarray:
+    """Positions satisfying the ideal joints with the journals centred (least change from the
+    scene's guesses), and the scene's velocities projected onto Phi_q q' = -Phi_t (least change
+    in kinetic-energy norm) of the ideal joints and the clearance joints that start "ideal"."""
+    q = np.array([[*b.position, math.radians(b.angle_deg)] for b in model.scene.bodies]).ravel()
+    revolute = _as_revolutes(model)
+    zero = np.zeros_like(q)
+    for _ in range(50):
+        jac, _, phi, _ = kernel.constraints(0.0, q, zero, revolute, model.prismatic, model.drive, 0.0)
+        if jac.shape[0] == 0 or np.max(np.abs(phi)) < 1e-14:
+            break
+        q -= jac.T @ np.linalg.lstsq(jac @ jac.T, phi, rcond=None)[0]
+    else:
+        raise InputError("joints: the bodies cannot be placed so that every joint closes "
+                         f"(largest gap {np.max(np.abs(phi)):.3g} m)")
+    qd = np.array([[*b.velocity, b.omega] for b in model.scene.bodies]).ravel()
+    jac, _, _, phi_t = kernel.constraints(0.0, q, zero, _as_revolutes(model, ("ideal",)),
+                                          model.prismatic, model.drive, 0.0)
+    if jac.shape[0]:
+        scaled = jac * model.minv
+        qd -= scaled.T @ np.linalg.lstsq(scaled @ jac.T, jac @ qd + phi_t, rcond=None)[0]
+    return np.concatenate([q, qd, [0.0, 0.0]])

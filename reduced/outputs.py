@@ -1,0 +1,151 @@
+"""Outputs of a reduced run: the time series, the summary (peaks, counters, energy balance,
+constraint drift) and the plots."""
+
+import csv
+import math
+
+import matplotlib
+import numpy as np
+
+from reduced import kernel
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def per_step(model, times, states, speeds):
+    """Columns at every accepted step: body motion, joint quantities, energies, drift."""
+    nq, nj = model.nq, model.joints.shape[0]
+    s = model.scene
+    cols = {"time_s": times}
+    acc = np.empty((times.size, nq))
+    joint = np.zeros((times.size, nj, 6))   # ecc x, ecc y, penetration, F_n, F_t, elastic energy
+    drift = np.empty(times.size)
+    for k in range(times.size):
+        y = states[k]
+        acc[k] = kernel.rhs(times[k], y, nq, model.minv, model.gravity, model.revolute,
+                            model.prismatic, model.drive, s.integrator.baumgarte, model.joints,
+                            speeds[k, :nj], model.grid_log0, model.grid_step, model.tables)[nq:2 * nq]
+        _, _, phi, _ = kernel.constraints(times[k], y[:nq], y[nq:2 * nq], model.revolute,
+                                          model.prismatic, model.drive, 0.0)
+        drift[k] = np.max(np.abs(phi), initial=0.0)
+        for j in range(nj):
+            row = model.joints[j]
+            bx, by = kernel.point(y[:nq], int(row[0]), row[1], row[2])
+            jx, jy = kernel.point(y[:nq], int(row[3]), row[4], row[5])
+            delta, f_n, f_t, *_ = kernel.joint_forces(y[:nq], y[nq:2 * nq], row, speeds[k, j],
+                                                      model.grid_log0, model.grid_step, model.tables[j])
+            joint[k, j] = (jx - bx, jy - by, delta, f_n, f_t, model.elastic_energy(j, delta))
+    for b, body in enumerate(s.bodies):
+        for i, (what, unit) in enumerate((("x", "m"), ("y", "m"), ("angle", "rad"))):
+            cols[f"{body.name}_{what}_{unit}"] = states[:, 3 * b + i]
+        for i, (what, unit) in enumerate((("vx", "m_per_s"), ("vy", "m_per_s"), ("omega", "rad_per_s"))):
+            cols[f"{body.name}_{what}_{unit}"] = states[:, nq + 3 * b + i]
+        for i, (what, unit) in enumerate((("ax", "m_per_s2"), ("ay", "m_per_s2"), ("alpha", "rad_per_s2"))):
+            cols[f"{body.name}_{what}_{unit}"] = acc[:, 3 * b + i]
+    for j, c in enumerate(s.clearance_joints):
+        for i, key in enumerate(("ecc_x_m", "ecc_y_m", "penetration_m", "normal_force_N",
+                                 "friction_force_N")):
+            cols[f"{c.name}_{key}"] = joint[:, j, i]
+    masses = 1 / model.minv
+    qd = states[:, nq:2 * nq]
+    kinetic = 0.5 * np.sum(masses * qd**2, axis=1)
+    m_body = masses[0::3]
+    potential = -np.sum(m_body * (model.gravity[0] * states[:, 0:nq:3] + model.gravity[1] * states[:, 1:nq:3]), axis=1)
+    energy = {"kinetic": kinetic, "potential": potential, "elastic": joint[:, :, 5].sum(axis=1),
+              "dissipated": states[:, 2 * nq], "work_in": states[:, 2 * nq + 1]}
+    return cols, energy, drift
+
+
+def sample(model, times, states, speeds):
+    """Per-step columns interpolated to the output sample times (and the per-step data)."""
+    cols, energy, drift = per_step(model, times, states, speeds)
+    grid = np.arange(0.0, times[-1], model.scene.output.sample_time)
+    grid = np.append(grid, times[-1]) if grid[-1] < times[-1] else grid
+    sampled = {k: np.interp(grid, times, v) for k, v in cols.items()}
+    return {"sampled": sampled, "steps": cols, "energy": energy, "drift": drift}
+
+
+def write_timeseries(path, series) -> None:
+    cols = series["sampled"]
+    with open(path, "w", newline="") as f:
+        out = csv.writer(f)
+        out.writerow(cols)
+        for row in zip(*cols.values()):
+            out.writerow([f"{v:.9e}" for v in row])
+
+
+def summary(model, times, states, speeds, counters, status, t_end, seconds, status_text):
+    series = sample(model, times, states, speeds)
+    e = series["energy"]
+    total = e["kinetic"] + e["potential"] + e["elastic"] + e["dissipated"] - e["work_in"]
+    scale = max(float(np.max(e["kinetic"])), 1e-300)
+    joints = {}
+    for c in model.scene.clearance_joints:
+        force = series["steps"][f"{c.name}_normal_force_N"]
+        joints[c.name] = {"peak_normal_force_N": float(force.max(initial=0.0)),
+                          "time_of_peak_s": float(times[np.argmax(force)]) if force.size else None,
+                          "peak_penetration_m": float(np.max(series["steps"][f"{c.name}_penetration_m"], initial=0.0)),
+                          "peak_friction_force_N": float(np.max(np.abs(series["steps"][f"{c.name}_friction_force_N"]), initial=0.0)),
+                          "clearance_m": c.bearing_radius - c.journal_radius}
+    return {
+        "status": "complete" if status == kernel.OK else "incomplete",
+        "stop": None if status == kernel.OK else {"time_s": t_end, "reason": status_text},
+        "duration_s": model.scene.duration, "time_reached_s": t_end,
+        "clearance_joints": joints,
+        "impacts": int(counters[3]),
+        "steps": int(counters[0]), "rejected_steps": int(counters[1]),
+        "rhs_evaluations": int(counters[2]), "wall_time_s": seconds,
+        "energy_balance": {"max_residual_J": float(np.max(np.abs(total - total[0]))),
+                           "relative_to_peak_kinetic": float(np.max(np.abs(total - total[0])) / scale),
+                           "dissipated_J": float(e["dissipated"][-1]),
+                           "work_in_J": float(e["work_in"][-1])},
+        "constraint_drift_max": float(np.max(series["drift"])),
+    }
+
+
+def plots(folder, model, series, twin) -> None:
+    """Prismatic body's acceleration against the driven angle (with the ideal joint), journal
+    orbits inside the clearance circle, contact forces."""
+    s = model.scene
+    cols = series["steps"]
+    angle = None
+    if s.drive:
+        angle = np.degrees(cols[f"{s.drive.body}_angle_rad"] - math.radians(s.drive.angle0_deg))
+    slider = next((j for j in s.joints if j.type == "prismatic"), None)
+    if slider and angle is not None:
+        a = math.radians(slider.axis_deg)
+        along = lambda c: c[f"{slider.body}_ax_m_per_s2"] * math.cos(a) + c[f"{slider.body}_ay_m_per_s2"] * math.sin(a)  # noqa: E731
+        fig, ax = plt.subplots(figsize=(10, 4.5))
+        ax.plot(angle, along(cols), lw=0.6, label="clearance joint")
+        if twin is not None:
+            t_model, t_times, t_states = twin
+            t_cols = per_step(t_model, t_times, t_states,
+                              np.zeros((t_times.size, 1)))[0]
+            ax.plot(np.degrees(t_cols[f"{s.drive.body}_angle_rad"] - math.radians(s.drive.angle0_deg)),
+                    along(t_cols), "k--", lw=1, label="ideal joint")
+        ax.set_xlabel(f"{s.drive.body} angle (deg)")
+        ax.set_ylabel(f"{slider.body} acceleration (m/s^2)")
+        ax.grid(alpha=0.3)
+        ax.legend()
+        fig.tight_layout()
+        fig.savefig(folder / "acceleration.png", dpi=110, metadata={"Software": None})
+        plt.close(fig)
+    for c in s.clearance_joints:
+        fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 5))
+        clearance = c.bearing_radius - c.journal_radius
+        ring = np.linspace(0, 2 * np.pi, 200)
+        ax.plot(clearance * np.cos(ring) * 1e3, clearance * np.sin(ring) * 1e3, "k-", lw=1)
+        ax.plot(cols[f"{c.name}_ecc_x_m"] * 1e3, cols[f"{c.name}_ecc_y_m"] * 1e3, lw=0.6)
+        ax.set_aspect("equal")
+        ax.set_xlabel("journal centre x (mm)")
+        ax.set_ylabel("journal centre y (mm)")
+        ax.set_title(f"{c.name}: journal centre inside the clearance circle")
+        x = angle if angle is not None else cols["time_s"]
+        bx.plot(x, cols[f"{c.name}_normal_force_N"], lw=0.6)
+        bx.set_xlabel(f"{s.drive.body} angle (deg)" if angle is not None else "time (s)")
+        bx.set_ylabel("normal contact force (N)")
+        bx.grid(alpha=0.3)
+        fig.tight_layout()
+        fig.savefig(folder / f"{c.name}.png", dpi=110, metadata={"Software": None})
+        plt.close(fig)

@@ -1,0 +1,177 @@
+"""The reduced multibody model against independent references: the exact slider-crank
+kinematics, clearance -> 0 with stiff contact, energy conservation and balance, the
+restitution of a single journal impact; bad scenes."""
+
+import copy
+import json
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import ROOT, pinbore
+
+from laws import dissipative
+from laws.elastic import Joint, hertz_point
+from reduced.model import build
+from reduced.outputs import per_step
+from reduced.run import ideal_twin, simulate
+from reduced.scene import ReducedScene
+
+FLORES = tomllib.loads((ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml").read_text())
+
+
+def solve(data):
+    model = build(ReducedScene.model_validate(data), "test", ROOT)
+    times, states, speeds, counters, status, t_end, _ = simulate(model)
+    assert status == 0, (status, t_end)
+    cols, energy, drift = per_step(model, times, states, speeds)
+    return cols, energy, drift, counters
+
+
+def exact_slider(theta, omega, r=0.05, l=0.12):
+    """Slider position, velocity and acceleration of the ideal slider-crank, exactly (no
+    long-rod approximation): x = r cos t + sqrt(l^2 - r^2 sin^2 t), crank at constant omega."""
+    s, c = np.sin(theta), np.cos(theta)
+    d = np.sqrt(l**2 - r**2 * s**2)
+    x = r * c + d
+    dx = -r * s - r**2 * s * c / d
+    ddx = -r * c - r**2 * (c**2 - s**2) / d - r**4 * s**2 * c**2 / d**3
+    return x, omega * dx, omega**2 * ddx
+
+
+OMEGA = 5000 * 2 * math.pi / 60
+
+
+def test_ideal_slider_crank_matches_exact_kinematics():
+    data = ideal_twin(ReducedScene.model_validate(FLORES)).model_dump()
+    cols, _, drift, _ = solve(data)
+    x, v, a = exact_slider(cols["crank_angle_rad"], OMEGA)
+    np.testing.assert_allclose(cols["slider_x_m"], x, atol=1e-9)
+    np.testing.assert_allclose(cols["slider_vx_m_per_s"], v, atol=1e-6 * OMEGA * 0.05)
+    np.testing.assert_allclose(cols["slider_ax_m_per_s2"], a, atol=1e-5 * OMEGA**2 * 0.05)
+    assert drift.max() < 1e-10
+
+
+def test_clearance_to_zero_with_stiff_contact_converges_to_the_ideal_joint():
+    """Clearance / 10 and contact stiffness x 100 per level: the slider's position and
+    velocity approach the exact ideal-joint kinematics."""
+    data = copy.deepcopy(FLORES)
+    data["duration"] = 0.012
+    gaps = []
+    for level in range(3):
+        joint = data["clearance_joints"][0]
+        joint["journal_radius"] = 10e-3 - 5e-4 / 10**level
+        joint["E"] = 207e9 * 100**level
+        cols, _, _, _ = solve(data)
+        x, v, _ = exact_slider(cols["crank_angle_rad"], OMEGA)
+        gaps.append([np.max(np.abs(cols["slider_x_m"] - x)), np.max(np.abs(cols["slider_vx_m_per_s"] - v))])
+    gaps = np.array(gaps)
+    assert np.all(np.diff(gaps, axis=0) < 0), gaps
+    assert gaps[-1, 0] < 1e-5 and gaps[-1, 1] < 0.5 * gaps[0, 1]
+
+
+def free_mechanism(damping="none", friction=0.0):
+    """The slider-crank without drive, thrown into motion (crank at 300 rad/s), gravity on."""
+    data = copy.deepcopy(FLORES)
+    del data["drive"]
+    data["duration"] = 0.02
+    data["bodies"][0]["omega"] = 300.0
+    joint = data["clearance_joints"][0]
+    joint["damping_law"], joint["restitution"] = damping, 0.8
+    if friction:
+        joint["friction_law"], joint["friction_coefficient"] = "coulomb_ambrosio", friction
+    data["integrator"] = {"rtol": 1e-9, "atol": 1e-12}
+    return data
+
+
+def test_energy_is_conserved_without_dissipation():
+    _, e, _, counters = solve(free_mechanism())
+    total = e["kinetic"] + e["potential"] + e["elastic"]
+    assert counters[3] >= 3  # impacts happened
+    assert np.max(np.abs(total - total[0])) < 1e-6 * e["kinetic"].max()
+    assert np.all(e["dissipated"] == 0) and np.all(e["work_in"] == 0)
+
+
+def test_dissipation_never_adds_energy_and_the_balance_closes():
+    _, e, _, counters = solve(free_mechanism("hunt_crossley", friction=0.1))
+    mechanical = e["kinetic"] + e["potential"] + e["elastic"]
+    assert counters[3] >= 3
+    assert np.all(np.diff(e["dissipated"]) >= -1e-12)
+    assert e["dissipated"][-1] > 0.01 * e["kinetic"][0]
+    balance = mechanical + e["dissipated"]
+    assert np.max(np.abs(balance - balance[0])) < 1e-6 * e["kinetic"].max()
+
+
+@pytest.mark.parametrize("law, e", [("lankarani_nikravesh", 0.9), ("flores", 0.5)])
+def test_single_impact_restitution_equals_the_laws(law, e):
+    """A journal thrown at 1 m/s against a fixed bearing rebounds with the effective
+    restitution of its law, as measured by integrating the same impact alone."""
+    mass, speed = 0.14, 1.0
+    data = {"kind": "reduced", "duration": 1.2e-3,
+            "bodies": [{"name": "journal", "mass": mass, "inertia": 1e-5, "velocity": [0.0, -speed]}],
+            "clearance_joints": [{"name": "j", "bearing_body": "ground", "bearing_point": [0.0, 0.0],
+                                  "journal_body": "journal", "journal_point": [0.0, 0.0],
+                                  "bearing_radius": 10e-3, "journal_radius": 9.5e-3, "E": 207e9,
+                                  "nu": 0.3, "normal_law": "hertz_point", "damping_law": law,
+                                  "restitution": e, "start": "free"}],
+            "integrator": {"rtol": 1e-10, "atol": 1e-13}}
+    cols, _, _, counters = solve(data)
+    assert counters[3] == 1
+    rebound = cols["journal_vy_m_per_s"][-1]
+    joint = Joint(10e-3, 9.5e-3, 207e9, 0.3, 207e9, 0.3, 1.0)
+    chi = dissipative.HYSTERESIS[law](e)
+    reference = dissipative.restitution(
+        lambda d, r: dissipative.hysteresis_force(hertz_point(max(d, 0), joint), r, speed, chi),
+        mass, speed)
+    assert rebound / speed == pytest.approx(reference, rel=1e-4)
+
+
+def _scene_with(edit):
+    data = copy.deepcopy(FLORES)
+    edit(data)
+    return data
+
+
+BAD = [
+    (lambda d: d["clearance_joints"][0].update(journal_radius=10.0e-3), "journal_radius must be smaller"),
+    (lambda d: d["bodies"][1].update(mass=-0.21), "bodies.1.mass"),
+    (lambda d: d["bodies"][2].update(inertia=0.0), "bodies.2.inertia"),
+    (lambda d: d["clearance_joints"][0].update(normal_law="hertzian"), "valid: hertz_point"),
+    (lambda d: d["clearance_joints"][0].update(damping_law="magic"), "valid: none, flores"),
+    (lambda d: d["joints"][1].update(body_j="conrod"), "unknown body 'conrod'"),
+    (lambda d: d["integrator"].update(rtol=0.0), "integrator.rtol"),
+    (lambda d: d["bodies"].append({"name": "loose", "mass": 1.0, "inertia": 1.0}),
+     "loose not connected to crank"),
+]
+
+
+@pytest.mark.parametrize("edit, message", BAD)
+def test_bad_scenes_are_one_line_exit_2(write_scene, tmp_path, edit, message):
+    done = pinbore("reduced", write_scene(_scene_with(edit)), "--out", tmp_path / "out")
+    assert done.returncode == 2, done.stderr
+    assert message in done.stderr and len(done.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_run_that_blows_up_keeps_its_time_series_and_says_so(write_scene, tmp_path):
+    """A journal thrown at 2 km/s penetrates beyond a tenth of its radius."""
+    def edit(d):
+        d["clearance_joints"][0].update(start="free")
+        d["bodies"][1].update(velocity=[0.0, -2000.0])
+    done = pinbore("reduced", write_scene(_scene_with(edit)), "--out", tmp_path / "out")
+    assert done.returncode == 1 and "blown up" in done.stderr
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["status"] == "incomplete" and summary["stop"]["time_s"] < FLORES["duration"]
+    rows = (tmp_path / "out" / "timeseries.csv").read_text().splitlines()
+    assert len(rows) > 2
+
+
+def test_flores_scene_runs_and_writes_everything(tmp_path):
+    out = tmp_path / "out"
+    done = pinbore("reduced", ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml", "--out", out)
+    assert done.returncode == 0, done.stderr
+    assert {"timeseries.csv", "summary.json", "acceleration.png", "rod_slider.png"} <= {p.name for p in out.iterdir()}
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["impacts"] > 10 and summary["energy_balance"]["relative_to_peak_kinetic"] < 1e-4
