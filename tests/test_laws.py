@@ -53,6 +53,12 @@ def test_johnson_general_form_reduces_to_the_equal_material_form():
             assert el.esdu_78035(d, joint) == pytest.approx(p, rel=1e-9)
 
 
+@pytest.fixture(autouse=True)
+def fresh_warnings(monkeypatch):
+    """Validity warnings are once per process: each test starts with none given."""
+    monkeypatch.setattr(el, "_warned", set())
+
+
 def test_implicit_laws_have_a_range():
     """Beyond the largest approach their log term allows, the laws give NaN and warn once."""
     with pytest.warns(UserWarning, match="johnson"):
