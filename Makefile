@@ -20,10 +20,12 @@ FEM_SCENES := $(basename $(notdir $(wildcard scenes/fem/*.toml)))
 FEM_CURVES := $(FEM_SCENES:%=build/fem/%/curve.csv)
 MESHES := $(filter-out build/mesh/study_%,$(FEM_SCENES:%=build/mesh/%/mesh.msh))
 STUDY_CURVES := $(filter build/fem/study_%,$(FEM_CURVES))
+REDUCED_SCENES := $(basename $(notdir $(wildcard scenes/reduced/*.toml)))
+REDUCED_RUNS := $(REDUCED_SCENES:%=build/reduced/%/summary.json)
 STAGE_CODE := $(wildcard pinbore/*.py laws/*.py meshes/*.py fem/*.py)
 MPIEXEC := $(if $(filter-out 1,$(NP)),$(VENV)/bin/mpiexec -n $(NP))
 
-.PHONY: all venv mesh fem calibration report bench test test-slow clean help
+.PHONY: all venv mesh fem calibration reduced report bench test test-slow clean help
 .DELETE_ON_ERROR:
 
 all: report ## set up .venv, run the default scenes, build the report (the main job)
@@ -56,10 +58,16 @@ calibration: build/calibration/laws.json ## fit and rank the contact laws on the
 build/calibration/laws.json: $(STUDY_CURVES) $(wildcard laws/*.py calibration/*.py) $(STAMP)
 	$(PINBORE) calibrate $(STUDY_CURVES) --out build/calibration
 
+reduced: $(REDUCED_RUNS) ## run the mechanisms with clearance joints (build/reduced/<scene>/)
+
+build/reduced/%/summary.json: scenes/reduced/%.toml build/calibration/laws.json \
+                              $(wildcard pinbore/*.py laws/*.py reduced/*.py) $(STAMP)
+	$(PINBORE) reduced $< --out build/reduced/$*
+
 report: build/report/index.html ## build build/report/index.html from the results
 
-build/report/index.html: $(FEM_CURVES) $(MESHES) build/calibration/laws.json $(wildcard bench/*.csv) \
-                         $(STAGE_CODE) $(wildcard calibration/*.py) $(STAMP)
+build/report/index.html: $(FEM_CURVES) $(MESHES) build/calibration/laws.json $(REDUCED_RUNS) \
+                         $(wildcard bench/*.csv) $(STAGE_CODE) $(wildcard calibration/*.py reduced/*.py) $(STAMP)
 	$(PINBORE) report --build build --out build/report
 	@echo "report: $(abspath $@)"
 

@@ -56,10 +56,12 @@ def table(header: list[str], rows: list[list]) -> str:
 def build(build_dir, out) -> Path:
     from calibration import report as calibration_report
     from fem import report as fem_report
+    from reduced import report as reduced_report
 
     build_dir = Path(build_dir)
     bench = Path("bench")
-    sections = [fem_report.section(build_dir, bench), calibration_report.section(build_dir, bench)]
+    sections = [fem_report.section(build_dir, bench), calibration_report.section(build_dir, bench),
+                reduced_report.section(build_dir)]
     page = ("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
             f"<title>pinbore report</title><style>{STYLE}</style></head><body>"
             "<h1>pinbore: contact in pin-in-bore (revolute clearance) joints</h1>"

@@ -33,6 +33,7 @@ class Model:
     grid_log0: float
     grid_step: float
     tables: np.ndarray
+    calibration: dict | None      # the laws file, when a calibrated law is used
     y0: np.ndarray
 
     @property
@@ -90,7 +91,7 @@ def build(scene: ReducedScene, source: str, base: Path) -> Model:
         tables.append(np.log(force))
     model = Model(scene, names, minv, np.asarray(scene.gravity, float), revolute, prismatic, drive,
                   np.array(joints, float).reshape(-1, 12), grid_log0, grid_step,
-                  np.array(tables).reshape(len(joints), GRID_POINTS), np.empty(0))
+                  np.array(tables).reshape(len(joints), GRID_POINTS), laws_data, np.empty(0))
     model.y0 = initial_state(model)
     return model
 

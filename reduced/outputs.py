@@ -101,7 +101,21 @@ def summary(model, times, states, speeds, counters, status, t_end, seconds, stat
                            "dissipated_J": float(e["dissipated"][-1]),
                            "work_in_J": float(e["work_in"][-1])},
         "constraint_drift_max": float(np.max(series["drift"])),
+        "warnings": validity_warnings(model, joints),
     }
+
+
+def validity_warnings(model, joints) -> list[str]:
+    """Calibrated laws used beyond the approaches they were calibrated on."""
+    out = []
+    for c in model.scene.clearance_joints:
+        if c.normal_law.startswith("calibrated:") and model.calibration is not None:
+            low, high = model.calibration["laws"][c.normal_law.split(":", 1)[1]]["validity"]["approach_m"]
+            peak = joints[c.name]["peak_penetration_m"]
+            if peak > high:
+                out.append(f"{c.name}: peak penetration {peak:.3g} m beyond the calibrated range "
+                           f"({low:.3g}-{high:.3g} m) of {c.normal_law}: extrapolated")
+    return out
 
 
 def plots(folder, model, series, twin) -> None:
