@@ -71,9 +71,10 @@ build/report/index.html: $(FEM_CURVES) $(MESHES) build/calibration/laws.json $(R
 	$(PINBORE) report --build build --out build/report
 	@echo "report: $(abspath $@)"
 
-bench: $(STUDY_CURVES) $(STAMP) ## run the benchmarks: bench/*.csv and plots
+bench: $(STUDY_CURVES) $(STAMP) ## run the benchmarks: bench/*.csv and plots (a few minutes)
 	$(PY) bench/fem2d.py --out bench
 	$(PY) bench/calibrate.py --out bench
+	$(PY) bench/multibody.py --out bench
 
 test: $(STAMP) ## run the test suite (what CI runs)
 	$(PY) -m pytest -n 2 -m "not slow" tests

@@ -56,14 +56,17 @@ def point(q, body, sx, sy):
 
 
 @numba.njit(cache=True)
-def constraints(t, q, qd, revolute, prismatic, drive, alpha):
-    """Phi_q (m x n) and the right-hand side gamma - 2 a Phi' - a^2 Phi."""
-    n = q.size
-    m = 2 * revolute.shape[0] + 2 * prismatic.shape[0] + (1 if drive[0] >= 0 else 0)
-    jac = np.zeros((m, n))
-    phi = np.zeros(m)
-    phi_t = np.zeros(m)
-    gamma = np.zeros(m)
+def constraint_count(revolute, prismatic, drive):
+    return 2 * revolute.shape[0] + 2 * prismatic.shape[0] + (1 if drive[0] >= 0 else 0)
+
+
+@numba.njit(cache=True)
+def fill_constraints(t, q, qd, revolute, prismatic, drive, alpha, jac, phi, phi_t, rhs_c):
+    """Phi_q into jac (m x n), Phi, Phi_t, and gamma - 2 a Phi' - a^2 Phi into rhs_c."""
+    jac[:] = 0.0
+    phi[:] = 0.0
+    phi_t[:] = 0.0
+    rhs_c[:] = 0.0  # gamma first
     row = 0
     for k in range(revolute.shape[0]):
         for side, sign in ((0, 1.0), (3, -1.0)):
@@ -81,8 +84,8 @@ def constraints(t, q, qd, revolute, prismatic, drive, alpha):
             jac[row, 3 * b + 2] += -sign * ay
             jac[row + 1, 3 * b + 2] += sign * ax
             w2 = qd[3 * b + 2] ** 2
-            gamma[row] += sign * ax * w2
-            gamma[row + 1] += sign * ay * w2
+            rhs_c[row] += sign * ax * w2
+            rhs_c[row + 1] += sign * ay * w2
         row += 2
     for k in range(prismatic.shape[0]):
         b = int(prismatic[k, 0])
@@ -92,7 +95,7 @@ def constraints(t, q, qd, revolute, prismatic, drive, alpha):
         jac[row, 3 * b] = nx
         jac[row, 3 * b + 1] = ny
         jac[row, 3 * b + 2] = -nx * ay + ny * ax
-        gamma[row] = (nx * ax + ny * ay) * qd[3 * b + 2] ** 2
+        rhs_c[row] = (nx * ax + ny * ay) * qd[3 * b + 2] ** 2
         phi[row + 1] = q[3 * b + 2] - prismatic[k, 6]
         jac[row + 1, 3 * b + 2] = 1.0
         row += 2
@@ -101,8 +104,47 @@ def constraints(t, q, qd, revolute, prismatic, drive, alpha):
         phi[row] = q[3 * b + 2] - drive[2] - drive[1] * t
         phi_t[row] = -drive[1]
         jac[row, 3 * b + 2] = 1.0
-    rate = jac @ qd + phi_t
-    return jac, gamma - 2 * alpha * rate - alpha * alpha * phi, phi, phi_t
+    m, n = jac.shape
+    for i in range(m):
+        rate = phi_t[i]
+        for j in range(n):
+            rate += jac[i, j] * qd[j]
+        rhs_c[i] -= 2 * alpha * rate + alpha * alpha * phi[i]
+
+
+@numba.njit(cache=True)
+def constraints(t, q, qd, revolute, prismatic, drive, alpha):
+    """Phi_q, the right-hand side gamma - 2 a Phi' - a^2 Phi, Phi and Phi_t (new arrays)."""
+    m = constraint_count(revolute, prismatic, drive)
+    jac, phi, phi_t, rhs_c = np.zeros((m, q.size)), np.zeros(m), np.zeros(m), np.zeros(m)
+    fill_constraints(t, q, qd, revolute, prismatic, drive, alpha, jac, phi, phi_t, rhs_c)
+    return jac, rhs_c, phi, phi_t
+
+
+@numba.njit(cache=True)
+def cholesky_solve(a, b):
+    """Solve a x = b in place (x in b) for a small symmetric positive definite a (overwritten)."""
+    m = b.size
+    for j in range(m):
+        d = a[j, j]
+        for k in range(j):
+            d -= a[j, k] * a[j, k]
+        a[j, j] = math.sqrt(d)
+        for i in range(j + 1, m):
+            v = a[i, j]
+            for k in range(j):
+                v -= a[i, k] * a[j, k]
+            a[i, j] = v / a[j, j]
+    for i in range(m):
+        v = b[i]
+        for k in range(i):
+            v -= a[i, k] * b[k]
+        b[i] = v / a[i, i]
+    for i in range(m - 1, -1, -1):
+        v = b[i]
+        for k in range(i + 1, m):
+            v -= a[k, i] * b[k]
+        b[i] = v / a[i, i]
 
 
 @numba.njit(cache=True)
@@ -156,19 +198,32 @@ def joint_forces(q, qd, joint, impact_speed, grid_log0, grid_step, table):
 
 
 @numba.njit(cache=True)
-def rhs(t, y, nq, minv, gravity, revolute, prismatic, drive, alpha, joints, speeds,
-        grid_log0, grid_step, tables):
+def workspace(nq, revolute, prismatic, drive):
+    """Buffers of the right-hand side: Phi_q, Phi, Phi_t, rhs_c, the Schur matrix, forces."""
+    m = constraint_count(revolute, prismatic, drive)
+    return (np.zeros((m, nq)), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros((m, m)),
+            np.zeros(nq))
+
+
+@numba.njit(cache=True)
+def rhs(t, y, dy, nq, minv, gravity, revolute, prismatic, drive, alpha, joints, speeds,
+        grid_log0, grid_step, tables, work):
+    """dy = f(t, y): velocities, accelerations, dissipated power, power of the constraints."""
+    jac, phi, phi_t, rhs_c, schur, force = work
     q, qd = y[:nq], y[nq:2 * nq]
-    force = np.zeros(nq)
     for b in range(nq // 3):
         force[3 * b] = gravity[0] / minv[3 * b]
         force[3 * b + 1] = gravity[1] / minv[3 * b + 1]
+        force[3 * b + 2] = 0.0
     dissipation = 0.0
     for k in range(joints.shape[0]):
         delta, f_n, f_t, f_el, power, nx, ny, cx, cy = joint_forces(
             q, qd, joints[k], speeds[k], grid_log0, grid_step, tables[k])
         if delta <= 0.0:
             continue
+        if not math.isfinite(f_n):
+            dy[:] = math.nan   # penetration beyond the tabulated law: the integrator stops
+            return
         fx, fy = -f_n * nx + f_t * ny, -f_n * ny - f_t * nx   # on the journal
         for b, sign in ((int(joints[k, 3]), 1.0), (int(joints[k, 0]), -1.0)):
             if b >= 0:
@@ -176,22 +231,42 @@ def rhs(t, y, nq, minv, gravity, revolute, prismatic, drive, alpha, joints, spee
                 force[3 * b + 1] += sign * fy
                 force[3 * b + 2] += sign * ((cx - q[3 * b]) * fy - (cy - q[3 * b + 1]) * fx)
         dissipation += power
-    dy = np.empty_like(y)
-    if not np.all(np.isfinite(force)):
-        dy[:] = math.nan   # penetration beyond the tabulated law: the integrator stops
-        return dy
     dy[:nq] = qd
-    jac, rhs_c, _, phi_t = constraints(t, q, qd, revolute, prismatic, drive, alpha)
-    if jac.shape[0] > 0:
-        scaled = jac * minv
-        lam = np.linalg.solve(scaled @ jac.T, scaled @ force - rhs_c)
-        dy[nq:2 * nq] = minv * (force - jac.T @ lam)
-        work = lam @ phi_t
+    m = rhs_c.size
+    work_in = 0.0
+    if m > 0:
+        fill_constraints(t, q, qd, revolute, prismatic, drive, alpha, jac, phi, phi_t, rhs_c)
+        # (Phi_q M^-1 Phi_q^T) lambda = Phi_q M^-1 Q - rhs_c, lambda into rhs_c
+        for i in range(m):
+            v = -rhs_c[i]
+            for j in range(nq):
+                v += jac[i, j] * minv[j] * force[j]
+            rhs_c[i] = v
+            for k in range(i + 1):
+                v = 0.0
+                for j in range(nq):
+                    v += jac[i, j] * minv[j] * jac[k, j]
+                schur[i, k] = v
+                schur[k, i] = v
+        cholesky_solve(schur, rhs_c)
+        for j in range(nq):
+            v = force[j]
+            for i in range(m):
+                v -= jac[i, j] * rhs_c[i]
+            dy[nq + j] = minv[j] * v
+        for i in range(m):
+            work_in += rhs_c[i] * phi_t[i]
     else:
-        dy[nq:2 * nq] = minv * force
-        work = 0.0
+        for j in range(nq):
+            dy[nq + j] = minv[j] * force[j]
     dy[2 * nq] = dissipation
-    dy[2 * nq + 1] = work
+    dy[2 * nq + 1] = work_in
+
+
+def rhs_value(t, y, model_args):
+    """f(t, y) as a new array (Python-side convenience)."""
+    dy = np.empty_like(y)
+    rhs(t, y, dy, *model_args, workspace(model_args[0], model_args[3], model_args[4], model_args[5]))
     return dy
 
 
@@ -221,8 +296,10 @@ def integrate(y0, t_end, nq, minv, gravity, revolute, prismatic, drive, alpha, j
     speeds = np.full(nj, speed_floor)
     t, y = 0.0, y0.copy()
     k = np.empty((7, ny))
-    k[0] = rhs(t, y, nq, minv, gravity, revolute, prismatic, drive, alpha, joints, speeds,
-               grid_log0, grid_step, tables)
+    ys = np.empty(ny)
+    work = workspace(nq, revolute, prismatic, drive)
+    rhs(t, y, k[0], nq, minv, gravity, revolute, prismatic, drive, alpha, joints, speeds,
+        grid_log0, grid_step, tables, work)
     calls, accepted, rejected, impacts = 1, 0, 0, 0
     h = min(max_step, 1e-6)
     err_prev = 1e-4
@@ -244,16 +321,22 @@ def integrate(y0, t_end, nq, minv, gravity, revolute, prismatic, drive, alpha, j
             status = BLOWN_UP if last_nan else STEP_TOO_SMALL
             break
         for s in range(1, 7):
-            ys = y + h * (A[s, :s] @ k[:s])
-            k[s] = rhs(t + C[s] * h, ys, nq, minv, gravity, revolute, prismatic, drive, alpha,
-                       joints, speeds, grid_log0, grid_step, tables)
+            for i in range(ny):
+                v = y[i]
+                for r in range(s):
+                    v += h * A[s, r] * k[r, i]
+                ys[i] = v
+            rhs(t + C[s] * h, ys, k[s], nq, minv, gravity, revolute, prismatic, drive, alpha,
+                joints, speeds, grid_log0, grid_step, tables, work)
         calls += 6
-        y_new = y + h * (B5[:6] @ k[:6])
-        err_vec = h * (E54 @ k)
+        y_new = ys.copy()  # stage 7 is evaluated at the 5th-order solution (FSAL)
         err = 0.0
         for i in range(2 * nq):
+            e = 0.0
+            for r in range(7):
+                e += E54[r] * k[r, i]
             scale = atol + rtol * max(abs(y[i]), abs(y_new[i]))
-            err += (err_vec[i] / scale) ** 2
+            err += (h * e / scale) ** 2
         err = math.sqrt(err / (2 * nq))
         last_nan = not math.isfinite(err)
         if last_nan:   # a stage went beyond the tabulated law: much smaller step
@@ -278,15 +361,15 @@ def integrate(y0, t_end, nq, minv, gravity, revolute, prismatic, drive, alpha, j
         t += h
         y = y_new
         accepted += 1
-        k[0] = k[6]  # first same as last
+        k[0, :] = k[6]  # first same as last
         for j in range(nj):
             delta, _, _, _, _, rate, _ = joint_kinematics(y[:nq], y[nq:2 * nq], joints[j])
             if not in_contact[j] and delta > -onset_tol:
                 in_contact[j] = True
                 speeds[j] = max(rate, speed_floor)
                 impacts += 1
-                k[0] = rhs(t, y, nq, minv, gravity, revolute, prismatic, drive, alpha, joints,
-                           speeds, grid_log0, grid_step, tables)
+                rhs(t, y, k[0], nq, minv, gravity, revolute, prismatic, drive, alpha, joints,
+                    speeds, grid_log0, grid_step, tables, work)
                 calls += 1
             elif in_contact[j] and delta < -onset_tol:
                 in_contact[j] = False

@@ -23,9 +23,10 @@ def per_step(model, times, states, speeds):
     drift = np.empty(times.size)
     for k in range(times.size):
         y = states[k]
-        acc[k] = kernel.rhs(times[k], y, nq, model.minv, model.gravity, model.revolute,
-                            model.prismatic, model.drive, s.integrator.baumgarte, model.joints,
-                            speeds[k, :nj], model.grid_log0, model.grid_step, model.tables)[nq:2 * nq]
+        acc[k] = kernel.rhs_value(times[k], y, (nq, model.minv, model.gravity, model.revolute,
+                                                model.prismatic, model.drive, s.integrator.baumgarte,
+                                                model.joints, speeds[k, :nj], model.grid_log0,
+                                                model.grid_step, model.tables))[nq:2 * nq]
         _, _, phi, _ = kernel.constraints(times[k], y[:nq], y[nq:2 * nq], model.revolute,
                                           model.prismatic, model.drive, 0.0)
         drift[k] = np.max(np.abs(phi), initial=0.0)
@@ -57,6 +58,27 @@ def per_step(model, times, states, speeds):
     return cols, energy, drift
 
 
+def refined_peak(model, j, times, states, speeds, k):
+    """The peak normal force of joint j near accepted step k, refined between the steps
+    k-1..k+1 by cubic Hermite interpolation of the penetration (delta and its rate at both ends
+    of each step): (peak force N, its time s)."""
+    nq, row = model.nq, model.joints[j]
+    chi, best = row[8], (0.0, float(times[k]))
+    for a in range(max(k - 1, 0), min(k + 1, times.size - 1)):
+        h = times[a + 1] - times[a]
+        ends = [kernel.joint_kinematics(states[i, :nq], states[i, nq:2 * nq], row) for i in (a, a + 1)]
+        d0, r0, d1, r1 = ends[0][0], ends[0][5] * h, ends[1][0], ends[1][5] * h
+        x = np.linspace(0, 1, 201)
+        delta = (2 * x**3 - 3 * x**2 + 1) * d0 + (x**3 - 2 * x**2 + x) * r0 + (-2 * x**3 + 3 * x**2) * d1 + (x**3 - x**2) * r1
+        rate = ((6 * x**2 - 6 * x) * d0 + (3 * x**2 - 4 * x + 1) * r0 + (-6 * x**2 + 6 * x) * d1 + (3 * x**2 - 2 * x) * r1) / h
+        for i in np.flatnonzero(delta > 0):
+            f_el = kernel.elastic_force(delta[i], model.grid_log0, model.grid_step, model.tables[j])
+            force = max(f_el * (1 + chi * rate[i] / speeds[a + 1, j]), 0.0)
+            if force > best[0]:
+                best = (force, float(times[a] + x[i] * h))
+    return best
+
+
 def sample(model, times, states, speeds):
     """Per-step columns interpolated to the output sample times (and the per-step data)."""
     cols, energy, drift = per_step(model, times, states, speeds)
@@ -81,10 +103,10 @@ def summary(model, times, states, speeds, counters, status, t_end, seconds, stat
     total = e["kinetic"] + e["potential"] + e["elastic"] + e["dissipated"] - e["work_in"]
     scale = max(float(np.max(e["kinetic"])), 1e-300)
     joints = {}
-    for c in model.scene.clearance_joints:
+    for j, c in enumerate(model.scene.clearance_joints):
         force = series["steps"][f"{c.name}_normal_force_N"]
-        joints[c.name] = {"peak_normal_force_N": float(force.max(initial=0.0)),
-                          "time_of_peak_s": float(times[np.argmax(force)]) if force.size else None,
+        peak, when = refined_peak(model, j, times, states, speeds, int(np.argmax(force)))
+        joints[c.name] = {"peak_normal_force_N": peak, "time_of_peak_s": when,
                           "peak_penetration_m": float(np.max(series["steps"][f"{c.name}_penetration_m"], initial=0.0)),
                           "peak_friction_force_N": float(np.max(np.abs(series["steps"][f"{c.name}_friction_force_N"]), initial=0.0)),
                           "clearance_m": c.bearing_radius - c.journal_radius}
