@@ -1,0 +1,73 @@
+"""Friction laws against closed forms: Stribeck minimum, Dahl's exponential approach, LuGre's
+steady Stribeck curve and pre-sliding stiffness, the Iwan element's Masing loop."""
+
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from laws import friction as fr
+
+# LuGre parameters of Canudas de Wit et al. 1995, Table I
+SIGMA0, SIGMA1, SIGMA2 = 1e5, math.sqrt(1e5), 0.4
+F_C, F_S, V_S = 1.0, 1.5, 0.001
+
+
+def test_coulomb_and_ambrosio():
+    assert fr.coulomb(0.3, 100.0, 0.2) == -20.0 and fr.coulomb(-0.3, 100.0, 0.2) == 20.0
+    np.testing.assert_allclose(fr.ambrosio(np.array([0.5e-4, 5.5e-4, 2e-3]), 100.0, 0.2, 1e-4, 1e-3),
+                               [0.0, -10.0, -20.0])
+
+
+def test_stribeck_polynomial_starts_at_mu_s_and_bottoms_at_mu_m():
+    v = np.linspace(1e-9, 0.2, 200001)
+    mu = fr.stribeck_polynomial(v, 0.3, 0.15, 0.05)
+    assert mu[0] == pytest.approx(0.3, abs=1e-6)
+    assert v[np.argmin(mu)] == pytest.approx(0.05, rel=1e-3) and mu.min() == pytest.approx(0.15, rel=1e-9)
+    assert fr.linear_velocity(-0.2, 0.3, 0.5) == pytest.approx(0.4)
+
+
+def test_dahl_approaches_coulomb_exponentially():
+    sigma, f_c, v = 2e4, 3.0, 0.01
+    sol = solve_ivp(lambda t, f: [fr.dahl_rate(f[0], v, sigma, f_c)], (0, 0.05), [0.0],
+                    rtol=1e-11, atol=1e-13, dense_output=True)
+    t = np.linspace(0, 0.05, 50)
+    np.testing.assert_allclose(sol.sol(t)[0], f_c * (1 - np.exp(-sigma * v * t / f_c)), atol=1e-8)
+
+
+@pytest.mark.parametrize("v", [1e-4, 1e-3, 3e-3, 0.1])
+def test_lugre_steady_sliding_is_the_stribeck_curve(v):
+    g = fr.lugre_g(v, F_C, F_S, V_S)
+    sol = solve_ivp(lambda t, z: [fr.lugre_rate(z[0], v, SIGMA0, g)], (0, 20 * g / (SIGMA0 * v)),
+                    [0.0], method="LSODA", rtol=1e-10, atol=1e-14)
+    z = sol.y[0, -1]
+    force = fr.lugre_force(z, fr.lugre_rate(z, v, SIGMA0, g), v, SIGMA0, SIGMA1, SIGMA2)
+    assert force == pytest.approx(g + SIGMA2 * v, rel=1e-6)
+
+
+def test_lugre_presliding_is_a_spring_of_stiffness_sigma0():
+    """A small displacement x from rest (|x| << F_c / sigma0) is resisted like a spring sigma0 x;
+    the first correction is -sigma0 x / (2 g): 5e-5 at x = 1 nm."""
+    amplitude, period = 1e-9, 1.0  # far below F_c / sigma0 = 10 um
+
+    def rhs(t, z):
+        v = amplitude * 2 * math.pi / period * math.cos(2 * math.pi * t / period)
+        return [fr.lugre_rate(z[0], v, SIGMA0, fr.lugre_g(v, F_C, F_S, V_S))]
+
+    sol = solve_ivp(rhs, (0, period / 4), [0.0], rtol=1e-10, atol=1e-18)
+    assert SIGMA0 * sol.y[0, -1] / amplitude == pytest.approx(SIGMA0, rel=1e-3)
+
+
+def test_iwan_element_dissipates_the_masing_loop():
+    """Cycling x = a sin wt with a > F_cr / k1: the loop's area is 4 F_cr (a - F_cr / k1)."""
+    k1, k2, f_cr, a = 1e4, 2e3, 5.0, 2e-3
+    x = a * np.sin(np.linspace(0, 4 * math.pi, 40001))
+    slider, forces = 0.0, []
+    for xi in x:
+        force, slider = fr.iwan_bilinear(xi, slider, k1, k2, f_cr)
+        forces.append(force)
+    forces = np.array(forces)
+    half = x.size // 2  # second cycle (the first starts from the virgin state)
+    work = np.trapezoid(forces[half:], x[half:])
+    assert work == pytest.approx(4 * f_cr * (a - f_cr / k1), rel=1e-3)
