@@ -34,7 +34,7 @@ def run(scene_path, out, comm=MPI.COMM_WORLD) -> int:
         stepper, el, contact, sizing, data = model.build(scene, comm)
         setup = time.perf_counter() - start
         steps = scene.load.steps
-        approaches = [scene.load.max_approach * (k + 1) / steps for k in range(steps)]
+        approaches = scene.load.approaches
         fields = (outputs.FieldWriter(tmp / "fields.xdmf", el, contact)
                   if scene.output.fields else None)
         # a progress bar on rank 0 when it writes to a terminal (tqdm decides: disable=None)

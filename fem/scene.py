@@ -44,11 +44,28 @@ class Contact(Strict):
 
 
 class Load(Strict):
-    """The hub moves the clearance through free space, then pushes max_approach further."""
+    """The hub moves the clearance through free space, then pushes max_approach further, in
+    equal steps, or in geometric steps from first_approach when that is given."""
 
     max_approach: float = pydantic.Field(gt=0, description="hub displacement beyond first touch (m)")
     steps: int = pydantic.Field(ge=1)
     direction_deg: float = pydantic.Field(ge=-360, le=360)
+    first_approach: float | None = pydantic.Field(default=None, gt=0)
+
+    @pydantic.model_validator(mode="after")
+    def _steps(self):
+        if self.first_approach is not None and (self.first_approach >= self.max_approach
+                                                or self.steps < 2):
+            raise ValueError("first_approach must be below max_approach, with steps >= 2")
+        return self
+
+    @property
+    def approaches(self) -> list[float]:
+        """The approach (m) of every load step."""
+        if self.first_approach is None:
+            return [self.max_approach * (k + 1) / self.steps for k in range(self.steps)]
+        ratio = (self.max_approach / self.first_approach) ** (1 / (self.steps - 1))
+        return [self.first_approach * ratio**k for k in range(self.steps)]
 
     @property
     def direction(self) -> tuple[float, float]:

@@ -57,7 +57,7 @@ class Solved:
         self.stepper, self.el, self.contact, self.sizing, _ = model.build(self.scene)
         load = self.scene.load
         if approaches is None:
-            approaches = [load.max_approach * (k + 1) / load.steps for k in range(load.steps)]
+            approaches = load.approaches
         self.run = self.stepper.run(list(approaches))
         assert self.run.stop is None, self.run.stop
 

@@ -66,6 +66,7 @@ BAD = [
     ("contact", "method", "lagrange", "contact.method"),
     ("contact", "friction", -0.1, "contact.friction"),
     ("load", "max_approach", "1e-5", "load.max_approach"),
+    ("load", "first_approach", 2e-5, "first_approach must be below max_approach"),
 ]
 
 
