@@ -16,14 +16,17 @@ A revolute clearance joint is no constraint: the journal centre P_j moves inside
 delta = |e| - c, the normal n = e/|e|, the contact point P_b + R_b n. While delta > 0 the
 normal force is F_n = F_el(delta) (1 + chi delta'/v0)  (>= 0), F_el from a table of the
 elastic law (log-log interpolation, exact for a power law), chi the hysteresis factor of the
-damping law, v0 the approach rate at the onset of this impact; the friction force is
-F_t = mu c_d(|v_t|) F_n opposing the tangential slip v_t (Ambrosio's regularised Coulomb).
-While delta <= 0 no law is evaluated.
+damping law, v0 the approach rate at the onset of this impact; the friction force
+opposes the tangential slip v_t: Ambrosio's regularised Coulomb, polynomial Stribeck or a
+linear velocity law (static, regularised near zero slip), or LuGre or Dahl normalised by F_n,
+whose states are integrated with the motion (and rest while the joint is open). While
+delta <= 0 no law is evaluated.
 
 Extra states integrate the energy dissipated in the joints and the work of the constraint
 forces (the drive), so the energy balance can be checked.
 
-Integrator: Dormand-Prince 5(4) with a PI step-size controller on (q, q'). A trial step with
+Integrator: Dormand-Prince 5(4) with a PI step-size controller on (q, q') and the friction
+states. A trial step with
 a stage beyond the tabulated law (NaN) is retried ten times shorter; only if the step size
 collapses that way has the run blown up. A step that would carry a joint from free flight
 into contact deeper than `onset_tol` is shortened (secant on delta) until it ends at the
@@ -39,6 +42,8 @@ import numpy as np
 
 # status codes
 OK, BLOWN_UP, TOO_MANY_STEPS, STEP_TOO_SMALL = 0, 1, 2, 3
+# friction laws of a clearance joint (column 9 of its row)
+NO_FRICTION, COULOMB, STRIBECK, LINEAR, LUGRE, DAHL = 0, 1, 2, 3, 4, 5
 
 
 @numba.njit(cache=True)
@@ -182,20 +187,44 @@ def joint_kinematics(q, qd, joint):
 
 
 @numba.njit(cache=True)
-def joint_forces(q, qd, joint, impact_speed, grid_log0, grid_step, table):
-    """(delta, F_n, F_t, F_el, dissipated power, n_x, n_y, c_x, c_y) of a clearance joint."""
+def friction(joint, f_n, slip, state):
+    """Friction force (N, positive along the slip: it acts against it) and the rate of the
+    law's state. joint[9] is the law, joint[10:17] its parameters; see reduced.scene."""
+    law, p = int(joint[9]), joint[10:17]
+    speed = abs(slip)
+    sign = 1.0 if slip > 0 else -1.0
+    if law == NO_FRICTION:
+        return 0.0, 0.0
+    if law <= LINEAR:   # static laws, regularised (Ambrosio) between p[5] and p[6]
+        cd = 0.0 if speed <= p[5] else (speed - p[5]) / (p[6] - p[5]) if speed <= p[6] else 1.0
+        if law == COULOMB:
+            mu = p[0]
+        elif law == STRIBECK:   # mu_s - k1 v + k3 v^3, minimum mu_m at v_m
+            k = p[0] - p[1]
+            mu = p[0] - 1.5 * k / p[2] * speed + 0.5 * k / p[2] ** 3 * speed**3
+        else:
+            mu = p[0] + p[1] * speed
+        return mu * cd * f_n * sign, 0.0
+    if law == LUGRE:
+        g = p[0] + (p[1] - p[0]) * math.exp(-(slip / p[2]) ** 2)
+        rate = slip - p[3] * speed * state / g
+        return f_n * (p[3] * state + p[4] * rate + p[5] * slip), rate
+    rate = p[1] * (1.0 - state / p[0] * sign) * slip   # Dahl, normalised
+    return f_n * state, rate
+
+
+@numba.njit(cache=True)
+def joint_forces(q, qd, joint, impact_speed, grid_log0, grid_step, table, state):
+    """(delta, F_n, F_t, F_el, dissipated power, n_x, n_y, c_x, c_y, state rate) of a
+    clearance joint. Row: bearing body and point, journal body and point, clearance, bearing
+    radius, hysteresis factor chi, friction law and parameters, friction state index."""
     delta, nx, ny, cx, cy, rate, slip = joint_kinematics(q, qd, joint)
     if delta <= 0.0:
-        return delta, 0.0, 0.0, 0.0, 0.0, nx, ny, cx, cy
+        return delta, 0.0, 0.0, 0.0, 0.0, nx, ny, cx, cy, 0.0
     f_el = elastic_force(delta, grid_log0, grid_step, table)
     f_n = max(f_el * (1.0 + joint[8] * rate / impact_speed), 0.0)
-    f_t = 0.0
-    if joint[9] > 0.0:
-        speed = abs(slip)
-        v0, v1 = joint[10], joint[11]
-        cd = 0.0 if speed <= v0 else (speed - v0) / (v1 - v0) if speed <= v1 else 1.0
-        f_t = joint[9] * cd * f_n * (1.0 if slip > 0 else -1.0)
-    return delta, f_n, f_t, f_el, (f_n - f_el) * rate + f_t * slip, nx, ny, cx, cy
+    f_t, state_rate = friction(joint, f_n, slip, state)
+    return delta, f_n, f_t, f_el, (f_n - f_el) * rate + f_t * slip, nx, ny, cx, cy, state_rate
 
 
 @numba.njit(cache=True)
@@ -217,11 +246,17 @@ def rhs(t, y, dy, nq, minv, gravity, revolute, prismatic, drive, alpha, joints, 
         force[3 * b + 1] = gravity[1] / minv[3 * b + 1]
         force[3 * b + 2] = 0.0
     dissipation = 0.0
+    for i in range(2 * nq + 2, y.size):
+        dy[i] = 0.0   # friction states rest out of contact
     for k in range(joints.shape[0]):
-        delta, f_n, f_t, f_el, power, nx, ny, cx, cy = joint_forces(
-            q, qd, joints[k], speeds[k], grid_log0, grid_step, tables[k])
+        index = int(joints[k, 17])
+        delta, f_n, f_t, f_el, power, nx, ny, cx, cy, state_rate = joint_forces(
+            q, qd, joints[k], speeds[k], grid_log0, grid_step, tables[k],
+            y[index] if index >= 0 else 0.0)
         if delta <= 0.0:
             continue
+        if index >= 0:
+            dy[index] = state_rate
         if not math.isfinite(f_n):
             dy[:] = math.nan   # penetration beyond the tabulated law: the integrator stops
             return
@@ -332,13 +367,15 @@ def integrate(y0, t_end, nq, minv, gravity, revolute, prismatic, drive, alpha, j
         calls += 6
         y_new = ys.copy()  # stage 7 is evaluated at the 5th-order solution (FSAL)
         err = 0.0
-        for i in range(2 * nq):
+        for i in range(ny):
+            if i == 2 * nq or i == 2 * nq + 1:
+                continue  # the energy integrals are outputs, not controlled
             e = 0.0
             for r in range(7):
                 e += E54[r] * k[r, i]
             scale = atol + rtol * max(abs(y[i]), abs(y_new[i]))
             err += (h * e / scale) ** 2
-        err = math.sqrt(err / (2 * nq))
+        err = math.sqrt(err / (ny - 2))
         last_nan = not math.isfinite(err)
         if last_nan:   # a stage went beyond the tabulated law: much smaller step
             rejected += 1

@@ -74,7 +74,7 @@ def build(scene: ReducedScene, source: str, base: Path) -> Model:
                        math.radians(scene.drive.angle0_deg)]) if scene.drive
              else np.array([-1.0, 0.0, 0.0]))
     laws_data = _laws_file(scene, base, source)
-    joints, tables = [], []
+    joints, tables, friction_states = [], [], 0
     # penetrations up to a tenth of the journal radius are tabulated; beyond, the run has blown up
     top = max((BLOW_UP_FRACTION * c.journal_radius for c in scene.clearance_joints), default=1.0)
     grid_log0 = math.log(GRID_LOW)
@@ -82,18 +82,41 @@ def build(scene: ReducedScene, source: str, base: Path) -> Model:
     deltas = np.exp(grid_log0 + grid_step * np.arange(GRID_POINTS))
     for c in scene.clearance_joints:
         chi = 0.0 if c.damping_law == "none" else dissipative.HYSTERESIS[c.damping_law](c.restitution)
-        mu = c.friction_coefficient if c.friction_law != "none" else 0.0
+        code, params, has_state = friction_block(c.friction)
+        state = -1
+        if has_state:
+            state, friction_states = 2 * len(minv) + 2 + friction_states, friction_states + 1
         joints.append([index[c.bearing_body], *c.bearing_point, index[c.journal_body],
                        *c.journal_point, c.bearing_radius - c.journal_radius, c.bearing_radius,
-                       chi, mu, c.friction_v0, c.friction_v1])
+                       chi, code, *params, state])
         force = normal_force(c, deltas, laws_data, source)
         force[deltas > BLOW_UP_FRACTION * c.journal_radius] = np.nan
         tables.append(np.log(force))
     model = Model(scene, names, minv, np.asarray(scene.gravity, float), revolute, prismatic, drive,
-                  np.array(joints, float).reshape(-1, 12), grid_log0, grid_step,
+                  np.array(joints, float).reshape(-1, JOINT_COLUMNS), grid_log0, grid_step,
                   np.array(tables).reshape(len(joints), GRID_POINTS), laws_data, np.empty(0))
     model.y0 = initial_state(model)
     return model
+
+
+JOINT_COLUMNS = 18   # see kernel.joint_forces for their meaning
+
+
+def friction_block(f):
+    """(kernel law code, 7 parameters, whether it carries a state) of a friction table.
+    Static laws put their regularisation speeds v0, v1 in the last two parameters."""
+    if f is None:
+        return kernel.NO_FRICTION, [0.0] * 7, False
+    if f.law == "coulomb_ambrosio":
+        return kernel.COULOMB, [f.mu, 0, 0, 0, 0, f.v0, f.v1], False
+    if f.law == "stribeck":
+        return kernel.STRIBECK, [f.mu_static, f.mu_min, f.v_min, 0, 0, f.v0, f.v1], False
+    if f.law == "linear":
+        return kernel.LINEAR, [f.mu_static, f.alpha, 0, 0, 0, f.v0, f.v1], False
+    if f.law == "lugre":
+        return kernel.LUGRE, [f.mu_coulomb, f.mu_static, f.stribeck_speed, f.sigma0, f.sigma1,
+                              f.sigma2, 0], True
+    return kernel.DAHL, [f.mu, f.sigma, 0, 0, 0, 0, 0], True
 
 
 def normal_force(c, deltas, laws_data, source) -> np.ndarray:
@@ -177,4 +200,6 @@ def initial_state(model: Model) -> np.ndarray:
     if jac.shape[0]:
         scaled = jac * model.minv
         qd -= scaled.T @ np.linalg.lstsq(scaled @ jac.T, jac @ qd + phi_t, rcond=None)[0]
-    return np.concatenate([q, qd, [0.0, 0.0]])
+    states = sum(1 for c in model.scene.clearance_joints
+                 if c.friction is not None and c.friction.law in ("lugre", "dahl"))
+    return np.concatenate([q, qd, [0.0, 0.0], np.zeros(states)])

@@ -34,8 +34,10 @@ def per_step(model, times, states, speeds):
             row = model.joints[j]
             bx, by = kernel.point(y[:nq], int(row[0]), row[1], row[2])
             jx, jy = kernel.point(y[:nq], int(row[3]), row[4], row[5])
+            index = int(row[17])
             delta, f_n, f_t, *_ = kernel.joint_forces(y[:nq], y[nq:2 * nq], row, speeds[k, j],
-                                                      model.grid_log0, model.grid_step, model.tables[j])
+                                                      model.grid_log0, model.grid_step,
+                                                      model.tables[j], y[index] if index >= 0 else 0.0)
             joint[k, j] = (jx - bx, jy - by, delta, f_n, f_t, model.elastic_energy(j, delta))
     for b, body in enumerate(s.bodies):
         for i, (what, unit) in enumerate((("x", "m"), ("y", "m"), ("angle", "rad"))):

@@ -17,7 +17,6 @@ from pinbore.scene import Strict
 GROUND = "ground"
 ELASTIC_LAWS = ["hertz_point"] + sorted(PUBLISHED)
 DAMPING_LAWS = ["none"] + sorted(HYSTERESIS)
-FRICTION_LAWS = ["none", "coulomb_ambrosio"]
 
 Vector = Annotated[list[float], pydantic.Field(min_length=2, max_length=2)]
 
@@ -62,6 +61,70 @@ class Drive(Strict):
     angle0_deg: float = 0.0
 
 
+class Regularised(Strict):
+    """Below v0 the friction force vanishes, between v0 and v1 it grows linearly to its full
+    value (Ambrosio 2003): the static laws need it to be continuous at zero slip."""
+
+    v0: float = pydantic.Field(default=1e-4, gt=0, description="m/s")
+    v1: float = pydantic.Field(default=1e-3, gt=0, description="m/s")
+
+    @pydantic.model_validator(mode="after")
+    def _speeds(self):
+        if self.v1 <= self.v0:
+            raise ValueError("v1 must exceed v0")
+        return self
+
+
+class CoulombFriction(Regularised):
+    """F_t = mu c_d(|v|) F_n (Ambrosio's regularised Coulomb)."""
+
+    law: Literal["coulomb_ambrosio"]
+    mu: float = pydantic.Field(ge=0)
+
+
+class StribeckFriction(Regularised):
+    """Polynomial Stribeck (review eq. 14): mu_static at rest, mu_min at |v| = v_min."""
+
+    law: Literal["stribeck"]
+    mu_static: float = pydantic.Field(ge=0)
+    mu_min: float = pydantic.Field(ge=0)
+    v_min: float = pydantic.Field(gt=0, description="m/s")
+
+
+class LinearFriction(Regularised):
+    """mu = mu_static + alpha |v| (review eq. 15)."""
+
+    law: Literal["linear"]
+    mu_static: float = pydantic.Field(ge=0)
+    alpha: float = pydantic.Field(ge=0, description="s/m")
+
+
+class LuGreFriction(Strict):
+    """LuGre normalised by the normal force: F_t = F_n (sigma0 z + sigma1 z' + sigma2 v),
+    z' = v - sigma0 |v| z / g(v), g = mu_coulomb + (mu_static - mu_coulomb) exp(-(v/v_s)^2)."""
+
+    law: Literal["lugre"]
+    mu_coulomb: float = pydantic.Field(ge=0)
+    mu_static: float = pydantic.Field(ge=0)
+    stribeck_speed: float = pydantic.Field(gt=0, description="m/s")
+    sigma0: float = pydantic.Field(gt=0, description="1/m")
+    sigma1: float = pydantic.Field(default=0.0, ge=0, description="s/m")
+    sigma2: float = pydantic.Field(default=0.0, ge=0, description="s/m")
+
+
+class DahlFriction(Strict):
+    """Dahl (review eq. 16, alpha = 1) normalised by the normal force: F_t = F_n m,
+    m' = sigma (1 - (m / mu) sgn v) v."""
+
+    law: Literal["dahl"]
+    mu: float = pydantic.Field(gt=0)
+    sigma: float = pydantic.Field(gt=0, description="1/m")
+
+
+Friction = Annotated[CoulombFriction | StribeckFriction | LinearFriction | LuGreFriction
+                     | DahlFriction, pydantic.Field(discriminator="law")]
+
+
 class ClearanceJoint(Strict):
     """A revolute joint with radial clearance: the journal (on journal_body) moves freely
     inside the bearing (on bearing_body) and meets its wall through the contact laws."""
@@ -80,10 +143,7 @@ class ClearanceJoint(Strict):
     normal_law: str
     damping_law: str = "none"
     restitution: float = pydantic.Field(default=1.0, gt=0, le=1)
-    friction_law: str = "none"
-    friction_coefficient: float = pydantic.Field(default=0.0, ge=0)
-    friction_v0: float = pydantic.Field(default=1e-4, gt=0, description="m/s, Ambrosio")
-    friction_v1: float = pydantic.Field(default=1e-3, gt=0, description="m/s, Ambrosio")
+    friction: Friction | None = None
     start: Literal["ideal", "free"] = "ideal"  # centred; moving with the ideal joint, or free
 
     @pydantic.model_validator(mode="after")
@@ -99,11 +159,6 @@ class ClearanceJoint(Strict):
         if self.damping_law not in DAMPING_LAWS:
             raise ValueError(f"damping_law {self.damping_law!r} is unknown; valid: "
                              f"{', '.join(DAMPING_LAWS)}")
-        if self.friction_law not in FRICTION_LAWS:
-            raise ValueError(f"friction_law {self.friction_law!r} is unknown; valid: "
-                             f"{', '.join(FRICTION_LAWS)}")
-        if self.friction_v1 <= self.friction_v0:
-            raise ValueError("friction_v1 must exceed friction_v0")
         return self
 
 

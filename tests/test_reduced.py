@@ -13,6 +13,7 @@ import pytest
 from conftest import ROOT, pinbore
 
 from laws import dissipative
+from laws import friction as friction_laws
 from laws.elastic import Joint, hertz_point
 from reduced.model import build
 from reduced.outputs import per_step
@@ -81,7 +82,7 @@ def free_mechanism(damping="none", friction=0.0):
     joint = data["clearance_joints"][0]
     joint["damping_law"], joint["restitution"] = damping, 0.8
     if friction:
-        joint["friction_law"], joint["friction_coefficient"] = "coulomb_ambrosio", friction
+        joint["friction"] = {"law": "coulomb_ambrosio", "mu": friction}
     data["integrator"] = {"rtol": 1e-9, "atol": 1e-12}
     return data
 
@@ -177,3 +178,42 @@ def test_flores_scene_runs_and_writes_everything(tmp_path):
     # at the scene's rtol = 1e-5 the balance closes to 1.7e-4 of the peak kinetic energy (the
     # strict energy tests above run at rtol = 1e-9)
     assert summary["impacts"] > 10 and summary["energy_balance"]["relative_to_peak_kinetic"] < 1e-3
+
+
+def journal_in_fixed_bearing(friction, omega=10.0, duration=0.6):
+    """A journal (1 kg) turned at omega inside a fixed bearing, under gravity."""
+    return {"kind": "reduced", "duration": duration, "gravity": [0.0, -9.81],
+            "bodies": [{"name": "journal", "mass": 1.0, "inertia": 1e-4}],
+            "drive": {"body": "journal", "speed_rpm": omega * 60 / (2 * math.pi)},
+            "clearance_joints": [{"name": "j", "bearing_body": "ground", "bearing_point": [0.0, 0.0],
+                                  "journal_body": "journal", "journal_point": [0.0, 0.0],
+                                  "bearing_radius": 10e-3, "journal_radius": 9.5e-3, "E": 207e9,
+                                  "nu": 0.3, "normal_law": "hertz_point", "damping_law": "flores",
+                                  "restitution": 0.3, "friction": friction}],
+            "integrator": {"rtol": 1e-7, "atol": 1e-10}}
+
+
+SLIP = 10.0 * 9.5e-3  # m/s, the journal's surface speed
+
+
+@pytest.mark.parametrize("friction, mu", [
+    ({"law": "coulomb_ambrosio", "mu": 0.2}, 0.2),
+    ({"law": "stribeck", "mu_static": 0.3, "mu_min": 0.15, "v_min": 0.05},
+     float(friction_laws.stribeck_polynomial(SLIP, 0.3, 0.15, 0.05))),
+    ({"law": "linear", "mu_static": 0.1, "alpha": 3.0}, 0.1 + 3.0 * SLIP),
+    ({"law": "lugre", "mu_coulomb": 0.1, "mu_static": 0.15, "stribeck_speed": 0.05,
+      "sigma0": 1e5, "sigma1": 3.0, "sigma2": 2.0},
+     float(friction_laws.lugre_g(SLIP, 0.1, 0.15, 0.05)) + 2.0 * SLIP),
+    ({"law": "dahl", "mu": 0.2, "sigma": 1e4}, 0.2),
+])
+def test_friction_circle(friction, mu):
+    """A turning journal climbs the bearing wall until normal and friction forces balance
+    gravity: the contact angle psi from the bottom has tan psi = mu(v) at the slip speed
+    (the friction circle). With mu rising in v the swing along the wall dies out; with
+    Coulomb or Dahl it does not, and its mean angle is the equilibrium."""
+    cols, _, _, _ = solve(journal_in_fixed_bearing(friction))
+    t = cols["time_s"]
+    late = t > 0.5 * t[-1]
+    psi = np.arctan2(cols["j_ecc_x_m"], -cols["j_ecc_y_m"])[late]
+    mean = np.sum(psi[1:] * np.diff(t[late])) / (t[late][-1] - t[late][0])
+    assert abs(math.tan(mean)) == pytest.approx(mu, rel=0.01)
