@@ -31,7 +31,7 @@ a stage beyond the tabulated law (NaN) is retried ten times shorter; only if the
 collapses that way has the run blown up. A step that would carry a joint from free flight
 into contact deeper than `onset_tol` is shortened (secant on delta) until it ends at the
 onset; there v0 is recorded. So every impact starts on a step boundary with a known impact
-speed. The right-hand side works in preallocated buffers and solves the Schur system by
+speed. Latches engage the same way, at their angle, so their spring starts unloaded. The right-hand side works in preallocated buffers and solves the Schur system by
 Cholesky: about 1 us per evaluation for the slider-crank.
 """
 
@@ -228,6 +228,38 @@ def joint_forces(q, qd, joint, impact_speed, grid_log0, grid_step, table, state)
 
 
 @numba.njit(cache=True)
+def relative_angle(q, qd, row):
+    """Relative angle phi_j - phi_i beyond the element's free angle, and its rate."""
+    bi, bj = int(row[0]), int(row[1])
+    angle = (q[3 * bj + 2] if bj >= 0 else 0.0) - (q[3 * bi + 2] if bi >= 0 else 0.0) - row[4]
+    rate = (qd[3 * bj + 2] if bj >= 0 else 0.0) - (qd[3 * bi + 2] if bi >= 0 else 0.0)
+    return angle, rate
+
+
+SPRING, STOP, LATCH = 0, 1, 2
+LATCH_TOL = 1e-8   # rad: a latch engages within this of its angle (the step is shortened to it)
+
+
+@numba.njit(cache=True)
+def torsion_torque(q, qd, row, latched):
+    """Torque on body j (N m) of a torsion spring, stop or latch, and the power its damper
+    dissipates. Row: body i, body j, stiffness, damping, free angle (rad), kind. A stop acts
+    beyond its angle and only pushes; a latch, once reached (`latched`), holds both ways."""
+    angle, rate = relative_angle(q, qd, row)
+    kind = int(row[5])
+    if kind == LATCH:
+        if latched:
+            return -row[2] * angle - row[3] * rate, row[3] * rate * rate
+        return 0.0, 0.0
+    if kind == STOP and angle <= 0.0:
+        return 0.0, 0.0
+    torque = -row[2] * angle - row[3] * rate
+    if kind == STOP and torque > 0.0:   # a stop pushes, never pulls: its stored energy is lost
+        return 0.0, -row[2] * angle * rate
+    return torque, row[3] * rate * rate
+
+
+@numba.njit(cache=True)
 def workspace(nq, revolute, prismatic, drive):
     """Buffers of the right-hand side: Phi_q, Phi, Phi_t, rhs_c, the Schur matrix, forces."""
     m = constraint_count(revolute, prismatic, drive)
@@ -237,7 +269,7 @@ def workspace(nq, revolute, prismatic, drive):
 
 @numba.njit(cache=True)
 def rhs(t, y, dy, nq, minv, gravity, revolute, prismatic, drive, alpha, joints, speeds,
-        grid_log0, grid_step, tables, work):
+        grid_log0, grid_step, tables, torsion, latched, work):
     """dy = f(t, y): velocities, accelerations, dissipated power, power of the constraints."""
     jac, phi, phi_t, rhs_c, schur, force = work
     q, qd = y[:nq], y[nq:2 * nq]
@@ -266,6 +298,14 @@ def rhs(t, y, dy, nq, minv, gravity, revolute, prismatic, drive, alpha, joints, 
                 force[3 * b] += sign * fx
                 force[3 * b + 1] += sign * fy
                 force[3 * b + 2] += sign * ((cx - q[3 * b]) * fy - (cy - q[3 * b + 1]) * fx)
+        dissipation += power
+    for k in range(torsion.shape[0]):
+        torque, power = torsion_torque(q, qd, torsion[k], latched[k] > 0)
+        bi, bj = int(torsion[k, 0]), int(torsion[k, 1])
+        if bj >= 0:
+            force[3 * bj + 2] += torque
+        if bi >= 0:
+            force[3 * bi + 2] -= torque
         dissipation += power
     dy[:nq] = qd
     m = rhs_c.size
@@ -319,7 +359,7 @@ E54 = B5 - np.array([5179 / 57600, 0, 7571 / 16695, 393 / 640, -92097 / 339200, 
 
 @numba.njit(cache=True)
 def integrate(y0, t_end, nq, minv, gravity, revolute, prismatic, drive, alpha, joints,
-              grid_log0, grid_step, tables, rtol, atol, max_step, onset_tol, speed_floor,
+              grid_log0, grid_step, tables, torsion, rtol, atol, max_step, onset_tol, speed_floor,
               max_steps):
     """Adaptive DOPRI5 from t = 0. Returns times, states and impact speeds of every accepted
     step, counters (accepted, rejected, rhs calls, impacts) and a status code."""
@@ -330,12 +370,16 @@ def integrate(y0, t_end, nq, minv, gravity, revolute, prismatic, drive, alpha, j
     states = np.empty((capacity, ny))
     speeds_out = np.empty((capacity, max(nj, 1)))
     speeds = np.full(nj, speed_floor)
+    latched = np.zeros(torsion.shape[0])
+    for r in range(torsion.shape[0]):
+        latched[r] = 1.0 if int(torsion[r, 5]) == LATCH and relative_angle(
+            y0[:nq], y0[nq:2 * nq], torsion[r])[0] > -LATCH_TOL else 0.0
     t, y = 0.0, y0.copy()
     k = np.empty((7, ny))
     ys = np.empty(ny)
     work = workspace(nq, revolute, prismatic, drive)
     rhs(t, y, k[0], nq, minv, gravity, revolute, prismatic, drive, alpha, joints, speeds,
-        grid_log0, grid_step, tables, work)
+        grid_log0, grid_step, tables, torsion, latched, work)
     calls, accepted, rejected, impacts = 1, 0, 0, 0
     h = min(max_step, 1e-6)
     err_prev = 1e-4
@@ -363,7 +407,7 @@ def integrate(y0, t_end, nq, minv, gravity, revolute, prismatic, drive, alpha, j
                     v += h * A[s, r] * k[r, i]
                 ys[i] = v
             rhs(t + C[s] * h, ys, k[s], nq, minv, gravity, revolute, prismatic, drive, alpha,
-                joints, speeds, grid_log0, grid_step, tables, work)
+                joints, speeds, grid_log0, grid_step, tables, torsion, latched, work)
         calls += 6
         y_new = ys.copy()  # stage 7 is evaluated at the 5th-order solution (FSAL)
         err = 0.0
@@ -392,6 +436,12 @@ def integrate(y0, t_end, nq, minv, gravity, revolute, prismatic, drive, alpha, j
                 d_new = joint_kinematics(y_new[:nq], y_new[nq:2 * nq], joints[j])[0]
                 if d_new > onset_tol:
                     shorten = min(shorten, 0.99 * (-depth[j]) / (d_new - depth[j]))
+        for r in range(torsion.shape[0]):
+            if latched[r] == 0.0 and int(torsion[r, 5]) == LATCH:
+                a_new = relative_angle(y_new[:nq], y_new[nq:2 * nq], torsion[r])[0]
+                if a_new > LATCH_TOL:
+                    a_old = relative_angle(y[:nq], y[nq:2 * nq], torsion[r])[0]
+                    shorten = min(shorten, 0.99 * (-a_old) / (a_new - a_old))
         if shorten < 1.0:
             rejected += 1
             h *= max(shorten, 1e-3)
@@ -407,11 +457,18 @@ def integrate(y0, t_end, nq, minv, gravity, revolute, prismatic, drive, alpha, j
                 speeds[j] = max(rate, speed_floor)
                 impacts += 1
                 rhs(t, y, k[0], nq, minv, gravity, revolute, prismatic, drive, alpha, joints,
-                    speeds, grid_log0, grid_step, tables, work)
+                    speeds, grid_log0, grid_step, tables, torsion, latched, work)
                 calls += 1
             elif in_contact[j] and delta < -onset_tol:
                 in_contact[j] = False
             depth[j] = delta
+        for r in range(torsion.shape[0]):
+            if latched[r] == 0.0 and int(torsion[r, 5]) == LATCH and \
+                    relative_angle(y[:nq], y[nq:2 * nq], torsion[r])[0] > -LATCH_TOL:
+                latched[r] = 1.0
+                rhs(t, y, k[0], nq, minv, gravity, revolute, prismatic, drive, alpha, joints,
+                    speeds, grid_log0, grid_step, tables, torsion, latched, work)
+                calls += 1
         if count == capacity:
             capacity *= 2
             times2 = np.empty(capacity)

@@ -34,6 +34,7 @@ class Model:
     grid_step: float
     tables: np.ndarray
     calibration: dict | None      # the laws file, when a calibrated law is used
+    torsion: np.ndarray           # (k, 6): body i, body j, stiffness, damping, free angle, kind
     y0: np.ndarray
 
     @property
@@ -94,12 +95,22 @@ def build(scene: ReducedScene, source: str, base: Path) -> Model:
         tables.append(np.log(force))
     model = Model(scene, names, minv, np.asarray(scene.gravity, float), revolute, prismatic, drive,
                   np.array(joints, float).reshape(-1, JOINT_COLUMNS), grid_log0, grid_step,
-                  np.array(tables).reshape(len(joints), GRID_POINTS), laws_data, np.empty(0))
+                  np.array(tables).reshape(len(joints), GRID_POINTS), laws_data,
+                  torsion_rows(scene, index), np.empty(0))
     model.y0 = initial_state(model)
     return model
 
 
 JOINT_COLUMNS = 18   # see kernel.joint_forces for their meaning
+
+
+def torsion_rows(scene, index) -> np.ndarray:
+    """Torsion springs and stops; angles relative to the initial relative angle of the bodies."""
+    angle = {b.name: math.radians(b.angle_deg) for b in scene.bodies} | {GROUND: 0.0}
+    return np.array([[index[t.body_i], index[t.body_j], t.stiffness, t.damping,
+                      angle[t.body_j] - angle[t.body_i] + math.radians(t.free_angle_deg),
+                      {"spring": kernel.SPRING, "stop": kernel.STOP, "latch": kernel.LATCH}[t.type]]
+                     for t in scene.torsion], float).reshape(-1, 6)
 
 
 def friction_block(f):
@@ -155,6 +166,7 @@ def _check_connected(scene, names) -> None:
     links = {name: set() for name in names + [GROUND]}
     pairs = [(j.body_i, j.body_j) if j.type == "revolute" else (j.body, GROUND) for j in scene.joints]
     pairs += [(c.bearing_body, c.journal_body) for c in scene.clearance_joints]
+    pairs += [(t.body_i, t.body_j) for t in scene.torsion]
     if scene.drive:
         pairs.append((scene.drive.body, GROUND))
     for a, b in pairs:

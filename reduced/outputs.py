@@ -13,6 +13,18 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
+def latch_history(model, states):
+    """Per step and torsion element, 1 once a latch has been reached (the integrator's rule)."""
+    nq = model.nq
+    flags = np.zeros((states.shape[0], model.torsion.shape[0]))
+    for r, row in enumerate(model.torsion):
+        if int(row[5]) == kernel.LATCH:
+            reached = np.array([kernel.relative_angle(y[:nq], y[nq:2 * nq], row)[0] > -kernel.LATCH_TOL
+                                for y in states])
+            flags[:, r] = np.maximum.accumulate(reached)
+    return flags
+
+
 def per_step(model, times, states, speeds):
     """Columns at every accepted step: body motion, joint quantities, energies, drift."""
     nq, nj = model.nq, model.joints.shape[0]
@@ -21,12 +33,14 @@ def per_step(model, times, states, speeds):
     acc = np.empty((times.size, nq))
     joint = np.zeros((times.size, nj, 6))   # ecc x, ecc y, penetration, F_n, F_t, elastic energy
     drift = np.empty(times.size)
+    latched = latch_history(model, states)
     for k in range(times.size):
         y = states[k]
         acc[k] = kernel.rhs_value(times[k], y, (nq, model.minv, model.gravity, model.revolute,
                                                 model.prismatic, model.drive, s.integrator.baumgarte,
                                                 model.joints, speeds[k, :nj], model.grid_log0,
-                                                model.grid_step, model.tables))[nq:2 * nq]
+                                                model.grid_step, model.tables, model.torsion,
+                                                latched[k]))[nq:2 * nq]
         _, _, phi, _ = kernel.constraints(times[k], y[:nq], y[nq:2 * nq], model.revolute,
                                           model.prismatic, model.drive, 0.0)
         drift[k] = np.max(np.abs(phi), initial=0.0)
@@ -55,6 +69,11 @@ def per_step(model, times, states, speeds):
     kinetic = 0.5 * np.sum(masses * qd**2, axis=1)
     m_body = masses[0::3]
     potential = -np.sum(m_body * (model.gravity[0] * states[:, 0:nq:3] + model.gravity[1] * states[:, 1:nq:3]), axis=1)
+    for r, row in enumerate(model.torsion):   # springs, engaged stops and latches: 1/2 k angle^2
+        angle = np.array([kernel.relative_angle(y[:nq], y[nq:2 * nq], row)[0] for y in states])
+        engaged = {kernel.SPRING: np.ones_like(angle, bool), kernel.STOP: angle > 0,
+                   kernel.LATCH: latched[:, r] > 0}[int(row[5])]
+        potential = potential + np.where(engaged, 0.5 * row[2] * angle**2, 0.0)
     energy = {"kinetic": kinetic, "potential": potential, "elastic": joint[:, :, 5].sum(axis=1),
               "dissipated": states[:, 2 * nq], "work_in": states[:, 2 * nq + 1]}
     return cols, energy, drift
@@ -168,6 +187,24 @@ def plots(folder, model, series, twin) -> None:
         ax.legend()
         fig.tight_layout()
         fig.savefig(folder / "acceleration.png", dpi=110, metadata={"Software": None})
+        plt.close(fig)
+    if s.drive is None and twin is not None:
+        body = s.bodies[0].name
+        t_model, t_times, t_states = twin
+        t_cols = per_step(t_model, t_times, t_states, np.zeros((t_times.size, 1)))[0]
+        fig, (ax, bx) = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
+        ax.plot(cols["time_s"], cols[f"{body}_omega_rad_per_s"], lw=0.6, label="clearance joint")
+        ax.plot(t_cols["time_s"], t_cols[f"{body}_omega_rad_per_s"], "k--", lw=1, label="ideal joint")
+        ax.set_ylabel(f"{body} attitude rate (rad/s)")
+        ax.grid(alpha=0.3)
+        ax.legend()
+        ideal = np.interp(cols["time_s"], t_cols["time_s"], t_cols[f"{body}_omega_rad_per_s"])
+        bx.plot(cols["time_s"], cols[f"{body}_omega_rad_per_s"] - ideal, lw=0.6)
+        bx.set_ylabel("difference (rad/s)")
+        bx.set_xlabel("time (s)")
+        bx.grid(alpha=0.3)
+        fig.tight_layout()
+        fig.savefig(folder / "attitude.png", dpi=110, metadata={"Software": None})
         plt.close(fig)
     for c in s.clearance_joints:
         fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 5))

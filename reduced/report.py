@@ -33,6 +33,10 @@ def section(build_dir: Path) -> str:
             parts.append(figure(png_data(folder / "acceleration.png"),
                                 f"Scene {folder.name}: slider acceleration against crank angle, "
                                 "with the ideal joint (dashed)."))
+        if (folder / "attitude.png").exists():
+            parts.append(figure(png_data(folder / "attitude.png"),
+                                f"Scene {folder.name}: attitude rate of the free-floating body "
+                                "during deployment, with the ideal hinge (dashed)."))
         for name in s["clearance_joints"]:
             if (folder / f"{name}.png").exists():
                 parts.append(figure(png_data(folder / f"{name}.png"),

@@ -33,7 +33,8 @@ def simulate(model: Model):
     result = kernel.integrate(model.y0, model.scene.duration, model.nq, model.minv, model.gravity,
                               model.revolute, model.prismatic, model.drive, s.baumgarte,
                               model.joints, model.grid_log0, model.grid_step, model.tables,
-                              s.rtol, s.atol, s.max_step, onset, SPEED_FLOOR, MAX_STEPS)
+                              model.torsion, s.rtol, s.atol, s.max_step, onset, SPEED_FLOOR,
+                              MAX_STEPS)
     return (*result, time.perf_counter() - start)
 
 

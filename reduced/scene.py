@@ -162,6 +162,20 @@ class ClearanceJoint(Strict):
         return self
 
 
+class TorsionSpring(Strict):
+    """A torque between two bodies on their relative angle phi = phi_j - phi_i (deg from the
+    initial configuration): spring  T = -k (phi - free_angle) - c phi'  on body j (and -T on
+    i); stop: the same only while phi > free_angle, and never pulling; latch: nothing until
+    phi first passes free_angle, then the spring-damper both ways (a catch that holds)."""
+
+    type: Literal["spring", "stop", "latch"]
+    body_i: str
+    body_j: str
+    stiffness: float = pydantic.Field(ge=0, description="N m / rad")
+    damping: float = pydantic.Field(default=0.0, ge=0, description="N m s / rad")
+    free_angle_deg: float = 0.0
+
+
 class Integrator(Strict):
     method: Literal["dopri5"] = "dopri5"
     rtol: float = pydantic.Field(default=1e-6, gt=0, lt=1)
@@ -184,6 +198,7 @@ class ReducedScene(Strict):
     joints: list[Revolute | Prismatic] = []
     drive: Drive | None = None
     clearance_joints: list[ClearanceJoint] = []
+    torsion: list[TorsionSpring] = []
     integrator: Integrator = Integrator()
     output: Output = Output()
 
@@ -198,6 +213,8 @@ class ReducedScene(Strict):
         used += [(j.body, "joints.body") for j in self.joints if j.type == "prismatic"]
         used += [(c.bearing_body, "clearance_joints.bearing_body") for c in self.clearance_joints]
         used += [(c.journal_body, "clearance_joints.journal_body") for c in self.clearance_joints]
+        used += [(t.body_i, "torsion.body_i") for t in self.torsion]
+        used += [(t.body_j, "torsion.body_j") for t in self.torsion]
         if self.drive:
             used.append((self.drive.body, "drive.body"))
         for name, key in used:
