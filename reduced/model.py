@@ -35,6 +35,7 @@ class Model:
     tables: np.ndarray
     calibration: dict | None      # the laws file, when a calibrated law is used
     torsion: np.ndarray           # (k, 6): body i, body j, stiffness, damping, free angle, kind
+    friction_states: int          # integrator states of LuGre and Dahl joints
     y0: np.ndarray
 
     @property
@@ -96,7 +97,7 @@ def build(scene: ReducedScene, source: str, base: Path) -> Model:
     model = Model(scene, names, minv, np.asarray(scene.gravity, float), revolute, prismatic, drive,
                   np.array(joints, float).reshape(-1, JOINT_COLUMNS), grid_log0, grid_step,
                   np.array(tables).reshape(len(joints), GRID_POINTS), laws_data,
-                  torsion_rows(scene, index), np.empty(0))
+                  torsion_rows(scene, index), friction_states, np.empty(0))
     model.y0 = initial_state(model)
     return model
 
@@ -105,7 +106,7 @@ JOINT_COLUMNS = 18   # see kernel.joint_forces for their meaning
 
 
 def torsion_rows(scene, index) -> np.ndarray:
-    """Torsion springs and stops; angles relative to the initial relative angle of the bodies."""
+    """Torsion springs, stops and latches; angles relative to the bodies' initial relative angle."""
     angle = {b.name: math.radians(b.angle_deg) for b in scene.bodies} | {GROUND: 0.0}
     return np.array([[index[t.body_i], index[t.body_j], t.stiffness, t.damping,
                       angle[t.body_j] - angle[t.body_i] + math.radians(t.free_angle_deg),
@@ -212,6 +213,4 @@ def initial_state(model: Model) -> np.ndarray:
     if jac.shape[0]:
         scaled = jac * model.minv
         qd -= scaled.T @ np.linalg.lstsq(scaled @ jac.T, jac @ qd + phi_t, rcond=None)[0]
-    states = sum(1 for c in model.scene.clearance_joints
-                 if c.friction is not None and c.friction.law in ("lugre", "dahl"))
-    return np.concatenate([q, qd, [0.0, 0.0], np.zeros(states)])
+    return np.concatenate([q, qd, [0.0, 0.0], np.zeros(model.friction_states)])
