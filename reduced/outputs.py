@@ -118,8 +118,8 @@ def write_timeseries(path, series) -> None:
             out.writerow([f"{v:.9e}" for v in row])
 
 
-def summary(model, times, states, speeds, counters, status, t_end, seconds, status_text):
-    series = sample(model, times, states, speeds)
+def summary(model, series, times, states, speeds, counters, status, t_end, seconds, status_text):
+    """The run's summary from its series (`sample`) and the integrator's outputs."""
     e = series["energy"]
     total = e["kinetic"] + e["potential"] + e["elastic"] + e["dissipated"] - e["work_in"]
     scale = max(float(np.max(e["kinetic"])), 1e-300)

@@ -61,8 +61,8 @@ def run(scene_path, out) -> int:
     with atomic_directory(out) as tmp:
         series = outputs.sample(model, times, states, speeds)
         outputs.write_timeseries(tmp / "timeseries.csv", series)
-        summary = outputs.summary(model, times, states, speeds, counters, status, t_end, seconds,
-                                  STATUS[status])
+        summary = outputs.summary(model, series, times, states, speeds, counters, status, t_end,
+                                  seconds, STATUS[status])
         summary["scene_file"] = str(scene_path)
         (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
         if scene.output.plots:
