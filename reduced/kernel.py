@@ -214,6 +214,12 @@ def friction(joint, f_n, slip, state):
 
 
 @numba.njit(cache=True)
+def damped_normal_force(f_el, rate, chi, impact_speed):
+    """F_n = F_el (1 + chi delta' / v0), never pulling."""
+    return max(f_el * (1.0 + chi * rate / impact_speed), 0.0)
+
+
+@numba.njit(cache=True)
 def joint_forces(q, qd, joint, impact_speed, grid_log0, grid_step, table, state):
     """(delta, F_n, F_t, F_el, dissipated power, n_x, n_y, c_x, c_y, state rate) of a
     clearance joint. Row: bearing body and point, journal body and point, clearance, bearing
@@ -222,7 +228,7 @@ def joint_forces(q, qd, joint, impact_speed, grid_log0, grid_step, table, state)
     if delta <= 0.0:
         return delta, 0.0, 0.0, 0.0, 0.0, nx, ny, cx, cy, 0.0
     f_el = elastic_force(delta, grid_log0, grid_step, table)
-    f_n = max(f_el * (1.0 + joint[8] * rate / impact_speed), 0.0)
+    f_n = damped_normal_force(f_el, rate, joint[8], impact_speed)
     f_t, state_rate = friction(joint, f_n, slip, state)
     return delta, f_n, f_t, f_el, (f_n - f_el) * rate + f_t * slip, nx, ny, cx, cy, state_rate
 

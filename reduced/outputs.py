@@ -94,7 +94,7 @@ def refined_peak(model, j, times, states, speeds, k):
         rate = ((6 * x**2 - 6 * x) * d0 + (3 * x**2 - 4 * x + 1) * r0 + (-6 * x**2 + 6 * x) * d1 + (3 * x**2 - 2 * x) * r1) / h
         for i in np.flatnonzero(delta > 0):
             f_el = kernel.elastic_force(delta[i], model.grid_log0, model.grid_step, model.tables[j])
-            force = max(f_el * (1 + chi * rate[i] / speeds[a + 1, j]), 0.0)
+            force = kernel.damped_normal_force(f_el, rate[i], chi, speeds[a + 1, j])
             if force > best[0]:
                 best = (force, float(times[a] + x[i] * h))
     return best
