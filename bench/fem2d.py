@@ -32,7 +32,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 import tomli_w  # noqa: E402
 
-from laws.elastic import persson_half_angle, persson_load  # noqa: E402
+from fem.scene import FemScene  # noqa: E402
+from laws.elastic import persson_half_angles, persson_load  # noqa: E402
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "fem" / "steel_c10um.toml"
@@ -60,12 +61,10 @@ def run(scene: dict, workdir: Path, name: str, ranks: int = 1) -> dict:
 
 def persson_errors(scene: dict, force, angle) -> tuple[float, float]:
     """Largest |half-angle - Persson(force)| (deg); |force / Persson(half-angle) - 1| at the
-    largest approach. Similar materials: E* = E / (2 (1 - nu^2))."""
-    m = scene["materials"]["pin"]
-    scale = m["E"] / (2 * (1 - m["nu"] ** 2)) * (scene["geometry"]["bore_radius"]
-                                                 - scene["geometry"]["pin_radius"])
-    closed = np.degrees([persson_half_angle(f / scale) for f in force])
-    closed_force = scale * persson_load(math.tan(math.radians(angle[-1]) / 2))
+    largest approach."""
+    joint = FemScene.model_validate(scene).joint
+    closed = np.degrees(persson_half_angles(force, joint))
+    closed_force = joint.e_star * joint.clearance * persson_load(math.tan(math.radians(angle[-1]) / 2))
     return float(np.max(np.abs(angle - closed))), abs(force[-1] / closed_force - 1)
 
 

@@ -117,8 +117,7 @@ def persson_error(curve):
     """Largest |FE half-angle - Persson| (deg) for similar materials, else None."""
     if curve.half_angle is None or not curve.similar_materials:
         return None
-    scale = curve.joint.e_star * curve.joint.clearance
-    closed = np.degrees([elastic.persson_half_angle(p / scale) for p in curve.force])
+    closed = np.degrees(elastic.persson_half_angles(curve.force, curve.joint))
     return float(np.max(np.abs(curve.half_angle - closed)))
 
 

@@ -7,7 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from laws.elastic import persson_half_angle
+from fem.scene import FemScene
+from laws.elastic import persson_half_angle, persson_half_angles
 from pinbore.report import figure, figure_data, png_data, plt, table
 
 
@@ -17,9 +18,9 @@ def read_csv(path: Path) -> dict[str, np.ndarray]:
     return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]} if rows else {}
 
 
-def effective_modulus(scene) -> float:
-    pin, bore = scene["materials"]["pin"], scene["materials"]["bore"]
-    return 1 / ((1 - pin["nu"] ** 2) / pin["E"] + (1 - bore["nu"] ** 2) / bore["E"])
+def joint_of(result):
+    """The contact-law joint of the scene an FE run recorded in its result.json."""
+    return FemScene.model_validate(result["scene"]).joint
 
 
 def similar(scene) -> bool:
@@ -40,17 +41,12 @@ def curves_figure(runs) -> str:
     ax.set_prop_cycle(color=plt.cm.tab20.colors)
     for name, result, curve, _ in runs:
         ax.plot(curve["approach_m"] * 1e6, curve["force_per_length_N_per_m"] / 1e3, "o-", ms=3,
-                label=f"{name} (c = {scene_clearance(result) * 1e6:.0f} um)")
+                label=f"{name} (c = {joint_of(result).clearance * 1e6:.0f} um)")
     ax.set_xlabel("approach beyond first touch (um)")
     ax.set_ylabel("force per length (kN/m)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, ncol=2)
     return figure_data(fig)
-
-
-def scene_clearance(result) -> float:
-    g = result["scene"]["geometry"]
-    return g["bore_radius"] - g["pin_radius"]
 
 
 def persson_figure(runs) -> tuple[str, list]:
@@ -63,10 +59,11 @@ def persson_figure(runs) -> tuple[str, list]:
     for name, result, curve, _ in runs:
         if not similar(result["scene"]):
             continue
-        scale = effective_modulus(result["scene"]) * scene_clearance(result)
-        x = curve["force_per_length_N_per_m"] / scale
-        ax.plot(x, curve["half_angle_deg"], "o", ms=4, label=f"FE {name}")
-        closed = np.degrees([persson_half_angle(v) for v in x])
+        joint = joint_of(result)
+        force = curve["force_per_length_N_per_m"]
+        ax.plot(force / (joint.e_star * joint.clearance), curve["half_angle_deg"], "o", ms=4,
+                label=f"FE {name}")
+        closed = np.degrees(persson_half_angles(force, joint))
         rows.append([name, f"{curve['half_angle_deg'].min():.1f}-{curve['half_angle_deg'].max():.1f}",
                      f"{np.max(np.abs(curve['half_angle_deg'] - closed)):.2f}"])
     ax.set_xscale("log")
@@ -90,7 +87,7 @@ def section(build_dir: Path, bench_dir: Path) -> str:
     parts.append(table(
         ["scene", "method", "c (um)", "dofs", "steps", "Newton its/step (median)",
          "max gap violation (m)", "wall time (s)", "status"],
-        [[name, r["contact"]["method"], f"{scene_clearance(r) * 1e6:g}", r["dofs"],
+        [[name, r["contact"]["method"], f"{joint_of(r).clearance * 1e6:g}", r["dofs"],
           r["steps_converged"], f"{np.median(r['newton_iterations']):g}",
           f"{r['max_gap_violation_m']:.2e}", f"{r['wall_time_s']['total']:.2f}", r["status"]]
          for name, r, _, _ in runs]))

@@ -247,6 +247,12 @@ def persson_half_angle(load: float) -> float:
     return 2 * math.atan(b)
 
 
+def persson_half_angles(forces, joint: Joint) -> np.ndarray:
+    """Persson contact half-angles (rad) at the forces per length `forces` (N/m)."""
+    scale = joint.e_star * joint.clearance
+    return np.array([persson_half_angle(p / scale) for p in np.atleast_1d(forces)])
+
+
 def hertz_per_length(d, joint: Joint):
     """The Hertz point form spread over the joint's length: P = K d^1.5 / L (N/m)."""
     return hertz_point(d, joint) / joint.length
