@@ -55,7 +55,7 @@ build/fem/%/curve.csv: scenes/fem/%.toml $(STAGE_CODE) $(STAMP)
 
 calibration: build/calibration/laws.json ## fit and rank the contact laws on the study curves
 
-build/calibration/laws.json: $(STUDY_CURVES) $(wildcard laws/*.py calibration/*.py) $(STAMP)
+build/calibration/laws.json: $(STUDY_CURVES) fem/scene.py $(wildcard laws/*.py calibration/*.py) $(STAMP)
 	$(PINBORE) calibrate $(STUDY_CURVES) --out build/calibration
 
 reduced: $(REDUCED_RUNS) ## run the mechanisms with clearance joints (build/reduced/<scene>/)

@@ -3,13 +3,15 @@
 import csv
 import json
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
+from fem.scene import FemScene
 from laws.elastic import Joint
 from pinbore.errors import InputError
+from pinbore.scene import validate
 
 APPROACH, FORCE, ANGLE = "approach_m", "force_per_length_N_per_m", "half_angle_deg"
 
@@ -50,12 +52,11 @@ def read_curve(path, length: float | None, min_points: int = 3) -> Curve:
     if np.any(force <= 0):
         raise InputError(f"{path}: {FORCE}: must be positive (row {int(np.argmax(force <= 0)) + 1})")
     scene = _scene(path)
-    g, pin, bore = scene["geometry"], scene["materials"]["pin"], scene["materials"]["bore"]
-    joint = Joint(g["bore_radius"], g["pin_radius"], bore["E"], bore["nu"], pin["E"], pin["nu"],
-                  length if length is not None else 2 * g["bore_radius"])
+    g = scene.geometry
+    joint = replace(scene.joint, length=length if length is not None else 2 * g.bore_radius)
     angle = _column(path, rows, ANGLE) if ANGLE in header else None
     return Curve(path.parent.name, approach, force, angle, joint,
-                 g["housing_radius"] / g["bore_radius"], pin == bore)
+                 g.housing_radius / g.bore_radius, scene.materials.pin == scene.materials.bore)
 
 
 def _check_columns(path, header) -> None:
@@ -83,10 +84,12 @@ def _column(path, rows, key) -> np.ndarray:
     return np.array(values)
 
 
-def _scene(path: Path) -> dict:
+def _scene(path: Path) -> FemScene:
+    """The scene the FE run recorded in the result.json beside the curve."""
     result = path.parent / "result.json"
     try:
-        return json.loads(result.read_text())["scene"]
+        data = json.loads(result.read_text())["scene"]
     except (OSError, ValueError, KeyError):
         raise InputError(f"{path}: needs the FE run's result.json beside it (the scene's "
                          "geometry and materials)") from None
+    return validate(FemScene, data, str(result))
