@@ -13,25 +13,30 @@ n.(r + A s - P) = 0 and phi = phi_0, the drive phi = phi_0 + omega t.
 
 A revolute clearance joint is no constraint: the journal centre P_j moves inside the bearing
 (centre P_b, radius R_b, clearance c = R_b - R_j). With e = P_j - P_b, the penetration is
-delta = |e| - c, the normal n = e/|e|, the contact point P_b + R_b n. While delta > 0 the
-normal force is F_n = F_el(delta) (1 + chi delta'/v0)  (>= 0), F_el from a table of the
-elastic law (log-log interpolation, exact for a power law), chi the hysteresis factor of the
-damping law, v0 the approach rate at the onset of this impact; the friction force
-opposes the tangential slip v_t: Ambrosio's regularised Coulomb, polynomial Stribeck or a
-linear velocity law (static, regularised near zero slip), or LuGre or Dahl normalised by F_n,
-whose states are integrated with the motion (and rest while the joint is open). While
-delta <= 0 no law is evaluated.
+delta = |e| - c, the normal n = e/|e|, the contact point P_b + R_b n. Continuous contact: while
+delta > 0 the normal force is F_n = F_el(delta) (1 + chi delta'/v0)  (>= 0), F_el from a
+table of the elastic law (log-log interpolation, exact for a power law), chi the hysteresis
+factor of the damping law, v0 the approach rate at the onset of this impact; the friction
+force opposes the tangential slip v_t: Ambrosio's regularised Coulomb, polynomial Stribeck or
+a linear velocity law (static, regularised near zero slip), LuGre or Dahl normalised by F_n,
+or the bilinear Iwan element, whose states are integrated with the motion (and rest while
+the joint is open). While delta <= 0 no law is evaluated. Impulse contact (Newton or
+Poisson): rigid impacts between steps (apply_impulse) and, below a rest speed, held contact:
+the constraint delta = 0 joins the ideal ones until its multiplier (the normal force) would
+pull; its velocity is projected back onto delta' = 0 after every step.
 
 Extra states integrate the energy dissipated in the joints and the work of the constraint
 forces (the drive), so the energy balance can be checked.
 
-Integrator: Dormand-Prince 5(4) with a PI step-size controller on (q, q') and the friction
-states. A trial step with
-a stage beyond the tabulated law (NaN) is retried ten times shorter; only if the step size
-collapses that way has the run blown up. A step that would carry a joint from free flight
-into contact deeper than `onset_tol` is shortened (secant on delta) until it ends at the
-onset; there v0 is recorded. So every impact starts on a step boundary with a known impact
-speed. Latches engage the same way, at their angle, so their spring starts unloaded. The right-hand side works in preallocated buffers and solves the Schur system by
+Integrators: Dormand-Prince 5(4) (explicit) or Rosenbrock 2(3) (linearly implicit, for stiff
+problems), both with a PI step-size controller on (q, q') and the friction states, or DOPRI5
+at a fixed step for comparison. A trial step with a stage beyond the tabulated law (NaN) is
+retried ten times shorter; only if the step size collapses that way has the run blown up. A
+step that would carry a joint from free flight into contact deeper than `onset_tol` is
+shortened (secant on delta) until it ends at the onset; there v0 is recorded. So every
+impact starts on a step boundary with a known impact speed. Latches engage the same way, at
+their angle, so their spring starts unloaded, and held contacts release at the zero of their
+force. The right-hand side works in preallocated buffers and solves the Schur system by
 Cholesky: about 1 us per evaluation for the slider-crank.
 """
 
@@ -43,7 +48,12 @@ import numpy as np
 # status codes
 OK, BLOWN_UP, TOO_MANY_STEPS, STEP_TOO_SMALL = 0, 1, 2, 3
 # friction laws of a clearance joint (column 9 of its row)
-NO_FRICTION, COULOMB, STRIBECK, LINEAR, LUGRE, DAHL = 0, 1, 2, 3, 4, 5
+NO_FRICTION, COULOMB, STRIBECK, LINEAR, LUGRE, DAHL, IWAN = 0, 1, 2, 3, 4, 5, 6
+# contact models of a clearance joint (column 18)
+CONTINUOUS, NEWTON, POISSON = 0, 1, 2
+# integration methods
+DOPRI5, DOPRI5_FIXED, ROSENBROCK23 = 0, 1, 2
+JOINT_COLUMNS = 21   # see joint_forces
 
 
 @numba.njit(cache=True)
@@ -63,12 +73,16 @@ def point(q, body, sx, sy):
 
 @numba.njit(cache=True)
 def constraint_count(revolute, prismatic, drive):
+    """Rows of the ideal joints and the drive (active contacts of impulse joints come on top)."""
     return 2 * revolute.shape[0] + 2 * prismatic.shape[0] + (1 if drive[0] >= 0 else 0)
 
 
 @numba.njit(cache=True)
-def fill_constraints(t, q, qd, revolute, prismatic, drive, alpha, jac, phi, phi_t, rhs_c):
-    """Phi_q into jac (m x n), Phi, Phi_t, and gamma - 2 a Phi' - a^2 Phi into rhs_c."""
+def fill_constraints(t, q, qd, revolute, prismatic, drive, joints, mode, alpha, jac, phi, phi_t,
+                     rhs_c):
+    """Phi_q into jac, Phi, Phi_t, and gamma - 2 a Phi' - a^2 Phi into rhs_c, for the ideal
+    joints, the drive and the clearance joints held in persistent contact (mode 1: the
+    unilateral constraint |e| - c = 0, active). Returns the number of rows used."""
     jac[:] = 0.0
     phi[:] = 0.0
     phi_t[:] = 0.0
@@ -110,27 +124,52 @@ def fill_constraints(t, q, qd, revolute, prismatic, drive, alpha, jac, phi, phi_
         phi[row] = q[3 * b + 2] - drive[2] - drive[1] * t
         phi_t[row] = -drive[1]
         jac[row, 3 * b + 2] = 1.0
-    m, n = jac.shape
-    for i in range(m):
+        row += 1
+    for k in range(joints.shape[0]):
+        if mode[k] == 0:
+            continue
+        # phi = |e| - c, e = P_j - P_b; phi'' = n.e'' + (|e'|^2 - (n.e')^2)/|e|
+        delta, nx, ny, _, _, rate, _ = joint_kinematics(q, qd, joints[k])
+        e = delta + joints[k, 6]
+        ex_dot = ey_dot = 0.0
+        for side, sign in ((3, 1.0), (0, -1.0)):
+            b = int(joints[k, side])
+            if b < 0:
+                continue
+            ax, ay = rot(q[3 * b + 2], joints[k, side + 1], joints[k, side + 2])
+            w = qd[3 * b + 2]
+            jac[row, 3 * b] += sign * nx
+            jac[row, 3 * b + 1] += sign * ny
+            jac[row, 3 * b + 2] += sign * (-nx * ay + ny * ax)
+            ex_dot += sign * (qd[3 * b] - w * ay)
+            ey_dot += sign * (qd[3 * b + 1] + w * ax)
+            rhs_c[row] += sign * w * w * (nx * ax + ny * ay)
+        rhs_c[row] -= (ex_dot**2 + ey_dot**2 - rate**2) / e
+        phi[row] = delta
+        row += 1
+    for i in range(row):
         rate = phi_t[i]
-        for j in range(n):
+        for j in range(jac.shape[1]):
             rate += jac[i, j] * qd[j]
         rhs_c[i] -= 2 * alpha * rate + alpha * alpha * phi[i]
+    return row
 
 
 @numba.njit(cache=True)
 def constraints(t, q, qd, revolute, prismatic, drive, alpha):
-    """Phi_q, the right-hand side gamma - 2 a Phi' - a^2 Phi, Phi and Phi_t (new arrays)."""
+    """Phi_q, the right-hand side gamma - 2 a Phi' - a^2 Phi, Phi and Phi_t of the ideal
+    joints and the drive (new arrays)."""
     m = constraint_count(revolute, prismatic, drive)
     jac, phi, phi_t, rhs_c = np.zeros((m, q.size)), np.zeros(m), np.zeros(m), np.zeros(m)
-    fill_constraints(t, q, qd, revolute, prismatic, drive, alpha, jac, phi, phi_t, rhs_c)
+    fill_constraints(t, q, qd, revolute, prismatic, drive, np.zeros((0, JOINT_COLUMNS)),
+                     np.zeros(0, np.int64), alpha, jac, phi, phi_t, rhs_c)
     return jac, rhs_c, phi, phi_t
 
 
 @numba.njit(cache=True)
-def cholesky_solve(a, b):
-    """Solve a x = b in place (x in b) for a small symmetric positive definite a (overwritten)."""
-    m = b.size
+def cholesky_solve(a, b, m):
+    """Solve a x = b in place (x in b) for the leading m x m block of a small symmetric
+    positive definite a (overwritten)."""
     for j in range(m):
         d = a[j, j]
         for k in range(j):
@@ -209,8 +248,24 @@ def friction(joint, f_n, slip, state):
         g = p[0] + (p[1] - p[0]) * math.exp(-(slip / p[2]) ** 2)
         rate = slip - p[3] * speed * state / g
         return f_n * (p[3] * state + p[4] * rate + p[5] * slip), rate
-    rate = p[1] * (1.0 - state / p[0] * sign) * slip   # Dahl, normalised
-    return f_n * state, rate
+    if law == DAHL:
+        rate = p[1] * (1.0 - state / p[0] * sign) * slip   # normalised
+        return f_n * state, rate
+    return 0.0, 0.0   # IWAN: two states, see iwan_friction
+
+
+@numba.njit(cache=True)
+def iwan_friction(joint, f_n, slip, travel, stretch):
+    """Bilinear Iwan element (review eq. 13) along the contact: a Jenkins element (spring k1
+    in series with a Coulomb slider of strength mu F_n) in parallel with a spring k2. States:
+    the tangential travel x since the onset of this contact and the Jenkins spring's
+    stretch z. F_t = k1 z + k2 x; x' = v_t; z' = v_t while the slider sticks, 0 while it
+    slides (|k1 z| = mu F_n, z v_t > 0). Returns (F_t, x', z')."""
+    k1, k2, mu = joint[10], joint[11], joint[12]
+    limit = mu * f_n / k1
+    z = min(max(stretch, -limit), limit)
+    sliding = abs(stretch) >= limit and stretch * slip > 0
+    return k1 * z + k2 * travel, slip, 0.0 if sliding else slip
 
 
 @numba.njit(cache=True)
@@ -220,17 +275,25 @@ def damped_normal_force(f_el, rate, chi, impact_speed):
 
 
 @numba.njit(cache=True)
-def joint_forces(q, qd, joint, impact_speed, grid_log0, grid_step, table, state):
-    """(delta, F_n, F_t, F_el, dissipated power, n_x, n_y, c_x, c_y, state rate) of a
-    clearance joint. Row: bearing body and point, journal body and point, clearance, bearing
-    radius, hysteresis factor chi, friction law and parameters, friction state index."""
+def joint_forces(q, qd, joint, impact_speed, grid_log0, grid_step, table, y):
+    """(delta, F_n, F_t, F_el, power into damping and friction, n_x, n_y, c_x, c_y, rates of
+    the friction states) of a clearance joint with a continuous contact law. Row: bearing body
+    and point, journal body and point, clearance, bearing radius, hysteresis factor chi,
+    friction law and its 7 parameters, index of its first state in y (-1: none), contact
+    model, restitution, rest speed. The power includes what the friction element stores in
+    its springs (LuGre, Dahl, Iwan) and may give back."""
     delta, nx, ny, cx, cy, rate, slip = joint_kinematics(q, qd, joint)
     if delta <= 0.0:
-        return delta, 0.0, 0.0, 0.0, 0.0, nx, ny, cx, cy, 0.0
+        return delta, 0.0, 0.0, 0.0, 0.0, nx, ny, cx, cy, 0.0, 0.0
     f_el = elastic_force(delta, grid_log0, grid_step, table)
     f_n = damped_normal_force(f_el, rate, joint[8], impact_speed)
-    f_t, state_rate = friction(joint, f_n, slip, state)
-    return delta, f_n, f_t, f_el, (f_n - f_el) * rate + f_t * slip, nx, ny, cx, cy, state_rate
+    index = int(joint[17])
+    if int(joint[9]) == IWAN:
+        f_t, rate0, rate1 = iwan_friction(joint, f_n, slip, y[index], y[index + 1])
+    else:
+        f_t, rate0 = friction(joint, f_n, slip, y[index] if index >= 0 else 0.0)
+        rate1 = 0.0
+    return delta, f_n, f_t, f_el, (f_n - f_el) * rate + f_t * slip, nx, ny, cx, cy, rate0, rate1
 
 
 @numba.njit(cache=True)
@@ -265,19 +328,42 @@ def torsion_torque(q, qd, row, latched):
     return torque, row[3] * rate * rate
 
 
+# positions in the argument tuple of rhs (see reduced.model.Model.kernel_args)
+ARG_SPEEDS, ARG_LATCHED, ARG_MODE = 8, 13, 14
+
+
 @numba.njit(cache=True)
-def workspace(nq, revolute, prismatic, drive):
-    """Buffers of the right-hand side: Phi_q, Phi, Phi_t, rhs_c, the Schur matrix, forces."""
-    m = constraint_count(revolute, prismatic, drive)
+def workspace(nq, revolute, prismatic, drive, nj):
+    """Buffers of the right-hand side: Phi_q, Phi, Phi_t, rhs_c, the Schur matrix, forces,
+    and per clearance joint its normal force (the law's, or the multiplier of a held contact)."""
+    m = constraint_count(revolute, prismatic, drive) + nj
     return (np.zeros((m, nq)), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros((m, m)),
-            np.zeros(nq))
+            np.zeros(nq), np.zeros(max(nj, 1)))
+
+
+@numba.njit(cache=True)
+def solve_multipliers(q, qd, minv, force, jac, rhs_c, schur, m, nq):
+    """(Phi_q M^-1 Phi_q^T) lambda = Phi_q M^-1 Q - rhs_c on the first m rows; lambda into rhs_c."""
+    for i in range(m):
+        v = -rhs_c[i]
+        for j in range(nq):
+            v += jac[i, j] * minv[j] * force[j]
+        rhs_c[i] = v
+        for k in range(i + 1):
+            v = 0.0
+            for j in range(nq):
+                v += jac[i, j] * minv[j] * jac[k, j]
+            schur[i, k] = v
+            schur[k, i] = v
+    cholesky_solve(schur, rhs_c, m)
 
 
 @numba.njit(cache=True)
 def rhs(t, y, dy, nq, minv, gravity, revolute, prismatic, drive, alpha, joints, speeds,
-        grid_log0, grid_step, tables, torsion, latched, work):
-    """dy = f(t, y): velocities, accelerations, dissipated power, power of the constraints."""
-    jac, phi, phi_t, rhs_c, schur, force = work
+        grid_log0, grid_step, tables, torsion, latched, mode, work):
+    """dy = f(t, y): velocities, accelerations, dissipated power, power of the constraints,
+    rates of the friction states."""
+    jac, phi, phi_t, rhs_c, schur, force, normal = work
     q, qd = y[:nq], y[nq:2 * nq]
     for b in range(nq // 3):
         force[3 * b] = gravity[0] / minv[3 * b]
@@ -286,18 +372,23 @@ def rhs(t, y, dy, nq, minv, gravity, revolute, prismatic, drive, alpha, joints, 
     dissipation = 0.0
     for i in range(2 * nq + 2, y.size):
         dy[i] = 0.0   # friction states rest out of contact
+    normal[:] = 0.0
     for k in range(joints.shape[0]):
-        index = int(joints[k, 17])
-        delta, f_n, f_t, f_el, power, nx, ny, cx, cy, state_rate = joint_forces(
-            q, qd, joints[k], speeds[k], grid_log0, grid_step, tables[k],
-            y[index] if index >= 0 else 0.0)
+        if int(joints[k, 18]) != CONTINUOUS:
+            continue   # impulse joints: impacts between steps, held contact as a constraint
+        delta, f_n, f_t, f_el, power, nx, ny, cx, cy, rate0, rate1 = joint_forces(
+            q, qd, joints[k], speeds[k], grid_log0, grid_step, tables[k], y)
         if delta <= 0.0:
             continue
-        if index >= 0:
-            dy[index] = state_rate
         if not math.isfinite(f_n):
             dy[:] = math.nan   # penetration beyond the tabulated law: the integrator stops
             return
+        index = int(joints[k, 17])
+        if index >= 0:
+            dy[index] = rate0
+            if int(joints[k, 9]) == IWAN:
+                dy[index + 1] = rate1
+        normal[k] = f_n
         fx, fy = -f_n * nx + f_t * ny, -f_n * ny - f_t * nx   # on the journal
         for b, sign in ((int(joints[k, 3]), 1.0), (int(joints[k, 0]), -1.0)):
             if b >= 0:
@@ -314,23 +405,11 @@ def rhs(t, y, dy, nq, minv, gravity, revolute, prismatic, drive, alpha, joints, 
             force[3 * bi + 2] -= torque
         dissipation += power
     dy[:nq] = qd
-    m = rhs_c.size
+    m = fill_constraints(t, q, qd, revolute, prismatic, drive, joints, mode, alpha, jac, phi,
+                         phi_t, rhs_c)
     work_in = 0.0
     if m > 0:
-        fill_constraints(t, q, qd, revolute, prismatic, drive, alpha, jac, phi, phi_t, rhs_c)
-        # (Phi_q M^-1 Phi_q^T) lambda = Phi_q M^-1 Q - rhs_c, lambda into rhs_c
-        for i in range(m):
-            v = -rhs_c[i]
-            for j in range(nq):
-                v += jac[i, j] * minv[j] * force[j]
-            rhs_c[i] = v
-            for k in range(i + 1):
-                v = 0.0
-                for j in range(nq):
-                    v += jac[i, j] * minv[j] * jac[k, j]
-                schur[i, k] = v
-                schur[k, i] = v
-        cholesky_solve(schur, rhs_c)
+        solve_multipliers(q, qd, minv, force, jac, rhs_c, schur, m, nq)
         for j in range(nq):
             v = force[j]
             for i in range(m):
@@ -338,6 +417,11 @@ def rhs(t, y, dy, nq, minv, gravity, revolute, prismatic, drive, alpha, joints, 
             dy[nq + j] = minv[j] * v
         for i in range(m):
             work_in += rhs_c[i] * phi_t[i]
+        row = constraint_count(revolute, prismatic, drive)
+        for k in range(joints.shape[0]):
+            if mode[k] == 1:
+                normal[k] = rhs_c[row]   # the multiplier of |e| - c = 0 is the normal force
+                row += 1
     else:
         for j in range(nq):
             dy[nq + j] = minv[j] * force[j]
@@ -345,11 +429,72 @@ def rhs(t, y, dy, nq, minv, gravity, revolute, prismatic, drive, alpha, joints, 
     dy[2 * nq + 1] = work_in
 
 
-def rhs_value(t, y, model_args):
-    """f(t, y) as a new array (Python-side convenience)."""
+def rhs_value(t, y, args):
+    """(f(t, y), normal force per clearance joint) as new arrays (Python-side convenience)."""
     dy = np.empty_like(y)
-    rhs(t, y, dy, *model_args, workspace(model_args[0], model_args[3], model_args[4], model_args[5]))
-    return dy
+    work = workspace(args[0], args[3], args[4], args[5], args[7].shape[0])
+    rhs(t, y, dy, *args, work)
+    return dy, work[6][:args[7].shape[0]].copy()
+
+
+@numba.njit(cache=True)
+def apply_impulse(t, y, args, work, j, target_restitution):
+    """Impact of impulse joint j (approaching at delta' = v > 0): the velocity jump of least
+    kinetic-energy change that keeps every ideal joint and held contact and leaves the
+    joint's approach rate at -e v, i.e. qd+ = qd - M^-1 G^T (G M^-1 G^T)^-1 (G qd - b) with G
+    the constraint rows plus the joint's normal. Newton's hypothesis sets e on velocities
+    directly; Poisson's applies the compression impulse P_c (rate to 0) and then e P_c. For a
+    frictionless impact the two coincide (the normal rate is linear in the impulse).
+    Returns (normal impulse on the journal, N s; energy dissipated, J; work of the drive's
+    impulse, J)."""
+    nq, minv, revolute, prismatic, drive, joints, mode = args[0], args[1], args[3], args[4], \
+        args[5], args[7], args[14]
+    jac, phi, phi_t, rhs_c, schur, _, _ = work
+    q, qd = y[:nq], y[nq:2 * nq]
+    rate = joint_kinematics(q, qd, joints[j])[5]
+    before = 0.0
+    for i in range(nq):
+        before += 0.5 * qd[i] ** 2 / minv[i]
+    held = mode[j]
+    mode[j] = 1
+    m = fill_constraints(t, q, qd, revolute, prismatic, drive, joints, mode, 0.0, jac, phi, phi_t,
+                         rhs_c)
+    mode[j] = held
+    row = constraint_count(revolute, prismatic, drive)
+    for k in range(j):
+        row += mode[k]
+    poisson = int(joints[j, 18]) == POISSON
+    e = target_restitution
+    rhs_c[:m] = 0.0
+    rhs_c[row] = rate if poisson else (1.0 + e) * rate
+    for i in range(m):
+        for k in range(i + 1):
+            v = 0.0
+            for c in range(nq):
+                v += jac[i, c] * minv[c] * jac[k, c]
+            schur[i, k] = v
+            schur[k, i] = v
+    cholesky_solve(schur, rhs_c, m)
+    scale = (1.0 + e) if poisson else 1.0
+    after = 0.0
+    for c in range(nq):
+        v = 0.0
+        for i in range(m):
+            v += jac[i, c] * rhs_c[i]
+        qd[c] -= scale * minv[c] * v
+        after += 0.5 * qd[c] ** 2 / minv[c]
+    work_in = 0.0   # the drive's impulse works on its prescribed speed
+    for i in range(m):
+        work_in += scale * rhs_c[i] * phi_t[i]
+    return scale * rhs_c[row], before - after + work_in, work_in
+
+
+@numba.njit(cache=True)
+def impulse_energy(y, nq, result):
+    """Book an impulse's dissipation and drive work in the energy states; the impulse."""
+    y[2 * nq] += result[1]
+    y[2 * nq + 1] += result[2]
+    return result[0]
 
 
 # Dormand-Prince 5(4) tableau
@@ -364,30 +509,108 @@ E54 = B5 - np.array([5179 / 57600, 0, 7571 / 16695, 393 / 640, -92097 / 339200, 
 
 
 @numba.njit(cache=True)
-def integrate(y0, t_end, nq, minv, gravity, revolute, prismatic, drive, alpha, joints,
-              grid_log0, grid_step, tables, torsion, rtol, atol, max_step, onset_tol, speed_floor,
-              max_steps):
-    """Adaptive DOPRI5 from t = 0. Returns times, states and impact speeds of every accepted
-    step, counters (accepted, rejected, rhs calls, impacts) and a status code."""
+def error_norm(err_vec, y, y_new, nq, rtol, atol):
+    """RMS of the local error scaled by atol + rtol |y|; the energy integrals are outputs."""
+    err = 0.0
+    for i in range(y.size):
+        if i == 2 * nq or i == 2 * nq + 1:
+            continue
+        scale = atol + rtol * max(abs(y[i]), abs(y_new[i]))
+        err += (err_vec[i] / scale) ** 2
+    return math.sqrt(err / (y.size - 2))
+
+
+@numba.njit(cache=True)
+def dopri5_step(t, y, h, k, y_new, err_vec, args, work):
+    """One Dormand-Prince 5(4) step: k[0] = f(t, y) on entry, k[6] = f(t + h, y_new) on exit."""
+    for s in range(1, 7):
+        for i in range(y.size):
+            v = y[i]
+            for r in range(s):
+                v += h * A[s, r] * k[r, i]
+            y_new[i] = v
+        rhs(t + C[s] * h, y_new, k[s], *args, work)
+    for i in range(y.size):
+        e = 0.0
+        for r in range(7):
+            e += E54[r] * k[r, i]
+        err_vec[i] = h * e
+    return 6
+
+
+ROS_D = 1.0 / (2.0 + math.sqrt(2.0))
+ROS_E32 = 6.0 + math.sqrt(2.0)
+
+
+@numba.njit(cache=True)
+def rosenbrock23_step(t, y, h, k, y_new, err_vec, args, work):
+    """One linearly implicit Rosenbrock 2(3) step (Shampine & Reichelt 1997, MATLAB's ode23s),
+    L-stable, with W = I - h d J and J, df/dt by finite differences:
+        k1 = W^-1 (F0 + h d T),  F1 = f(t + h/2, y + h k1 / 2),  k2 = W^-1 (F1 - k1) + k1,
+        y1 = y + h k2,  F2 = f(t + h, y1),
+        k3 = W^-1 (F2 - e32 (k2 - F1) - 2 (k1 - F0) + h d T),  error = h (k1 - 2 k2 + k3) / 6.
+    k[0] = F0 on entry, k[6] = F2 on exit; k[1..5] are scratch."""
+    n = y.size
+    f0, f1, col = k[0], k[1], k[2]
+    jacobian = np.empty((n, n))
+    ys = y.copy()
+    for c in range(n):
+        step = 1e-7 * max(abs(y[c]), 1e-6)
+        ys[c] = y[c] + step
+        rhs(t, ys, col, *args, work)
+        for r in range(n):
+            jacobian[r, c] = (col[r] - f0[r]) / step
+        ys[c] = y[c]
+    dt = 1e-7 * max(t, h)
+    rhs(t + dt, y, col, *args, work)
+    tdot = (col - f0) / dt
+    w = -h * ROS_D * jacobian
+    for i in range(n):
+        w[i, i] += 1.0
+    winv = np.linalg.inv(w)
+    k1 = winv @ (f0 + h * ROS_D * tdot)
+    rhs(t + 0.5 * h, y + 0.5 * h * k1, f1, *args, work)
+    k2 = winv @ (f1 - k1) + k1
+    y_new[:] = y + h * k2
+    rhs(t + h, y_new, k[6], *args, work)
+    k3 = winv @ (k[6] - ROS_E32 * (k2 - f1) - 2.0 * (k1 - f0) + h * ROS_D * tdot)
+    err_vec[:] = h / 6.0 * (k1 - 2.0 * k2 + k3)
+    return n + 4
+
+
+@numba.njit(cache=True)
+def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_floor, max_steps):
+    """Integrate from t = 0 with DOPRI5 (adaptive), DOPRI5 at the fixed step max_step (no
+    error control, no event location: for comparison) or Rosenbrock 2(3) (adaptive, for stiff
+    contact). Returns times, states, impact speeds and contact modes of every accepted step,
+    the impact log (time, joint, approach rate, impulse), counters (accepted, rejected, rhs
+    calls, impacts) and a status code."""
+    nq, joints, torsion = args[0], args[7], args[12]
+    speeds, latched, mode = args[ARG_SPEEDS], args[ARG_LATCHED], args[ARG_MODE]
     ny = y0.size
     nj = joints.shape[0]
+    adaptive = method != DOPRI5_FIXED
+    event_dt = 1e-8 * max_step   # a release is located to within this time
+    exponent = 1.0 / 3.0 if method == ROSENBROCK23 else 0.2
     capacity = 4096
     times = np.empty(capacity)
     states = np.empty((capacity, ny))
     speeds_out = np.empty((capacity, max(nj, 1)))
-    speeds = np.full(nj, speed_floor)
-    latched = np.zeros(torsion.shape[0])
+    modes_out = np.zeros((capacity, max(nj, 1)), np.int64)
+    log = np.empty((256, 4))
+    speeds[:] = speed_floor
+    mode[:] = 0
     for r in range(torsion.shape[0]):
         latched[r] = 1.0 if int(torsion[r, 5]) == LATCH and relative_angle(
             y0[:nq], y0[nq:2 * nq], torsion[r])[0] > -LATCH_TOL else 0.0
     t, y = 0.0, y0.copy()
     k = np.empty((7, ny))
-    ys = np.empty(ny)
-    work = workspace(nq, revolute, prismatic, drive)
-    rhs(t, y, k[0], nq, minv, gravity, revolute, prismatic, drive, alpha, joints, speeds,
-        grid_log0, grid_step, tables, torsion, latched, work)
+    y_new = np.empty(ny)
+    err_vec = np.empty(ny)
+    work = workspace(nq, args[3], args[4], args[5], nj)
+    rhs(t, y, k[0], *args, work)
     calls, accepted, rejected, impacts = 1, 0, 0, 0
-    h = min(max_step, 1e-6)
+    h = max_step if not adaptive else min(max_step, 1e-6)
     err_prev = 1e-4
     times[0], states[0], speeds_out[0, :nj] = t, y, speeds
     count = 1
@@ -395,9 +618,11 @@ def integrate(y0, t_end, nq, minv, gravity, revolute, prismatic, drive, alpha, j
     last_nan = False
     depth = np.zeros(nj)                  # penetration at the last accepted state
     in_contact = np.zeros(nj, np.bool_)   # between an onset and the next separation
+    held_force = np.zeros(nj)             # normal force of a held contact (impulse joints)
+    held_peak = np.zeros(nj)
     for j in range(nj):
         depth[j] = joint_kinematics(y[:nq], y[nq:2 * nq], joints[j])[0]
-        in_contact[j] = depth[j] > -onset_tol
+        in_contact[j] = depth[j] > -onset_tol and int(joints[j, 18]) == CONTINUOUS
     while t < t_end:
         if accepted + rejected >= max_steps:
             status = TOO_MANY_STEPS
@@ -406,86 +631,122 @@ def integrate(y0, t_end, nq, minv, gravity, revolute, prismatic, drive, alpha, j
         if h < 1e-15 * max(t, 1e-3):
             status = BLOWN_UP if last_nan else STEP_TOO_SMALL
             break
-        for s in range(1, 7):
-            for i in range(ny):
-                v = y[i]
-                for r in range(s):
-                    v += h * A[s, r] * k[r, i]
-                ys[i] = v
-            rhs(t + C[s] * h, ys, k[s], nq, minv, gravity, revolute, prismatic, drive, alpha,
-                joints, speeds, grid_log0, grid_step, tables, torsion, latched, work)
-        calls += 6
-        y_new = ys.copy()  # stage 7 is evaluated at the 5th-order solution (FSAL)
-        err = 0.0
-        for i in range(ny):
-            if i == 2 * nq or i == 2 * nq + 1:
-                continue  # the energy integrals are outputs, not controlled
-            e = 0.0
-            for r in range(7):
-                e += E54[r] * k[r, i]
-            scale = atol + rtol * max(abs(y[i]), abs(y_new[i]))
-            err += (h * e / scale) ** 2
-        err = math.sqrt(err / (ny - 2))
+        if method == ROSENBROCK23:
+            calls += rosenbrock23_step(t, y, h, k, y_new, err_vec, args, work)
+        else:
+            calls += dopri5_step(t, y, h, k, y_new, err_vec, args, work)
+        err = error_norm(err_vec, y, y_new, nq, rtol, atol)
         last_nan = not math.isfinite(err)
         if last_nan:   # a stage went beyond the tabulated law: much smaller step
             rejected += 1
             h *= 0.1
             continue
-        if err > 1.0:
+        if adaptive and err > 1.0:
             rejected += 1
-            h *= max(0.2, 0.9 * err ** -0.2)
+            h *= max(0.2, 0.9 * err ** -exponent)
             continue
-        # a free joint would end the step in contact: shorten the step to end at the onset
         shorten = 1.0
-        for j in range(nj):
-            if not in_contact[j]:
-                d_new = joint_kinematics(y_new[:nq], y_new[nq:2 * nq], joints[j])[0]
-                if d_new > onset_tol:
-                    shorten = min(shorten, 0.99 * (-depth[j]) / (d_new - depth[j]))
-        for r in range(torsion.shape[0]):
-            if latched[r] == 0.0 and int(torsion[r, 5]) == LATCH:
-                a_new = relative_angle(y_new[:nq], y_new[nq:2 * nq], torsion[r])[0]
-                if a_new > LATCH_TOL:
-                    a_old = relative_angle(y[:nq], y[nq:2 * nq], torsion[r])[0]
-                    shorten = min(shorten, 0.99 * (-a_old) / (a_new - a_old))
+        if adaptive:
+            # a free joint would end the step in contact: shorten the step to end at the onset
+            for j in range(nj):
+                if not in_contact[j] and mode[j] == 0:
+                    d_new = joint_kinematics(y_new[:nq], y_new[nq:2 * nq], joints[j])[0]
+                    if d_new > onset_tol and depth[j] < -onset_tol:
+                        shorten = min(shorten, 0.99 * (-depth[j]) / (d_new - depth[j]))
+                    elif d_new > max(depth[j], 0.0) + onset_tol:   # back from a rebound within the step: bisect
+                        shorten = min(shorten, 0.5)
+                elif mode[j] == 1 and h > event_dt:   # a held contact would pull: end the step at the release
+                    f_new = work[6][j]
+                    if held_force[j] > 0.0 and f_new < -1e-3 * math.sqrt(rtol) * held_peak[j]:
+                        shorten = min(shorten, 0.99 * held_force[j] / (held_force[j] - f_new))
+            for r in range(torsion.shape[0]):
+                if latched[r] == 0.0 and int(torsion[r, 5]) == LATCH:
+                    a_new = relative_angle(y_new[:nq], y_new[nq:2 * nq], torsion[r])[0]
+                    if a_new > LATCH_TOL:
+                        a_old = relative_angle(y[:nq], y[nq:2 * nq], torsion[r])[0]
+                        shorten = min(shorten, 0.99 * (-a_old) / (a_new - a_old))
         if shorten < 1.0:
             rejected += 1
             h *= max(shorten, 1e-3)
             continue
         t += h
-        y = y_new
+        y[:] = y_new
         accepted += 1
         k[0, :] = k[6]  # first same as last
+        changed = False
+        for j in range(nj):
+            if mode[j] == 1:
+                held_force[j] = work[6][j]
+                held_peak[j] = max(held_peak[j], held_force[j])
+                if held_force[j] < 0.0:   # released; an approach rate left by drift is removed
+                    if joint_kinematics(y[:nq], y[nq:2 * nq], joints[j])[5] > 0.0:
+                        impulse_energy(y, nq, apply_impulse(t, y, args, work, j, 0.0))
+                    mode[j] = 0
+                else:   # still held: project the velocity back onto delta' = 0 (drift)
+                    impulse_energy(y, nq, apply_impulse(t, y, args, work, j, 0.0))
+                changed = True
         for j in range(nj):
             delta, _, _, _, _, rate, _ = joint_kinematics(y[:nq], y[nq:2 * nq], joints[j])
-            if not in_contact[j] and delta > -onset_tol:
+            depth[j] = delta
+            onset, impulse = False, 0.0
+            if int(joints[j, 18]) != CONTINUOUS:
+                if mode[j] == 0 and delta > -onset_tol and rate > 0.0:
+                    e = joints[j, 19] if joints[j, 19] * rate >= joints[j, 20] else 0.0
+                    impulse = impulse_energy(y, nq, apply_impulse(t, y, args, work, j, e))
+                    if e == 0.0:   # too slow to rebound: held contact (the third state)
+                        mode[j] = 1
+                        held_force[j] = held_peak[j] = 0.0
+                    speeds[j] = rate
+                    onset = True
+            elif not in_contact[j] and delta > -onset_tol:
                 in_contact[j] = True
                 speeds[j] = max(rate, speed_floor)
-                impacts += 1
-                rhs(t, y, k[0], nq, minv, gravity, revolute, prismatic, drive, alpha, joints,
-                    speeds, grid_log0, grid_step, tables, torsion, latched, work)
-                calls += 1
+                index = int(joints[j, 17])
+                if int(joints[j, 9]) == IWAN:   # a new contact point: the element starts unloaded
+                    y[index] = y[index + 1] = 0.0
+                onset = True
             elif in_contact[j] and delta < -onset_tol:
                 in_contact[j] = False
-            depth[j] = delta
+            if onset:
+                changed = True
+                impacts += 1
+                if impacts > log.shape[0]:
+                    log2 = np.empty((2 * log.shape[0], 4))
+                    log2[:log.shape[0]] = log
+                    log = log2
+                log[impacts - 1, 0], log[impacts - 1, 1] = t, j
+                log[impacts - 1, 2], log[impacts - 1, 3] = rate, impulse
+        for j in range(nj):   # the Iwan slider's return map: |k1 z| <= mu F_n
+            if int(joints[j, 9]) == IWAN and in_contact[j]:
+                _, f_n, _, _, _, _, _, _, _, _, _ = joint_forces(
+                    y[:nq], y[nq:2 * nq], joints[j], speeds[j], args[9], args[10], args[11][j], y)
+                index = int(joints[j, 17])
+                limit = joints[j, 12] * f_n / joints[j, 10]
+                y[index + 1] = min(max(y[index + 1], -limit), limit)
+                changed = True
         for r in range(torsion.shape[0]):
             if latched[r] == 0.0 and int(torsion[r, 5]) == LATCH and \
                     relative_angle(y[:nq], y[nq:2 * nq], torsion[r])[0] > -LATCH_TOL:
                 latched[r] = 1.0
-                rhs(t, y, k[0], nq, minv, gravity, revolute, prismatic, drive, alpha, joints,
-                    speeds, grid_log0, grid_step, tables, torsion, latched, work)
-                calls += 1
+                changed = True
+        if changed:
+            rhs(t, y, k[0], *args, work)
+            calls += 1
         if count == capacity:
             capacity *= 2
             times2 = np.empty(capacity)
             states2 = np.empty((capacity, ny))
             speeds2 = np.empty((capacity, max(nj, 1)))
-            times2[:count], states2[:count], speeds2[:count] = times, states, speeds_out
-            times, states, speeds_out = times2, states2, speeds2
-        times[count], states[count], speeds_out[count, :nj] = t, y, speeds
+            modes2 = np.zeros((capacity, max(nj, 1)), np.int64)
+            times2[:count], states2[:count], speeds2[:count], modes2[:count] = \
+                times, states, speeds_out, modes_out
+            times, states, speeds_out, modes_out = times2, states2, speeds2, modes2
+        times[count], states[count], speeds_out[count, :nj], modes_out[count, :nj] = t, y, speeds, mode
         count += 1
-        factor = 0.9 * err ** -0.14 * err_prev ** 0.08 if err > 0 else 5.0
-        h *= min(5.0, max(0.2, factor))
-        err_prev = max(err, 1e-4)
+        if adaptive:
+            factor = 0.9 * err ** (-0.7 * exponent) * err_prev ** (0.4 * exponent) if err > 0 else 5.0
+            h *= min(5.0, max(0.2, factor))
+            err_prev = max(err, 1e-4)
     counters = np.array([accepted, rejected, calls, impacts])
-    return times[:count], states[:count], speeds_out[:count], counters, status, t
+    return (times[:count], states[:count], speeds_out[:count], modes_out[:count], log[:impacts],
+            counters, status, t)

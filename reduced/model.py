@@ -35,12 +35,23 @@ class Model:
     tables: np.ndarray
     calibration: dict | None      # the laws file, when a calibrated law is used
     torsion: np.ndarray           # (k, 6): body i, body j, stiffness, damping, free angle, kind
-    friction_states: int          # integrator states of LuGre and Dahl joints
+    friction_states: int          # integrator states of LuGre, Dahl (1) and Iwan (2) joints
     y0: np.ndarray
 
     @property
     def nq(self) -> int:
         return self.minv.size
+
+    def kernel_args(self, speeds=None, latched=None, mode=None) -> tuple:
+        """The argument tuple of kernel.rhs; impact speeds, latch flags and contact modes are
+        the integrator's (given here to evaluate a recorded step)."""
+        nj, nt = self.joints.shape[0], self.torsion.shape[0]
+        return (self.nq, self.minv, self.gravity, self.revolute, self.prismatic, self.drive,
+                self.scene.integrator.baumgarte, self.joints,
+                np.zeros(nj) if speeds is None else np.asarray(speeds, float),
+                self.grid_log0, self.grid_step, self.tables, self.torsion,
+                np.zeros(nt) if latched is None else np.asarray(latched, float),
+                np.zeros(nj, np.int64) if mode is None else np.asarray(mode, np.int64))
 
     def elastic_energy(self, joint: int, delta: float) -> float:
         """U(delta) = int_0^delta F_el, exact for the log-log interpolant the dynamics use:
@@ -84,25 +95,28 @@ def build(scene: ReducedScene, source: str, base: Path) -> Model:
     deltas = np.exp(grid_log0 + grid_step * np.arange(GRID_POINTS))
     for c in scene.clearance_joints:
         chi = 0.0 if c.damping_law == "none" else dissipative.HYSTERESIS[c.damping_law](c.restitution)
-        code, params, has_state = friction_block(c.friction)
+        code, params, states = friction_block(c.friction)
         state = -1
-        if has_state:
-            state, friction_states = 2 * len(minv) + 2 + friction_states, friction_states + 1
+        if states:
+            state, friction_states = 2 * len(minv) + 2 + friction_states, friction_states + states
         joints.append([index[c.bearing_body], *c.bearing_point, index[c.journal_body],
                        *c.journal_point, c.bearing_radius - c.journal_radius, c.bearing_radius,
-                       chi, code, *params, state])
-        force = normal_force(c, deltas, laws_data, source)
-        force[deltas > BLOW_UP_FRACTION * c.journal_radius] = np.nan
+                       chi, code, *params, state, IMPACT[c.impact], c.restitution, c.rest_speed])
+        if c.impact == "continuous":
+            force = normal_force(c, deltas, laws_data, source)
+            force[deltas > BLOW_UP_FRACTION * c.journal_radius] = np.nan
+        else:
+            force = np.full(GRID_POINTS, np.nan)   # rigid: no law, never evaluated
         tables.append(np.log(force))
     model = Model(scene, names, minv, np.asarray(scene.gravity, float), revolute, prismatic, drive,
-                  np.array(joints, float).reshape(-1, JOINT_COLUMNS), grid_log0, grid_step,
+                  np.array(joints, float).reshape(-1, kernel.JOINT_COLUMNS), grid_log0, grid_step,
                   np.array(tables).reshape(len(joints), GRID_POINTS), laws_data,
                   torsion_rows(scene, index), friction_states, np.empty(0))
     model.y0 = initial_state(model)
     return model
 
 
-JOINT_COLUMNS = 18   # see kernel.joint_forces for their meaning
+IMPACT = {"continuous": kernel.CONTINUOUS, "newton": kernel.NEWTON, "poisson": kernel.POISSON}
 
 
 def torsion_rows(scene, index) -> np.ndarray:
@@ -115,20 +129,22 @@ def torsion_rows(scene, index) -> np.ndarray:
 
 
 def friction_block(f):
-    """(kernel law code, 7 parameters, whether it carries a state) of a friction table.
+    """(kernel law code, 7 parameters, number of integrator states) of a friction table.
     Static laws put their regularisation speeds v0, v1 in the last two parameters."""
     if f is None:
-        return kernel.NO_FRICTION, [0.0] * 7, False
+        return kernel.NO_FRICTION, [0.0] * 7, 0
     if f.law == "coulomb_ambrosio":
-        return kernel.COULOMB, [f.mu, 0, 0, 0, 0, f.v0, f.v1], False
+        return kernel.COULOMB, [f.mu, 0, 0, 0, 0, f.v0, f.v1], 0
     if f.law == "stribeck":
-        return kernel.STRIBECK, [f.mu_static, f.mu_min, f.v_min, 0, 0, f.v0, f.v1], False
+        return kernel.STRIBECK, [f.mu_static, f.mu_min, f.v_min, 0, 0, f.v0, f.v1], 0
     if f.law == "linear":
-        return kernel.LINEAR, [f.mu_static, f.alpha, 0, 0, 0, f.v0, f.v1], False
+        return kernel.LINEAR, [f.mu_static, f.alpha, 0, 0, 0, f.v0, f.v1], 0
     if f.law == "lugre":
         return kernel.LUGRE, [f.mu_coulomb, f.mu_static, f.stribeck_speed, f.sigma0, f.sigma1,
-                              f.sigma2, 0], True
-    return kernel.DAHL, [f.mu, f.sigma, 0, 0, 0, 0, 0], True
+                              f.sigma2, 0], 1
+    if f.law == "dahl":
+        return kernel.DAHL, [f.mu, f.sigma, 0, 0, 0, 0, 0], 1
+    return kernel.IWAN, [f.k1, f.k2, f.mu, 0, 0, 0, 0], 2
 
 
 def normal_force(c, deltas, laws_data, source) -> np.ndarray:

@@ -25,8 +25,10 @@ def latch_history(model, states):
     return flags
 
 
-def per_step(model, times, states, speeds):
-    """Columns at every accepted step: body motion, joint quantities, energies, drift."""
+def per_step(model, run):
+    """Columns at every accepted step of a Trajectory: body motion, joint quantities,
+    energies, drift."""
+    times, states = run.times, run.states
     nq, nj = model.nq, model.joints.shape[0]
     s = model.scene
     cols = {"time_s": times}
@@ -36,11 +38,9 @@ def per_step(model, times, states, speeds):
     latched = latch_history(model, states)
     for k in range(times.size):
         y = states[k]
-        acc[k] = kernel.rhs_value(times[k], y, (nq, model.minv, model.gravity, model.revolute,
-                                                model.prismatic, model.drive, s.integrator.baumgarte,
-                                                model.joints, speeds[k, :nj], model.grid_log0,
-                                                model.grid_step, model.tables, model.torsion,
-                                                latched[k]))[nq:2 * nq]
+        dy, normal = kernel.rhs_value(times[k], y, model.kernel_args(run.speeds[k, :nj], latched[k],
+                                                                     run.modes[k, :nj]))
+        acc[k] = dy[nq:2 * nq]
         _, _, phi, _ = kernel.constraints(times[k], y[:nq], y[nq:2 * nq], model.revolute,
                                           model.prismatic, model.drive, 0.0)
         drift[k] = np.max(np.abs(phi), initial=0.0)
@@ -48,11 +48,14 @@ def per_step(model, times, states, speeds):
             row = model.joints[j]
             bx, by = kernel.point(y[:nq], int(row[0]), row[1], row[2])
             jx, jy = kernel.point(y[:nq], int(row[3]), row[4], row[5])
-            index = int(row[17])
-            delta, f_n, f_t, *_ = kernel.joint_forces(y[:nq], y[nq:2 * nq], row, speeds[k, j],
-                                                      model.grid_log0, model.grid_step,
-                                                      model.tables[j], y[index] if index >= 0 else 0.0)
-            joint[k, j] = (jx - bx, jy - by, delta, f_n, f_t, model.elastic_energy(j, delta))
+            if int(row[18]) == kernel.CONTINUOUS:
+                delta, f_n, f_t, *_ = kernel.joint_forces(y[:nq], y[nq:2 * nq], row, run.speeds[k, j],
+                                                          model.grid_log0, model.grid_step,
+                                                          model.tables[j], y)
+                joint[k, j] = (jx - bx, jy - by, delta, f_n, f_t, model.elastic_energy(j, delta))
+            else:   # rigid impacts: the force of a held contact is its multiplier
+                delta = kernel.joint_kinematics(y[:nq], y[nq:2 * nq], row)[0]
+                joint[k, j] = (jx - bx, jy - by, delta, normal[j], 0.0, 0.0)
     for b, body in enumerate(s.bodies):
         for i, (what, unit) in enumerate((("x", "m"), ("y", "m"), ("angle", "rad"))):
             cols[f"{body.name}_{what}_{unit}"] = states[:, 3 * b + i]
@@ -79,10 +82,11 @@ def per_step(model, times, states, speeds):
     return cols, energy, drift
 
 
-def refined_peak(model, j, times, states, speeds, k):
+def refined_peak(model, j, run, k):
     """The peak normal force of joint j near accepted step k, refined between the steps
     k-1..k+1 by cubic Hermite interpolation of the penetration (delta and its rate at both ends
     of each step): (peak force N, its time s)."""
+    times, states, speeds = run.times, run.states, run.speeds
     nq, row = model.nq, model.joints[j]
     chi, best = row[8], (0.0, float(times[k]))
     for a in range(max(k - 1, 0), min(k + 1, times.size - 1)):
@@ -100,12 +104,12 @@ def refined_peak(model, j, times, states, speeds, k):
     return best
 
 
-def sample(model, times, states, speeds):
+def sample(model, run):
     """Per-step columns interpolated to the output sample times (and the per-step data)."""
-    cols, energy, drift = per_step(model, times, states, speeds)
-    grid = np.arange(0.0, times[-1], model.scene.output.sample_time)
-    grid = np.append(grid, times[-1]) if grid[-1] < times[-1] else grid
-    sampled = {k: np.interp(grid, times, v) for k, v in cols.items()}
+    cols, energy, drift = per_step(model, run)
+    grid = np.arange(0.0, run.times[-1], model.scene.output.sample_time)
+    grid = np.append(grid, run.times[-1]) if grid[-1] < run.times[-1] else grid
+    sampled = {k: np.interp(grid, run.times, v) for k, v in cols.items()}
     return {"sampled": sampled, "steps": cols, "energy": energy, "drift": drift}
 
 
@@ -118,27 +122,36 @@ def write_timeseries(path, series) -> None:
             out.writerow([f"{v:.9e}" for v in row])
 
 
-def summary(model, series, times, states, speeds, counters, status, t_end, seconds, status_text):
-    """The run's summary from its series (`sample`) and the integrator's outputs."""
+def summary(model, series, run, status_text):
+    """The run's summary from its series (`sample`) and the Trajectory."""
+    counters, status = run.counters, run.status
     e = series["energy"]
     total = e["kinetic"] + e["potential"] + e["elastic"] + e["dissipated"] - e["work_in"]
     scale = max(float(np.max(e["kinetic"])), 1e-300)
     joints = {}
     for j, c in enumerate(model.scene.clearance_joints):
         force = series["steps"][f"{c.name}_normal_force_N"]
-        peak, when = refined_peak(model, j, times, states, speeds, int(np.argmax(force)))
+        if c.impact == "continuous":
+            peak, when = refined_peak(model, j, run, int(np.argmax(force)))
+        else:
+            peak, when = float(np.max(force)), float(run.times[np.argmax(force)])
+        mine = run.impacts[run.impacts[:, 1] == j]
         joints[c.name] = {"peak_normal_force_N": peak, "time_of_peak_s": when,
+                          "impacts": int(mine.shape[0]),
+                          "peak_impact_speed_m_per_s": float(np.max(mine[:, 2], initial=0.0)),
+                          "peak_impulse_N_s": float(np.max(mine[:, 3], initial=0.0)),
                           "peak_penetration_m": float(np.max(series["steps"][f"{c.name}_penetration_m"], initial=0.0)),
                           "peak_friction_force_N": float(np.max(np.abs(series["steps"][f"{c.name}_friction_force_N"]), initial=0.0)),
                           "clearance_m": c.bearing_radius - c.journal_radius}
     return {
         "status": "complete" if status == kernel.OK else "incomplete",
-        "stop": None if status == kernel.OK else {"time_s": t_end, "reason": status_text},
-        "duration_s": model.scene.duration, "time_reached_s": t_end,
+        "stop": None if status == kernel.OK else {"time_s": run.t_end, "reason": status_text},
+        "duration_s": model.scene.duration, "time_reached_s": run.t_end,
+        "integrator": model.scene.integrator.method,
         "clearance_joints": joints,
         "impacts": int(counters[3]),
         "steps": int(counters[0]), "rejected_steps": int(counters[1]),
-        "rhs_evaluations": int(counters[2]), "wall_time_s": seconds,
+        "rhs_evaluations": int(counters[2]), "wall_time_s": run.seconds,
         "energy_balance": {"max_residual_J": float(np.max(np.abs(total - total[0]))),
                            "relative_to_peak_kinetic": float(np.max(np.abs(total - total[0])) / scale),
                            "dissipated_J": float(e["dissipated"][-1]),
@@ -152,7 +165,7 @@ def validity_warnings(model, joints) -> list[str]:
     """Calibrated laws used beyond the approaches they were calibrated on."""
     out = []
     for c in model.scene.clearance_joints:
-        if c.normal_law.startswith("calibrated:") and model.calibration is not None:
+        if (c.normal_law or "").startswith("calibrated:") and model.calibration is not None:
             low, high = model.calibration["laws"][c.normal_law.split(":", 1)[1]]["validity"]["approach_m"]
             peak = joints[c.name]["peak_penetration_m"]
             if peak > high:
@@ -176,9 +189,8 @@ def plots(folder, model, series, twin) -> None:
         fig, ax = plt.subplots(figsize=(10, 4.5))
         ax.plot(angle, along(cols), lw=0.6, label="clearance joint")
         if twin is not None:
-            t_model, t_times, t_states = twin
-            t_cols = per_step(t_model, t_times, t_states,
-                              np.zeros((t_times.size, 1)))[0]
+            t_model, t_run = twin
+            t_cols = per_step(t_model, t_run)[0]
             ax.plot(np.degrees(t_cols[f"{s.drive.body}_angle_rad"] - math.radians(s.drive.angle0_deg)),
                     along(t_cols), "k--", lw=1, label="ideal joint")
         ax.set_xlabel(f"{s.drive.body} angle (deg)")
@@ -190,8 +202,8 @@ def plots(folder, model, series, twin) -> None:
         plt.close(fig)
     if s.drive is None and twin is not None:
         body = s.bodies[0].name
-        t_model, t_times, t_states = twin
-        t_cols = per_step(t_model, t_times, t_states, np.zeros((t_times.size, 1)))[0]
+        t_model, t_run = twin
+        t_cols = per_step(t_model, t_run)[0]
         fig, (ax, bx) = plt.subplots(2, 1, figsize=(10, 7), sharex=True)
         ax.plot(cols["time_s"], cols[f"{body}_omega_rad_per_s"], lw=0.6, label="clearance joint")
         ax.plot(t_cols["time_s"], t_cols[f"{body}_omega_rad_per_s"], "k--", lw=1, label="ideal joint")

@@ -12,8 +12,9 @@ def section(build_dir: Path) -> str:
              "<p>Planar rigid bodies, ideal joints as constraints with Lagrange multipliers "
              "(Baumgarte stabilisation), revolute clearance joints with a normal law (elastic "
              "part from the law library or calibrated on the FE study, Hunt-Crossley-type "
-             "damping) and friction; adaptive Dormand-Prince 5(4), compiled with numba, that "
-             "lands every contact onset on a step boundary.</p>"]
+             "damping) and friction, or rigid impacts (Newton restitution, then held contact); "
+             "adaptive Dormand-Prince 5(4), compiled with numba, that lands every contact onset "
+             "on a step boundary (a stiff Rosenbrock 2(3) is the alternative).</p>"]
     if not runs:
         return "".join(parts) + "<p class='note'>No runs under build/reduced: run <code>make reduced</code>.</p>"
     rows = []

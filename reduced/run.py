@@ -9,6 +9,7 @@ import json
 import math
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -25,17 +26,39 @@ STATUS = {kernel.OK: "complete", kernel.BLOWN_UP: "blown up (NaN, or a penetrati
           f"more than {MAX_STEPS} steps", kernel.STEP_TOO_SMALL: "step size underflow"}
 
 
-def simulate(model: Model):
-    """Integrate the model; (times, states, impact speeds, counters, status, t_end, seconds)."""
+METHODS = {"dopri5": kernel.DOPRI5, "dopri5_fixed": kernel.DOPRI5_FIXED,
+           "rosenbrock23": kernel.ROSENBROCK23}
+
+
+@dataclass
+class Trajectory:
+    """What the integrator returns: per accepted step the time, state (q, q', dissipated
+    energy, work in, friction states), impact speed and contact mode (1: held) per clearance
+    joint; the impacts (time, joint, approach rate, impulse); counters (accepted, rejected,
+    rhs calls, impacts); the status code, the time reached and the wall time."""
+
+    times: np.ndarray
+    states: np.ndarray
+    speeds: np.ndarray
+    modes: np.ndarray
+    impacts: np.ndarray
+    counters: np.ndarray
+    status: int
+    t_end: float
+    seconds: float
+
+
+def simulate(model: Model, y0=None, duration=None) -> Trajectory:
+    """Integrate the model from y0 (default: its consistent initial state) over `duration`
+    (default: the scene's)."""
     s = model.scene.integrator
     onset = 1e-3 * min((j[6] for j in model.joints), default=1.0) * s.rtol ** 0.5
     start = time.perf_counter()
-    result = kernel.integrate(model.y0, model.scene.duration, model.nq, model.minv, model.gravity,
-                              model.revolute, model.prismatic, model.drive, s.baumgarte,
-                              model.joints, model.grid_log0, model.grid_step, model.tables,
-                              model.torsion, s.rtol, s.atol, s.max_step, onset, SPEED_FLOOR,
-                              MAX_STEPS)
-    return (*result, time.perf_counter() - start)
+    result = kernel.integrate(model.y0 if y0 is None else y0,
+                              model.scene.duration if duration is None else duration,
+                              model.kernel_args(), METHODS[s.method], s.rtol, s.atol, s.max_step,
+                              onset, SPEED_FLOOR, MAX_STEPS)
+    return Trajectory(*result[:6], int(result[6]), float(result[7]), time.perf_counter() - start)
 
 
 def ideal_twin(scene: ReducedScene) -> ReducedScene:
@@ -53,22 +76,21 @@ def run(scene_path, out) -> int:
     scene_path = Path(scene_path)
     scene = scenes.load(ReducedScene, scene_path)
     model = build(scene, str(scene_path), scene_path.parent)
-    times, states, speeds, counters, status, t_end, seconds = simulate(model)
+    trajectory = simulate(model)
     twin = None
     if scene.clearance_joints and scene.output.plots:
         twin_model = build(ideal_twin(scene), str(scene_path), scene_path.parent)
-        twin = (twin_model, *simulate(twin_model)[:2])
+        twin = (twin_model, simulate(twin_model))
     with atomic_directory(out) as tmp:
-        series = outputs.sample(model, times, states, speeds)
+        series = outputs.sample(model, trajectory)
         outputs.write_timeseries(tmp / "timeseries.csv", series)
-        summary = outputs.summary(model, series, times, states, speeds, counters, status, t_end,
-                                  seconds, STATUS[status])
+        summary = outputs.summary(model, series, trajectory, STATUS[trajectory.status])
         summary["scene_file"] = str(scene_path)
         (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
         if scene.output.plots:
             outputs.plots(tmp, model, series, twin)
-    if status != kernel.OK:
-        print(f"pinbore reduced: {scene_path}: stopped at t = {t_end:.6g} s: {STATUS[status]}; "
+    if trajectory.status != kernel.OK:
+        print(f"pinbore reduced: {scene_path}: stopped at t = {trajectory.t_end:.6g} s: {STATUS[trajectory.status]}; "
               f"kept the time series up to there in {out} (marked incomplete)", file=sys.stderr)
         return 1
     return 0

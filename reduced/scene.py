@@ -121,8 +121,19 @@ class DahlFriction(Strict):
     sigma: float = pydantic.Field(gt=0, description="1/m")
 
 
+class IwanFriction(Strict):
+    """Bilinear Iwan element (review eq. 13) along the contact: a spring k1 in series with a
+    Coulomb slider of strength mu F_n, in parallel with a spring k2; it starts unloaded at
+    every new contact. For joints that oscillate rather than turn (k2 resists travel)."""
+
+    law: Literal["iwan_bilinear"]
+    mu: float = pydantic.Field(ge=0)
+    k1: float = pydantic.Field(gt=0, description="N/m")
+    k2: float = pydantic.Field(default=0.0, ge=0, description="N/m")
+
+
 Friction = Annotated[CoulombFriction | StribeckFriction | LinearFriction | LuGreFriction
-                     | DahlFriction, pydantic.Field(discriminator="law")]
+                     | DahlFriction | IwanFriction, pydantic.Field(discriminator="law")]
 
 
 class ClearanceJoint(Strict):
@@ -140,16 +151,32 @@ class ClearanceJoint(Strict):
                                           description="axial length (m): per-length laws x L")
     E: float = pydantic.Field(gt=0)
     nu: float = pydantic.Field(gt=-1, lt=0.5)
-    normal_law: str
+    normal_law: str | None = None
     damping_law: str = "none"
-    restitution: float = pydantic.Field(default=1.0, gt=0, le=1)
+    restitution: float = pydantic.Field(default=1.0, ge=0, le=1)
     friction: Friction | None = None
-    start: Literal["ideal", "free"] = "ideal"  # centred; moving with the ideal joint, or free
+    # ideal: centred, moving with the ideal joint; free: centred, velocities as given;
+    # placed: where the bodies' positions put it, velocities as given
+    start: Literal["ideal", "free", "placed"] = "ideal"
+    # "continuous": the normal and damping laws act while the journal penetrates;
+    # "newton" / "poisson": rigid impacts with restitution `restitution`, and below
+    # rest_speed (approach rate x restitution) the contact is held until it would pull
+    impact: Literal["continuous", "newton", "poisson"] = "continuous"
+    rest_speed: float = pydantic.Field(default=1e-3, gt=0, description="m/s")
 
     @pydantic.model_validator(mode="after")
     def _consistent(self):
         if self.journal_radius >= self.bearing_radius:
             raise ValueError("journal_radius must be smaller than bearing_radius (clearance > 0)")
+        if self.impact != "continuous":
+            if self.friction is not None or self.normal_law is not None or self.damping_law != "none":
+                raise ValueError(f"impact = {self.impact!r} is a rigid, frictionless impact model: "
+                                 "give no normal_law, damping_law or friction")
+            return self
+        if self.normal_law is None:
+            raise ValueError("normal_law is required by impact = 'continuous'")
+        if self.restitution == 0 and self.damping_law != "none":
+            raise ValueError("restitution must be > 0 for a continuous damping law")
         if not (self.normal_law in ELASTIC_LAWS or self.normal_law.startswith("calibrated:")):
             raise ValueError(f"normal_law {self.normal_law!r} is unknown; valid: "
                              f"{', '.join(ELASTIC_LAWS)}, calibrated:<law in laws.json>")
@@ -177,7 +204,12 @@ class TorsionSpring(Strict):
 
 
 class Integrator(Strict):
-    method: Literal["dopri5"] = "dopri5"
+    """dopri5: explicit, adaptive, contact onsets located (the default); rosenbrock23: linearly
+    implicit and L-stable (Shampine-Reichelt), for stiff contact laws or springs;
+    dopri5_fixed: the step max_step throughout, no error control or event location (only for
+    comparing against)."""
+
+    method: Literal["dopri5", "rosenbrock23", "dopri5_fixed"] = "dopri5"
     rtol: float = pydantic.Field(default=1e-6, gt=0, lt=1)
     atol: float = pydantic.Field(default=1e-9, gt=0)
     max_step: float = pydantic.Field(default=1e-4, gt=0)
@@ -220,7 +252,7 @@ class ReducedScene(Strict):
         for name, key in used:
             if name not in known:
                 raise ValueError(f"{key}: unknown body {name!r}; bodies: {', '.join(sorted(known))}")
-        if any(c.normal_law.startswith("calibrated:") for c in self.clearance_joints) \
+        if any((c.normal_law or "").startswith("calibrated:") for c in self.clearance_joints) \
                 and self.laws_file is None:
             raise ValueError("laws_file is required by a calibrated:<law> normal law")
         return self
