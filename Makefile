@@ -24,8 +24,11 @@ REDUCED_SCENES := $(basename $(notdir $(wildcard scenes/reduced/*.toml)))
 REDUCED_RUNS := $(REDUCED_SCENES:%=build/reduced/%/summary.json)
 STAGE_CODE := $(wildcard pinbore/*.py laws/*.py meshes/*.py fem/*.py)
 MPIEXEC := $(if $(filter-out 1,$(NP)),$(VENV)/bin/mpiexec -n $(NP))
+DYNAMICS_SCENE := scenes/reduced/slider_crank_flores2004.toml
+DYNAMICS := $(addprefix build/dynamics/,poincare/summary.json bifurcation/summary.json design/summary.json)
+DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(wildcard pinbore/*.py laws/*.py reduced/*.py) $(STAMP)
 
-.PHONY: all venv mesh fem calibration reduced report bench test test-slow clean help
+.PHONY: all venv mesh fem calibration reduced dynamics report bench test test-slow clean help
 .DELETE_ON_ERROR:
 
 all: report ## set up .venv, run the default scenes, build the report (the main job)
@@ -64,9 +67,25 @@ build/reduced/%/summary.json: scenes/reduced/%.toml build/calibration/laws.json 
                               $(wildcard pinbore/*.py laws/*.py reduced/*.py) $(STAMP)
 	$(PINBORE) reduced $< --out build/reduced/$*
 
+dynamics: $(DYNAMICS) ## Poincare map, bifurcation diagram and design map of the slider-crank (build/dynamics/)
+
+# (the sweeps run their points on the local cores; their per-point caches make a rerun resume)
+build/dynamics/poincare/summary.json: $(DYNAMICS_DEPS)
+	$(PINBORE) dynamics $< --analysis poincare --transient 50 --periods 100 --out build/dynamics/poincare
+
+build/dynamics/bifurcation/summary.json: $(DYNAMICS_DEPS)
+	$(PINBORE) dynamics $< --analysis bifurcation --parameter clearance --range 1e-4 5e-4 \
+	    --points 40 --transient 30 --periods 30 --out build/dynamics/bifurcation \
+	    --cache build/dynamics/cache
+
+build/dynamics/design/summary.json: $(DYNAMICS_DEPS)
+	$(PINBORE) dynamics $< --analysis design --range 1e-4 5e-4 --points 5 --speeds 2000 5000 4 \
+	    --transient 10 --periods 10 --max-force 20000 --max-deviation 1.0 \
+	    --out build/dynamics/design --cache build/dynamics/cache
+
 report: build/report/index.html ## build build/report/index.html from the results
 
-build/report/index.html: $(FEM_CURVES) $(MESHES) build/calibration/laws.json $(REDUCED_RUNS) \
+build/report/index.html: $(FEM_CURVES) $(MESHES) build/calibration/laws.json $(REDUCED_RUNS) $(DYNAMICS) \
                          $(wildcard bench/*.csv) $(STAGE_CODE) $(wildcard calibration/*.py reduced/*.py) $(STAMP)
 	$(PINBORE) report --build build --out build/report
 	@echo "report: $(abspath $@)"
@@ -75,6 +94,7 @@ bench: $(STUDY_CURVES) $(STAMP) ## run the benchmarks: bench/*.csv and plots (a 
 	$(PY) bench/fem2d.py --out bench
 	$(PY) bench/calibrate.py --out bench
 	$(PY) bench/multibody.py --out bench
+	$(PY) bench/sweep.py --out bench
 
 test: $(STAMP) ## run the test suite (what CI runs)
 	$(PY) -m pytest -n 2 -m "not slow" tests

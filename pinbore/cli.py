@@ -4,6 +4,7 @@ Bad input prints one line `pinbore <command>: <file>: <key>: <rule>` and exits w
 """
 
 import argparse
+import math
 import sys
 
 from pinbore.errors import InputError
@@ -39,6 +40,12 @@ def _reduced(args) -> int:
     from reduced import run as reduced_run
 
     return reduced_run.run(args.scene, args.out)
+
+
+def _dynamics(args) -> int:
+    from reduced import studies
+
+    return studies.run(args)
 
 
 def _report(args) -> int:
@@ -82,6 +89,34 @@ def parser() -> argparse.ArgumentParser:
                    "integrate a mechanism with clearance joints: timeseries.csv, summary.json",
                    "Integrate a planar mechanism with revolute clearance joints (scene kind = "
                    "\"reduced\"); write DIR/timeseries.csv, DIR/summary.json and plots.")
+    d = sub.add_parser("dynamics", help="Poincare maps, bifurcations, Lyapunov exponents, shooting, design maps",
+                       description="Nonlinear dynamics of a driven mechanism with clearance "
+                                   "joints, sampled once per drive revolution; write DIR/summary.json "
+                                   "with tables and plots of the analysis.")
+    d.add_argument("scene", help="reduced scene file (TOML) with a [drive]")
+    d.add_argument("--analysis", required=True,
+                   choices=["poincare", "bifurcation", "lyapunov", "shooting", "design"])
+    d.add_argument("--out", required=True, metavar="DIR", help="output directory (replaced when complete)")
+    d.add_argument("--parameter", choices=["clearance", "speed", "friction"],
+                   help="bifurcation: the swept parameter (m, rpm, or mu)")
+    d.add_argument("--range", type=float, nargs=2, metavar=("LOW", "HIGH"),
+                   help="bifurcation: parameter range; design: clearance range (m)")
+    d.add_argument("--points", type=int, default=50, help="sweep points (default 50)")
+    d.add_argument("--speeds", type=float, nargs=3, metavar=("LOW", "HIGH", "N"),
+                   help="design: drive speeds (rpm)")
+    d.add_argument("--transient", type=int, default=50,
+                   help="drive periods discarded before sampling (default 50)")
+    d.add_argument("--periods", type=int, default=50, help="periods sampled (default 50)")
+    d.add_argument("--multiple", type=int, default=1, help="shooting: orbit period in drive periods")
+    d.add_argument("--max-force", type=float, default=math.inf, help="design: threshold (N)")
+    d.add_argument("--max-deviation", type=float, default=math.inf,
+                   help="design: threshold of the slider acceleration deviation (RMS / ideal RMS)")
+    d.add_argument("--workers", type=int, default=None, help="local processes (default: the cores)")
+    d.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="run the sweep on this Dask scheduler instead of local processes")
+    d.add_argument("--cache", default=None, metavar="DIR",
+                   help="per-point results, for resuming (default: OUT-cache)")
+    d.set_defaults(func=_dynamics)
     r = sub.add_parser("report", help="build the HTML report from the results under build/",
                        description="Collect the results under BUILD into one self-contained "
                                    "HTML page, OUT/index.html.")

@@ -61,7 +61,7 @@ def build(build_dir, out) -> Path:
     build_dir = Path(build_dir)
     bench = Path("bench")
     sections = [fem_report.section(build_dir, bench), calibration_report.section(build_dir, bench),
-                reduced_report.section(build_dir)]
+                reduced_report.section(build_dir), reduced_report.dynamics_section(build_dir)]
     page = ("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
             f"<title>pinbore report</title><style>{STYLE}</style></head><body>"
             "<h1>pinbore: contact in pin-in-bore (revolute clearance) joints</h1>"

@@ -42,16 +42,17 @@ class Model:
     def nq(self) -> int:
         return self.minv.size
 
-    def kernel_args(self, speeds=None, latched=None, mode=None) -> tuple:
-        """The argument tuple of kernel.rhs; impact speeds, latch flags and contact modes are
-        the integrator's (given here to evaluate a recorded step)."""
+    def kernel_args(self, speeds=None, latched=None, mode=None, drive=None) -> tuple:
+        """The argument tuple of kernel.rhs and kernel.integrate: impact speeds (default: the
+        floor), latch flags and contact modes (the integrator's, given here to evaluate a
+        recorded step or to continue a run), and the drive row (default: the scene's)."""
         nj, nt = self.joints.shape[0], self.torsion.shape[0]
-        return (self.nq, self.minv, self.gravity, self.revolute, self.prismatic, self.drive,
-                self.scene.integrator.baumgarte, self.joints,
-                np.zeros(nj) if speeds is None else np.asarray(speeds, float),
+        return (self.nq, self.minv, self.gravity, self.revolute, self.prismatic,
+                self.drive if drive is None else drive, self.scene.integrator.baumgarte, self.joints,
+                np.full(nj, SPEED_FLOOR) if speeds is None else np.array(speeds, float),
                 self.grid_log0, self.grid_step, self.tables, self.torsion,
                 np.zeros(nt) if latched is None else np.asarray(latched, float),
-                np.zeros(nj, np.int64) if mode is None else np.asarray(mode, np.int64))
+                np.zeros(nj, np.int64) if mode is None else np.array(mode, np.int64))
 
     def elastic_energy(self, joint: int, delta: float) -> float:
         """U(delta) = int_0^delta F_el, exact for the log-log interpolant the dynamics use:
@@ -208,25 +209,37 @@ def _as_revolutes(model: Model, starts=("ideal", "free")) -> np.ndarray:
     return np.vstack([model.revolute, closed]) if closed.size else model.revolute
 
 
+def project(q, qd, revolute, prismatic, drive, minv, t=0.0):
+    """The nearest consistent state: positions moved least onto Phi(q, t) = 0 (Gauss-Newton),
+    velocities projected onto Phi_q q' = -Phi_t with least change in kinetic-energy norm.
+    Returns (q, q', largest remaining position gap)."""
+    q, qd = q.copy(), qd.copy()
+    zero = np.zeros_like(q)
+    gap = 0.0
+    for _ in range(50):
+        jac, _, phi, _ = kernel.constraints(t, q, zero, revolute, prismatic, drive, 0.0)
+        gap = np.max(np.abs(phi), initial=0.0)
+        if jac.shape[0] == 0 or gap < 1e-14:
+            break
+        q -= jac.T @ np.linalg.lstsq(jac @ jac.T, phi, rcond=None)[0]
+    jac, _, _, phi_t = kernel.constraints(t, q, zero, revolute, prismatic, drive, 0.0)
+    if jac.shape[0]:
+        scaled = jac * minv
+        qd -= scaled.T @ np.linalg.lstsq(scaled @ jac.T, jac @ qd + phi_t, rcond=None)[0]
+    return q, qd, gap
+
+
 def initial_state(model: Model) -> np.ndarray:
     """Positions satisfying the ideal joints with the journals centred (least change from the
     scene's guesses), and the scene's velocities projected onto Phi_q q' = -Phi_t (least change
-    in kinetic-energy norm) of the ideal joints and the clearance joints that start "ideal"."""
+    in kinetic-energy norm) of the ideal joints and the clearance joints that start "ideal"
+    ("placed" journals keep their positions)."""
     q = np.array([[*b.position, math.radians(b.angle_deg)] for b in model.scene.bodies]).ravel()
-    revolute = _as_revolutes(model)
-    zero = np.zeros_like(q)
-    for _ in range(50):
-        jac, _, phi, _ = kernel.constraints(0.0, q, zero, revolute, model.prismatic, model.drive, 0.0)
-        if jac.shape[0] == 0 or np.max(np.abs(phi)) < 1e-14:
-            break
-        q -= jac.T @ np.linalg.lstsq(jac @ jac.T, phi, rcond=None)[0]
-    else:
-        raise InputError("joints: the bodies cannot be placed so that every joint closes "
-                         f"(largest gap {np.max(np.abs(phi)):.3g} m)")
     qd = np.array([[*b.velocity, b.omega] for b in model.scene.bodies]).ravel()
-    jac, _, _, phi_t = kernel.constraints(0.0, q, zero, _as_revolutes(model, ("ideal",)),
-                                          model.prismatic, model.drive, 0.0)
-    if jac.shape[0]:
-        scaled = jac * model.minv
-        qd -= scaled.T @ np.linalg.lstsq(scaled @ jac.T, jac @ qd + phi_t, rcond=None)[0]
+    q, _, gap = project(q, qd, _as_revolutes(model), model.prismatic, model.drive, model.minv)
+    if gap >= 1e-14:
+        raise InputError("joints: the bodies cannot be placed so that every joint closes "
+                         f"(largest gap {gap:.3g} m)")
+    _, qd, _ = project(q, qd, _as_revolutes(model, ("ideal",)), model.prismatic, model.drive,
+                       model.minv)
     return np.concatenate([q, qd, [0.0, 0.0], np.zeros(model.friction_states)])

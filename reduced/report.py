@@ -46,3 +46,33 @@ def section(build_dir: Path) -> str:
         for warning in s.get("warnings", []):
             parts.append(f"<p class='note'>{folder.name}: {warning}</p>")
     return "".join(parts)
+
+
+def dynamics_section(build_dir: Path) -> str:
+    """Nonlinear dynamics: Poincare map, bifurcation diagram, design map (build/dynamics)."""
+    folder = build_dir / "dynamics"
+    parts = ["<h2>Nonlinear dynamics of the slider-crank with clearance</h2>",
+             "<p>Sampled once per crank revolution after a transient; points classified as "
+             "periodic (with their period), quasi-periodic or chaotic (largest Lyapunov exponent "
+             "by Benettin's renormalisation); design map: peak contact force and slider "
+             "acceleration deviation from the ideal joint over clearance and speed.</p>"]
+    if not folder.exists():
+        return "".join(parts) + "<p class='note'>No results: run <code>make dynamics</code>.</p>"
+    captions = {"poincare": "Poincare map of the journal centre",
+                "bifurcation": "bifurcation diagram against the radial clearance",
+                "design": "design map (white: thresholds)"}
+    for name, caption in captions.items():
+        path = folder / name / "summary.json"
+        if not path.exists():
+            continue
+        s = json.loads(path.read_text())
+        facts = {"poincare": lambda: f"{s['kind']}" + (f", period {s['period']}" if s["period"] else "")
+                 + (f", largest Lyapunov exponent {s['lyapunov_per_s']:.4g} 1/s" if s["lyapunov_per_s"] else ""),
+                 "bifurcation": lambda: ", ".join(f"{k}: {v} points" for k, v in s["counts"].items()),
+                 "design": lambda: "; ".join(f"{speed} rpm: " + (f"{b['low_m'] * 1e3:.3g}-{b['high_m'] * 1e3:.3g} mm"
+                                                                 if b["low_m"] is not None else "none")
+                                             for speed, b in s["band"].items())}[name]()
+        png = folder / name / f"{name}.png"
+        if png.exists():
+            parts.append(figure(png_data(png), f"{caption} ({facts}; {s['wall_time_s']:.1f} s)."))
+    return "".join(parts)

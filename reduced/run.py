@@ -48,16 +48,18 @@ class Trajectory:
     seconds: float
 
 
-def simulate(model: Model, y0=None, duration=None) -> Trajectory:
-    """Integrate the model from y0 (default: its consistent initial state) over `duration`
-    (default: the scene's)."""
+def onset_tolerance(model: Model) -> float:
+    """Penetration (m) within which a contact onset counts as located."""
+    return 1e-3 * min((j[6] for j in model.joints), default=1.0) * model.scene.integrator.rtol ** 0.5
+
+
+def simulate(model: Model) -> Trajectory:
+    """Integrate the model from its consistent initial state over the scene's duration."""
     s = model.scene.integrator
-    onset = 1e-3 * min((j[6] for j in model.joints), default=1.0) * s.rtol ** 0.5
     start = time.perf_counter()
-    result = kernel.integrate(model.y0 if y0 is None else y0,
-                              model.scene.duration if duration is None else duration,
-                              model.kernel_args(), METHODS[s.method], s.rtol, s.atol, s.max_step,
-                              onset, SPEED_FLOOR, MAX_STEPS)
+    result = kernel.integrate(model.y0, model.scene.duration, model.kernel_args(), METHODS[s.method],
+                              s.rtol, s.atol, s.max_step, onset_tolerance(model), SPEED_FLOOR,
+                              MAX_STEPS)
     return Trajectory(*result[:6], int(result[6]), float(result[7]), time.perf_counter() - start)
 
 

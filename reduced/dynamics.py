@@ -1,0 +1,210 @@
+r"""Nonlinear dynamics of periodically driven systems, seen once per driving period.
+
+A `Flow` is what the analyses need of a system: its driving period, a way to advance a state
+by whole periods, the state's coordinates (normalised, so that distances mean something) and
+a way to perturb a state along them. `MechanismFlow` wraps a driven reduced model; the tests
+wrap a forced Duffing oscillator the same way, so every analysis is checked on a system with
+published behaviour.
+
+- Poincare map (stroboscopic, at the driving period): the first `transient` periods are
+  discarded, then `periods` samples are kept. The transient criterion is the count given
+  (default 50 periods: for the slider-crank's journal, impacts damp an initial condition in
+  a few revolutions; the classification is checked not to change when it is doubled).
+- Classification of the samples x_0..x_(N-1): periodic with period p (the smallest p <= 16
+  with |x_(i+p) - x_i| <= tol * max |x| for every i); otherwise chaotic if the largest
+  Lyapunov exponent is positive, quasi-periodic if not.
+- Largest Lyapunov exponent (Benettin et al. 1980): a neighbour at distance d0 is advanced
+  with the reference one period at a time, its separation d measured and renormalised back
+  to d0; lambda = sum log(d / d0) / (N T). Each trajectory locates its own impacts, so an
+  impact that one meets and the other misses shows up as the (finite) jump it is; d0 = 1e-7
+  of the coordinates' scale keeps such jumps rare.
+- Periodic orbits by shooting: Newton on P^m(x) - x = 0 with the Jacobian of the m-fold map
+  by finite differences; its eigenvalues are the Floquet multipliers (stable when all lie
+  inside the unit circle).
+"""
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from reduced import kernel
+from reduced.model import Model, project
+from reduced.run import MAX_STEPS, METHODS, SPEED_FLOOR, Trajectory, onset_tolerance
+
+MAX_PERIOD = 16
+
+
+@dataclass
+class MechanismState:
+    y: np.ndarray           # the kernel's state vector
+    speeds: np.ndarray      # impact speeds of the clearance joints
+    mode: np.ndarray        # contact modes (held contacts of impulse joints)
+    period: int             # periods elapsed since the start
+
+
+class MechanismFlow:
+    """A driven reduced model advanced by whole crank periods. Coordinates: positions and
+    velocities of every body, the driven angle taken relative to the drive, scaled by the
+    smallest clearance c (m) and c omega (m/s)."""
+
+    def __init__(self, model: Model):
+        self.model = model
+        self.omega = model.drive[1]
+        self.period = 2 * math.pi / abs(self.omega)
+        self.length = min((j[6] for j in model.joints), default=1e-3)
+        nq = model.nq
+        self.scale = np.concatenate([np.full(nq, self.length), np.full(nq, self.length * abs(self.omega))])
+        self.driven = int(model.drive[0])
+        self.last = None   # the Trajectory of the last advance (for the design study)
+
+    def start(self) -> MechanismState:
+        nj = self.model.joints.shape[0]
+        return MechanismState(self.model.y0.copy(), np.full(nj, SPEED_FLOOR), np.zeros(nj, np.int64), 0)
+
+    def _drive(self, period: int) -> np.ndarray:
+        drive = self.model.drive.copy()
+        drive[2] += 2 * math.pi * period * math.copysign(1.0, self.omega)
+        return drive
+
+    def advance(self, state: MechanismState, periods: int = 1) -> MechanismState:
+        model, s = self.model, self.model.scene.integrator
+        args = model.kernel_args(state.speeds, None, state.mode, self._drive(state.period))
+        result = kernel.integrate(state.y, periods * self.period, args, METHODS[s.method], s.rtol,
+                                  s.atol, s.max_step, onset_tolerance(model), SPEED_FLOOR, MAX_STEPS)
+        self.last = Trajectory(*result[:6], int(result[6]), float(result[7]), 0.0)
+        if self.last.status != kernel.OK:
+            raise FloatingPointError(f"the integration stopped at t = {self.last.t_end:.6g} s "
+                                     f"of period {state.period} (status {self.last.status})")
+        return MechanismState(result[1][-1].copy(), args[kernel.ARG_SPEEDS].copy(),
+                              args[kernel.ARG_MODE].copy(), state.period + periods)
+
+    def coordinates(self, state: MechanismState) -> np.ndarray:
+        nq = self.model.nq
+        x = state.y[:2 * nq].copy()
+        if self.driven >= 0:
+            x[3 * self.driven + 2] -= self._drive(state.period)[2]
+        return x / self.scale
+
+    def observed(self, state: MechanismState) -> np.ndarray:
+        """What the Poincare map shows: the first clearance joint's journal centre relative to
+        its bearing centre (m) and its rate (m/s); without clearance joints, the centre of the
+        first body that is not driven."""
+        nq = self.model.nq
+        q, qd = state.y[:nq], state.y[nq:2 * nq]
+        if self.model.joints.shape[0]:
+            row = self.model.joints[0]
+            points = ((int(row[3]), row[4], row[5], 1.0), (int(row[0]), row[1], row[2], -1.0))
+        else:
+            body = next(b for b in range(nq // 3) if b != self.driven)
+            points = ((body, 0.0, 0.0, 1.0),)
+        out = np.zeros(4)
+        for body, sx, sy, sign in points:
+            x, y = kernel.point(q, body, sx, sy)
+            out[:2] += sign * np.array([x, y])
+            if body >= 0:
+                w = qd[3 * body + 2]
+                out[2:] += sign * np.array([qd[3 * body] - w * (y - q[3 * body + 1]),
+                                            qd[3 * body + 1] + w * (x - q[3 * body])])
+        return out
+
+    def observed_name(self) -> str:
+        if self.model.joints.shape[0]:
+            return f"journal centre of {self.model.scene.clearance_joints[0].name} relative to its bearing"
+        body = next(b for b in range(self.model.nq // 3) if b != self.driven)
+        return f"centre of body {self.model.names[body]}"
+
+    def perturb(self, state: MechanismState, dx: np.ndarray) -> MechanismState:
+        """The state moved by dx (in coordinates), then made consistent with the ideal joints."""
+        model, nq = self.model, self.model.nq
+        y = state.y.copy()
+        y[:2 * nq] += dx * self.scale
+        q, qd, _ = project(y[:nq], y[nq:2 * nq], model.revolute, model.prismatic,
+                           self._drive(state.period), model.minv)
+        y[:nq], y[nq:2 * nq] = q, qd
+        return replace(state, y=y)
+
+
+def poincare(flow, state, transient: int, periods: int):
+    """Stroboscopic samples (periods x coordinates) after `transient` periods, and the state
+    reached."""
+    if transient:
+        state = flow.advance(state, transient)
+    samples = []
+    for _ in range(periods):
+        state = flow.advance(state)
+        samples.append(flow.coordinates(state))
+    return np.array(samples), state
+
+
+def period_of(samples: np.ndarray, tol: float = 1e-4) -> int | None:
+    """The smallest p <= MAX_PERIOD with x_(i+p) = x_i (to tol of the samples' scale) for
+    every sample, or None."""
+    scale = max(np.max(np.abs(samples)), 1e-300)
+    for p in range(1, min(MAX_PERIOD, len(samples) // 2) + 1):
+        if np.max(np.abs(samples[p:] - samples[:-p])) <= tol * scale:
+            return p
+    return None
+
+
+def lyapunov(flow, state, periods: int, d0: float = 1e-7, seed: int = 0):
+    """Largest Lyapunov exponent (1/s) by Benettin's renormalisation once per period, and its
+    running estimate after each period (to show convergence). A neighbour whose separation
+    collapses (every direction contracts onto the reference: a fully constrained mechanism)
+    gives -inf."""
+    rng = np.random.default_rng(seed)
+    x0 = flow.coordinates(state)
+    direction = rng.standard_normal(x0.size)
+    neighbour = flow.perturb(state, d0 * direction / np.linalg.norm(direction))
+    total, running = 0.0, []
+    for k in range(periods):
+        state, neighbour = flow.advance(state), flow.advance(neighbour)
+        dx = flow.coordinates(neighbour) - flow.coordinates(state)
+        d = np.linalg.norm(dx)
+        if d < 1e-14 * d0:
+            return -math.inf, running + [-math.inf]
+        total += math.log(d / d0)
+        running.append(total / ((k + 1) * flow.period))
+        neighbour = flow.perturb(state, dx * (d0 / d))
+    return running[-1], running
+
+
+def classify(samples, exponent=None, tol=1e-4) -> tuple[str, int | None]:
+    """("periodic", p), ("quasi-periodic", None) or ("chaotic", None)."""
+    p = period_of(samples, tol)
+    if p is not None:
+        return "periodic", p
+    if exponent is None:
+        return "not periodic", None
+    return ("chaotic" if exponent > 0 else "quasi-periodic"), None
+
+
+def shooting(flow, state, multiple: int = 1, tol: float = 1e-9, iterations: int = 20, step: float = 1e-6):
+    """A periodic orbit of period `multiple` driving periods from a guess `state`, by Newton
+    on P^m(x) - x = 0 in the flow's coordinates. Returns (state on the orbit, Floquet
+    multipliers, residual history). The Jacobian of P^m by forward differences of size `step`."""
+    history = []
+    for _ in range(iterations):
+        x = flow.coordinates(state)
+        end = flow.advance(state, multiple)
+        residual = flow.coordinates(end) - x
+        history.append(float(np.linalg.norm(residual)))
+        jac = monodromy(flow, state, end, multiple, step)
+        if history[-1] <= tol * max(np.linalg.norm(x), 1.0):
+            return state, np.linalg.eigvals(jac), history
+        dx = np.linalg.lstsq(jac - np.eye(x.size), -residual, rcond=None)[0]
+        state = flow.perturb(state, dx)
+    raise FloatingPointError(f"shooting did not converge in {iterations} Newton iterations "
+                             f"(residuals {', '.join(f'{r:.2e}' for r in history)})")
+
+
+def monodromy(flow, state, end, multiple, step):
+    """d P^m / d x at `state` (forward differences; `end` = P^m(state))."""
+    x_end = flow.coordinates(end)
+    n = x_end.size
+    jac = np.empty((n, n))
+    for i in range(n):
+        dx = np.zeros(n)
+        dx[i] = step
+        jac[:, i] = (flow.coordinates(flow.advance(flow.perturb(state, dx), multiple)) - x_end) / step
+    return jac

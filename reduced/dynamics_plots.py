@@ -1,0 +1,89 @@
+"""Tables and pictures of the nonlinear-dynamics analyses (reduced.studies)."""
+
+import csv
+
+import matplotlib
+import numpy as np
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+KIND_COLOURS = {"periodic": "tab:blue", "quasi-periodic": "tab:green", "chaotic": "tab:red"}
+
+
+def write_table(path, header, rows) -> None:
+    with open(path, "w", newline="") as f:
+        out = csv.writer(f)
+        out.writerow(header)
+        out.writerows(rows)
+
+
+def _save(fig, path) -> None:
+    fig.tight_layout()
+    fig.savefig(path, dpi=110, metadata={"Software": None})
+    plt.close(fig)
+
+
+def poincare(path, samples, clearance, title, observed) -> None:
+    """Poincare samples of the observed point (the journal centre in its clearance circle, when
+    there is one), and x against its rate."""
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(11, 5))
+    if observed.startswith("journal"):
+        ring = np.linspace(0, 2 * np.pi, 200)
+        ax.plot(clearance * np.cos(ring) * 1e3, clearance * np.sin(ring) * 1e3, "k-", lw=0.8)
+        ax.set_aspect("equal")
+    ax.plot(samples[:, 0] * 1e3, samples[:, 1] * 1e3, "o", ms=3)
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    ax.set_title(observed, fontsize=9)
+    bx.plot(samples[:, 0] * 1e3, samples[:, 2], "o", ms=3)
+    bx.set_xlabel("x (mm)")
+    bx.set_ylabel("its rate (m/s)")
+    for a in (ax, bx):
+        a.grid(alpha=0.3)
+    fig.suptitle(f"Poincare map, once per drive revolution ({title})")
+    _save(fig, path)
+
+
+def convergence(path, running) -> None:
+    fig, ax = plt.subplots(figsize=(7, 4))
+    ax.plot(np.arange(1, len(running) + 1), running)
+    ax.set_xlabel("periods")
+    ax.set_ylabel("largest Lyapunov exponent estimate (1/s)")
+    ax.grid(alpha=0.3)
+    _save(fig, path)
+
+
+def bifurcation(path, rows, parameter, unit) -> None:
+    """Poincare samples (journal x) against the parameter, coloured by classification."""
+    fig, ax = plt.subplots(figsize=(10, 5))
+    for kind, colour in KIND_COLOURS.items():
+        xs = [r["value"] for r in rows if r["kind"] == kind for _ in r["observed"]]
+        ys = [j[0] * 1e3 for r in rows if r["kind"] == kind for j in r["observed"]]
+        if xs:
+            ax.plot(xs, ys, ",", color=colour, alpha=0.8)
+            ax.plot([], [], "o", ms=4, color=colour, label=kind)
+    ax.set_xlabel(f"{parameter} ({unit})")
+    ax.set_ylabel("journal centre x at the Poincare section (mm)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    _save(fig, path)
+
+
+def design(path, rows, clearances, speeds, max_force, max_deviation) -> None:
+    """Peak force and acceleration deviation over clearance x speed, with the thresholds."""
+    shape = (len(speeds), len(clearances))
+    force = np.array([r["peak_force_N"] for r in rows]).reshape(shape)
+    deviation = np.array([r["acceleration_deviation"] for r in rows]).reshape(shape)
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.8))
+    for ax, values, label, limit in ((axes[0], force, "peak contact force (N)", max_force),
+                                     (axes[1], deviation, "slider acceleration deviation (RMS / ideal RMS)",
+                                      max_deviation)):
+        image = ax.pcolormesh(np.array(clearances) * 1e3, speeds, values, shading="nearest", cmap="viridis")
+        fig.colorbar(image, ax=ax, label=label)
+        if len(speeds) > 1 and len(clearances) > 1:
+            ax.contour(np.array(clearances) * 1e3, speeds, values, levels=[limit], colors="w")
+        ax.set_xlabel("clearance (mm)")
+        ax.set_ylabel("drive speed (rpm)")
+        ax.set_title(f"{label}; white: threshold {limit:g}", fontsize=9)
+    _save(fig, path)

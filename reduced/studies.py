@@ -1,0 +1,311 @@
+"""`pinbore dynamics SCENE --analysis ... --out DIR`: Poincare maps, bifurcation diagrams,
+Lyapunov exponents, periodic orbits by shooting and design studies of a driven mechanism.
+
+Sweeps run their points in parallel: on the local cores (a process pool), or on a Dask
+cluster when `--scheduler ADDRESS` is given (the same tasks through its executor). Each point
+is cached as JSON under the cache folder as soon as it is done, so an interrupted sweep
+resumes where it stopped.
+"""
+
+import concurrent.futures
+import copy
+import hashlib
+import json
+import math
+import multiprocessing
+import os
+from pathlib import Path
+
+import numpy as np
+from tqdm import tqdm
+
+from pinbore.errors import InputError
+from reduced import dynamics
+from reduced.model import build
+from reduced.outputs import per_step
+from reduced.run import ideal_twin
+from reduced.scene import ReducedScene
+
+PARAMETERS = {"clearance": "m, radial clearance of every clearance joint",
+              "speed": "rpm, the drive's speed",
+              "friction": "mu of every clearance joint's friction law"}
+
+
+def with_parameter(data: dict, parameter: str, value: float, source: str) -> dict:
+    """The scene's data with the swept parameter set."""
+    data = copy.deepcopy(data)
+    joints = data.get("clearance_joints", [])
+    if parameter == "clearance":
+        if not joints:
+            raise InputError(f"{source}: --parameter clearance: the scene has no clearance joints")
+        for joint in joints:
+            joint["journal_radius"] = joint["bearing_radius"] - value
+    elif parameter == "speed":
+        data["drive"]["speed_rpm"] = value
+    elif parameter == "friction":
+        if not joints or any("mu" not in (j.get("friction") or {}) for j in joints):
+            raise InputError(f"{source}: --parameter friction: every clearance joint needs a "
+                             "friction law with a coefficient mu (coulomb_ambrosio, dahl, iwan_bilinear)")
+        for joint in joints:
+            joint["friction"]["mu"] = value
+    return data
+
+
+def mechanism_flow(data: dict, base: Path, source: str) -> dynamics.MechanismFlow:
+    scene = ReducedScene.model_validate(data)
+    if scene.drive is None:
+        raise InputError(f"{source}: drive: nonlinear-dynamics analyses need a driven mechanism "
+                         "(the Poincare section is taken once per drive revolution)")
+    return dynamics.MechanismFlow(build(scene, source, base))
+
+
+def observed_samples(flow, states) -> np.ndarray:
+    """The observed point (x, y in m, and its velocity in m/s) at each state."""
+    return np.array([flow.observed(s) for s in states])
+
+
+class BifurcationPoint:
+    """One point of a sweep: Poincare samples of the observed point and the classification
+    (periodic with its period, quasi-periodic, chaotic); the largest Lyapunov exponent only
+    where the samples are not periodic, over a fifth of the sampled periods (at least 10:
+    enough for its sign; `--analysis lyapunov` gives the converged value)."""
+
+    def __init__(self, data, base, source, parameter, transient, periods):
+        self.data, self.base, self.source = data, base, source
+        self.parameter, self.transient, self.periods = parameter, transient, periods
+
+    def __call__(self, value: float) -> dict:
+        flow = mechanism_flow(with_parameter(self.data, self.parameter, value, self.source),
+                              self.base, self.source)
+        state = flow.advance(flow.start(), self.transient)
+        states, coords = [], []
+        for _ in range(self.periods):
+            state = flow.advance(state)
+            states.append(state)
+            coords.append(flow.coordinates(state))
+        coords = np.array(coords)
+        exponent = None
+        if dynamics.period_of(coords) is None:
+            exponent, _ = dynamics.lyapunov(flow, state, max(self.periods // 5, 10))
+        kind, period = dynamics.classify(coords, exponent)
+        return {"value": value, "kind": kind, "period": period,
+                "lyapunov_per_s": exponent if exponent is None or math.isfinite(exponent) else None,
+                "observed": observed_samples(flow, states).tolist()}
+
+
+def sweep(task, values, cache: Path, workers: int, scheduler: str | None, key: str) -> list[dict]:
+    """task(value) for every value, in parallel, each result cached in `cache` (resumable)."""
+    cache.mkdir(parents=True, exist_ok=True)
+    results, todo = {}, []
+    for value in values:
+        path = cache / f"{key}_{value!r}.json"
+        if path.exists():
+            results[value] = json.loads(path.read_text())
+        else:
+            todo.append(value)
+    if todo:
+        executor = _executor(workers, scheduler)
+        with executor:
+            futures = {executor.submit(task, v): v for v in todo}
+            for future in tqdm(concurrent.futures.as_completed(futures), total=len(futures),
+                               desc="sweep", unit="point", initial=len(values) - len(todo)):
+                value = futures[future]
+                result = future.result()
+                tmp = cache / f".{key}_{value!r}.json.tmp"
+                tmp.write_text(json.dumps(result))
+                tmp.rename(cache / f"{key}_{value!r}.json")
+                results[value] = result
+    return [results[v] for v in values]
+
+
+def _executor(workers: int, scheduler: str | None):
+    if scheduler is None:
+        # spawned, not forked: the parent runs threads (numba, tqdm) that fork would copy mid-state
+        return concurrent.futures.ProcessPoolExecutor(max_workers=workers,
+                                                      mp_context=multiprocessing.get_context("spawn"))
+    try:
+        from distributed import Client   # noqa: PLC0415 (optional dependency)
+    except ImportError:
+        raise InputError("--scheduler: needs the dask 'distributed' package") from None
+    return Client(scheduler).get_executor()
+
+
+def sweep_key(data: dict, analysis: str, parameter: str, transient: int, periods: int) -> str:
+    """Cache key: the scene and the settings that change a point's result."""
+    text = json.dumps([data, analysis, parameter, transient, periods], sort_keys=True)
+    return f"{analysis}_{parameter}_{hashlib.sha256(text.encode()).hexdigest()[:12]}"
+
+
+def default_workers() -> int:
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+class DesignPoint:
+    """Peak contact force, impacts per revolution and the RMS deviation of the slider's
+    acceleration from the ideal joint's (as a fraction of the ideal's RMS), over the sampled
+    revolutions after the transient, at one (clearance, speed)."""
+
+    def __init__(self, data, base, source, transient, periods):
+        self.data, self.base, self.source = data, base, source
+        self.transient, self.periods = transient, periods
+
+    def __call__(self, point) -> dict:
+        clearance, speed = point
+        data = with_parameter(with_parameter(self.data, "speed", speed, self.source),
+                              "clearance", clearance, self.source)
+        flow = mechanism_flow(data, self.base, self.source)
+        state = flow.advance(flow.start(), self.transient)
+        flow.advance(state, self.periods)
+        cols = per_step(flow.model, flow.last)[0]
+        ideal = mechanism_flow(ideal_twin(ReducedScene.model_validate(data)).model_dump(),
+                               self.base, self.source)
+        ideal.advance(ideal.start(), 1)
+        ideal_cols = per_step(ideal.model, ideal.last)[0]
+        slider = next(j for j in flow.model.scene.joints if j.type == "prismatic").body
+        drive = flow.model.scene.drive.body
+        angle = np.mod(cols[f"{drive}_angle_rad"], 2 * math.pi)
+        ideal_angle = np.mod(ideal_cols[f"{drive}_angle_rad"], 2 * math.pi)
+        order = np.argsort(ideal_angle)
+        reference = np.interp(angle, ideal_angle[order], ideal_cols[f"{slider}_ax_m_per_s2"][order],
+                              period=2 * math.pi)
+        deviation = math.sqrt(np.mean((cols[f"{slider}_ax_m_per_s2"] - reference) ** 2)
+                              / np.mean(ideal_cols[f"{slider}_ax_m_per_s2"] ** 2))
+        forces = [cols[f"{c.name}_normal_force_N"] for c in flow.model.scene.clearance_joints]
+        return {"clearance_m": clearance, "speed_rpm": speed,
+                "peak_force_N": float(max(np.max(f) for f in forces)),
+                "impacts_per_revolution": float(flow.last.counters[3]) / self.periods,
+                "acceleration_deviation": deviation}
+
+
+def design_band(rows, speeds, max_force, max_deviation) -> dict:
+    """Per speed, the clearances (m) whose peak force and acceleration deviation stay within
+    the thresholds."""
+    band = {}
+    for speed in speeds:
+        ok = [r["clearance_m"] for r in rows if r["speed_rpm"] == speed
+              and r["peak_force_N"] <= max_force and r["acceleration_deviation"] <= max_deviation]
+        band[f"{speed:g}"] = {"clearances_m": ok, "low_m": min(ok, default=None), "high_m": max(ok, default=None)}
+    return band
+
+
+def run(args) -> int:
+    """The `pinbore dynamics` command; outputs in args.out (replaced when complete)."""
+    import time
+
+    from pinbore import scene as scenes
+    from pinbore.output import atomic_directory
+    from reduced import dynamics_plots as plots
+
+    path = Path(args.scene)
+    scene = scenes.load(ReducedScene, path)   # validates, one-line errors
+    data = scene.model_dump(exclude_none=True)
+    source, base = str(path), path.parent
+    _check_arguments(args, scene, source)
+    cache = Path(args.cache) if args.cache else Path(f"{args.out}-cache")
+    args.workers = args.workers or default_workers()
+    start = time.perf_counter()
+    summary = {"scene_file": source, "analysis": args.analysis, "transient_periods": args.transient,
+               "periods": args.periods}
+    status = 0
+    with atomic_directory(args.out) as tmp:
+        if args.analysis == "poincare":
+            flow = mechanism_flow(data, base, source)
+            state = flow.advance(flow.start(), args.transient)
+            states, coords = [], []
+            for _ in tqdm(range(args.periods), desc="poincare", unit="period"):
+                state = flow.advance(state)
+                states.append(state)
+                coords.append(flow.coordinates(state))
+            coords = np.array(coords)
+            exponent, running = dynamics.lyapunov(flow, state, args.periods)
+            kind, period = dynamics.classify(coords, exponent)
+            samples = observed_samples(flow, states)
+            plots.write_table(tmp / "poincare.csv", ["period", "x_m", "y_m", "vx_m_per_s", "vy_m_per_s"],
+                              [[args.transient + k + 1, *row] for k, row in enumerate(samples)])
+            plots.poincare(tmp / "poincare.png", samples, flow.length, f"{path.stem}: {kind}"
+                           + (f", period {period}" if period else ""), flow.observed_name())
+            summary |= {"observed": flow.observed_name(), "kind": kind, "period": period,
+                        "lyapunov_per_s": _finite(exponent)}
+        elif args.analysis == "lyapunov":
+            flow = mechanism_flow(data, base, source)
+            state = flow.advance(flow.start(), args.transient)
+            exponent, running = dynamics.lyapunov(flow, state, args.periods)
+            plots.write_table(tmp / "lyapunov.csv", ["period", "running_estimate_per_s"],
+                              [[k + 1, v] for k, v in enumerate(running)])
+            plots.convergence(tmp / "lyapunov.png", running)
+            tail = [v for v in running[len(running) * 3 // 4:] if math.isfinite(v)]
+            summary |= {"lyapunov_per_s": _finite(exponent),
+                        "last_quarter_spread_per_s": (max(tail) - min(tail)) if tail else None}
+        elif args.analysis == "shooting":
+            flow = mechanism_flow(data, base, source)
+            state = flow.advance(flow.start(), args.transient)
+            try:
+                orbit, multipliers, history = dynamics.shooting(flow, state, args.multiple)
+                summary |= {"converged": True, "residuals": history,
+                            "floquet_multipliers": [[m.real, m.imag] for m in multipliers],
+                            "largest_multiplier_modulus": float(np.max(np.abs(multipliers))),
+                            "stable": bool(np.max(np.abs(multipliers)) < 1),
+                            "observed": flow.observed(orbit).tolist()}
+            except FloatingPointError as err:
+                summary |= {"converged": False, "reason": str(err)}
+                status = 1
+        elif args.analysis == "bifurcation":
+            values = np.linspace(args.range[0], args.range[1], args.points).tolist()
+            task = BifurcationPoint(data, base, source, args.parameter, args.transient, args.periods)
+            key = sweep_key(data, "bifurcation", args.parameter, args.transient, args.periods)
+            rows = sweep(task, values, cache, args.workers, args.scheduler, key)
+            plots.write_table(tmp / "bifurcation.csv",
+                              ["value", "kind", "period", "lyapunov_per_s", "x_m", "y_m"],
+                              [[r["value"], r["kind"], r["period"], r["lyapunov_per_s"], *j[:2]]
+                               for r in rows for j in r["observed"]])
+            plots.bifurcation(tmp / "bifurcation.png", rows, args.parameter, PARAMETERS[args.parameter])
+            kinds = [r["kind"] for r in rows]
+            summary |= {"parameter": args.parameter, "range": args.range, "points": args.points,
+                        "counts": {k: kinds.count(k) for k in sorted(set(kinds))}}
+        else:   # design
+            clearances = np.linspace(args.range[0], args.range[1], args.points).tolist()
+            speeds = np.linspace(*args.speeds[:2], int(args.speeds[2])).tolist()
+            grid = [(c, v) for v in speeds for c in clearances]
+            task = DesignPoint(data, base, source, args.transient, args.periods)
+            key = sweep_key(data, "design", "clearance_speed", args.transient, args.periods)
+            rows = sweep(task, grid, cache, args.workers, args.scheduler, key)
+            names = list(rows[0])
+            plots.write_table(tmp / "design.csv", names, [[r[n] for n in names] for r in rows])
+            plots.design(tmp / "design.png", rows, clearances, speeds, args.max_force, args.max_deviation)
+            summary |= {"thresholds": {"peak_force_N": args.max_force,
+                                       "acceleration_deviation": args.max_deviation},
+                        "band": design_band(rows, speeds, args.max_force, args.max_deviation)}
+        summary["wall_time_s"] = time.perf_counter() - start
+        (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    return status
+
+
+def _finite(value):
+    return value if value is not None and math.isfinite(value) else None
+
+
+def _check_arguments(args, scene, source) -> None:
+    if scene.drive is None:
+        raise InputError(f"{source}: drive: nonlinear-dynamics analyses need a driven mechanism")
+    if args.analysis in ("bifurcation", "design"):
+        if args.range is None:
+            raise InputError(f"--range: {args.analysis} needs --range LOW HIGH")
+        low, high = args.range
+        if not high > low:
+            raise InputError(f"--range: HIGH must exceed LOW (got {low:g} {high:g})")
+        if args.points < 2:
+            raise InputError(f"--points: at least 2 (got {args.points})")
+        if args.analysis == "bifurcation" and args.parameter is None:
+            raise InputError(f"--parameter: bifurcation needs one of {', '.join(PARAMETERS)}")
+        parameter = "clearance" if args.analysis == "design" else args.parameter
+        with_parameter(scene.model_dump(exclude_none=True), parameter, args.range[0], source)
+        if parameter == "clearance" and low <= 0:
+            raise InputError(f"--range: a clearance must be > 0 (got {low:g})")
+    if args.analysis == "design":
+        if args.speeds is None or args.speeds[1] <= args.speeds[0] or int(args.speeds[2]) < 1:
+            raise InputError("--speeds: design needs --speeds LOW HIGH N (rpm, HIGH > LOW, N >= 1)")
+        if not any(j.type == "prismatic" for j in scene.joints):
+            raise InputError(f"{source}: joints: the design study measures a prismatic body's "
+                             "acceleration; the scene has no prismatic joint")
+    if args.periods < 1 or args.transient < 0:
+        raise InputError("--periods must be >= 1 and --transient >= 0")

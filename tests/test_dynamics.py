@@ -1,0 +1,137 @@
+"""The nonlinear-dynamics analyses against systems with known behaviour: the forced
+double-well Duffing oscillator x'' + 0.3 x' - x + x^3 = gamma cos 1.2 t (the parameter set of
+Jordan & Smith, Nonlinear Ordinary Differential Equations, whose attractors are period 1 at
+gamma = 0.20, period 2 at 0.28, period 4 at 0.29, chaotic at 0.50), Liouville's formula for
+its Floquet multipliers, and the ideal slider-crank (one Poincare point); the CLI's sweeps,
+cache and bad input."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+from conftest import ROOT, pinbore
+from scipy.integrate import solve_ivp
+
+from reduced import dynamics, studies
+
+FLORES = ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml"
+DAMPING, FREQUENCY = 0.3, 1.2
+
+
+class Duffing:
+    """The forced Duffing oscillator as a Flow (state: (x, x'), periods elapsed)."""
+
+    def __init__(self, gamma):
+        self.gamma = gamma
+        self.period = 2 * math.pi / FREQUENCY
+
+    def start(self):
+        return np.array([1.0, 0.0]), 0
+
+    def advance(self, state, periods=1):
+        y, k = state
+        t0 = k * self.period
+        sol = solve_ivp(lambda t, z: [z[1], -DAMPING * z[1] + z[0] - z[0] ** 3
+                                      + self.gamma * math.cos(FREQUENCY * t)],
+                        (t0, t0 + periods * self.period), y, method="DOP853", rtol=1e-11, atol=1e-12)
+        return sol.y[:, -1], k + periods
+
+    def coordinates(self, state):
+        return state[0].copy()
+
+    def perturb(self, state, dx):
+        return state[0] + dx, state[1]
+
+
+def duffing_point(gamma):
+    """A sweep task (module level, so that worker processes can run it)."""
+    flow = Duffing(gamma)
+    samples, state = dynamics.poincare(flow, flow.start(), 200, 64)
+    exponent, _ = dynamics.lyapunov(flow, state, 150)
+    kind, period = dynamics.classify(samples, exponent)
+    return {"value": gamma, "kind": kind, "period": period, "lyapunov_per_s": exponent}
+
+
+@pytest.mark.parametrize("gamma, kind, period", [(0.20, "periodic", 1), (0.28, "periodic", 2),
+                                                 (0.29, "periodic", 4), (0.50, "chaotic", None)])
+def test_duffing_attractors_and_the_sign_of_their_exponent(gamma, kind, period):
+    point = duffing_point(gamma)
+    assert (point["kind"], point["period"]) == (kind, period)
+    assert (point["lyapunov_per_s"] > 0) == (kind == "chaotic")
+
+
+def test_a_parallel_sweep_finds_the_period_doubling_and_resumes_from_its_cache(tmp_path):
+    """Between the published period-1 (0.20) and period-2 (0.28) attractors the sweep finds
+    one period doubling, where the exponent approaches zero from below; a second run reads
+    every point from the cache."""
+    values = [0.24, 0.25, 0.26, 0.27, 0.28]
+    rows = studies.sweep(duffing_point, values, tmp_path, 2, None, "duffing")
+    periods = [r["period"] for r in rows]
+    first_two = periods.index(2)
+    assert periods[:first_two] == [1] * first_two and set(periods[first_two:]) == {2}
+    gamma_pd = 0.5 * (values[first_two - 1] + values[first_two])
+    assert 0.20 < gamma_pd < 0.28
+    exponents = [r["lyapunov_per_s"] for r in rows]
+    assert max(exponents[:first_two]) == exponents[first_two - 1] < 0   # rising towards the doubling
+    stamps = {p.name: p.stat().st_mtime_ns for p in tmp_path.iterdir()}
+    assert studies.sweep(duffing_point, values, tmp_path, 2, None, "duffing") == rows
+    assert {p.name: p.stat().st_mtime_ns for p in tmp_path.iterdir()} == stamps
+
+
+def test_shooting_finds_the_period_one_orbit_and_liouville_fixes_its_multipliers():
+    """Newton on P(x) = x from a rough guess converges quadratically; the multipliers lie in
+    the unit circle and their product is det DP = exp(-damping T) (Liouville: the flow's
+    divergence is -damping)."""
+    flow = Duffing(0.20)
+    guess = flow.advance(flow.start(), 10)
+    orbit, multipliers, history = dynamics.shooting(flow, guess, tol=1e-10)
+    assert history[-1] < 1e-10 * max(np.linalg.norm(orbit[0]), 1.0) and len(history) <= 8
+    assert np.all(np.abs(multipliers) < 1)
+    assert np.prod(multipliers).real == pytest.approx(math.exp(-DAMPING * flow.period), rel=1e-5)
+    assert np.allclose(flow.advance(orbit)[0], orbit[0], atol=1e-8)
+
+
+def test_ideal_slider_crank_has_one_poincare_point_and_no_positive_exponent(tmp_path):
+    scene = tmp_path / "ideal.toml"
+    scene.write_text((ROOT / "scenes" / "reduced" / "slider_crank_flores2004_ideal.toml").read_text())
+    done = pinbore("dynamics", scene, "--analysis", "poincare", "--transient", "5", "--periods", "8",
+                   "--out", tmp_path / "out")
+    assert done.returncode == 0, done.stderr
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["kind"] == "periodic" and summary["period"] == 1
+    assert summary["lyapunov_per_s"] is None or summary["lyapunov_per_s"] <= 0
+    samples = np.loadtxt(tmp_path / "out" / "poincare.csv", delimiter=",", skiprows=1)
+    assert np.ptp(samples[:, 1:3], axis=0).max() < 1e-12
+
+
+def test_bifurcation_over_clearance_writes_its_diagram(tmp_path):
+    done = pinbore("dynamics", FLORES, "--analysis", "bifurcation", "--parameter", "clearance",
+                   "--range", "2e-4", "5e-4", "--points", "2", "--transient", "3", "--periods", "4",
+                   "--workers", "2", "--out", tmp_path / "out")
+    assert done.returncode == 0, done.stderr
+    assert {"bifurcation.csv", "bifurcation.png", "summary.json"} <= {p.name for p in (tmp_path / "out").iterdir()}
+    assert sum(json.loads((tmp_path / "out" / "summary.json").read_text())["counts"].values()) == 2
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--analysis", "bifurcation", "--parameter", "clearance", "--range", "5e-4", "2e-4"], "--range: HIGH must exceed LOW"),
+    (["--analysis", "bifurcation", "--parameter", "clearance", "--range", "2e-4", "5e-4", "--points", "0"], "--points: at least 2"),
+    (["--analysis", "bifurcation", "--parameter", "friction", "--range", "0.1", "0.2"], "--parameter friction"),
+    (["--analysis", "design", "--range", "2e-4", "5e-4"], "--speeds"),
+])
+def test_bad_sweeps_are_one_line_exit_2(tmp_path, extra, message):
+    done = pinbore("dynamics", FLORES, *extra, "--out", tmp_path / "out")
+    assert done.returncode == 2, done.stderr
+    assert message in done.stderr and len(done.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+
+
+def test_the_same_sweep_runs_on_a_dask_scheduler(tmp_path):
+    """--scheduler ADDRESS: the points go through the cluster's executor (an in-process
+    cluster here) and come back the same as from local processes."""
+    distributed = pytest.importorskip("distributed")
+    values = [0.20, 0.28]
+    with distributed.LocalCluster(n_workers=1, processes=False, dashboard_address=None) as cluster:
+        rows = studies.sweep(duffing_point, values, tmp_path / "dask", 1, cluster.scheduler_address, "duffing")
+    assert [(r["kind"], r["period"]) for r in rows] == [("periodic", 1), ("periodic", 2)]
