@@ -40,7 +40,7 @@ def measure(integrator, repeats=3):
     runs = [simulate(model) for _ in range(repeats)]
     run = runs[-1]
     times, counters = run.times, run.counters
-    cols = per_step(model, run)[0]
+    cols, _, drift = per_step(model, run)
     force = cols["rod_slider_normal_force_N"]
     first = np.flatnonzero(force > 0)
     end = first[0] + np.argmax(force[first[0]:] == 0)
@@ -51,7 +51,8 @@ def measure(integrator, repeats=3):
     rms = float(np.sqrt(np.sum(force[1:] ** 2 * dt) / times[-1]))
     return {"method": integrator["method"], "setting": integrator.get("rtol", integrator.get("max_step")), "wall": statistics.median(r.seconds for r in runs), "peak": peak_force,
             "t_peak": peak_time, "mean": mean, "rms": rms, "impacts": int(counters[3]),
-            "steps": int(counters[0]), "rhs": int(counters[2]), "status": run.status}
+            "steps": int(counters[0]), "rhs": int(counters[2]), "status": run.status,
+            "drift": float(drift.max())}
 
 
 def main(out: Path) -> None:
@@ -60,13 +61,13 @@ def main(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
     header = ["method", "rtol_or_step_s", "wall_time_s", "steps", "rhs_evaluations", "first_peak_N",
               "first_peak_error_rel", "first_peak_time_error_s", "mean_force_N", "rms_force_N",
-              "impacts"]
+              "impacts", "constraint_drift_m"]
     lines = [",".join(header)]
     for r in rows + [reference | {"wall": reference["wall"]}]:
         lines.append(",".join(str(v) for v in [
             r["method"], r["setting"], f"{r['wall']:.4f}", r["steps"], r["rhs"], f"{r['peak']:.6g}",
             f"{abs(r['peak'] / reference['peak'] - 1):.2e}", f"{abs(r['t_peak'] - reference['t_peak']):.2e}",
-            f"{r['mean']:.5g}", f"{r['rms']:.5g}", r["impacts"]]))
+            f"{r['mean']:.5g}", f"{r['rms']:.5g}", r["impacts"], f"{r['drift']:.1e}"]))
     (out / "reduced.csv").write_text("\n".join(lines) + "\n")
     fig, ax = plt.subplots(figsize=(7, 4.5))
     labels = {"dopri5": "DOPRI5, adaptive, onsets located", "rosenbrock23": "Rosenbrock 2(3), adaptive",

@@ -492,19 +492,20 @@ def apply_impulse(t, y, args, work, j, target_restitution):
 
 
 @numba.njit(cache=True)
-def project_onto_constraints(t, y, args, work):
+def project_onto_constraints(t, y, args, work, tolerance, rate_tolerance):
     """One Gauss-Newton step of positions and then velocities onto Phi = 0 and
     Phi_q q' + Phi_t = 0 (ideal joints, drive, held contacts), least change in the mass
-    metric: dq = -M^-1 Phi_q^T (Phi_q M^-1 Phi_q^T)^-1 Phi. Keeps the drift of an accepted
-    step from accumulating where Baumgarte alone is too slow (loose tolerances, fast drives)."""
+    metric: dq = -M^-1 Phi_q^T (Phi_q M^-1 Phi_q^T)^-1 Phi, each only where the residual
+    exceeds its tolerance (m, m/s). Keeps the drift of accepted steps from accumulating where
+    Baumgarte alone is too slow (loose tolerances, fast drives). Returns whether y changed."""
     nq, minv = args[0], args[1]
     jac, phi, phi_t, rhs_c, schur, _, _ = work
+    changed = False
     for level in range(2):
         q, qd = y[:nq], y[nq:2 * nq]
         m = fill_constraints(t, q, qd, args[3], args[4], args[5], args[7], args[14], 0.0, jac,
                              phi, phi_t, rhs_c)
-        if m == 0:
-            return
+        largest = 0.0
         for i in range(m):
             if level == 0:
                 rhs_c[i] = phi[i]
@@ -513,6 +514,11 @@ def project_onto_constraints(t, y, args, work):
                 for c in range(nq):
                     v += jac[i, c] * qd[c]
                 rhs_c[i] = v
+            largest = max(largest, abs(rhs_c[i]))
+        if largest <= (tolerance if level == 0 else rate_tolerance):
+            continue
+        changed = True
+        for i in range(m):
             for k in range(i + 1):
                 v = 0.0
                 for c in range(nq):
@@ -526,6 +532,7 @@ def project_onto_constraints(t, y, args, work):
             for i in range(m):
                 v += jac[i, c] * rhs_c[i]
             target[c] -= minv[c] * v
+    return changed
 
 
 @numba.njit(cache=True)
@@ -710,6 +717,7 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
         y[:] = y_new
         accepted += 1
         k[0, :] = k[6]  # first same as last
+        changed = False
         for j in range(nj):
             if mode[j] == 1:
                 held_force[j] = work[6][j]
@@ -718,6 +726,7 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
                     if joint_kinematics(y[:nq], y[nq:2 * nq], joints[j])[5] > 0.0:
                         impulse_energy(y, nq, apply_impulse(t, y, args, work, j, 0.0))
                     mode[j] = 0
+                    changed = True
         for j in range(nj):
             delta, _, _, _, _, rate, _ = joint_kinematics(y[:nq], y[nq:2 * nq], joints[j])
             depth[j] = delta
@@ -741,6 +750,7 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
             elif in_contact[j] and delta < -onset_tol:
                 in_contact[j] = False
             if onset:
+                changed = True
                 impacts += 1
                 if impacts > log.shape[0]:
                     log2 = np.empty((2 * log.shape[0], 4))
@@ -755,13 +765,15 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
                 index = int(joints[j, 17])
                 limit = joints[j, 12] * f_n / joints[j, 10]
                 y[index + 1] = min(max(y[index + 1], -limit), limit)
+                changed = True
         for r in range(torsion.shape[0]):
             if latched[r] == 0.0 and int(torsion[r, 5]) == LATCH and \
                     relative_angle(y[:nq], y[nq:2 * nq], torsion[r])[0] > -LATCH_TOL:
                 latched[r] = 1.0
-        project_onto_constraints(t, y, args, work)   # then f(t, y) anew: events change it too
-        rhs(t, y, k[0], *args, work)
-        calls += 1
+                changed = True
+        if project_onto_constraints(t, y, args, work, onset_tol, onset_tol / max_step) or changed:
+            rhs(t, y, k[0], *args, work)
+            calls += 1
         if count == capacity:
             capacity *= 2
             times2 = np.empty(capacity)
