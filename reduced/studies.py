@@ -131,8 +131,11 @@ def _executor(workers: int, scheduler: str | None):
 
 
 def sweep_key(data: dict, analysis: str, parameter: str, transient: int, periods: int) -> str:
-    """Cache key: the scene and the settings that change a point's result."""
-    text = json.dumps([data, analysis, parameter, transient, periods], sort_keys=True)
+    """Cache key: the scene, the settings that change a point's result, and the code of the
+    model (a changed model never reads old points)."""
+    code = [f.read_bytes().hex() for package in ("laws", "reduced")
+            for f in sorted((Path(__file__).resolve().parent.parent / package).glob("*.py"))]
+    text = json.dumps([data, analysis, parameter, transient, periods, code], sort_keys=True)
     return f"{analysis}_{parameter}_{hashlib.sha256(text.encode()).hexdigest()[:12]}"
 
 
