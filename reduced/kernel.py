@@ -195,6 +195,29 @@ def cholesky_solve(a, b, m):
 
 
 @numba.njit(cache=True)
+def schur_solve(jac, minv, schur, b, m, nq):
+    """(Phi_q M^-1 Phi_q^T) x = b on the first m rows of jac; x into b."""
+    for i in range(m):
+        for k in range(i + 1):
+            v = 0.0
+            for c in range(nq):
+                v += jac[i, c] * minv[c] * jac[k, c]
+            schur[i, k] = v
+            schur[k, i] = v
+    cholesky_solve(schur, b, m)
+
+
+@numba.njit(cache=True)
+def mass_weighted_step(target, jac, minv, x, m, nq, scale):
+    """target -= scale M^-1 Phi_q^T x: the least change (in the mass metric) along the rows."""
+    for c in range(nq):
+        v = 0.0
+        for i in range(m):
+            v += jac[i, c] * x[i]
+        target[c] -= scale * minv[c] * v
+
+
+@numba.njit(cache=True)
 def elastic_force(delta, grid_log0, grid_step, table):
     """F_el(delta) from log F tabulated on a uniform grid of log delta: power law below the
     grid, NaN above it (beyond the joint's scale, or the law's range), which stops the run."""
@@ -351,13 +374,7 @@ def solve_multipliers(q, qd, minv, force, jac, rhs_c, schur, m, nq):
         for j in range(nq):
             v += jac[i, j] * minv[j] * force[j]
         rhs_c[i] = v
-        for k in range(i + 1):
-            v = 0.0
-            for j in range(nq):
-                v += jac[i, j] * minv[j] * jac[k, j]
-            schur[i, k] = v
-            schur[k, i] = v
-    cholesky_solve(schur, rhs_c, m)
+    schur_solve(jac, minv, schur, rhs_c, m, nq)
 
 
 @numba.njit(cache=True)
@@ -469,21 +486,11 @@ def apply_impulse(t, y, args, work, j, target_restitution):
     e = target_restitution
     rhs_c[:m] = 0.0
     rhs_c[row] = rate if poisson else (1.0 + e) * rate
-    for i in range(m):
-        for k in range(i + 1):
-            v = 0.0
-            for c in range(nq):
-                v += jac[i, c] * minv[c] * jac[k, c]
-            schur[i, k] = v
-            schur[k, i] = v
-    cholesky_solve(schur, rhs_c, m)
+    schur_solve(jac, minv, schur, rhs_c, m, nq)
     scale = (1.0 + e) if poisson else 1.0
+    mass_weighted_step(qd, jac, minv, rhs_c, m, nq, scale)
     after = 0.0
     for c in range(nq):
-        v = 0.0
-        for i in range(m):
-            v += jac[i, c] * rhs_c[i]
-        qd[c] -= scale * minv[c] * v
         after += 0.5 * qd[c] ** 2 / minv[c]
     work_in = 0.0   # the drive's impulse works on its prescribed speed
     for i in range(m):
@@ -518,20 +525,8 @@ def project_onto_constraints(t, y, args, work, tolerance, rate_tolerance):
         if largest <= (tolerance if level == 0 else rate_tolerance):
             continue
         changed = True
-        for i in range(m):
-            for k in range(i + 1):
-                v = 0.0
-                for c in range(nq):
-                    v += jac[i, c] * minv[c] * jac[k, c]
-                schur[i, k] = v
-                schur[k, i] = v
-        cholesky_solve(schur, rhs_c, m)
-        target = y[:nq] if level == 0 else y[nq:2 * nq]
-        for c in range(nq):
-            v = 0.0
-            for i in range(m):
-                v += jac[i, c] * rhs_c[i]
-            target[c] -= minv[c] * v
+        schur_solve(jac, minv, schur, rhs_c, m, nq)
+        mass_weighted_step(y[:nq] if level == 0 else y[nq:2 * nq], jac, minv, rhs_c, m, nq, 1.0)
     return changed
 
 
