@@ -14,13 +14,18 @@ import json
 import math
 import multiprocessing
 import os
+import sys
+import time
 from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
+from pinbore import scene as scenes
 from pinbore.errors import InputError
+from pinbore.output import atomic_directory
 from reduced import dynamics
+from reduced import dynamics_plots as plots
 from reduced.model import build
 from reduced.outputs import per_step
 from reduced.run import ideal_twin
@@ -75,6 +80,13 @@ class BifurcationPoint:
         self.parameter, self.transient, self.periods = parameter, transient, periods
 
     def __call__(self, value: float) -> dict:
+        try:
+            return self._point(value)
+        except FloatingPointError as err:   # a point whose integration fails is marked, not lost
+            return {"value": value, "kind": "failed", "period": None, "lyapunov_per_s": None,
+                    "observed": [], "reason": str(err)}
+
+    def _point(self, value: float) -> dict:
         flow = mechanism_flow(with_parameter(self.data, self.parameter, value, self.source),
                               self.base, self.source)
         state = flow.advance(flow.start(), self.transient)
@@ -153,6 +165,14 @@ class DesignPoint:
         self.transient, self.periods = transient, periods
 
     def __call__(self, point) -> dict:
+        try:
+            return self._point(point)
+        except FloatingPointError as err:   # marked (NaN: blank in the map, outside every band)
+            return {"clearance_m": point[0], "speed_rpm": point[1], "peak_force_N": math.nan,
+                    "impacts_per_revolution": math.nan, "acceleration_deviation": math.nan,
+                    "reason": str(err)}
+
+    def _point(self, point) -> dict:
         clearance, speed = point
         data = with_parameter(with_parameter(self.data, "speed", speed, self.source),
                               "clearance", clearance, self.source)
@@ -193,12 +213,6 @@ def design_band(rows, speeds, max_force, max_deviation) -> dict:
 
 def run(args) -> int:
     """The `pinbore dynamics` command; outputs in args.out (replaced when complete)."""
-    import time
-
-    from pinbore import scene as scenes
-    from pinbore.output import atomic_directory
-    from reduced import dynamics_plots as plots
-
     path = Path(args.scene)
     scene = scenes.load(ReducedScene, path)   # validates, one-line errors
     data = scene.model_dump(exclude_none=True)
@@ -209,6 +223,19 @@ def run(args) -> int:
     start = time.perf_counter()
     summary = {"scene_file": source, "analysis": args.analysis, "transient_periods": args.transient,
                "periods": args.periods}
+    try:
+        status = _analyse(args, path, data, source, base, cache, start, summary)
+    except FloatingPointError as err:
+        print(f"pinbore dynamics: {source}: {err}; nothing written", file=sys.stderr)
+        return 1
+    if status:
+        print(f"pinbore dynamics: {source}: {summary['reason']}; wrote {args.out}/summary.json "
+              "(converged: false)", file=sys.stderr)
+    return status
+
+
+def _analyse(args, path, data, source, base, cache, start, summary) -> int:
+    """Run the analysis and write its outputs; 1 if shooting did not converge."""
     status = 0
     with atomic_directory(args.out) as tmp:
         if args.analysis == "poincare":
