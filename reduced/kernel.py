@@ -23,7 +23,7 @@ or the bilinear Iwan element, whose states are integrated with the motion (and r
 the joint is open). While delta <= 0 no law is evaluated. Impulse contact (Newton or
 Poisson): rigid impacts between steps (apply_impulse) and, below a rest speed, held contact:
 the constraint delta = 0 joins the ideal ones until its multiplier (the normal force) would
-pull; its velocity is projected back onto delta' = 0 after every step.
+pull.
 
 Extra states integrate the energy dissipated in the joints and the work of the constraint
 forces (the drive), so the energy balance can be checked.
@@ -36,10 +36,11 @@ step that would carry a joint from free flight into contact deeper than `onset_t
 shortened (secant on delta) until it ends at the onset; there v0 is recorded. So every
 impact starts on a step boundary with a known impact speed. Latches engage the same way, at
 their angle, so their spring starts unloaded, and held contacts release at the zero of their
-force. After every accepted step, positions and then velocities are projected back onto the
-constraints (one mass-weighted Gauss-Newton step each), so drift cannot accumulate where
-Baumgarte alone is too slow. The right-hand side works in preallocated buffers and solves the Schur system by
-Cholesky: about 1 us per evaluation for the slider-crank.
+force. After an accepted step whose drift exceeds the onset tolerance, positions and then
+velocities are projected back onto the constraints (one mass-weighted Gauss-Newton step
+each), so drift cannot accumulate where Baumgarte alone is too slow. The right-hand side
+works in preallocated buffers and solves the Schur system by Cholesky: about 1.2 us per
+evaluation for the slider-crank.
 """
 
 import math
@@ -621,9 +622,10 @@ def rosenbrock23_step(t, y, h, k, y_new, err_vec, args, work):
 
 @numba.njit(cache=True)
 def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_floor, max_steps):
-    """Integrate from t = 0 (continuing from the impact speeds and contact modes in args) with DOPRI5 (adaptive), DOPRI5 at the fixed step max_step (no
-    error control, no event location: for comparison) or Rosenbrock 2(3) (adaptive, for stiff
-    contact). Returns times, states, impact speeds and contact modes of every accepted step,
+    """Integrate from t = 0, continuing from the impact speeds and contact modes in args, with
+    DOPRI5 (adaptive), DOPRI5 at the fixed step max_step (no error control, no event
+    location: for comparison) or Rosenbrock 2(3) (adaptive, for stiff contact). Returns
+    times, states, impact speeds and contact modes of every accepted step,
     the impact log (time, joint, approach rate, impulse), counters (accepted, rejected, rhs
     calls, impacts) and a status code."""
     nq, joints, torsion = args[0], args[7], args[12]
@@ -651,7 +653,7 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
     calls, accepted, rejected, impacts = 1, 0, 0, 0
     h = max_step if not adaptive else min(max_step, 1e-6)
     err_prev = 1e-4
-    times[0], states[0], speeds_out[0, :nj] = t, y, speeds
+    times[0], states[0], speeds_out[0, :nj], modes_out[0, :nj] = t, y, speeds, mode
     count = 1
     status = OK
     last_nan = False
@@ -692,7 +694,7 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
                     d_new = joint_kinematics(y_new[:nq], y_new[nq:2 * nq], joints[j])[0]
                     if d_new > onset_tol and depth[j] < -onset_tol:
                         shorten = min(shorten, 0.99 * (-depth[j]) / (d_new - depth[j]))
-                    elif d_new > max(depth[j], 0.0) + onset_tol:   # back from a rebound within the step: bisect
+                    elif d_new > max(depth[j], 0.0) + onset_tol:   # back within the step: bisect
                         shorten = min(shorten, 0.5)
                 elif mode[j] == 1 and h > event_dt:   # a held contact would pull: end the step at the release
                     f_new = work[6][j]
