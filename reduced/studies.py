@@ -299,7 +299,8 @@ def _analyse(args, path, data, source, base, cache, start, summary) -> int:
             task = DesignPoint(data, base, source, args.transient, args.periods)
             key = sweep_key(data, "design", "clearance_speed", args.transient, args.periods)
             rows = sweep(task, grid, cache, args.workers, args.scheduler, key)
-            names = list(rows[0])
+            names = ["clearance_m", "speed_rpm", "peak_force_N", "impacts_per_revolution",
+                     "acceleration_deviation"]
             plots.write_table(tmp / "design.csv", names, [[r[n] for n in names] for r in rows])
             plots.design(tmp / "design.png", rows, clearances, speeds, args.max_force, args.max_deviation)
             summary |= {"thresholds": {"peak_force_N": args.max_force,
