@@ -30,7 +30,7 @@ import numpy as np
 
 from reduced import kernel
 from reduced.model import Model, project
-from reduced.run import MAX_STEPS, METHODS, SPEED_FLOOR, Trajectory, onset_tolerance
+from reduced.run import simulate
 
 MAX_PERIOD = 16
 
@@ -40,6 +40,7 @@ class MechanismState:
     y: np.ndarray           # the kernel's state vector
     speeds: np.ndarray      # impact speeds of the clearance joints
     mode: np.ndarray        # contact modes (held contacts of impulse joints)
+    latched: np.ndarray     # latch flags of the torsion elements
     period: int             # periods elapsed since the start
 
 
@@ -59,8 +60,9 @@ class MechanismFlow:
         self.last = None   # the Trajectory of the last advance (for the design study)
 
     def start(self) -> MechanismState:
-        nj = self.model.joints.shape[0]
-        return MechanismState(self.model.y0.copy(), np.full(nj, SPEED_FLOOR), np.zeros(nj, np.int64), 0)
+        args = self.model.kernel_args()
+        return MechanismState(self.model.y0.copy(), args[kernel.ARG_SPEEDS], args[kernel.ARG_MODE],
+                              args[kernel.ARG_LATCHED], 0)
 
     def _drive(self, period: int) -> np.ndarray:
         drive = self.model.drive.copy()
@@ -68,16 +70,14 @@ class MechanismFlow:
         return drive
 
     def advance(self, state: MechanismState, periods: int = 1) -> MechanismState:
-        model, s = self.model, self.model.scene.integrator
-        args = model.kernel_args(state.speeds, None, state.mode, self._drive(state.period))
-        result = kernel.integrate(state.y, periods * self.period, args, METHODS[s.method], s.rtol,
-                                  s.atol, s.max_step, onset_tolerance(model), SPEED_FLOOR, MAX_STEPS)
-        self.last = Trajectory(*result[:6], int(result[6]), float(result[7]), 0.0)
+        args = self.model.kernel_args(state.speeds, state.latched, state.mode,
+                                      self._drive(state.period))
+        self.last = simulate(self.model, state.y, periods * self.period, args)
         if self.last.status != kernel.OK:
             raise FloatingPointError(f"the integration stopped at t = {self.last.t_end:.6g} s "
                                      f"of period {state.period} (status {self.last.status})")
-        return MechanismState(result[1][-1].copy(), args[kernel.ARG_SPEEDS].copy(),
-                              args[kernel.ARG_MODE].copy(), state.period + periods)
+        return MechanismState(self.last.states[-1].copy(), args[kernel.ARG_SPEEDS],
+                              args[kernel.ARG_MODE], args[kernel.ARG_LATCHED], state.period + periods)
 
     def coordinates(self, state: MechanismState) -> np.ndarray:
         nq = self.model.nq

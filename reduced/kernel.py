@@ -368,7 +368,7 @@ def workspace(nq, revolute, prismatic, drive, nj):
 
 
 @numba.njit(cache=True)
-def solve_multipliers(q, qd, minv, force, jac, rhs_c, schur, m, nq):
+def solve_multipliers(minv, force, jac, rhs_c, schur, m, nq):
     """(Phi_q M^-1 Phi_q^T) lambda = Phi_q M^-1 Q - rhs_c on the first m rows; lambda into rhs_c."""
     for i in range(m):
         v = -rhs_c[i]
@@ -429,7 +429,7 @@ def rhs(t, y, dy, nq, minv, gravity, revolute, prismatic, drive, alpha, joints, 
                          phi_t, rhs_c)
     work_in = 0.0
     if m > 0:
-        solve_multipliers(q, qd, minv, force, jac, rhs_c, schur, m, nq)
+        solve_multipliers(minv, force, jac, rhs_c, schur, m, nq)
         for j in range(nq):
             v = force[j]
             for i in range(m):
@@ -622,11 +622,11 @@ def rosenbrock23_step(t, y, h, k, y_new, err_vec, args, work):
 
 @numba.njit(cache=True)
 def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_floor, max_steps):
-    """Integrate from t = 0, continuing from the impact speeds and contact modes in args, with
-    DOPRI5 (adaptive), DOPRI5 at the fixed step max_step (no error control, no event
-    location: for comparison) or Rosenbrock 2(3) (adaptive, for stiff contact). Returns
-    times, states, impact speeds and contact modes of every accepted step,
-    the impact log (time, joint, approach rate, impulse), counters (accepted, rejected, rhs
+    """Integrate from t = 0, continuing from the impact speeds, latches and contact modes in
+    args, with DOPRI5 (adaptive), DOPRI5 at the fixed step max_step (no error control, no
+    event location: for comparison) or Rosenbrock 2(3) (adaptive, for stiff contact). Returns
+    times, states, impact speeds, contact modes and latch flags of every accepted step, the
+    impact log (time, joint, approach rate, impulse), counters (accepted, rejected, rhs
     calls, impacts) and a status code."""
     nq, joints, torsion = args[0], args[7], args[12]
     speeds, latched, mode = args[ARG_SPEEDS], args[ARG_LATCHED], args[ARG_MODE]
@@ -640,10 +640,12 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
     states = np.empty((capacity, ny))
     speeds_out = np.empty((capacity, max(nj, 1)))
     modes_out = np.zeros((capacity, max(nj, 1)), np.int64)
+    latched_out = np.zeros((capacity, max(torsion.shape[0], 1)))
     log = np.empty((256, 4))
-    for r in range(torsion.shape[0]):
-        latched[r] = 1.0 if int(torsion[r, 5]) == LATCH and relative_angle(
-            y0[:nq], y0[nq:2 * nq], torsion[r])[0] > -LATCH_TOL else 0.0
+    for r in range(torsion.shape[0]):   # a latch given as engaged stays so
+        angle = relative_angle(y0[:nq], y0[nq:2 * nq], torsion[r])[0]
+        if int(torsion[r, 5]) == LATCH and angle > -LATCH_TOL:
+            latched[r] = 1.0
     t, y = 0.0, y0.copy()
     k = np.empty((7, ny))
     y_new = np.empty(ny)
@@ -654,6 +656,7 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
     h = max_step if not adaptive else min(max_step, 1e-6)
     err_prev = 1e-4
     times[0], states[0], speeds_out[0, :nj], modes_out[0, :nj] = t, y, speeds, mode
+    latched_out[0, :torsion.shape[0]] = latched
     count = 1
     status = OK
     last_nan = False
@@ -696,7 +699,7 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
                         shorten = min(shorten, 0.99 * (-depth[j]) / (d_new - depth[j]))
                     elif d_new > max(depth[j], 0.0) + onset_tol:   # back within the step: bisect
                         shorten = min(shorten, 0.5)
-                elif mode[j] == 1 and h > event_dt:   # a held contact would pull: end the step at the release
+                elif mode[j] == 1 and h > event_dt:   # a held contact would pull: end at the release
                     f_new = work[6][j]
                     if held_force[j] > 0.0 and f_new < -1e-3 * math.sqrt(rtol) * held_peak[j]:
                         shorten = min(shorten, 0.99 * held_force[j] / (held_force[j] - f_new))
@@ -761,8 +764,9 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
                     y[:nq], y[nq:2 * nq], joints[j], speeds[j], args[9], args[10], args[11][j], y)
                 index = int(joints[j, 17])
                 limit = joints[j, 12] * f_n / joints[j, 10]
-                y[index + 1] = min(max(y[index + 1], -limit), limit)
-                changed = True
+                if abs(y[index + 1]) > limit:
+                    y[index + 1] = math.copysign(limit, y[index + 1])
+                    changed = True
         for r in range(torsion.shape[0]):
             if latched[r] == 0.0 and int(torsion[r, 5]) == LATCH and \
                     relative_angle(y[:nq], y[nq:2 * nq], torsion[r])[0] > -LATCH_TOL:
@@ -777,15 +781,18 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
             states2 = np.empty((capacity, ny))
             speeds2 = np.empty((capacity, max(nj, 1)))
             modes2 = np.zeros((capacity, max(nj, 1)), np.int64)
+            latched2 = np.zeros((capacity, max(torsion.shape[0], 1)))
             times2[:count], states2[:count], speeds2[:count], modes2[:count] = \
                 times, states, speeds_out, modes_out
-            times, states, speeds_out, modes_out = times2, states2, speeds2, modes2
+            latched2[:count] = latched_out
+            times, states, speeds_out, modes_out, latched_out = times2, states2, speeds2, modes2, latched2
         times[count], states[count], speeds_out[count, :nj], modes_out[count, :nj] = t, y, speeds, mode
+        latched_out[count, :torsion.shape[0]] = latched
         count += 1
         if adaptive:
             factor = 0.9 * err ** (-0.7 * exponent) * err_prev ** (0.4 * exponent) if err > 0 else 5.0
             h *= min(5.0, max(0.2, factor))
             err_prev = max(err, 1e-4)
     counters = np.array([accepted, rejected, calls, impacts])
-    return (times[:count], states[:count], speeds_out[:count], modes_out[:count], log[:impacts],
-            counters, status, t)
+    return (times[:count], states[:count], speeds_out[:count], modes_out[:count],
+            latched_out[:count], log[:impacts], counters, status, t)

@@ -45,13 +45,14 @@ class Model:
     def kernel_args(self, speeds=None, latched=None, mode=None, drive=None) -> tuple:
         """The argument tuple of kernel.rhs and kernel.integrate: impact speeds (default: the
         floor), latch flags and contact modes (the integrator's, given here to evaluate a
-        recorded step or to continue a run), and the drive row (default: the scene's)."""
+        recorded step or to continue a run; copied, as the integrator updates them in place),
+        and the drive row (default: the scene's)."""
         nj, nt = self.joints.shape[0], self.torsion.shape[0]
         return (self.nq, self.minv, self.gravity, self.revolute, self.prismatic,
                 self.drive if drive is None else drive, self.scene.integrator.baumgarte, self.joints,
                 np.full(nj, SPEED_FLOOR) if speeds is None else np.array(speeds, float),
                 self.grid_log0, self.grid_step, self.tables, self.torsion,
-                np.zeros(nt) if latched is None else np.asarray(latched, float),
+                np.zeros(nt) if latched is None else np.array(latched, float),
                 np.zeros(nj, np.int64) if mode is None else np.array(mode, np.int64))
 
     def elastic_energy(self, joint: int, delta: float) -> float:

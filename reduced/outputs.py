@@ -13,18 +13,6 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
-def latch_history(model, states):
-    """Per step and torsion element, 1 once a latch has been reached (the integrator's rule)."""
-    nq = model.nq
-    flags = np.zeros((states.shape[0], model.torsion.shape[0]))
-    for r, row in enumerate(model.torsion):
-        if int(row[5]) == kernel.LATCH:
-            reached = np.array([kernel.relative_angle(y[:nq], y[nq:2 * nq], row)[0] > -kernel.LATCH_TOL
-                                for y in states])
-            flags[:, r] = np.maximum.accumulate(reached)
-    return flags
-
-
 def per_step(model, run):
     """Columns at every accepted step of a Trajectory: body motion, joint quantities,
     energies, drift."""
@@ -35,11 +23,11 @@ def per_step(model, run):
     acc = np.empty((times.size, nq))
     joint = np.zeros((times.size, nj, 6))   # ecc x, ecc y, penetration, F_n, F_t, elastic energy
     drift = np.empty(times.size)
-    latched = latch_history(model, states)
+    latched = run.latched
     for k in range(times.size):
         y = states[k]
-        dy, normal = kernel.rhs_value(times[k], y, model.kernel_args(run.speeds[k, :nj], latched[k],
-                                                                     run.modes[k, :nj]))
+        dy, normal = kernel.rhs_value(times[k], y, model.kernel_args(
+            run.speeds[k, :nj], latched[k, :model.torsion.shape[0]], run.modes[k, :nj]))
         acc[k] = dy[nq:2 * nq]
         _, _, phi, _ = kernel.constraints(times[k], y[:nq], y[nq:2 * nq], model.revolute,
                                           model.prismatic, model.drive, 0.0)

@@ -34,13 +34,15 @@ METHODS = {"dopri5": kernel.DOPRI5, "dopri5_fixed": kernel.DOPRI5_FIXED,
 class Trajectory:
     """What the integrator returns: per accepted step the time, state (q, q', dissipated
     energy, work in, friction states), impact speed and contact mode (1: held) per clearance
-    joint; the impacts (time, joint, approach rate, impulse); counters (accepted, rejected,
-    rhs calls, impacts); the status code, the time reached and the wall time."""
+    joint and latch flag per torsion element; the impacts (time, joint, approach rate,
+    impulse); counters (accepted, rejected, rhs calls, impacts); the status code, the time
+    reached and the wall time."""
 
     times: np.ndarray
     states: np.ndarray
     speeds: np.ndarray
     modes: np.ndarray
+    latched: np.ndarray
     impacts: np.ndarray
     counters: np.ndarray
     status: int
@@ -53,14 +55,18 @@ def onset_tolerance(model: Model) -> float:
     return 1e-3 * min((j[6] for j in model.joints), default=1.0) * model.scene.integrator.rtol ** 0.5
 
 
-def simulate(model: Model) -> Trajectory:
-    """Integrate the model from its consistent initial state over the scene's duration."""
+def simulate(model: Model, y0=None, duration=None, args=None) -> Trajectory:
+    """Integrate the model from y0 (default: its consistent initial state) over `duration`
+    (default: the scene's), with the kernel arguments `args` (default: model.kernel_args(),
+    a fresh start; the integrator updates their speeds, latches and modes in place)."""
     s = model.scene.integrator
     start = time.perf_counter()
-    result = kernel.integrate(model.y0, model.scene.duration, model.kernel_args(), METHODS[s.method],
+    result = kernel.integrate(model.y0 if y0 is None else y0,
+                              model.scene.duration if duration is None else duration,
+                              model.kernel_args() if args is None else args, METHODS[s.method],
                               s.rtol, s.atol, s.max_step, onset_tolerance(model), SPEED_FLOOR,
                               MAX_STEPS)
-    return Trajectory(*result[:6], int(result[6]), float(result[7]), time.perf_counter() - start)
+    return Trajectory(*result[:7], int(result[7]), float(result[8]), time.perf_counter() - start)
 
 
 def ideal_twin(scene: ReducedScene) -> ReducedScene:
