@@ -27,6 +27,7 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
+from tqdm import tqdm
 
 from reduced import kernel
 from reduced.model import Model, project
@@ -125,16 +126,16 @@ class MechanismFlow:
         return replace(state, y=y)
 
 
-def poincare(flow, state, transient: int, periods: int):
-    """Stroboscopic samples (periods x coordinates) after `transient` periods, and the state
-    reached."""
+def poincare(flow, state, transient: int, periods: int, progress: bool = False):
+    """Stroboscopic samples (periods x coordinates) after `transient` periods, and the states
+    they were taken at (the last one: the state reached)."""
     if transient:
         state = flow.advance(state, transient)
-    samples = []
-    for _ in range(periods):
+    states = []
+    for _ in tqdm(range(periods), desc="poincare", unit="period", disable=not progress):
         state = flow.advance(state)
-        samples.append(flow.coordinates(state))
-    return np.array(samples), state
+        states.append(state)
+    return np.array([flow.coordinates(s) for s in states]), states
 
 
 def period_of(samples: np.ndarray, tol: float = 1e-4) -> int | None:

@@ -56,11 +56,15 @@ def with_parameter(data: dict, parameter: str, value: float, source: str) -> dic
     return data
 
 
-def mechanism_flow(data: dict, base: Path, source: str) -> dynamics.MechanismFlow:
-    scene = ReducedScene.model_validate(data)
+def require_drive(scene: ReducedScene, source: str) -> None:
     if scene.drive is None:
         raise InputError(f"{source}: drive: nonlinear-dynamics analyses need a driven mechanism "
                          "(the Poincare section is taken once per drive revolution)")
+
+
+def mechanism_flow(data: dict, base: Path, source: str) -> dynamics.MechanismFlow:
+    scene = ReducedScene.model_validate(data)
+    require_drive(scene, source)
     return dynamics.MechanismFlow(build(scene, source, base))
 
 
@@ -89,16 +93,10 @@ class BifurcationPoint:
     def _point(self, value: float) -> dict:
         flow = mechanism_flow(with_parameter(self.data, self.parameter, value, self.source),
                               self.base, self.source)
-        state = flow.advance(flow.start(), self.transient)
-        states, coords = [], []
-        for _ in range(self.periods):
-            state = flow.advance(state)
-            states.append(state)
-            coords.append(flow.coordinates(state))
-        coords = np.array(coords)
+        coords, states = dynamics.poincare(flow, flow.start(), self.transient, self.periods)
         exponent = None
         if dynamics.period_of(coords) is None:
-            exponent, _ = dynamics.lyapunov(flow, state, max(self.periods // 5, 10))
+            exponent, _ = dynamics.lyapunov(flow, states[-1], max(self.periods // 5, 10))
         kind, period = dynamics.classify(coords, exponent)
         return {"value": value, "kind": kind, "period": period,
                 "lyapunov_per_s": exponent if exponent is None or math.isfinite(exponent) else None,
@@ -240,14 +238,9 @@ def _analyse(args, path, data, source, base, cache, start, summary) -> int:
     with atomic_directory(args.out) as tmp:
         if args.analysis == "poincare":
             flow = mechanism_flow(data, base, source)
-            state = flow.advance(flow.start(), args.transient)
-            states, coords = [], []
-            for _ in tqdm(range(args.periods), desc="poincare", unit="period"):
-                state = flow.advance(state)
-                states.append(state)
-                coords.append(flow.coordinates(state))
-            coords = np.array(coords)
-            exponent, running = dynamics.lyapunov(flow, state, args.periods)
+            coords, states = dynamics.poincare(flow, flow.start(), args.transient, args.periods,
+                                               progress=True)
+            exponent, _ = dynamics.lyapunov(flow, states[-1], args.periods)
             kind, period = dynamics.classify(coords, exponent)
             samples = observed_samples(flow, states)
             plots.write_table(tmp / "poincare.csv", ["period", "x_m", "y_m", "vx_m_per_s", "vy_m_per_s"],
@@ -316,8 +309,7 @@ def _finite(value):
 
 
 def _check_arguments(args, scene, source) -> None:
-    if scene.drive is None:
-        raise InputError(f"{source}: drive: nonlinear-dynamics analyses need a driven mechanism")
+    require_drive(scene, source)
     if args.analysis in ("bifurcation", "design"):
         if args.range is None:
             raise InputError(f"--range: {args.analysis} needs --range LOW HIGH")

@@ -47,8 +47,8 @@ class Duffing:
 def duffing_point(gamma):
     """A sweep task (module level, so that worker processes can run it)."""
     flow = Duffing(gamma)
-    samples, state = dynamics.poincare(flow, flow.start(), 200, 64)
-    exponent, _ = dynamics.lyapunov(flow, state, 150)
+    samples, states = dynamics.poincare(flow, flow.start(), 200, 64)
+    exponent, _ = dynamics.lyapunov(flow, states[-1], 150)
     kind, period = dynamics.classify(samples, exponent)
     return {"value": gamma, "kind": kind, "period": period, "lyapunov_per_s": exponent}
 
