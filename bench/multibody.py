@@ -22,7 +22,7 @@ import numpy as np  # noqa: E402
 from tqdm import tqdm  # noqa: E402
 
 from reduced.model import build  # noqa: E402
-from reduced.outputs import per_step, refined_peak  # noqa: E402
+from reduced.outputs import per_step, refined_peak, save_png  # noqa: E402
 from reduced.run import simulate  # noqa: E402
 from reduced.scene import ReducedScene  # noqa: E402
 
@@ -85,9 +85,7 @@ def main(out: Path) -> None:
     ax.set_ylabel("first-impact peak force error")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(out / "reduced.png", dpi=110, metadata={"Software": None})
-    plt.close(fig)
+    save_png(fig, out / "reduced.png")
     print((out / "reduced.csv").read_text())
 
 

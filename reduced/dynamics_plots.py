@@ -8,6 +8,8 @@ import numpy as np
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from reduced.outputs import save_png  # noqa: E402
+
 KIND_COLOURS = {"periodic": "tab:blue", "quasi-periodic": "tab:green", "chaotic": "tab:red"}
 
 
@@ -16,12 +18,6 @@ def write_table(path, header, rows) -> None:
         out = csv.writer(f)
         out.writerow(header)
         out.writerows(rows)
-
-
-def _save(fig, path) -> None:
-    fig.tight_layout()
-    fig.savefig(path, dpi=110, metadata={"Software": None})
-    plt.close(fig)
 
 
 def poincare(path, samples, clearance, title, observed) -> None:
@@ -42,7 +38,7 @@ def poincare(path, samples, clearance, title, observed) -> None:
     for a in (ax, bx):
         a.grid(alpha=0.3)
     fig.suptitle(f"Poincare map, once per drive revolution ({title})")
-    _save(fig, path)
+    save_png(fig, path)
 
 
 def convergence(path, running) -> None:
@@ -51,7 +47,7 @@ def convergence(path, running) -> None:
     ax.set_xlabel("periods")
     ax.set_ylabel("largest Lyapunov exponent estimate (1/s)")
     ax.grid(alpha=0.3)
-    _save(fig, path)
+    save_png(fig, path)
 
 
 def bifurcation(path, rows, parameter, unit) -> None:
@@ -67,7 +63,7 @@ def bifurcation(path, rows, parameter, unit) -> None:
     ax.set_ylabel("journal centre x at the Poincare section (mm)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    _save(fig, path)
+    save_png(fig, path)
 
 
 def design(path, rows, clearances, speeds, max_force, max_deviation) -> None:
@@ -86,4 +82,4 @@ def design(path, rows, clearances, speeds, max_force, max_deviation) -> None:
         ax.set_xlabel("clearance (mm)")
         ax.set_ylabel("drive speed (rpm)")
         ax.set_title(f"{label}; white: threshold {limit:g}", fontsize=9)
-    _save(fig, path)
+    save_png(fig, path)

@@ -13,6 +13,13 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 
+def save_png(fig, path) -> None:
+    """Lay out, write without metadata that would change between runs, close."""
+    fig.tight_layout()
+    fig.savefig(path, dpi=110, metadata={"Software": None})
+    plt.close(fig)
+
+
 def per_step(model, run):
     """Columns at every accepted step of a Trajectory: body motion, joint quantities,
     energies, drift."""
@@ -185,9 +192,7 @@ def plots(folder, model, series, twin) -> None:
         ax.set_ylabel(f"{slider.body} acceleration (m/s^2)")
         ax.grid(alpha=0.3)
         ax.legend()
-        fig.tight_layout()
-        fig.savefig(folder / "acceleration.png", dpi=110, metadata={"Software": None})
-        plt.close(fig)
+        save_png(fig, folder / "acceleration.png")
     if s.drive is None and twin is not None:
         body = s.bodies[0].name
         t_model, t_run = twin
@@ -203,9 +208,7 @@ def plots(folder, model, series, twin) -> None:
         bx.set_ylabel("difference (rad/s)")
         bx.set_xlabel("time (s)")
         bx.grid(alpha=0.3)
-        fig.tight_layout()
-        fig.savefig(folder / "attitude.png", dpi=110, metadata={"Software": None})
-        plt.close(fig)
+        save_png(fig, folder / "attitude.png")
     for c in s.clearance_joints:
         fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 5))
         clearance = c.bearing_radius - c.journal_radius
@@ -221,6 +224,4 @@ def plots(folder, model, series, twin) -> None:
         bx.set_xlabel(f"{s.drive.body} angle (deg)" if angle is not None else "time (s)")
         bx.set_ylabel("normal contact force (N)")
         bx.grid(alpha=0.3)
-        fig.tight_layout()
-        fig.savefig(folder / f"{c.name}.png", dpi=110, metadata={"Software": None})
-        plt.close(fig)
+        save_png(fig, folder / f"{c.name}.png")
