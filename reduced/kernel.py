@@ -254,7 +254,8 @@ def joint_kinematics(q, qd, joint):
 @numba.njit(cache=True)
 def friction(joint, f_n, slip, state):
     """Friction force (N, positive along the slip: it acts against it) and the rate of the
-    law's state. joint[9] is the law, joint[10:17] its parameters; see reduced.scene."""
+    law's state, for every law but the two-state Iwan element (iwan_friction). joint[9] is
+    the law, joint[10:17] its parameters; see reduced.scene."""
     law, p = int(joint[9]), joint[10:17]
     speed = abs(slip)
     sign = 1.0 if slip > 0 else -1.0
@@ -274,10 +275,8 @@ def friction(joint, f_n, slip, state):
         g = p[0] + (p[1] - p[0]) * math.exp(-(slip / p[2]) ** 2)
         rate = slip - p[3] * speed * state / g
         return f_n * (p[3] * state + p[4] * rate + p[5] * slip), rate
-    if law == DAHL:
-        rate = p[1] * (1.0 - state / p[0] * sign) * slip   # normalised
-        return f_n * state, rate
-    return 0.0, 0.0   # IWAN: two states, see iwan_friction
+    rate = p[1] * (1.0 - state / p[0] * sign) * slip   # Dahl, normalised (Iwan: iwan_friction)
+    return f_n * state, rate
 
 
 @numba.njit(cache=True)
