@@ -14,6 +14,7 @@ from pinbore.errors import InputError
 from pinbore.scene import validate
 
 APPROACH, FORCE, ANGLE = "approach_m", "force_per_length_N_per_m", "half_angle_deg"
+STAGE = "stage"  # push, rotate or slide: the calibration reads the push
 
 
 @dataclass(frozen=True)
@@ -30,8 +31,8 @@ class Curve:
 
 
 def read_curve(path, length: float | None, min_points: int = 3) -> Curve:
-    """Read DIR/curve.csv and the scene in DIR/result.json. `length` (m) is the axial length
-    given to laws that need one; None takes the bore diameter."""
+    """Read the radial push of DIR/curve.csv and the scene in DIR/result.json. `length` (m)
+    is the axial length given to laws that need one; None takes the bore diameter."""
     path = Path(path)
     try:
         with open(path, newline="") as f:
@@ -41,6 +42,7 @@ def read_curve(path, length: float | None, min_points: int = 3) -> Curve:
     except (OSError, UnicodeDecodeError, csv.Error) as err:
         raise InputError(f"{path}: cannot read curve file ({err})") from None
     _check_columns(path, header)
+    rows = [row for row in rows if row.get(STAGE, "push") == "push"]
     if len(rows) < min_points:
         raise InputError(f"{path}: {len(rows)} points; a fit of 2 parameters needs at least "
                          f"{min_points}")

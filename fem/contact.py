@@ -45,6 +45,38 @@ first contact step takes 4-8 iterations (measured over clearances 1e-6 to 5e-4 m
 increments 1e-6 to 1e-5 m). Nodal collocation (rather than Gauss points) is what the contact
 notes measured to converge in 3-5 iterations with P1 elements.
 
+Coulomb friction (return map on a tangential penalty, active-set Newton)
+------------------------------------------------------------------------
+The tangential position of pin node i on the bore is the arc length of its closest point in
+the bore's reference (material) coordinate, s_i = R_i Theta_c, Theta_c = Theta_k + xi dTheta.
+A step from the converged state n (s_n, shear sigma_n) is a backward-Euler return map of an
+elastic-plastic interface:
+
+    sigma_trial = Lambda_i + eps_T (s_i - s_n,i),
+    sigma_i     = sigma_trial                   if |sigma_trial| <= mu p_i   (stick)
+                  mu p_i sign(sigma_trial)      otherwise                     (slip),
+
+sigma (Pa) the shear the pin exerts on the bore along +Theta (the bore holds the pin back
+with -sigma), eps_T = eps / 10. Penalty: Lambda = sigma_n, so a stuck node creeps by the
+elastic slip (sigma - sigma_n)/eps_T. Augmented Lagrangian: Lambda is a multiplier updated
+with the normal one (Lambda <- sigma, Uzawa) until every stuck node moved less than the gap
+tolerance over the step, so stick is exact and slip is Coulomb's. Residual and tangent, with
+ds/dU = R dTheta (df/dU) / D from the closest-point condition f = (x - Y) . Y' = 0,
+D = |Y'|^2 - (x - Y) . Y'':
+
+    f_T = sum_i w_i sigma_i ds_i/dU,
+    K_T = sum_i w_i eps_T ds_i/dU (x) ds_i/dU                                    (stick)
+          sum_i w_i mu sign(sigma_i) ds_i/dU (x) dp_i/dU,  dp/dU = -eps dg/dU      (slip),
+
+the slip tangent being unsymmetric (MUMPS takes it as it is). Newton on the plain return map
+cycled (a node near the stick/slip boundary flips between the branches, or slips one way,
+then the other); what converges (7-10 iterations per push step, 3-5 per rotation step) is
+the primal-dual active-set rule of Hueber, Stadler & Wohlmuth (2008) applied at every
+residual evaluation: a slipping node keeps slipping while its slip goes the way of its
+shear and sticks otherwise (`active_set`). A stiffer stick (eps_T = eps) also made Newton
+cycle. The dissipated work of a step, w sigma (sigma_trial - sigma)/eps_T, is >= 0 node by
+node. Without friction (mu = 0) none of this is assembled.
+
 Parallel runs
 -------------
 The surfaces hold a few thousand nodes at most: every rank gathers their displacements,
@@ -128,6 +160,77 @@ def pressure(lam, penalty, g):
     return np.maximum(lam - penalty * g, 0.0)
 
 
+def slip_gradient(x: np.ndarray, bore: Segments, k, xi) -> np.ndarray:
+    """ds/dU (n, 6) of the arc length s = R Theta_c of the closest point, over
+    (pin node, bore node k, bore node k+1), from (x - Y(xi)) . Y'(xi) = 0."""
+    y, dy, ddy = bore.point(k, xi)
+    d = np.einsum("ni,ni->n", dy, dy) - np.einsum("ni,ni->n", x - y, ddy)
+    df = np.stack([dy, -(1 - xi)[:, None] * dy - (x - y), -xi[:, None] * dy + (x - y)], axis=1)
+    return (bore.radius * bore.widths[k] / d)[:, None] * df.reshape(-1, 6)
+
+
+def active_set(trial, bound, p, status, sign):
+    """Shear (Pa) and state of each node at an iterate, given the active set of the last
+    one (status, sign) and the slip bound mu p (Pa).
+
+    The primal-dual active-set rule of Hueber, Stadler & Wohlmuth (2008): a node that was
+    slipping keeps slipping (shear = sign * bound) while its slip, trial - sign * bound, goes
+    the way of its shear, and sticks otherwise; any other node in contact sticks if
+    |trial| <= bound and slips along sign(trial) if not; a node with p = 0 is open. A
+    converged state is the backward-Euler return map sigma = clip(trial, -bound, bound).
+    """
+    slipping = (status == SLIP) & (sign != 0)
+    keeps = slipping & (np.sign(trial - sign * bound) * sign >= 0)
+    stuck = np.where(slipping, ~keeps, np.abs(trial) <= bound) & (bound > 0)
+    direction = np.where(keeps, sign, np.sign(trial))
+    shear = np.where(p > 0, np.where(stuck, trial, direction * bound), 0.0)
+    return shear, np.where(p > 0, np.where(stuck, STICK, SLIP), OPEN)
+
+
+OPEN, STICK, SLIP = 0, 1, 2
+STATE_NAMES = ("open", "stick", "slip")
+TANGENTIAL_PENALTY_RATIO = 0.1  # eps_T / eps: a stiffer stick made Newton cycle
+
+
+@dataclass
+class Friction:
+    """Coulomb friction at the pin nodes: coefficient, tangential penalty (Pa/m), the
+    converged state n (bore coordinate s_n (m), shear sigma_n (Pa)), the multiplier Lambda
+    (= sigma_n with the penalty method), and the active set of the current Newton iterate:
+    the state and slip direction of each node."""
+
+    mu: float
+    penalty: float
+    s_n: np.ndarray
+    sigma_n: np.ndarray
+    multiplier: np.ndarray
+    status: np.ndarray
+    sign: np.ndarray
+
+    @classmethod
+    def at_rest(cls, mu, penalty, n):
+        zero = np.zeros(n)
+        return cls(mu, penalty, zero, zero.copy(), zero.copy(), np.full(n, OPEN), zero.copy())
+
+    def trial(self, s):
+        return self.multiplier + self.penalty * (s - self.s_n)
+
+    def freeze(self, state) -> None:
+        self.status, self.sign = state.status.copy(), np.sign(state.shear)
+
+    def settled(self, state) -> bool:
+        """The iterate's active set is the one the return map gives at the solution."""
+        return bool(np.array_equal(state.status, self.status)
+                    and np.array_equal(np.sign(state.shear), self.sign))
+
+    def saved(self):
+        return tuple(a.copy() for a in (self.s_n, self.sigma_n, self.status, self.sign))
+
+    def load(self, saved) -> None:
+        self.s_n, self.sigma_n, self.status, self.sign = (a.copy() for a in saved)
+        self.multiplier = self.sigma_n.copy()
+
+
 # --- the two surfaces of a mesh and the assembly of the contact terms --------------------------
 
 @dataclass
@@ -137,6 +240,14 @@ class ContactState:
     gap: np.ndarray        # m
     pressure: np.ndarray   # Pa
     angle: np.ndarray      # rad, current polar angle of the node
+    position: np.ndarray   # m, arc length s of the closest bore point (material coordinate)
+    shear: np.ndarray      # Pa, on the bore along +theta (0 without friction)
+    status: np.ndarray     # OPEN, STICK or SLIP
+    slip: np.ndarray       # m, plastic slip of this step, (sigma_trial - sigma) / eps_T
+
+    def dissipated(self, weights) -> float:
+        """Work dissipated by friction over the step (J/m): sum w sigma slip >= 0."""
+        return float(np.sum(weights * self.shear * self.slip))
 
 
 class PinBoreContact:
@@ -144,10 +255,12 @@ class PinBoreContact:
 
     pin_dofs / bore_dofs: local block (node) indices in V owned by this rank. Every rank
     holds both surfaces whole, sorted by angle: pin_X, pin_nodes (global node indices),
-    weights (tributary lengths), bore_angles, and the multipliers lam.
+    weights (tributary lengths), bore_angles, the multipliers lam and, with mu > 0, the
+    friction state.
     """
 
-    def __init__(self, V, pin_dofs, bore_dofs, bore_radius, penalty, template: PETSc.Vec):
+    def __init__(self, V, pin_dofs, bore_dofs, bore_radius, penalty, template: PETSc.Vec,
+                 friction: float = 0.0):
         self.comm = V.mesh.comm
         self.bore_radius = bore_radius
         self.penalty = penalty
@@ -167,6 +280,8 @@ class PinBoreContact:
         self.bore_rows = (bs * bore_nodes[:, None] + np.arange(2)).astype(PETSc.IntType)
         self.lam = np.zeros(len(self.pin_X))
         self._scatter, self._local = self._make_scatter(template)
+        self.friction = (Friction.at_rest(friction, TANGENTIAL_PENALTY_RATIO * penalty,
+                                          len(self.pin_X)) if friction > 0 else None)
 
     def _gather(self, coords, global_nodes):
         coords = np.concatenate(self.comm.allgather(coords))
@@ -194,33 +309,101 @@ class PinBoreContact:
         bore = Segments(self.bore_radius, self.bore_angles, u_bore)
         k, xi = closest_point(x, bore)
         g, nu, rho = gap_and_normal(x, bore, k, xi)
-        return x, k, xi, g, nu, rho
+        return x, bore, k, xi, g, nu, rho
+
+    def _position(self, bore: Segments, k, xi, previous):
+        """Arc length R Theta_c (m) of the closest points, unwrapped next to `previous`."""
+        s = bore.radius * (bore.angles[k] + xi * bore.widths[k])
+        period = 2 * np.pi * bore.radius
+        return s - period * np.round((s - previous) / period)
 
     def state(self, u: PETSc.Vec) -> ContactState:
-        x, _, _, g, _, _ = self._kinematics(u)
-        return ContactState(g, pressure(self.lam, self.penalty, g), np.arctan2(x[:, 1], x[:, 0]))
+        x, bore, k, xi, g, _, _ = self._kinematics(u)
+        p = pressure(self.lam, self.penalty, g)
+        f = self.friction
+        if f is None:
+            zero = np.zeros_like(g)
+            return ContactState(g, p, np.arctan2(x[:, 1], x[:, 0]), zero, zero,
+                                np.where(p > 0, SLIP, OPEN), zero)
+        s = self._position(bore, k, xi, f.s_n)
+        trial = f.trial(s)
+        shear, status = active_set(trial, f.mu * p, p, f.status, f.sign)
+        return ContactState(g, p, np.arctan2(x[:, 1], x[:, 0]), s, shear, status,
+                            (trial - shear) / f.penalty)
+
+    def commit(self, state: ContactState) -> None:
+        """Make a converged state the start of the next step."""
+        f = self.friction
+        if f is not None:
+            f.s_n, f.sigma_n, f.multiplier = state.position, state.shear, state.shear.copy()
+            f.freeze(state)
+
+    def snapshot(self):
+        return self.lam.copy(), None if self.friction is None else self.friction.saved()
+
+    def restore(self, snapshot) -> None:
+        lam, friction = snapshot
+        self.lam = lam.copy()
+        if friction is not None:
+            self.friction.load(friction)
+
+    def stick_violation(self, state: ContactState) -> float:
+        """Largest motion (m) of a stuck node over the step (0 with the penalty method the
+        augmented Lagrangian drives it to)."""
+        if self.friction is None:
+            return 0.0
+        moved = np.abs(state.position - self.friction.s_n)[state.status == STICK]
+        return float(moved.max(initial=0.0))
+
+    def friction_settled(self, state: ContactState) -> bool:
+        return self.friction is None or self.friction.settled(state)
+
+    def update_friction(self, state: ContactState) -> None:
+        if self.friction is not None:
+            self.friction.freeze(state)
+
+    def update_multipliers(self, state: ContactState) -> None:
+        """Uzawa: lambda <- p, Lambda <- sigma."""
+        self.lam = state.pressure
+        if self.friction is not None:
+            self.friction.multiplier = state.shear.copy()
 
     def _local_terms(self, u: PETSc.Vec, with_tangent: bool):
         """Active nodes: global rows (n, 6) and residual (n, 6) [, tangent (n, 6, 6)]."""
-        _, k, xi, g, nu, rho = self._kinematics(u)
+        x, bore, k, xi, g, nu, rho = self._kinematics(u)
         p = pressure(self.lam, self.penalty, g)
         act = np.flatnonzero(p > 0)
-        k, xi, nu, rho = k[act], xi[act], nu[act], rho[act]
+        x, k, xi, nu, rho = x[act], k[act], xi[act], nu[act], rho[act]
         k1 = (k + 1) % self.bore_angles.size
         rows = np.concatenate([self.pin_rows[act], self.bore_rows[k], self.bore_rows[k1]], axis=1)
         b = np.stack([np.ones_like(xi), -(1 - xi), -xi], axis=1)       # x - Y(xi) weights
         grad = -(b[:, :, None] * nu[:, None, :]).reshape(-1, 6)        # dg/dU
         w, pa = self.weights[act], p[act]
-        residual = -(w * pa)[:, None] * grad
+        residual = -pa[:, None] * grad
+        f = self.friction
+        if f is not None:
+            grad_s = slip_gradient(x, bore, k, xi)
+            s = self._position(bore, k, xi, f.s_n[act])
+            stuck = f.status[act] == STICK
+            trial = f.multiplier[act] + f.penalty * (s - f.s_n[act])
+            shear = np.where(stuck, trial, f.sign[act] * f.mu * pa)
+            residual += shear[:, None] * grad_s
+        residual *= w[:, None]
         if not with_tangent:
             return rows, residual, None
         tangential = (np.eye(2) - np.einsum("ni,nj->nij", nu, nu)) / rho[:, None, None]
         tangent = (self.penalty * np.einsum("ni,nj->nij", grad, grad)
                    + np.einsum("n,na,nb,nij->naibj", pa, b, b, tangential).reshape(-1, 6, 6))
+        if f is not None:
+            slip = ~stuck * f.mu * f.sign[act] * self.penalty   # d(sign mu p)/dU = -sign mu eps dg/dU
+            tangent += (f.penalty * np.einsum("n,ni,nj->nij", stuck, grad_s, grad_s)
+                        - np.einsum("n,ni,nj->nij", slip, grad_s, grad))
         return rows, residual, tangent * w[:, None, None]
 
     def add_residual(self, u: PETSc.Vec, F: PETSc.Vec) -> None:
         """F += f_c(u). Collective; call F.assemble() afterwards."""
+        if self.friction is not None:
+            self.friction.freeze(self.state(u))  # the active-set update of this iterate
         rows, residual, _ = self._local_terms(u, with_tangent=False)
         if self.comm.rank == 0:
             F.setValues(rows.ravel(), residual.ravel(), addv=PETSc.InsertMode.ADD_VALUES)

@@ -55,8 +55,9 @@ class Elasticity:
                      for name, tag in (("hub", HUB), ("housing_edge", HOUSING_EDGE),
                                        ("pin_surface", PIN_SURFACE), ("bore_surface", BORE_SURFACE))}
         self.pin_nodes = dolfinx.fem.locate_dofs_topological(V, mesh.topology.dim, cell_tags.find(PIN))
-        self.hub_displacement = dolfinx.fem.Constant(mesh, np.zeros(2))
-        self.bcs = [dolfinx.fem.dirichletbc(self.hub_displacement, self.dofs["hub"], V),
+        self.hub_motion = dolfinx.fem.Function(V)
+        self.hub_X = V.tabulate_dof_coordinates()[self.dofs["hub"], :2]
+        self.bcs = [dolfinx.fem.dirichletbc(self.hub_motion, self.dofs["hub"]),
                     dolfinx.fem.dirichletbc(np.zeros(2), self.dofs["housing_edge"], V)]
 
         # K: full stiffness, for residuals and reactions. K_bc: rows and columns of prescribed
@@ -86,15 +87,20 @@ class Elasticity:
         imap = self.V.dofmap.index_map
         return imap.size_global * self.V.dofmap.index_map_bs
 
-    def set_boundary_values(self, x: PETSc.Vec, hub_displacement) -> None:
-        """Write the prescribed values (hub translation, clamped edge) into x."""
-        self.hub_displacement.value[:] = hub_displacement
+    def set_boundary_values(self, x: PETSc.Vec, shift, rotation: float = 0.0) -> None:
+        """Write the prescribed values into x: the hub moves rigidly, translated by `shift`
+        (m) and turned by `rotation` (rad, linearised, u = shift + rotation e_z x X, the
+        small-strain rigid motion), the outer edge stays clamped."""
+        self.hub_motion.x.array.reshape(-1, 2)[self.dofs["hub"]] = rigid_motion(
+            self.hub_X, shift, rotation)
         dolfinx.fem.petsc.set_bc(x, self.bcs)
 
-    def pin_translation(self, shift) -> PETSc.Vec:
-        """A vector that translates every pin node by `shift` and leaves the housing at rest."""
+    def pin_rigid_motion(self, shift, rotation: float = 0.0) -> PETSc.Vec:
+        """A vector that moves every pin node rigidly (see set_boundary_values), the housing
+        at rest."""
         f = dolfinx.fem.Function(self.V)
-        f.x.array.reshape(-1, 2)[self.pin_nodes] = shift
+        X = self.V.tabulate_dof_coordinates()[self.pin_nodes, :2]
+        f.x.array.reshape(-1, 2)[self.pin_nodes] = rigid_motion(X, shift, rotation)
         return f.x.petsc_vec.copy()
 
     def zero_prescribed(self, F: PETSc.Vec) -> None:
@@ -105,11 +111,22 @@ class Elasticity:
         """out = K x: the elastic internal forces (N/m per dof)."""
         self.K.mult(x, out)
 
-    def hub_reaction(self, x: PETSc.Vec, work: PETSc.Vec) -> np.ndarray:
-        """Force (N/m) the hub exerts on the pin, summed over its dofs: (K x) at the hub."""
+    def hub_reaction(self, x: PETSc.Vec, work: PETSc.Vec, rotation: float = 0.0):
+        """Force (N/m) and moment about the pin's axis (N m/m) the hub exerts on the pin,
+        from (K x) at the hub dofs; the moment is taken about the hub's centre, its arms are
+        the hub nodes' positions relative to it (the reference ones turned by `rotation`)."""
         self.K.mult(x, work)
-        local = work.getArray(readonly=True)
-        bs = self.V.dofmap.index_map_bs
-        owned = self.dofs["hub"][self.dofs["hub"] < self.V.dofmap.index_map.size_local]
-        force = np.array([local[bs * owned + i].sum() for i in range(2)])
-        return self.mesh.comm.allreduce(force)
+        local = work.getArray(readonly=True).reshape(-1, 2)
+        hub = self.dofs["hub"]
+        owned = hub < self.V.dofmap.index_map.size_local
+        f = local[hub[owned]]
+        arm = self.hub_X[owned] + rigid_motion(self.hub_X[owned], (0.0, 0.0), rotation)
+        moment = np.sum(arm[:, 0] * f[:, 1] - arm[:, 1] * f[:, 0])
+        total = self.mesh.comm.allreduce(np.append(f.sum(axis=0), moment))
+        return total[:2], float(total[2])
+
+
+def rigid_motion(X: np.ndarray, shift, rotation: float) -> np.ndarray:
+    """Small-strain rigid motion u = shift + rotation e_z x X of points X (n, 2) about the
+    origin (the pin's axis in the reference configuration)."""
+    return np.asarray(shift) + rotation * np.stack([-X[:, 1], X[:, 0]], axis=1)

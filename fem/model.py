@@ -57,7 +57,8 @@ def build(scene: FemScene, comm=MPI.COMM_WORLD):
     owned = el.V.dofmap.index_map.size_local
     surface = [d[d < owned] for d in (el.dofs["pin_surface"], el.dofs["bore_surface"])]
     contact = PinBoreContact(el.V, *surface, scene.geometry.bore_radius,
-                             penalty_of(scene, sizing.contact_size), el.K.createVecRight())
+                             penalty_of(scene, sizing.contact_size), el.K.createVecRight(),
+                             friction=scene.contact.friction)
     tolerance = scene.contact.gap_tolerance or DEFAULT_GAP_TOLERANCE * scene.load.max_approach
     stepper = LoadStepper(el, contact, clearance=scene.geometry.clearance,
                           direction=scene.load.direction, method=scene.contact.method,

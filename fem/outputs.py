@@ -10,41 +10,61 @@ import dolfinx.io
 import matplotlib
 import numpy as np
 
+from fem.contact import OPEN, STATE_NAMES, STICK
 from fem.post import angle_from, half_angle
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-CURVE_COLUMNS = ["step", "approach_m", "force_per_length_N_per_m", "half_angle_deg",
-                 "newton_iterations", "uzawa_iterations", "gap_violation_m"]
+CURVE_COLUMNS = ["step", "stage", "approach_m", "rotation_deg", "tangential_push_m",
+                 "force_per_length_N_per_m", "tangential_force_per_length_N_per_m",
+                 "friction_torque_per_length_N", "half_angle_deg", "stick_fraction",
+                 "dissipated_work_J_per_m", "newton_iterations", "uzawa_iterations",
+                 "gap_violation_m"]
+
+
+def stage_of(step) -> str:
+    """push (radial approach), rotate (hub turned) or slide (hub pushed across)."""
+    return "rotate" if step.point[1] else ("slide" if step.point[2] else "push")
 
 
 def curve_rows(run, direction_deg):
+    dissipated = 0.0
     for i, step in enumerate(run.steps, start=1):
         alpha = angle_from(direction_deg, step.contact.angle)
-        yield [i, step.approach, step.force, np.degrees(half_angle(alpha, step.contact.pressure)),
+        touching = step.contact.status != OPEN
+        stuck = np.count_nonzero(step.contact.status == STICK) / max(np.count_nonzero(touching), 1)
+        dissipated += step.dissipated
+        yield [i, stage_of(step), step.point[0], np.degrees(step.point[1]), step.point[2],
+               step.force[0], step.force[1], step.torque,
+               np.degrees(half_angle(alpha, step.contact.pressure)), stuck, dissipated,
                step.newton_iterations, step.uzawa_iterations, step.gap_violation]
 
 
 def write_curve(path: Path, run, direction_deg) -> None:
+    """One row per converged step; forces, torque and work per unit length of the pin."""
     with open(path, "w", newline="") as f:
         out = csv.writer(f)
         out.writerow(CURVE_COLUMNS)
         for row in curve_rows(run, direction_deg):
-            out.writerow([row[0], f"{row[1]:.9e}", f"{row[2]:.9e}", f"{row[3]:.6f}",
-                          row[4], row[5], f"{row[6]:.3e}"])
+            out.writerow(row[:2] + [f"{v:.9e}" for v in row[2:8]]
+                         + [f"{row[8]:.6f}", f"{row[9]:.4f}", f"{row[10]:.9e}",
+                            row[11], row[12], f"{row[13]:.3e}"])
 
 
 def write_pressure(path: Path, run, direction_deg, arc_half_angle) -> None:
-    """Nodal pressure on the refined arc (where contact can be), by angle from the load."""
+    """Nodal pressure, shear (on the bore, along +theta) and stick/slip/open state on the
+    refined arc (where contact can be), by angle from the load."""
     with open(path, "w", newline="") as f:
         out = csv.writer(f)
-        out.writerow(["step", "angle_deg", "pressure_Pa"])
+        out.writerow(["step", "angle_deg", "pressure_Pa", "shear_Pa", "state"])
         for i, step in enumerate(run.steps, start=1):
-            alpha = angle_from(direction_deg, step.contact.angle)
+            c = step.contact
+            alpha = angle_from(direction_deg, c.angle)
             keep = np.flatnonzero(np.abs(alpha) <= arc_half_angle)
             for j in keep[np.argsort(alpha[keep])]:
-                out.writerow([i, f"{np.degrees(alpha[j]):.6f}", f"{step.contact.pressure[j]:.9e}"])
+                out.writerow([i, f"{np.degrees(alpha[j]):.6f}", f"{c.pressure[j]:.9e}",
+                              f"{c.shear[j]:.9e}", STATE_NAMES[c.status[j]]])
 
 
 def write_result(path: Path, result: dict) -> None:
@@ -67,17 +87,19 @@ class FieldWriter:
         local = elasticity.V.dofmap.index_map.global_to_local(contact.pin_nodes)
         self.mine = np.flatnonzero(local >= 0)
         self.local = local[self.mine]
+        self.step = 0  # the XDMF "time" is the step number (the programme is not monotone in one)
         self.file = dolfinx.io.XDMFFile(mesh.comm, str(path), "w")
         self.file.write_mesh(mesh)
 
-    def write(self, x, pressure, approach):
+    def write(self, x, step):
         x.copy(self.u.x.petsc_vec)
         self.u.x.scatter_forward()
         self.von_mises.interpolate(self.vm_expr)
         self.pressure.x.array[:] = 0.0
-        self.pressure.x.array[self.local] = pressure[self.mine]
+        self.pressure.x.array[self.local] = step.contact.pressure[self.mine]
+        self.step += 1
         for f in (self.u, self.von_mises, self.pressure):
-            self.file.write_function(f, approach)
+            self.file.write_function(f, float(self.step))
 
     def close(self):
         self.file.close()

@@ -12,10 +12,11 @@ from laws.elastic import persson_half_angle, persson_half_angles
 from pinbore.report import figure, figure_data, png_data, plt, table
 
 
-def read_csv(path: Path) -> dict[str, np.ndarray]:
+def read_csv(path: Path, stage: str = "push") -> dict[str, np.ndarray]:
+    """The numeric columns of the rows of one stage of a curve.csv (push, rotate, slide)."""
     with open(path, newline="") as f:
-        rows = list(csv.DictReader(f))
-    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0]} if rows else {}
+        rows = [r for r in csv.DictReader(f) if r["stage"] == stage]
+    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0] if k != "stage"} if rows else {}
 
 
 def joint_of(result):

@@ -33,14 +33,13 @@ def run(scene_path, out, comm=MPI.COMM_WORLD) -> int:
     with atomic_directory(out, comm) as tmp:
         stepper, el, contact, sizing, data = model.build(scene, comm)
         setup = time.perf_counter() - start
-        steps = scene.load.steps
-        approaches = scene.load.approaches
+        programme = scene.load.programme
         fields = (outputs.FieldWriter(tmp / "fields.xdmf", el, contact)
                   if scene.output.fields else None)
         # a progress bar on rank 0 when it writes to a terminal (tqdm decides: disable=None)
-        with tqdm(total=steps, desc=f"fem {Path(scene_path).stem}", unit="step",
+        with tqdm(total=len(programme), desc=f"fem {Path(scene_path).stem}", unit="step",
                   disable=None if comm.rank == 0 else True, leave=False) as bar:
-            result = stepper.run(approaches, bar, on_step=fields.write if fields else None)
+            result = stepper.run(programme, bar, on_step=fields.write if fields else None)
         if fields:
             fields.close()
         solve = time.perf_counter() - start - setup
@@ -78,7 +77,9 @@ def summary(scene, scene_path, result, el, contact, stepper, sizing, comm, wall)
                  "pin_surface_nodes": len(contact.pin_X)},
         "contact": {"method": scene.contact.method, "penalty_Pa_per_m": contact.penalty,
                     "gap_tolerance_m": stepper.gap_tolerance
-                    if scene.contact.method == "augmented-lagrangian" else None},
+                    if scene.contact.method == "augmented-lagrangian" else None,
+                    "friction": scene.contact.friction,
+                    "friction_terms_assembled": contact.friction is not None},
         "steps_converged": len(steps),
         "cutbacks": result.cutbacks,
         "newton_iterations": [s.newton_iterations for s in steps],

@@ -30,14 +30,12 @@ class Contact(Strict):
     """
 
     method: Literal["penalty", "augmented-lagrangian"]
-    friction: float = pydantic.Field(ge=0)
+    friction: float = pydantic.Field(ge=0, description="Coulomb coefficient mu (0: frictionless)")
     penalty_factor: float | None = pydantic.Field(default=None, gt=0)
     gap_tolerance: float | None = pydantic.Field(default=None, gt=0)
 
     @pydantic.model_validator(mode="after")
     def _supported(self):
-        if self.friction > 0:
-            raise ValueError("friction > 0 is not supported yet (frictional contact is issue 3)")
         if self.gap_tolerance is not None and self.method != "augmented-lagrangian":
             raise ValueError("gap_tolerance applies to method = \"augmented-lagrangian\" only")
         return self
@@ -45,15 +43,33 @@ class Contact(Strict):
 
 class Load(Strict):
     """The hub moves the clearance through free space, then pushes max_approach further, in
-    equal steps, or in geometric steps from first_approach when that is given."""
+    equal steps, or in geometric steps from first_approach when that is given.
 
-    max_approach: float = pydantic.Field(gt=0, description="hub displacement beyond first touch (m)")
+    Then, optionally, with the approach held, the hub turns the pin about its axis by
+    rotation_deg, or pushes it across the load direction by tangential_push (m, towards
+    +90 deg from the load), in slide_steps equal steps: the pin sticks, then slips.
+    Rotations are small-strain (linearised): R phi^2 / 2 must stay below 1 % of the approach.
+    """
+
+    max_approach: float = pydantic.Field(ge=0, description="hub displacement beyond first touch (m)")
     steps: int = pydantic.Field(ge=1)
     direction_deg: float = pydantic.Field(ge=-360, le=360)
     first_approach: float | None = pydantic.Field(default=None, gt=0)
+    rotation_deg: float | None = None
+    tangential_push: float | None = None
+    slide_steps: int = pydantic.Field(default=10, ge=1)
 
     @pydantic.model_validator(mode="after")
     def _steps(self):
+        slide = "rotation_deg" if self.rotation_deg is not None else (
+            "tangential_push" if self.tangential_push is not None else None)
+        if self.max_approach <= 0:
+            raise ValueError("max_approach must be > 0 (m)"
+                             + (f": {slide} needs a radial push first" if slide else ""))
+        if self.rotation_deg is not None and self.tangential_push is not None:
+            raise ValueError("give rotation_deg or tangential_push, not both")
+        if self.rotation_deg == 0 or self.tangential_push == 0:
+            raise ValueError(f"{slide} must not be 0 (leave it out for a push only)")
         if self.first_approach is not None and (self.first_approach >= self.max_approach
                                                 or self.steps < 2):
             raise ValueError("first_approach must be below max_approach, with steps >= 2")
@@ -61,11 +77,22 @@ class Load(Strict):
 
     @property
     def approaches(self) -> list[float]:
-        """The approach (m) of every load step."""
+        """The approach (m) of every load step of the radial push."""
         if self.first_approach is None:
             return [self.max_approach * (k + 1) / self.steps for k in range(self.steps)]
         ratio = (self.max_approach / self.first_approach) ** (1 / (self.steps - 1))
         return [self.first_approach * ratio**k for k in range(self.steps)]
+
+    @property
+    def programme(self) -> list[tuple[float, float, float]]:
+        """Every load step as (approach (m), rotation (rad), tangential push (m))."""
+        points = [(a, 0.0, 0.0) for a in self.approaches]
+        rotation = math.radians(self.rotation_deg or 0.0)
+        push = self.tangential_push or 0.0
+        if rotation or push:
+            n = self.slide_steps
+            points += [(self.max_approach, rotation * k / n, push * k / n) for k in range(1, n + 1)]
+        return points
 
     @property
     def direction(self) -> tuple[float, float]:
@@ -101,6 +128,12 @@ class FemScene(Strict):
             raise ValueError("mesh.contact_size must be smaller than pin_radius - hub_radius")
         if self.load.max_approach >= self.geometry.pin_radius - self.geometry.hub_radius:
             raise ValueError("load.max_approach must be smaller than the pin wall (small strain)")
+        if self.load.rotation_deg is not None:
+            phi = math.radians(self.load.rotation_deg)
+            if self.geometry.pin_radius * phi**2 / 2 > 0.01 * self.load.max_approach:
+                limit = math.degrees(math.sqrt(0.02 * self.load.max_approach / self.geometry.pin_radius))
+                raise ValueError(f"load.rotation_deg: |rotation| must be <= {limit:.3g} deg here "
+                                 "(small-strain rotation: R phi^2/2 <= 1 % of max_approach)")
         return self
 
     @property

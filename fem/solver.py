@@ -1,4 +1,8 @@
-"""Load stepping: the hub crosses the clearance, then pushes the pin into the bore.
+"""Load stepping: the hub crosses the clearance, pushes the pin into the bore, then
+(optionally) turns it or pushes it sideways with the approach held.
+
+A load point is (approach (m), rotation (rad), tangential push (m)); the hub sits at
+(c + approach) d + push d_perp, turned by the rotation (fem.elasticity.rigid_motion).
 
 Each load step solves  K u + f_c(u) = 0  (free dofs), u = prescribed (hub, clamped edge),
 with PETSc SNES: Newton, full steps, the tangent K_bc + K_c (fem.contact says which terms of
@@ -9,8 +13,11 @@ step over-predicts the arc and Newton spends its iterations releasing nodes. Mea
 step, 5-7 with a full one.
 
 augmented-lagrangian: after each Newton solve the multipliers take the converged pressure
-(Uzawa) until the largest penetration is below `gap_tolerance`; they start each step from
-the extrapolation of the last two steps, so one or two solves per step usually suffice.
+(and shear) (Uzawa) until the largest penetration, and the largest motion of a stuck node,
+is below `gap_tolerance`; the normal ones start each step from the extrapolation of the
+last two steps, so one or two solves per step usually suffice. The predictor extrapolates
+along the programme only while the step continues the previous one; at a change of
+programme (push to rotation) it moves the pin rigidly with the hub.
 
 A step whose Newton (or Uzawa) iteration fails is retried from the last converged state
 with half the increment, up to `max_cutbacks` times per load step (converged intermediate
@@ -36,14 +43,20 @@ SNES_REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not
 class StepResult:
     """One converged load step."""
 
-    approach: float              # m, hub displacement beyond first touch
-    force: float                 # N/m, hub reaction along the load direction
+    point: np.ndarray            # (approach (m), rotation (rad), tangential push (m))
+    force: np.ndarray            # N/m, hub force on the pin along (d, d_perp)
+    torque: float                # N m/m, hub moment on the pin about its axis
+    dissipated: float            # J/m, frictional work of this step
     newton_iterations: int       # summed over Uzawa updates
     uzawa_iterations: int
     gap_violation: float         # m, largest penetration
     reasons: list[str]
     contact: ContactState
     wall_time: float
+
+    @property
+    def approach(self) -> float:
+        return float(self.point[0])
 
 
 @dataclass
@@ -66,8 +79,10 @@ class LoadStepper:
                  method, gap_tolerance, newton_max_it, uzawa_max_it, max_cutbacks, force_atol):
         self.el, self.contact = elasticity, contact
         self.clearance, self.direction = clearance, np.asarray(direction, dtype=float)
+        self.across = np.array([-self.direction[1], self.direction[0]])
         self.method, self.gap_tolerance = method, gap_tolerance
-        self.uzawa_max_it = uzawa_max_it if method == "augmented-lagrangian" else 1
+        self.augmented = method == "augmented-lagrangian"
+        self.uzawa_max_it = uzawa_max_it if self.augmented or contact.friction else 1
         self.max_cutbacks = max_cutbacks
         self.x = elasticity.K.createVecRight()
         self.work = self.x.duplicate()
@@ -107,58 +122,63 @@ class LoadStepper:
         self.contact.add_tangent(x, J)
         J.assemble()
 
-    def run(self, approaches, progress=None, on_step=None) -> Run:
-        """Solve for each approach in turn (m, increasing); cut back and retry on failure.
-
-        on_step(x, pressure, approach) is called after every converged step.
-        """
-        approaches = [float(a) for a in approaches]
+    def run(self, programme, progress=None, on_step=None) -> Run:
+        """Solve for each load point in turn (see the module docstring); cut back and retry
+        on failure. on_step(x, step) is called after every converged step."""
+        programme = [np.asarray(p, dtype=float) for p in programme]
         run = Run()
-        touch = self.el.pin_translation(self.clearance * self.direction)  # exact: no force yet
-        history = [(0.0, touch, np.zeros_like(self.contact.lam))]
-        target_index, target, cuts = 0, approaches[0], 0
-        while target_index < len(approaches):
+        touch = self.el.pin_rigid_motion(self.clearance * self.direction)  # exact: no force yet
+        self.contact.commit(self.contact.state(touch))
+        history = [(np.zeros(3), touch, self.contact.snapshot())]
+        target_index, target, cuts = 0, programme[0], 0
+        while target_index < len(programme):
             outcome = self._attempt(history, target)
             if isinstance(outcome, StepResult):
+                self.contact.commit(outcome.contact)
                 run.steps.append(outcome)
                 if on_step is not None:
-                    on_step(self.x, outcome.contact.pressure, target)
-                history = history[-1:] + [(target, self.x.copy(), self.contact.lam.copy())]
-                if target == approaches[target_index]:
+                    on_step(self.x, outcome)
+                history = history[-1:] + [(target, self.x.copy(), self.contact.snapshot())]
+                if np.array_equal(target, programme[target_index]):
                     target_index, cuts = target_index + 1, 0
                     if progress is not None:
                         progress.update(1)
-                if target_index < len(approaches):
-                    target = approaches[target_index]
+                if target_index < len(programme):
+                    target = programme[target_index]
                 continue
             cuts += 1
             run.cutbacks += 1
             if cuts > self.max_cutbacks:
-                run.stop = Stop(target, f"{outcome}; gave up after {self.max_cutbacks} cutbacks "
-                                        f"at approach {target:.6g} m")
+                run.stop = Stop(float(target[0]), f"{outcome}; gave up after {self.max_cutbacks} "
+                                f"cutbacks at load point {describe(target)}")
                 history[-1][1].copy(self.x)  # leave the last converged state in x
-                self.contact.lam = history[-1][2]
+                self.contact.restore(history[-1][2])
                 break
             target = 0.5 * (history[-1][0] + target)
         return run
 
     def _predict(self, history, target):
-        """Half-secant extrapolation of displacements and multipliers (see module docstring)."""
-        approach, x, lam = history[-1]
-        if len(history) == 1:
-            guess = x + self.el.pin_translation(target * self.direction)
-            return guess, lam.copy()
-        approach_0, x_0, lam_0 = history[-2]
-        ratio = PREDICTOR_RATIO * (target - approach) / (approach - approach_0)
-        guess = x + ratio * (x - x_0)
-        return guess, np.maximum(lam + ratio * (lam - lam_0), 0.0)
+        """Half-secant extrapolation of displacements and normal multipliers while the step
+        continues the previous one; else the pin moved rigidly with the hub."""
+        point, x, snapshot = history[-1]
+        self.contact.restore(snapshot)
+        step = target - point
+        if len(history) > 1:
+            point_0, x_0, (lam_0, _) = history[-2]
+            previous = point - point_0
+            if np.allclose(np.cross(step, previous), 0.0, atol=1e-12 * np.abs(step).max()):
+                ratio = PREDICTOR_RATIO * float(step @ previous) / float(previous @ previous)
+                lam = self.contact.lam
+                self.contact.lam = np.maximum(lam + ratio * (lam - lam_0), 0.0)
+                return x + ratio * (x - x_0)
+        return x + self.el.pin_rigid_motion(step[0] * self.direction + step[2] * self.across,
+                                            step[1])
 
     def _attempt(self, history, target) -> StepResult | str:
         """One load step; a StepResult, or the reason it failed."""
         start = time.perf_counter()
-        guess, self.contact.lam = self._predict(history, target)
-        guess.copy(self.x)
-        self.el.set_boundary_values(self.x, self.hub_at(target))
+        self._predict(history, target).copy(self.x)
+        self.el.set_boundary_values(self.x, self.hub_shift(target), target[1])
         newton, reasons = 0, []
         for uzawa in range(1, self.uzawa_max_it + 1):
             self.snes.solve(None, self.x)
@@ -169,15 +189,25 @@ class LoadStepper:
                 return f"Newton failed ({reasons[-1]}) after {newton} iterations"
             state = self.contact.state(self.x)
             violation = float(np.max(-state.gap, initial=0.0))
-            if self.method == "penalty" or violation <= self.gap_tolerance:
+            worst = max(violation, self.contact.stick_violation(state)) if self.augmented else 0.0
+            if worst <= self.gap_tolerance and self.contact.friction_settled(state):
                 break
-            self.contact.lam = state.pressure
+            self.contact.update_friction(state)
+            if self.augmented:
+                self.contact.update_multipliers(state)
         else:
-            return (f"augmented Lagrangian left a penetration of {violation:.3g} m "
-                    f"> gap_tolerance {self.gap_tolerance:.3g} m after {self.uzawa_max_it} updates")
-        force = float(self.el.hub_reaction(self.x, self.work) @ self.direction)
-        return StepResult(target, force, newton, uzawa, violation, reasons, state,
-                          time.perf_counter() - start)
+            return (f"augmented Lagrangian left a penetration (or stuck-node slip) of "
+                    f"{worst:.3g} m > gap_tolerance {self.gap_tolerance:.3g} m after "
+                    f"{self.uzawa_max_it} updates")
+        force, torque = self.el.hub_reaction(self.x, self.work, target[1])
+        return StepResult(target, np.array([force @ self.direction, force @ self.across]), torque,
+                          state.dissipated(self.contact.weights), newton, uzawa, violation,
+                          reasons, state, time.perf_counter() - start)
 
-    def hub_at(self, approach: float) -> np.ndarray:
-        return (self.clearance + approach) * self.direction
+    def hub_shift(self, point) -> np.ndarray:
+        return (self.clearance + point[0]) * self.direction + point[2] * self.across
+
+
+def describe(point) -> str:
+    return (f"approach {point[0]:.6g} m, rotation {np.degrees(point[1]):.6g} deg, "
+            f"tangential push {point[2]:.6g} m")

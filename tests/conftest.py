@@ -48,22 +48,20 @@ def effective_modulus(scene: dict) -> float:
 class Solved:
     """An in-process FE solve of a scene dict: the run and the objects behind it."""
 
-    def __init__(self, data: dict, approaches=None):
+    def __init__(self, data: dict, approaches=None, on_step=None):
         from fem import model
         from fem.scene import FemScene
         from pinbore.scene import validate
 
         self.scene = validate(FemScene, data, "test scene")
         self.stepper, self.el, self.contact, self.sizing, _ = model.build(self.scene)
-        load = self.scene.load
-        if approaches is None:
-            approaches = load.approaches
-        self.run = self.stepper.run(list(approaches))
+        programme = self.scene.load.programme if approaches is None else [(a, 0, 0) for a in approaches]
+        self.run = self.stepper.run(programme, on_step=on_step)
         assert self.run.stop is None, self.run.stop
 
     @property
     def forces(self):
-        return [s.force for s in self.run.steps]
+        return [s.force[0] for s in self.run.steps]
 
     def half_angles_deg(self):
         from fem.post import angle_from, half_angle

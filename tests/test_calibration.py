@@ -96,7 +96,8 @@ def _edited(fe_run, tmp_path, edit):
 
 
 @pytest.mark.parametrize("edit, message", [
-    (lambda r: [[c for i, c in enumerate(row) if i != 1] for row in r], "approach_m: required column"),
+    (lambda r: [[c for i, c in enumerate(row) if i != r[0].index("approach_m")] for row in r],
+     "approach_m: required column"),
     (lambda r: [r[0]] + [r[2], r[1]] + r[3:], "approach_m: must be positive and increase"),
     (lambda r: r[:2] + [r[2][:2] + ["nan"] + r[2][3:]] + r[3:], "row 2: nan is not finite"),
     (lambda r: r[:3], "2 points; a fit of 2 parameters needs at least 3"),

@@ -27,7 +27,8 @@ def test_fem_writes_curve_pressure_result_fields_picture(write_scene, tmp_path):
     forces = [float(r["force_per_length_N_per_m"]) for r in rows]
     assert all(f > 0 for f in forces) and forces == sorted(forces)
     pressure = list(csv.DictReader(open(out / "pressure.csv")))
-    assert set(pressure[0]) == {"step", "angle_deg", "pressure_Pa"}
+    assert set(pressure[0]) == {"step", "angle_deg", "pressure_Pa", "shear_Pa", "state"}
+    assert {r["state"] for r in pressure} <= {"open", "slip"}  # frictionless: no stick
     result = json.loads((out / "result.json").read_text())
     assert result["status"] == "complete" and result["dofs"] > 0
     assert result["scene"]["geometry"]["pin_radius"] == data["geometry"]["pin_radius"]
