@@ -368,8 +368,18 @@ class PinBoreContact:
         if self.friction is not None:
             self.friction.multiplier = state.shear.copy()
 
+    def torque(self, u: PETSc.Vec, centre) -> float:
+        """Moment (N m/m) about the axis through `centre` that balances the contact tractions
+        on the pin, taken in the current configuration: the friction torque the hub applies
+        (the normal tractions pass through the bore's axis and contribute only through the
+        offset of the two axes). Collective."""
+        act, _, residual, _ = self._local_terms(u, with_tangent=False)
+        arm = self.pin_X[act] + self._surface_displacements(u)[0][act] - np.asarray(centre)
+        return float(np.sum(arm[:, 0] * residual[:, 1] - arm[:, 1] * residual[:, 0]))
+
     def _local_terms(self, u: PETSc.Vec, with_tangent: bool):
-        """Active nodes: global rows (n, 6) and residual (n, 6) [, tangent (n, 6, 6)]."""
+        """Active nodes: their indices, global rows (n, 6) and residual (n, 6)
+        [, tangent (n, 6, 6)]."""
         x, bore, k, xi, g, nu, rho = self._kinematics(u)
         p = pressure(self.lam, self.penalty, g)
         act = np.flatnonzero(p > 0)
@@ -390,7 +400,7 @@ class PinBoreContact:
             residual += shear[:, None] * grad_s
         residual *= w[:, None]
         if not with_tangent:
-            return rows, residual, None
+            return act, rows, residual, None
         tangential = (np.eye(2) - np.einsum("ni,nj->nij", nu, nu)) / rho[:, None, None]
         tangent = (self.penalty * np.einsum("ni,nj->nij", grad, grad)
                    + np.einsum("n,na,nb,nij->naibj", pa, b, b, tangential).reshape(-1, 6, 6))
@@ -398,19 +408,19 @@ class PinBoreContact:
             slip = ~stuck * f.mu * f.sign[act] * self.penalty   # d(sign mu p)/dU = -sign mu eps dg/dU
             tangent += (f.penalty * np.einsum("n,ni,nj->nij", stuck, grad_s, grad_s)
                         - np.einsum("n,ni,nj->nij", slip, grad_s, grad))
-        return rows, residual, tangent * w[:, None, None]
+        return act, rows, residual, tangent * w[:, None, None]
 
     def add_residual(self, u: PETSc.Vec, F: PETSc.Vec) -> None:
         """F += f_c(u). Collective; call F.assemble() afterwards."""
         if self.friction is not None:
             self.friction.freeze(self.state(u))  # the active-set update of this iterate
-        rows, residual, _ = self._local_terms(u, with_tangent=False)
+        _, rows, residual, _ = self._local_terms(u, with_tangent=False)
         if self.comm.rank == 0:
             F.setValues(rows.ravel(), residual.ravel(), addv=PETSc.InsertMode.ADD_VALUES)
 
     def add_tangent(self, u: PETSc.Vec, J: PETSc.Mat) -> None:
         """J += K_c(u). Collective; call J.assemble() afterwards."""
-        rows, _, tangent = self._local_terms(u, with_tangent=True)
+        _, rows, _, tangent = self._local_terms(u, with_tangent=True)
         if self.comm.rank == 0:
             for r, block in zip(rows, tangent):
                 J.setValues(r, r, block, addv=PETSc.InsertMode.ADD_VALUES)

@@ -111,19 +111,13 @@ class Elasticity:
         """out = K x: the elastic internal forces (N/m per dof)."""
         self.K.mult(x, out)
 
-    def hub_reaction(self, x: PETSc.Vec, work: PETSc.Vec, rotation: float = 0.0):
-        """Force (N/m) and moment about the pin's axis (N m/m) the hub exerts on the pin,
-        from (K x) at the hub dofs; the moment is taken about the hub's centre, its arms are
-        the hub nodes' positions relative to it (the reference ones turned by `rotation`)."""
+    def hub_reaction(self, x: PETSc.Vec, work: PETSc.Vec) -> np.ndarray:
+        """Force (N/m) the hub exerts on the pin, summed over its dofs: (K x) at the hub."""
         self.K.mult(x, work)
         local = work.getArray(readonly=True).reshape(-1, 2)
         hub = self.dofs["hub"]
-        owned = hub < self.V.dofmap.index_map.size_local
-        f = local[hub[owned]]
-        arm = self.hub_X[owned] + rigid_motion(self.hub_X[owned], (0.0, 0.0), rotation)
-        moment = np.sum(arm[:, 0] * f[:, 1] - arm[:, 1] * f[:, 0])
-        total = self.mesh.comm.allreduce(np.append(f.sum(axis=0), moment))
-        return total[:2], float(total[2])
+        owned = hub[hub < self.V.dofmap.index_map.size_local]
+        return self.mesh.comm.allreduce(local[owned].sum(axis=0))
 
 
 def rigid_motion(X: np.ndarray, shift, rotation: float) -> np.ndarray:

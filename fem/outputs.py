@@ -10,7 +10,7 @@ import dolfinx.io
 import matplotlib
 import numpy as np
 
-from fem.contact import OPEN, STATE_NAMES, STICK
+from fem.contact import OPEN, SLIP, STATE_NAMES, STICK
 from fem.post import angle_from, half_angle
 
 matplotlib.use("Agg")
@@ -117,7 +117,8 @@ def deformed_triangles(elasticity, u, magnify, pin_shift):
 
 
 def picture(path: Path, elasticity, x, run, scene, arc_half_angle):
-    """Deformed contact zone coloured by von Mises stress, beside the pressure profiles."""
+    """Deformed contact zone coloured by von Mises stress, beside the pressure profiles (and,
+    with friction, the shear profiles with the stick / slip state of the last step)."""
     comm = elasticity.mesh.comm
     u = dolfinx.fem.Function(elasticity.V)
     x.copy(u.x.petsc_vec)
@@ -138,7 +139,9 @@ def picture(path: Path, elasticity, x, run, scene, arc_half_angle):
         return
     cells = np.concatenate([c for c, _ in gathered])
     values = np.concatenate([v for _, v in gathered])
-    fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 5.5))
+    friction = scene.contact.friction > 0
+    fig, axes = plt.subplots(1, 3 if friction else 2, figsize=(19 if friction else 13, 5.5))
+    ax, bx = axes[:2]
     centre = g.bore_radius * direction
     near = np.linalg.norm(cells.mean(axis=1) - centre, axis=1) < 2 * view
     tri = np.arange(3 * near.sum()).reshape(-1, 3)
@@ -163,6 +166,32 @@ def picture(path: Path, elasticity, x, run, scene, arc_half_angle):
     bx.set_ylabel("contact pressure (MPa)")
     bx.set_title("pressure on the bore, every load step")
     bx.grid(alpha=0.3)
+    if friction:
+        shear_panel(axes[2], run, scene, arc_half_angle)
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
+
+
+def shear_panel(ax, run, scene, arc_half_angle):
+    """Shear on the bore at every step, the Coulomb bound +-mu p and the stick / slip nodes of
+    the last step."""
+    for i, step in enumerate(run.steps, start=1):
+        alpha = angle_from(scene.load.direction_deg, step.contact.angle)
+        keep = np.flatnonzero(np.abs(alpha) <= arc_half_angle)
+        keep = keep[np.argsort(alpha[keep])]
+        ax.plot(np.degrees(alpha[keep]), step.contact.shear[keep] / 1e6,
+                color=plt.cm.plasma(i / (len(run.steps) + 1)), lw=1)
+    c = run.steps[-1].contact
+    mu_p = scene.contact.friction * c.pressure[keep] / 1e6
+    ax.plot(np.degrees(alpha[keep]), mu_p, "k--", lw=0.8, label="+-mu p, last step")
+    ax.plot(np.degrees(alpha[keep]), -mu_p, "k--", lw=0.8)
+    for state, marker in ((STICK, "o"), (SLIP, "x")):
+        on = keep[c.status[keep] == state]
+        ax.plot(np.degrees(alpha[on]), c.shear[on] / 1e6, marker, ms=3, color="k", mfc="none",
+                label=f"{STATE_NAMES[state]}, last step")
+    ax.set_xlabel("angle from load direction (deg)")
+    ax.set_ylabel("shear on the bore, along +theta (MPa)")
+    ax.set_title("friction: shear at every step")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)

@@ -45,7 +45,7 @@ class StepResult:
 
     point: np.ndarray            # (approach (m), rotation (rad), tangential push (m))
     force: np.ndarray            # N/m, hub force on the pin along (d, d_perp)
-    torque: float                # N m/m, hub moment on the pin about its axis
+    torque: float                # N m/m, friction torque about the pin's axis (contact.torque)
     dissipated: float            # J/m, frictional work of this step
     newton_iterations: int       # summed over Uzawa updates
     uzawa_iterations: int
@@ -199,7 +199,8 @@ class LoadStepper:
             return (f"augmented Lagrangian left a penetration (or stuck-node slip) of "
                     f"{worst:.3g} m > gap_tolerance {self.gap_tolerance:.3g} m after "
                     f"{self.uzawa_max_it} updates")
-        force, torque = self.el.hub_reaction(self.x, self.work, target[1])
+        force = self.el.hub_reaction(self.x, self.work)
+        torque = self.contact.torque(self.x, self.hub_shift(target))
         return StepResult(target, np.array([force @ self.direction, force @ self.across]), torque,
                           state.dissipated(self.contact.weights), newton, uzawa, violation,
                           reasons, state, time.perf_counter() - start)

@@ -71,6 +71,21 @@ BAD = [
 ]
 
 
+BAD_LOADS = [
+    ({"max_approach": 0.0, "rotation_deg": 0.05}, "rotation_deg needs a radial push first"),
+    ({"tangential_push": 1e-6, "rotation_deg": 0.05}, "not both"),
+    ({"rotation_deg": 5.0}, "load.rotation_deg: |rotation| must be <="),
+    ({"rotation_deg": 0.0}, "rotation_deg must not be 0"),
+]
+
+
+@pytest.mark.parametrize("load, message", BAD_LOADS)
+def test_bad_load_programme_is_one_line_exit_2(write_scene, tmp_path, load, message):
+    done = pinbore("fem", write_scene(scene_dict(load=load)), "--out", tmp_path / "out")
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert message in done.stderr and len(done.stderr.strip().splitlines()) == 1
+
+
 @pytest.mark.parametrize("table, key, value, message", BAD)
 def test_bad_value_is_one_line_exit_2_nothing_written(write_scene, tmp_path, table, key, value,
                                                       message):
