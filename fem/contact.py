@@ -1,29 +1,38 @@
-r"""Pin-on-bore contact: node-to-curved-segment gap, penalty and augmented Lagrangian.
+r"""Pin-on-bore contact: node-to-curved-patch gap, penalty and augmented Lagrangian, Coulomb
+friction; 2D (plane strain) and 3D.
 
 Kinematics
 ----------
 The pin surface nodes are the slaves, the bore surface is the master. In the reference
-configuration the bore is the circle of radius R_i about the origin; its nodes sit at the
-angles Theta_k. Between bore nodes k and k+1 the deformed bore is the *curved* segment
+configuration the bore is the circle of radius R_i about the axis (3D: the cylinder
+0 <= z <= L, its radius widened near the ends by an optional edge relief delta(z)); its
+nodes sit on a grid of angles Theta_k (and levels Z_l in 3D). Between bore nodes the
+deformed bore is the *curved* patch
 
-    Y(xi) = R_i e_r(Theta_k + xi dTheta) + (1 - xi) u_k + xi u_{k+1},      0 <= xi <= 1,
+    2D:  Y(xi)      = R_i e_r(Theta_k + xi dTheta_k) + N_a(xi) u_a,          N = (1 - xi, xi)
+    3D:  Y(xi, eta) = (R_i + delta(z)) e_r(Theta_k + xi dTheta_k) + z e_z + N_a(xi, eta) u_a,
+                      z = Z_l + eta dZ_l,  N bilinear over the four corner nodes,
 
-the exact circle plus the linearly interpolated displacement, so there is no faceting error
+the exact surface plus the interpolated displacement, so there is no faceting error
 (a straight chord would sit h^2/(8 R) inside the circle: 1 % of a 10 um approach on a 10 mm
-bore meshed at 0.09 mm). A pin node at x is projected onto the closest point of the bore,
-(x - Y(xi)) . Y'(xi) = 0 (Newton in xi, moving to the next segment when xi leaves [0, 1]),
-and the normal gap (positive open, negative penetrating) is
+bore meshed at 0.09 mm). (In 3D the FE trace of the bore's displacement is linear on the
+triangles of the grid's quads; the bilinear interpolation differs from it by O(h^2 grad^2 u).)
+A pin node at x is projected onto the closest point of the bore, (x - Y) . Y_,a = 0 for each
+surface coordinate zeta_a (Newton in zeta, moving to the next patch when zeta leaves
+[0, 1]; a node whose closest point lies beyond the bore's ends is out of contact), and the
+normal gap (positive open, negative penetrating) is
 
-    g = (Y(xi) - x) . nu,    nu = outward unit normal of the bore at xi.
+    g = (Y(zeta) - x) . nu,    nu = outward unit normal of the bore at zeta.
 
-At the closest point dg/dxi = 0, so dg/dx = -nu, dg/du_k = (1 - xi) nu, dg/du_{k+1} = xi nu:
-the forces on the pin node and on the bore nodes are equal and opposite and the gap does not
-change under a common rigid translation. Linear momentum is conserved exactly.
+At the closest point dg/dzeta = 0, so dg/dx = -nu and dg/du_a = N_a nu: the forces on the
+pin node and on the bore nodes are equal and opposite and the gap does not change under a
+common rigid translation. Linear momentum is conserved exactly.
 
 Constraint enforcement (nodal collocation)
 ------------------------------------------
 The contact potential is a sum over pin nodes, each weighted by its tributary length w_i
-(half the two adjacent edges, m; per unit length in plane strain):
+(2D: half the two adjacent edges, m, per unit length; 3D: that length times half the two
+adjacent layers, m^2):
 
     Pi_c = sum_i w_i / (2 eps) <lambda_i - eps g_i>^2,       p_i = <lambda_i - eps g_i>,
 
@@ -35,9 +44,11 @@ p_i is the contact pressure (Pa) at node i. Residual and tangent:
     f_c = dPi_c/dU = -sum_i w_i p_i dg_i/dU,
     K_c = sum_i w_i [ eps H(p_i) dg_i/dU (x) dg_i/dU  +  p_i (I - nu nu) / rho  (x)  b b^T ],
 
-b = (1, -(1 - xi), -xi) over (pin node, bore node k, bore node k+1) and rho = |Y| the radius
-of curvature. The residual is exact. The second term is the curvature of the bore acting on
-the relative displacement x - Y; the tangent leaves out the change of nu with the bore
+    (3D: (I - nu nu) replaced by t t, t the unit tangent along the circumference)
+
+b = (1, -N_a) over (pin node, bore nodes a) and rho the distance of Y from the axis, the
+radius of curvature. The residual is exact. The second term is the curvature of the bore
+acting on the relative displacement x - Y; the tangent leaves out the change of nu with the bore
 displacements, terms of relative size |g|/h (about 1e-6 at a converged state, h the element
 size), so Newton still converges quadratically to that level. Kept in, such terms are of
 both signs at the large penetrations of a first guess and made Newton cycle; without them the
@@ -47,28 +58,29 @@ notes measured to converge in 3-5 iterations with P1 elements.
 
 Coulomb friction (return map on a tangential penalty, active-set Newton)
 ------------------------------------------------------------------------
-The tangential position of pin node i on the bore is the arc length of its closest point in
-the bore's reference (material) coordinate, s_i = R_i Theta_c, Theta_c = Theta_k + xi dTheta.
+The tangential position of pin node i on the bore is the position of its closest point in
+the bore's reference (material) coordinates: the arc length s_i = R_i Theta_c,
+Theta_c = Theta_k + xi dTheta_k (3D: and the axial position Z_c = Z_l + eta dZ_l).
 A step from the converged state n (s_n, shear sigma_n) is a backward-Euler return map of an
-elastic-plastic interface:
+elastic-plastic interface (vectors of the surface coordinates in 3D, radial return):
 
     sigma_trial = Lambda_i + eps_T (s_i - s_n,i),
-    sigma_i     = sigma_trial                   if |sigma_trial| <= mu p_i   (stick)
-                  mu p_i sign(sigma_trial)      otherwise                     (slip),
+    sigma_i     = sigma_trial                        if |sigma_trial| <= mu p_i   (stick)
+                  mu p_i sigma_trial/|sigma_trial|   otherwise                     (slip),
 
-sigma (Pa) the shear the pin exerts on the bore along +Theta (the bore holds the pin back
-with -sigma), eps_T = eps / 10. Penalty: Lambda = sigma_n, so a stuck node creeps by the
+sigma (Pa) the shear the pin exerts on the bore along +Theta (+z) (the bore holds the pin
+back with -sigma), eps_T = eps / 10. Penalty: Lambda = sigma_n, so a stuck node creeps by the
 elastic slip (sigma - sigma_n)/eps_T. Augmented Lagrangian: Lambda is a multiplier updated
 with the normal one (Lambda <- sigma, Uzawa) until every stuck node moved less than the gap
 tolerance over the step, so stick is exact and slip is Coulomb's. Residual and tangent, with
-ds/dU = R dTheta (df/dU) / D from the closest-point condition f = (x - Y) . Y' = 0,
-D = |Y'|^2 - (x - Y) . Y'':
+ds/dU = diag(R dTheta, dZ) A^-1 df/dU from the closest-point conditions
+f_a = (x - Y) . Y_,a = 0, A_ab = Y_,a . Y_,b - (x - Y) . Y_,ab:
 
-    f_T = sum_i w_i sigma_i ds_i/dU,
-    K_T = sum_i w_i eps_T ds_i/dU (x) ds_i/dU                                    (stick)
-          sum_i w_i mu sign(sigma_i) ds_i/dU (x) dp_i/dU,  dp/dU = -eps dg/dU      (slip),
+    f_T = sum_i w_i sigma_i . ds_i/dU,
+    K_T = sum_i w_i eps_T ds_i/dU (x) ds_i/dU                                         (stick)
+          sum_i w_i ds_i/dU (x) [mu n dp_i/dU + mu p_i/|trial| (I - n n) eps_T ds_i/dU]   (slip),
 
-the slip tangent being unsymmetric (MUMPS takes it as it is). Newton on the plain return map
+n = sigma_trial/|sigma_trial|, dp/dU = -eps dg/dU (in 2D I - n n = 0); the slip tangent being unsymmetric (MUMPS takes it as it is). Newton on the plain return map
 cycled (a node near the stick/slip boundary flips between the branches, or slips one way,
 then the other); what converges (7-10 iterations per push step, 3-5 per rotation step) is
 the primal-dual active-set rule of Hueber, Stadler & Wohlmuth (2008) applied at every
@@ -79,21 +91,20 @@ node. Without friction (mu = 0) none of this is assembled.
 
 Parallel runs
 -------------
-The surfaces hold a few thousand nodes at most: every rank gathers their displacements,
-rank 0 computes the contact terms and adds them to the distributed PETSc residual and
-Jacobian with global indices (PETSc communicates off-process entries at assembly).
-Friction (slip along xi) and 3D (bore patches in angle and axial position) enter here as
-more local variables per node with the same gather-compute-add structure.
+The surfaces hold a few thousand nodes (2D) to some ten thousand (3D): every rank gathers
+their displacements, rank 0 computes the contact terms and adds them to the distributed
+PETSc residual and Jacobian with global indices (PETSc communicates off-process entries at
+assembly).
 """
 
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import dolfinx_solver  # noqa: F401  (loads PETSc's libraries; precedes petsc4py)
 import numpy as np
 from petsc4py import PETSc
 
 
-# --- local kinematics: pin nodes against curved bore segments, vectorized over nodes ---------
+# --- the bore: reference geometry, curved patches, closest points (vectorized over nodes) ------
 
 def bracket(theta: np.ndarray, bore_angles: np.ndarray):
     """Segment k (bore nodes k, k+1 mod M) containing each angle, and the local coordinate xi.
@@ -106,53 +117,223 @@ def bracket(theta: np.ndarray, bore_angles: np.ndarray):
     return k, (t - closed[k]) / (closed[k + 1] - closed[k])
 
 
+@dataclass(frozen=True)
+class Relief:
+    """Edge relief of the bore: over `length` (m) from each end the bore radius grows along a
+    circular arc, tangent to the bore, to `depth` (m) more at the end face; the arc's radius
+    is r = (length^2 + depth^2) / (2 depth)."""
+
+    length: float
+    depth: float
+
+    def profile(self, z, z_low, z_high):
+        """delta(z), delta'(z), delta''(z) (m, -, 1/m) of the bore between z_low and z_high."""
+        r = (self.length**2 + self.depth**2) / (2 * self.depth)
+        into = np.maximum(0.0, self.length - np.minimum(z - z_low, z_high - z))  # arc coordinate
+        side = np.where(z - z_low < z_high - z, -1.0, 1.0)                      # d(into)/dz
+        root = np.sqrt(r**2 - into**2)
+        return r - root, side * into / root, np.where(into > 0, r**2 / root**3, 0.0)
+
+
 @dataclass
-class Segments:
-    """The bore as curved segments: reference radius, node angles and current displacements."""
+class BoreSurface:
+    """The bore as curved patches: reference radius and node grid (angles, and in 3D the
+    levels z with the ends of the bore at levels[0] and `end`), the edge relief, and the
+    current node displacements (M * L, dim), level by level."""
 
     radius: float
-    angles: np.ndarray          # (M,) sorted, in [-pi, pi)
-    displacement: np.ndarray    # (M, 2)
+    angles: np.ndarray                   # (M,) sorted, in [-pi, pi)
+    displacement: np.ndarray             # (M * L, dim)
+    levels: np.ndarray | None = None     # (L,) sorted, 3D only
+    relief: Relief | None = None
+    end: float | None = None             # z of the bore's far end (the last level, or beyond
+                                         # it when a symmetry plane cuts the model)
 
     def __post_init__(self):
         self.widths = np.diff(np.append(self.angles, self.angles[0] + 2 * np.pi))
+        self.dim = 2 if self.levels is None else 3
 
-    def point(self, k, xi):
-        """Y(xi), Y'(xi) and Y''(xi) on segments k."""
+    def corners(self, k, l):
+        """Node indices (n, 2 or 4) of patches (k, l)."""
+        m = self.angles.size
+        k1 = (k + 1) % m
+        if self.dim == 2:
+            return np.stack([k, k1], axis=1)
+        return np.stack([l * m + k, l * m + k1, (l + 1) * m + k, (l + 1) * m + k1], axis=1)
+
+    def shape(self, zeta):
+        """Shape functions N (n, c), their derivatives dN (n, p, c) and ddN (n, p, p, c)."""
+        xi = zeta[:, 0]
+        if self.dim == 2:
+            n = np.stack([1 - xi, xi], axis=1)
+            dn = np.broadcast_to(np.array([[-1.0, 1.0]]), (xi.size, 1, 2))
+            return n, dn, np.zeros((xi.size, 1, 1, 2))
+        eta = zeta[:, 1]
+        n = np.stack([(1 - xi) * (1 - eta), xi * (1 - eta), (1 - xi) * eta, xi * eta], axis=1)
+        dn = np.stack([np.stack([-(1 - eta), 1 - eta, -eta, eta], axis=1),
+                       np.stack([-(1 - xi), -xi, 1 - xi, xi], axis=1)], axis=1)
+        ddn = np.zeros((xi.size, 2, 2, 4))
+        ddn[:, 0, 1] = ddn[:, 1, 0] = [1.0, -1.0, -1.0, 1.0]
+        return n, dn, ddn
+
+    def reference(self, k, l, zeta):
+        """The undeformed surface X0 (n, d) and its derivatives (n, p, d), (n, p, p, d)."""
         width = self.widths[k]
-        theta = self.angles[k] + xi * width
+        theta = self.angles[k] + zeta[:, 0] * width
         e_r = np.stack([np.cos(theta), np.sin(theta)], axis=1)
         e_t = np.stack([-e_r[:, 1], e_r[:, 0]], axis=1)
-        u0, u1 = self.displacement[k], self.displacement[(k + 1) % self.angles.size]
-        y = self.radius * e_r + (1 - xi)[:, None] * u0 + xi[:, None] * u1
-        dy = (self.radius * width)[:, None] * e_t + (u1 - u0)
-        ddy = -(self.radius * width**2)[:, None] * e_r
-        return y, dy, ddy
+        if self.dim == 2:
+            x0 = self.radius * e_r
+            dx0 = ((self.radius * width)[:, None] * e_t)[:, None, :]
+            ddx0 = (-(self.radius * width**2)[:, None] * e_r)[:, None, None, :]
+            return x0, dx0, ddx0
+        height = np.diff(self.levels)[l]
+        z = self.levels[l] + zeta[:, 1] * height
+        if self.relief is None:
+            delta = slope = curve = np.zeros_like(z)
+        else:
+            delta, slope, curve = self.relief.profile(z, self.levels[0], self.end)
+        r = self.radius + delta
+        zero, one = np.zeros_like(z)[:, None], np.ones_like(z)[:, None]
+
+        def lift(v, axial):
+            return np.concatenate([v, axial], axis=1)
+
+        x0 = lift(r[:, None] * e_r, z[:, None])
+        d_xi = lift((r * width)[:, None] * e_t, zero)
+        d_eta = lift((height * slope)[:, None] * e_r, height[:, None] * one)
+        dd_xixi = lift(-(r * width**2)[:, None] * e_r, zero)
+        dd_xieta = lift((width * height * slope)[:, None] * e_t, zero)
+        dd_etaeta = lift((height**2 * curve)[:, None] * e_r, zero)
+        dx0 = np.stack([d_xi, d_eta], axis=1)
+        ddx0 = np.stack([np.stack([dd_xixi, dd_xieta], 1), np.stack([dd_xieta, dd_etaeta], 1)], 1)
+        return x0, dx0, ddx0
+
+    def point(self, k, l, zeta):
+        """Y (n, d), Y_,a (n, p, d), Y_,ab (n, p, p, d) and N (n, c), dN (n, p, c) on patches
+        (k, l) at the surface coordinates zeta (n, p)."""
+        x0, dx0, ddx0 = self.reference(k, l, zeta)
+        n, dn, ddn = self.shape(zeta)
+        u = self.displacement[self.corners(k, l)]                 # (n, c, d)
+        return (x0 + np.einsum("nc,ncd->nd", n, u), dx0 + np.einsum("npc,ncd->npd", dn, u),
+                ddx0 + np.einsum("npqc,ncd->npqd", ddn, u), n, dn)
+
+    def position(self, k, l, zeta, previous):
+        """Material coordinates s (n, p) of surface points: arc length R Theta (unwrapped
+        next to `previous`) and, in 3D, the axial position z (m)."""
+        s = self.radius * (self.angles[k] + zeta[:, 0] * self.widths[k])
+        period = 2 * np.pi * self.radius
+        s = s - period * np.round((s - previous[:, 0]) / period)
+        if self.dim == 2:
+            return s[:, None]
+        return np.stack([s, self.levels[l] + zeta[:, 1] * np.diff(self.levels)[l]], axis=1)
+
+    def metric(self, k, l):
+        """d s / d zeta (n, p): R dTheta_k (and dZ_l)."""
+        arc = self.radius * self.widths[k]
+        if self.dim == 2:
+            return arc[:, None]
+        return np.stack([arc, np.diff(self.levels)[l]], axis=1)
 
 
-def closest_point(x: np.ndarray, bore: Segments, newton_steps: int = 4, hops: int = 8):
-    """Segment k and coordinate xi of the closest bore point to each x (n, 2)."""
+@dataclass
+class Projection:
+    """Closest points: patch (k, l), surface coordinates zeta (n, p), and whether the point
+    lies on the bore (False beyond its ends)."""
+
+    k: np.ndarray
+    l: np.ndarray
+    zeta: np.ndarray
+    inside: np.ndarray
+
+    def take(self, index):
+        return Projection(*(getattr(self, f.name)[index] for f in fields(self)))
+
+
+def closest_point(x: np.ndarray, bore: BoreSurface, newton_steps: int = 4, hops: int = 8):
+    """The closest bore point to each x (n, d), a Projection."""
     k, xi = bracket(np.arctan2(x[:, 1], x[:, 0]), bore.angles)
+    if bore.dim == 2:
+        l, zeta = np.zeros_like(k), xi[:, None]
+    else:
+        top = bore.levels.size - 2
+        l = np.clip(np.searchsorted(bore.levels, x[:, 2], side="right") - 1, 0, top)
+        zeta = np.stack([xi, (x[:, 2] - bore.levels[l]) / np.diff(bore.levels)[l]], axis=1)
     m = bore.angles.size
     for _ in range(hops):
         for _ in range(newton_steps):
-            y, dy, ddy = bore.point(k, xi)
-            f = np.einsum("ni,ni->n", x - y, dy)
-            df = -np.einsum("ni,ni->n", dy, dy) + np.einsum("ni,ni->n", x - y, ddy)
-            xi = xi - f / df
-        below, above = xi < 0, xi > 1
-        if not (below.any() or above.any()):
-            break
+            y, dy, ddy, _, _ = bore.point(k, l, zeta)
+            r = x - y
+            f = np.einsum("nd,npd->np", r, dy)
+            a = np.einsum("npd,nqd->npq", dy, dy) - np.einsum("nd,npqd->npq", r, ddy)
+            zeta = zeta + np.linalg.solve(a, f[..., None])[..., 0]
+        below, above = zeta[:, 0] < 0, zeta[:, 0] > 1
         k = np.where(below, (k - 1) % m, np.where(above, (k + 1) % m, k))
-        xi = np.where(below, 1.0, np.where(above, 0.0, xi))
-    return k, np.clip(xi, 0.0, 1.0)
+        zeta[:, 0] = np.where(below, 1.0, np.where(above, 0.0, zeta[:, 0]))
+        moved = below | above
+        if bore.dim == 3:
+            down, up = (zeta[:, 1] < 0) & (l > 0), (zeta[:, 1] > 1) & (l < top)
+            l = np.where(down, l - 1, np.where(up, l + 1, l))
+            zeta[:, 1] = np.where(down, 1.0, np.where(up, 0.0, zeta[:, 1]))
+            moved |= down | up
+        if not moved.any():
+            break
+    inside = np.ones(len(x), dtype=bool)
+    if bore.dim == 3:
+        slack = 1e-9
+        inside = (zeta[:, 1] >= -slack) & (zeta[:, 1] <= 1 + slack)
+    return Projection(k, l, np.clip(zeta, 0.0, 1.0), inside)
 
 
-def gap_and_normal(x: np.ndarray, bore: Segments, k, xi):
-    """Gap g = (Y - x) . nu (m), the outward normal nu and the radius of curvature |Y|."""
-    y, dy, _ = bore.point(k, xi)
-    nu = np.stack([dy[:, 1], -dy[:, 0]], axis=1) / np.linalg.norm(dy, axis=1)[:, None]
-    return np.einsum("ni,ni->n", y - x, nu), nu, np.linalg.norm(y, axis=1)
+@dataclass
+class Kinematics:
+    """Pin positions x, closest points, gaps g (m, +inf beyond the bore's ends), outward
+    normals nu, circumferential unit tangents t, radii of curvature rho (m), and at the
+    closest points Y, its derivatives and the shape functions."""
+
+    x: np.ndarray
+    projection: Projection
+    gap: np.ndarray
+    normal: np.ndarray
+    tangent: np.ndarray
+    rho: np.ndarray
+    y: np.ndarray
+    dy: np.ndarray
+    ddy: np.ndarray
+    n: np.ndarray
+    dn: np.ndarray
+
+    def take(self, index):
+        """The same quantities at a subset of the nodes."""
+        return Kinematics(*(getattr(self, f.name)[index] if f.name != "projection"
+                            else self.projection.take(index) for f in fields(self)))
+
+
+def kinematics(x: np.ndarray, bore: BoreSurface) -> Kinematics:
+    """Project the pin nodes x (n, d) onto the bore and measure gaps and normals."""
+    proj = closest_point(x, bore)
+    y, dy, ddy, n, dn = bore.point(proj.k, proj.l, proj.zeta)
+    if bore.dim == 2:
+        nu = np.stack([dy[:, 0, 1], -dy[:, 0, 0]], axis=1)
+    else:
+        nu = np.cross(dy[:, 0], dy[:, 1])
+    nu /= np.linalg.norm(nu, axis=1)[:, None]
+    t = dy[:, 0] / np.linalg.norm(dy[:, 0], axis=1)[:, None]
+    g = np.where(proj.inside, np.einsum("nd,nd->n", y - x, nu), np.inf)
+    return Kinematics(x, proj, g, nu, t, np.linalg.norm(y[:, :2], axis=1), y, dy, ddy, n, dn)
+
+
+def slip_gradient(kin: Kinematics, bore: BoreSurface) -> np.ndarray:
+    """ds/dU (n, p, (1 + c) d) of the material coordinates s of the closest points over
+    (pin node, bore corner nodes), from the closest-point conditions (x - Y) . Y_,a = 0."""
+    r = kin.x - kin.y
+    a = np.einsum("npd,nqd->npq", kin.dy, kin.dy) - np.einsum("nd,npqd->npq", r, kin.ddy)
+    pin = kin.dy[:, :, None, :]                                               # (n, p, 1, d)
+    corners = (-np.einsum("nc,npd->npcd", kin.n, kin.dy)
+               + np.einsum("npc,nd->npcd", kin.dn, r))                        # (n, p, c, d)
+    df = np.concatenate([pin, corners], axis=2).reshape(len(r), a.shape[1], -1)
+    proj = kin.projection
+    return bore.metric(proj.k, proj.l)[:, :, None] * np.linalg.solve(a, df)
 
 
 def pressure(lam, penalty, g):
@@ -160,30 +341,22 @@ def pressure(lam, penalty, g):
     return np.maximum(lam - penalty * g, 0.0)
 
 
-def slip_gradient(x: np.ndarray, bore: Segments, k, xi) -> np.ndarray:
-    """ds/dU (n, 6) of the arc length s = R Theta_c of the closest point, over
-    (pin node, bore node k, bore node k+1), from (x - Y(xi)) . Y'(xi) = 0."""
-    y, dy, ddy = bore.point(k, xi)
-    d = np.einsum("ni,ni->n", dy, dy) - np.einsum("ni,ni->n", x - y, ddy)
-    df = np.stack([dy, -(1 - xi)[:, None] * dy - (x - y), -xi[:, None] * dy + (x - y)], axis=1)
-    return (bore.radius * bore.widths[k] / d)[:, None] * df.reshape(-1, 6)
-
-
-def active_set(trial, bound, p, status, sign):
-    """Shear (Pa) and state of each node at an iterate, given the active set of the last
-    one (status, sign) and the slip bound mu p (Pa).
+def active_set(trial, bound, p, status, direction):
+    """Shear (n, p) (Pa) and state of each node at an iterate, given the active set of the
+    last one (status, slip direction) and the slip bound mu p (Pa).
 
     The primal-dual active-set rule of Hueber, Stadler & Wohlmuth (2008): a node that was
-    slipping keeps slipping (shear = sign * bound) while its slip, trial - sign * bound, goes
-    the way of its shear, and sticks otherwise; any other node in contact sticks if
-    |trial| <= bound and slips along sign(trial) if not; a node with p = 0 is open. A
-    converged state is the backward-Euler return map sigma = clip(trial, -bound, bound).
+    slipping keeps slipping (shear = bound * trial/|trial|) while its trial shear along its
+    slip direction exceeds the bound, and sticks otherwise; any other node in contact sticks
+    if |trial| <= bound and slips if not; a node with p = 0 is open. A converged state is
+    the backward-Euler return map.
     """
-    slipping = (status == SLIP) & (sign != 0)
-    keeps = slipping & (np.sign(trial - sign * bound) * sign >= 0)
-    stuck = np.where(slipping, ~keeps, np.abs(trial) <= bound) & (bound > 0)
-    direction = np.where(keeps, sign, np.sign(trial))
-    shear = np.where(p > 0, np.where(stuck, trial, direction * bound), 0.0)
+    size = np.linalg.norm(trial, axis=1)
+    slipping = (status == SLIP) & (np.abs(direction).sum(axis=1) > 0)
+    keeps = slipping & (np.einsum("np,np->n", trial, direction) >= bound)
+    stuck = np.where(slipping, ~keeps, size <= bound) & (bound > 0)
+    unit = trial / np.maximum(size, np.finfo(float).tiny)[:, None]
+    shear = np.where((p > 0)[:, None], np.where(stuck[:, None], trial, bound[:, None] * unit), 0.0)
     return shear, np.where(p > 0, np.where(stuck, STICK, SLIP), OPEN)
 
 
@@ -195,9 +368,9 @@ TANGENTIAL_PENALTY_RATIO = 0.1  # eps_T / eps: a stiffer stick made Newton cycle
 @dataclass
 class Friction:
     """Coulomb friction at the pin nodes: coefficient, tangential penalty (Pa/m), the
-    converged state n (bore coordinate s_n (m), shear sigma_n (Pa)), the multiplier Lambda
-    (= sigma_n with the penalty method), and the active set of the current Newton iterate:
-    the state and slip direction of each node."""
+    converged state n (bore coordinates s_n (m), shear sigma_n (Pa), both (n, p)), the
+    multiplier Lambda (= sigma_n with the penalty method), and the active set of the current
+    Newton iterate: the state and slip direction of each node."""
 
     mu: float
     penalty: float
@@ -205,29 +378,30 @@ class Friction:
     sigma_n: np.ndarray
     multiplier: np.ndarray
     status: np.ndarray
-    sign: np.ndarray
+    direction: np.ndarray
 
     @classmethod
-    def at_rest(cls, mu, penalty, n):
-        zero = np.zeros(n)
+    def at_rest(cls, mu, penalty, n, p):
+        zero = np.zeros((n, p))
         return cls(mu, penalty, zero, zero.copy(), zero.copy(), np.full(n, OPEN), zero.copy())
 
     def trial(self, s):
         return self.multiplier + self.penalty * (s - self.s_n)
 
     def freeze(self, state) -> None:
-        self.status, self.sign = state.status.copy(), np.sign(state.shear)
+        size = np.linalg.norm(state.shear, axis=1)
+        self.status = state.status.copy()
+        self.direction = state.shear / np.maximum(size, np.finfo(float).tiny)[:, None]
 
     def settled(self, state) -> bool:
         """The iterate's active set is the one the return map gives at the solution."""
-        return bool(np.array_equal(state.status, self.status)
-                    and np.array_equal(np.sign(state.shear), self.sign))
+        return bool(np.array_equal(state.status, self.status))
 
     def saved(self):
-        return tuple(a.copy() for a in (self.s_n, self.sigma_n, self.status, self.sign))
+        return tuple(a.copy() for a in (self.s_n, self.sigma_n, self.status, self.direction))
 
     def load(self, saved) -> None:
-        self.s_n, self.sigma_n, self.status, self.sign = (a.copy() for a in saved)
+        self.s_n, self.sigma_n, self.status, self.direction = (a.copy() for a in saved)
         self.multiplier = self.sigma_n.copy()
 
 
@@ -235,53 +409,61 @@ class Friction:
 
 @dataclass
 class ContactState:
-    """What one evaluation found at the pin nodes (arrays over pin nodes, sorted by angle)."""
+    """What one evaluation found at the pin nodes (arrays over pin nodes, sorted by level and
+    angle)."""
 
     gap: np.ndarray        # m
     pressure: np.ndarray   # Pa
     angle: np.ndarray      # rad, current polar angle of the node
-    position: np.ndarray   # m, arc length s of the closest bore point (material coordinate)
-    shear: np.ndarray      # Pa, on the bore along +theta (0 without friction)
+    position: np.ndarray   # m, (n, p) material coordinates s of the closest bore point
+    shear: np.ndarray      # Pa, (n, p) on the bore along +theta (and +z) (0 without friction)
     status: np.ndarray     # OPEN, STICK or SLIP
-    slip: np.ndarray       # m, plastic slip of this step, (sigma_trial - sigma) / eps_T
+    slip: np.ndarray       # m, (n, p) plastic slip of this step, (sigma_trial - sigma) / eps_T
 
     def dissipated(self, weights) -> float:
-        """Work dissipated by friction over the step (J/m): sum w sigma slip >= 0."""
-        return float(np.sum(weights * self.shear * self.slip))
+        """Work dissipated by friction over the step (J/m in 2D, J in 3D): sum w sigma . slip
+        >= 0."""
+        return float(np.sum(weights * np.einsum("np,np->n", self.shear, self.slip)))
 
 
 class PinBoreContact:
     """Contact terms between the pin-surface and bore-surface nodes of a P1 vector space.
 
     pin_dofs / bore_dofs: local block (node) indices in V owned by this rank. Every rank
-    holds both surfaces whole, sorted by angle: pin_X, pin_nodes (global node indices),
-    weights (tributary lengths), bore_angles, the multipliers lam and, with mu > 0, the
-    friction state.
+    holds both surfaces whole: pin_X, pin_nodes (global node indices), weights (tributary
+    lengths or areas), the bore's grid, the multipliers lam and, with mu > 0, the friction
+    state. 3D: `levels_end` is the bore's far end (m), `relief` its edge relief, and
+    `pin_frame` a rotation (3, 3) about the point (0, 0, pivot) that tilts the pin: its
+    inverse takes the pin's nodes back onto their grid of angles and levels.
     """
 
     def __init__(self, V, pin_dofs, bore_dofs, bore_radius, penalty, template: PETSc.Vec,
-                 friction: float = 0.0):
+                 friction: float = 0.0, relief: Relief | None = None, bore_end=None,
+                 pin_frame=None, pivot: float = 0.0):
         self.comm = V.mesh.comm
-        self.bore_radius = bore_radius
         self.penalty = penalty
-        coords = V.tabulate_dof_coordinates()[:, :2]
+        self.dim = dim = V.mesh.geometry.dim
+        coords = V.tabulate_dof_coordinates()[:, :dim]
         imap = V.dofmap.index_map
-        gathered = [self._gather(coords[d], imap.local_to_global(d.astype(np.int32)))
-                    for d in (pin_dofs, bore_dofs)]
-        (self.pin_X, pin_nodes), (bore_X, bore_nodes) = gathered
-        pin_angle = np.arctan2(self.pin_X[:, 1], self.pin_X[:, 0])
-        bore_angle = np.arctan2(bore_X[:, 1], bore_X[:, 0])
-        order_p, order_b = np.argsort(pin_angle), np.argsort(bore_angle)
-        self.pin_X, self.pin_nodes = self.pin_X[order_p], pin_nodes[order_p]
-        self.bore_angles, bore_nodes = bore_angle[order_b], bore_nodes[order_b]
-        self.weights = tributary_lengths(self.pin_X)
-        bs = V.dofmap.index_map_bs
-        self.pin_rows = (bs * self.pin_nodes[:, None] + np.arange(2)).astype(PETSc.IntType)
-        self.bore_rows = (bs * bore_nodes[:, None] + np.arange(2)).astype(PETSc.IntType)
+        (pin_X, pin_nodes), (bore_X, bore_nodes) = [
+            self._gather(coords[d], imap.local_to_global(d.astype(np.int32)))
+            for d in (pin_dofs, bore_dofs)]
+        pin_ref = pin_X if pin_frame is None else untilt(pin_X, pin_frame, pivot)
+        order_p, pin_grid = grid_order(pin_ref)
+        order_b, bore_grid = grid_order(bore_X)
+        self.pin_X, self.pin_nodes = pin_X[order_p], pin_nodes[order_p]
+        self.pin_reference = pin_ref[order_p]   # untilted: on the grid of angles x levels
+        self.weights = tributary_weights(pin_ref[order_p], *pin_grid)
+        angles, levels = bore_grid
+        self.bore = BoreSurface(bore_radius, angles, np.zeros((len(bore_X), dim)), levels,
+                                relief, bore_end if dim == 3 else None)
+        rows = np.arange(dim)
+        self.pin_rows = (dim * self.pin_nodes[:, None] + rows).astype(PETSc.IntType)
+        self.bore_rows = (dim * bore_nodes[order_b][:, None] + rows).astype(PETSc.IntType)
         self.lam = np.zeros(len(self.pin_X))
         self._scatter, self._local = self._make_scatter(template)
         self.friction = (Friction.at_rest(friction, TANGENTIAL_PENALTY_RATIO * penalty,
-                                          len(self.pin_X)) if friction > 0 else None)
+                                          len(self.pin_X), dim - 1) if friction > 0 else None)
 
     def _gather(self, coords, global_nodes):
         coords = np.concatenate(self.comm.allgather(coords))
@@ -300,36 +482,30 @@ class PinBoreContact:
                               mode=PETSc.ScatterMode.FORWARD)
         values = self._local.getArray(readonly=True)
         n_pin = self.pin_rows.size
-        return values[:n_pin].reshape(-1, 2), values[n_pin:].reshape(-1, 2)
+        return values[:n_pin].reshape(-1, self.dim), values[n_pin:].reshape(-1, self.dim)
 
-    def _kinematics(self, u: PETSc.Vec):
+    def _kinematics(self, u: PETSc.Vec) -> Kinematics:
         """Current pin positions, closest bore points and gaps. Collective (gathers u)."""
-        u_pin, u_bore = self._surface_displacements(u)
-        x = self.pin_X + u_pin
-        bore = Segments(self.bore_radius, self.bore_angles, u_bore)
-        k, xi = closest_point(x, bore)
-        g, nu, rho = gap_and_normal(x, bore, k, xi)
-        return x, bore, k, xi, g, nu, rho
+        u_pin, self.bore.displacement = self._surface_displacements(u)
+        return kinematics(self.pin_X + u_pin, self.bore)
 
-    def _position(self, bore: Segments, k, xi, previous):
-        """Arc length R Theta_c (m) of the closest points, unwrapped next to `previous`."""
-        s = bore.radius * (bore.angles[k] + xi * bore.widths[k])
-        period = 2 * np.pi * bore.radius
-        return s - period * np.round((s - previous) / period)
+    def _position(self, kin: Kinematics, previous):
+        proj = kin.projection
+        return self.bore.position(proj.k, proj.l, proj.zeta, previous)
 
     def state(self, u: PETSc.Vec) -> ContactState:
-        x, bore, k, xi, g, _, _ = self._kinematics(u)
+        kin = self._kinematics(u)
+        g = kin.gap
         p = pressure(self.lam, self.penalty, g)
+        angle = np.arctan2(kin.x[:, 1], kin.x[:, 0])
         f = self.friction
         if f is None:
-            zero = np.zeros_like(g)
-            return ContactState(g, p, np.arctan2(x[:, 1], x[:, 0]), zero, zero,
-                                np.where(p > 0, SLIP, OPEN), zero)
-        s = self._position(bore, k, xi, f.s_n)
+            zero = np.zeros((len(g), self.dim - 1))
+            return ContactState(g, p, angle, zero, zero, np.where(p > 0, SLIP, OPEN), zero)
+        s = self._position(kin, f.s_n)
         trial = f.trial(s)
-        shear, status = active_set(trial, f.mu * p, p, f.status, f.sign)
-        return ContactState(g, p, np.arctan2(x[:, 1], x[:, 0]), s, shear, status,
-                            (trial - shear) / f.penalty)
+        shear, status = active_set(trial, f.mu * p, p, f.status, f.direction)
+        return ContactState(g, p, angle, s, shear, status, (trial - shear) / f.penalty)
 
     def commit(self, state: ContactState) -> None:
         """Make a converged state the start of the next step."""
@@ -352,8 +528,8 @@ class PinBoreContact:
         augmented Lagrangian drives it to)."""
         if self.friction is None:
             return 0.0
-        moved = np.abs(state.position - self.friction.s_n)[state.status == STICK]
-        return float(moved.max(initial=0.0))
+        moved = np.linalg.norm(state.position - self.friction.s_n, axis=1)
+        return float(moved[state.status == STICK].max(initial=0.0))
 
     def friction_settled(self, state: ContactState) -> bool:
         return self.friction is None or self.friction.settled(state)
@@ -369,45 +545,56 @@ class PinBoreContact:
             self.friction.multiplier = state.shear.copy()
 
     def torque(self, u: PETSc.Vec, centre) -> float:
-        """Moment (N m/m) about the axis through `centre` that balances the contact tractions
-        on the pin, taken in the current configuration: the friction torque the hub applies
-        (the normal tractions pass through the bore's axis and contribute only through the
-        offset of the two axes). Collective."""
+        """Moment (N m/m in 2D, N m in 3D) about the axis through `centre` (parallel to z)
+        that balances the contact tractions on the pin, taken in the current configuration:
+        the friction torque the hub applies (the normal tractions pass through the bore's
+        axis and contribute only through the offset of the two axes). Collective."""
         act, _, residual, _ = self._local_terms(u, with_tangent=False)
-        arm = self.pin_X[act] + self._surface_displacements(u)[0][act] - np.asarray(centre)
+        arm = self.pin_X[act, :2] + self._surface_displacements(u)[0][act, :2] - np.asarray(centre)[:2]
         return float(np.sum(arm[:, 0] * residual[:, 1] - arm[:, 1] * residual[:, 0]))
 
     def _local_terms(self, u: PETSc.Vec, with_tangent: bool):
-        """Active nodes: their indices, global rows (n, 6) and residual (n, 6)
-        [, tangent (n, 6, 6)]."""
-        x, bore, k, xi, g, nu, rho = self._kinematics(u)
-        p = pressure(self.lam, self.penalty, g)
+        """Active nodes: their indices, global rows (n, (1 + c) d) and residual (n, (1 + c) d)
+        [, tangent (n, (1 + c) d, (1 + c) d)]."""
+        kin = self._kinematics(u)
+        p = pressure(self.lam, self.penalty, kin.gap)
         act = np.flatnonzero(p > 0)
-        x, k, xi, nu, rho = x[act], k[act], xi[act], nu[act], rho[act]
-        k1 = (k + 1) % self.bore_angles.size
-        rows = np.concatenate([self.pin_rows[act], self.bore_rows[k], self.bore_rows[k1]], axis=1)
-        b = np.stack([np.ones_like(xi), -(1 - xi), -xi], axis=1)       # x - Y(xi) weights
-        grad = -(b[:, :, None] * nu[:, None, :]).reshape(-1, 6)        # dg/dU
+        proj = kin.projection
+        corners = self.bore.corners(proj.k[act], proj.l[act])
+        rows = np.concatenate([self.pin_rows[act, None], self.bore_rows[corners]], axis=1)
+        rows = rows.reshape(len(act), -1)
+        b = np.concatenate([np.ones((len(act), 1)), -kin.n[act]], axis=1)    # x - Y weights
+        nu = kin.normal[act]
+        grad = -(b[:, :, None] * nu[:, None, :]).reshape(len(act), -1)      # dg/dU
         w, pa = self.weights[act], p[act]
         residual = -pa[:, None] * grad
         f = self.friction
         if f is not None:
-            grad_s = slip_gradient(x, bore, k, xi)
-            s = self._position(bore, k, xi, f.s_n[act])
+            sub = kin.take(act)
+            grad_s = slip_gradient(sub, self.bore)                            # (n, p, rows)
             stuck = f.status[act] == STICK
-            trial = f.multiplier[act] + f.penalty * (s - f.s_n[act])
-            shear = np.where(stuck, trial, f.sign[act] * f.mu * pa)
-            residual += shear[:, None] * grad_s
+            trial = f.multiplier[act] + f.penalty * (self._position(sub, f.s_n[act]) - f.s_n[act])
+            size = np.linalg.norm(trial, axis=1)
+            unit = np.divide(trial, size[:, None], out=np.zeros_like(trial), where=size[:, None] > 0)
+            shear = np.where(stuck[:, None], trial, (f.mu * pa)[:, None] * unit)
+            residual += np.einsum("np,npr->nr", shear, grad_s)
         residual *= w[:, None]
         if not with_tangent:
             return act, rows, residual, None
-        tangential = (np.eye(2) - np.einsum("ni,nj->nij", nu, nu)) / rho[:, None, None]
+        t = kin.tangent[act]
+        curvature = np.einsum("ni,nj->nij", t, t) / kin.rho[act][:, None, None]
         tangent = (self.penalty * np.einsum("ni,nj->nij", grad, grad)
-                   + np.einsum("n,na,nb,nij->naibj", pa, b, b, tangential).reshape(-1, 6, 6))
+                   + np.einsum("n,na,nb,nij->naibj", pa, b, b, curvature).reshape(len(act),
+                                                                                   *grad.shape[1:] * 2))
         if f is not None:
-            slip = ~stuck * f.mu * f.sign[act] * self.penalty   # d(sign mu p)/dU = -sign mu eps dg/dU
-            tangent += (f.penalty * np.einsum("n,ni,nj->nij", stuck, grad_s, grad_s)
-                        - np.einsum("n,ni,nj->nij", slip, grad_s, grad))
+            projector = np.eye(self.dim - 1) - np.einsum("np,nq->npq", unit, unit)
+            ratio = np.divide(f.mu * pa, size, out=np.zeros_like(size), where=size > 0)
+            slip_ds = f.penalty * ratio[:, None, None] * projector       # 0 in 2D
+            d_shear = np.where(stuck[:, None, None],
+                               f.penalty * grad_s,
+                               -(f.mu * self.penalty) * np.einsum("np,nr->npr", unit, grad)
+                               + np.einsum("npq,nqr->npr", slip_ds, grad_s))
+            tangent += np.einsum("npr,nps->nrs", grad_s, d_shear)
         return act, rows, residual, tangent * w[:, None, None]
 
     def add_residual(self, u: PETSc.Vec, F: PETSc.Vec) -> None:
@@ -426,7 +613,46 @@ class PinBoreContact:
                 J.setValues(r, r, block, addv=PETSc.InsertMode.ADD_VALUES)
 
 
+# --- surface grids and their tributary weights -------------------------------------------------
+
+def untilt(X: np.ndarray, frame: np.ndarray, pivot: float) -> np.ndarray:
+    """Points X (n, 3) of the tilted pin taken back by the inverse of the rotation `frame`
+    about (0, 0, pivot)."""
+    centre = np.array([0.0, 0.0, pivot])
+    return (X - centre) @ frame + centre
+
+
+def grid_order(X: np.ndarray):
+    """Order of surface nodes X (n, d) by level, then angle, and the grid: (angles (M,),
+    levels (L,) or None in 2D). The nodes of an extruded surface share their angles at every
+    level."""
+    angle = np.arctan2(X[:, 1], X[:, 0])
+    if X.shape[1] == 2:
+        order = np.argsort(angle)
+        return order, (angle[order], None)
+    scale = np.abs(X[:, 2]).max() + 1.0
+    levels, level = np.unique(np.round(X[:, 2] / scale, 12), return_inverse=True)
+    order = np.lexsort((angle, level))
+    per_level = np.bincount(level)
+    if np.any(per_level != per_level[0]):
+        raise ValueError("the surface nodes do not form a grid of angles x levels")
+    first = order[:per_level[0]]
+    return order, (angle[first], np.array([X[level == i, 2].mean() for i in range(levels.size)]))
+
+
 def tributary_lengths(points: np.ndarray) -> np.ndarray:
     """Half the summed lengths of the two edges at each node of a closed polygon (m)."""
     edges = np.linalg.norm(np.roll(points, -1, axis=0) - points, axis=1)
     return 0.5 * (edges + np.roll(edges, 1))
+
+
+def tributary_weights(X: np.ndarray, angles, levels) -> np.ndarray:
+    """Tributary lengths (2D, m) or areas (3D, m^2) of surface nodes X sorted by grid_order:
+    the polygon's tributary lengths times half the two adjacent layers."""
+    if levels is None:
+        return tributary_lengths(X)
+    m = angles.size
+    ring = tributary_lengths(X[:m, :2])
+    layers = np.diff(levels)
+    axial = 0.5 * (np.append(layers, 0.0) + np.insert(layers, 0, 0.0))
+    return (axial[:, None] * ring[None, :]).ravel()

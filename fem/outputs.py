@@ -64,7 +64,7 @@ def write_pressure(path: Path, run, direction_deg, arc_half_angle) -> None:
             keep = np.flatnonzero(np.abs(alpha) <= arc_half_angle)
             for j in keep[np.argsort(alpha[keep])]:
                 out.writerow([i, f"{np.degrees(alpha[j]):.6f}", f"{c.pressure[j]:.9e}",
-                              f"{c.shear[j]:.9e}", STATE_NAMES[c.status[j]]])
+                              f"{c.shear[j, 0]:.9e}", STATE_NAMES[c.status[j]]])
 
 
 def write_result(path: Path, result: dict) -> None:
@@ -180,7 +180,7 @@ def shear_panel(ax, run, scene, arc_half_angle):
         alpha = angle_from(scene.load.direction_deg, step.contact.angle)
         keep = np.flatnonzero(np.abs(alpha) <= arc_half_angle)
         keep = keep[np.argsort(alpha[keep])]
-        ax.plot(np.degrees(alpha[keep]), step.contact.shear[keep] / 1e6,
+        ax.plot(np.degrees(alpha[keep]), step.contact.shear[keep, 0] / 1e6,
                 color=plt.cm.plasma(i / (len(run.steps) + 1)), lw=1)
     c = run.steps[-1].contact
     mu_p = scene.contact.friction * c.pressure[keep] / 1e6
@@ -188,7 +188,7 @@ def shear_panel(ax, run, scene, arc_half_angle):
     ax.plot(np.degrees(alpha[keep]), -mu_p, "k--", lw=0.8)
     for state, marker in ((STICK, "o"), (SLIP, "x")):
         on = keep[c.status[keep] == state]
-        ax.plot(np.degrees(alpha[on]), c.shear[on] / 1e6, marker, ms=3, color="k", mfc="none",
+        ax.plot(np.degrees(alpha[on]), c.shear[on, 0] / 1e6, marker, ms=3, color="k", mfc="none",
                 label=f"{STATE_NAMES[state]}, last step")
     ax.set_xlabel("angle from load direction (deg)")
     ax.set_ylabel("shear on the bore, along +theta (MPa)")

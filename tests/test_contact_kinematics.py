@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from fem.contact import Segments, bracket, closest_point, gap_and_normal, tributary_lengths
+from fem.contact import BoreSurface, bracket, kinematics, tributary_lengths
 from fem.post import angle_from, half_angle
 
 R_BORE, R_PIN = 10.0e-3, 9.9e-3
@@ -14,7 +14,7 @@ R_BORE, R_PIN = 10.0e-3, 9.9e-3
 
 def circle_segments(n=720, displacement=None):
     angles = np.sort(np.remainder(np.linspace(0, 2 * np.pi, n, endpoint=False) + 0.1, 2 * np.pi) - np.pi)
-    return Segments(R_BORE, angles, np.zeros((n, 2)) if displacement is None else displacement)
+    return BoreSurface(R_BORE, angles, np.zeros((n, 2)) if displacement is None else displacement)
 
 
 def test_gap_of_a_translated_pin_is_exact():
@@ -23,10 +23,10 @@ def test_gap_of_a_translated_pin_is_exact():
     t = np.array([3e-5, -8e-5])
     x = R_PIN * np.stack([np.cos(theta), np.sin(theta)], 1) + t
     bore = circle_segments(n=60)  # coarse: a chord would sit 1.4e-5 m inside the circle
-    g, nu, rho = gap_and_normal(x, bore, *closest_point(x, bore))
-    np.testing.assert_allclose(g, R_BORE - np.linalg.norm(x, axis=1), atol=1e-15)
-    np.testing.assert_allclose(nu, x / np.linalg.norm(x, axis=1)[:, None], atol=1e-12)
-    np.testing.assert_allclose(rho, R_BORE, rtol=1e-12)
+    kin = kinematics(x, bore)
+    np.testing.assert_allclose(kin.gap, R_BORE - np.linalg.norm(x, axis=1), atol=1e-15)
+    np.testing.assert_allclose(kin.normal, x / np.linalg.norm(x, axis=1)[:, None], atol=1e-12)
+    np.testing.assert_allclose(kin.rho, R_BORE, rtol=1e-12)
 
 
 def test_gap_is_invariant_under_a_common_translation():
@@ -36,10 +36,10 @@ def test_gap_is_invariant_under_a_common_translation():
     angles = circle_segments(n).angles
     bore = circle_segments(n, 1e-6 * np.stack([np.cos(3 * angles), np.sin(2 * angles)], 1))
     x = R_PIN * np.stack([np.cos(np.linspace(-3, 3, 50)), np.sin(np.linspace(-3, 3, 50))], 1)
-    g0 = gap_and_normal(x, bore, *closest_point(x, bore))[0]
+    g0 = kinematics(x, bore).gap
     shift = np.array([2e-5, 1e-5])
-    moved = Segments(bore.radius, bore.angles, bore.displacement + shift)
-    g1 = gap_and_normal(x + shift, moved, *closest_point(x + shift, moved))[0]
+    moved = BoreSurface(bore.radius, bore.angles, bore.displacement + shift)
+    g1 = kinematics(x + shift, moved).gap
     np.testing.assert_allclose(g1, g0, atol=1e-15)
 
 
@@ -48,10 +48,10 @@ def test_uniform_radial_expansion_of_the_bore_opens_the_gap_by_as_much():
     n = 200
     bore = circle_segments(n)
     e_r = np.stack([np.cos(bore.angles), np.sin(bore.angles)], 1)
-    expanded = Segments(R_BORE, bore.angles, 2e-6 * e_r)
+    expanded = BoreSurface(R_BORE, bore.angles, 2e-6 * e_r)
     x = R_PIN * np.stack([np.cos(np.linspace(-3, 3, 31)), np.sin(np.linspace(-3, 3, 31))], 1)
-    g0 = gap_and_normal(x, bore, *closest_point(x, bore))[0]
-    g1 = gap_and_normal(x, expanded, *closest_point(x, expanded))[0]
+    g0 = kinematics(x, bore).gap
+    g1 = kinematics(x, expanded).gap
     np.testing.assert_allclose(g1 - g0, 2e-6, rtol=(2 * np.pi / n) ** 2 / 8)
 
 

@@ -56,7 +56,8 @@ def tied_torque(solved, rotation):
     K = scipy.sparse.csr_matrix((values, indices, indptr)).tolil()
     state = solved.run.steps[solved.scene.load.steps - 1].contact   # end of the push
     x0 = solved.stepper.x.duplicate()
-    _, bore, k, xi, _, _, _ = contact._kinematics(x0)  # reference closest points
+    proj = contact._kinematics(x0).projection  # reference closest points
+    k, xi = proj.k, proj.zeta[:, 0]
     bore_rows = contact.bore_rows
     stiffness = 1e3 * contact.penalty
     for i in np.flatnonzero(state.pressure > 0):
