@@ -19,7 +19,8 @@ bore meshed at 0.09 mm). (In 3D the FE trace of the bore's displacement is linea
 triangles of the grid's quads; the bilinear interpolation differs from it by O(h^2 grad^2 u).)
 A pin node at x is projected onto the closest point of the bore, (x - Y) . Y_,a = 0 for each
 surface coordinate zeta_a (Newton in zeta, moving to the next patch when zeta leaves
-[0, 1]; a node whose closest point lies beyond the bore's ends is out of contact), and the
+[0, 1]; past the bore's ends the end patches are continued by half a layer, beyond that a
+node is out of contact), and the
 normal gap (positive open, negative penetrating) is
 
     g = (Y(zeta) - x) . nu,    nu = outward unit normal of the bore at zeta.
@@ -103,6 +104,8 @@ import dolfinx_solver  # noqa: F401  (loads PETSc's libraries; precedes petsc4py
 import numpy as np
 from petsc4py import PETSc
 
+from meshes.model import Relief
+
 
 # --- the bore: reference geometry, curved patches, closest points (vectorized over nodes) ------
 
@@ -115,24 +118,6 @@ def bracket(theta: np.ndarray, bore_angles: np.ndarray):
     t = np.where(theta < bore_angles[0], theta + 2 * np.pi, theta)
     k = np.clip(np.searchsorted(closed, t, side="right") - 1, 0, bore_angles.size - 1)
     return k, (t - closed[k]) / (closed[k + 1] - closed[k])
-
-
-@dataclass(frozen=True)
-class Relief:
-    """Edge relief of the bore: over `length` (m) from each end the bore radius grows along a
-    circular arc, tangent to the bore, to `depth` (m) more at the end face; the arc's radius
-    is r = (length^2 + depth^2) / (2 depth)."""
-
-    length: float
-    depth: float
-
-    def profile(self, z, z_low, z_high):
-        """delta(z), delta'(z), delta''(z) (m, -, 1/m) of the bore between z_low and z_high."""
-        r = (self.length**2 + self.depth**2) / (2 * self.depth)
-        into = np.maximum(0.0, self.length - np.minimum(z - z_low, z_high - z))  # arc coordinate
-        side = np.where(z - z_low < z_high - z, -1.0, 1.0)                      # d(into)/dz
-        root = np.sqrt(r**2 - into**2)
-        return r - root, side * into / root, np.where(into > 0, r**2 / root**3, 0.0)
 
 
 @dataclass
@@ -250,6 +235,9 @@ class Projection:
         return Projection(*(getattr(self, f.name)[index] for f in fields(self)))
 
 
+END_OVERHANG = 0.5  # of the end layer: how far the end patches continue past the bore's ends
+
+
 def closest_point(x: np.ndarray, bore: BoreSurface, newton_steps: int = 4, hops: int = 8):
     """The closest bore point to each x (n, d), a Projection."""
     k, xi = bracket(np.arctan2(x[:, 1], x[:, 0]), bore.angles)
@@ -279,10 +267,14 @@ def closest_point(x: np.ndarray, bore: BoreSurface, newton_steps: int = 4, hops:
         if not moved.any():
             break
     inside = np.ones(len(x), dtype=bool)
+    zeta[:, 0] = np.clip(zeta[:, 0], 0.0, 1.0)
     if bore.dim == 3:
-        slack = 1e-9
-        inside = (zeta[:, 1] >= -slack) & (zeta[:, 1] <= 1 + slack)
-    return Projection(k, l, np.clip(zeta, 0.0, 1.0), inside)
+        # Past the bore's ends the end patches continue smoothly (a pin node that moves a
+        # little beyond the end keeps its contact; cutting it off there made Newton cycle);
+        # further than half a layer, the node is out of contact.
+        inside = (zeta[:, 1] >= -END_OVERHANG) & (zeta[:, 1] <= 1 + END_OVERHANG)
+        zeta[:, 1] = np.clip(zeta[:, 1], -END_OVERHANG, 1 + END_OVERHANG)
+    return Projection(k, l, zeta, inside)
 
 
 @dataclass
@@ -346,14 +338,15 @@ def active_set(trial, bound, p, status, direction):
     last one (status, slip direction) and the slip bound mu p (Pa).
 
     The primal-dual active-set rule of Hueber, Stadler & Wohlmuth (2008): a node that was
-    slipping keeps slipping (shear = bound * trial/|trial|) while its trial shear along its
-    slip direction exceeds the bound, and sticks otherwise; any other node in contact sticks
-    if |trial| <= bound and slips if not; a node with p = 0 is open. A converged state is
-    the backward-Euler return map.
+    slipping keeps slipping (shear = bound * trial/|trial|) while |trial| exceeds the bound
+    and trial does not turn back against its slip direction (by more than 90 deg), and
+    sticks otherwise (in 2D: a node never slips back in one iterate); any other node in
+    contact sticks if |trial| <= bound and slips if not; a node with p = 0 is open. A
+    converged state is the backward-Euler return map.
     """
     size = np.linalg.norm(trial, axis=1)
     slipping = (status == SLIP) & (np.abs(direction).sum(axis=1) > 0)
-    keeps = slipping & (np.einsum("np,np->n", trial, direction) >= bound)
+    keeps = slipping & (size >= bound) & (np.einsum("np,np->n", trial, direction) > 0)
     stuck = np.where(slipping, ~keeps, size <= bound) & (bound > 0)
     unit = trial / np.maximum(size, np.finfo(float).tiny)[:, None]
     shear = np.where((p > 0)[:, None], np.where(stuck[:, None], trial, bound[:, None] * unit), 0.0)
@@ -363,6 +356,7 @@ def active_set(trial, bound, p, status, direction):
 OPEN, STICK, SLIP = 0, 1, 2
 STATE_NAMES = ("open", "stick", "slip")
 TANGENTIAL_PENALTY_RATIO = 0.1  # eps_T / eps: a stiffer stick made Newton cycle
+ACTIVE_SET_UPDATES = 5          # per Newton solve (see PinBoreContact.start_solve)
 
 
 @dataclass
@@ -453,6 +447,7 @@ class PinBoreContact:
         order_b, bore_grid = grid_order(bore_X)
         self.pin_X, self.pin_nodes = pin_X[order_p], pin_nodes[order_p]
         self.pin_reference = pin_ref[order_p]   # untilted: on the grid of angles x levels
+        self.pin_grid = pin_grid
         self.weights = tributary_weights(pin_ref[order_p], *pin_grid)
         angles, levels = bore_grid
         self.bore = BoreSurface(bore_radius, angles, np.zeros((len(bore_X), dim)), levels,
@@ -464,6 +459,17 @@ class PinBoreContact:
         self._scatter, self._local = self._make_scatter(template)
         self.friction = (Friction.at_rest(friction, TANGENTIAL_PENALTY_RATIO * penalty,
                                           len(self.pin_X), dim - 1) if friction > 0 else None)
+        self.active_set_updates = 0   # left in the current Newton solve (see start_solve)
+        self.normal_set = None        # the nodes in contact, once kept (see start_solve)
+
+    def mid_section(self) -> np.ndarray:
+        """Indices of the pin nodes in the plane section (2D: all; 3D: the level nearest the
+        pin's middle, the top level of a half model)."""
+        if self.dim == 2:
+            return np.arange(len(self.pin_X))
+        z = self.pin_reference[:, 2]
+        middle = z[np.argmin(np.abs(z - self.bore.end / 2))]
+        return np.flatnonzero(z == middle)
 
     def _gather(self, coords, global_nodes):
         coords = np.concatenate(self.comm.allgather(coords))
@@ -531,8 +537,20 @@ class PinBoreContact:
         moved = np.linalg.norm(state.position - self.friction.s_n, axis=1)
         return float(moved[state.status == STICK].max(initial=0.0))
 
+    def start_solve(self) -> None:
+        """With friction, let the next Newton solve update the active sets (stick/slip, and
+        the nodes in contact) at its first ACTIVE_SET_UPDATES residual evaluations, then
+        keep both: Newton then solves a smooth problem and converges, and a set that was
+        still changing (nodes flipping between two states) is settled by the next solve."""
+        self.active_set_updates = ACTIVE_SET_UPDATES
+        self.normal_set = None
+
     def friction_settled(self, state: ContactState) -> bool:
-        return self.friction is None or self.friction.settled(state)
+        """Whether the last solve's active sets are those of its solution."""
+        if self.friction is None:
+            return True
+        in_contact = self.normal_set is None or np.array_equal(state.pressure > 0, self.normal_set)
+        return in_contact and self.friction.settled(state)
 
     def update_friction(self, state: ContactState) -> None:
         if self.friction is not None:
@@ -557,8 +575,13 @@ class PinBoreContact:
         """Active nodes: their indices, global rows (n, (1 + c) d) and residual (n, (1 + c) d)
         [, tangent (n, (1 + c) d, (1 + c) d)]."""
         kin = self._kinematics(u)
-        p = pressure(self.lam, self.penalty, kin.gap)
-        act = np.flatnonzero(p > 0)
+        if self.normal_set is None:
+            p = pressure(self.lam, self.penalty, kin.gap)
+            act = np.flatnonzero(p > 0)
+        else:   # the kept set: its nodes are pressed by lambda - eps g, whatever its sign
+            act = np.flatnonzero(self.normal_set)
+            p = np.zeros_like(kin.gap)
+            p[act] = self.lam[act] - self.penalty * kin.gap[act]
         proj = kin.projection
         corners = self.bore.corners(proj.k[act], proj.l[act])
         rows = np.concatenate([self.pin_rows[act, None], self.bore_rows[corners]], axis=1)
@@ -572,9 +595,9 @@ class PinBoreContact:
         if f is not None:
             sub = kin.take(act)
             grad_s = slip_gradient(sub, self.bore)                            # (n, p, rows)
-            stuck = f.status[act] == STICK
             trial = f.multiplier[act] + f.penalty * (self._position(sub, f.s_n[act]) - f.s_n[act])
             size = np.linalg.norm(trial, axis=1)
+            stuck = f.status[act] == STICK
             unit = np.divide(trial, size[:, None], out=np.zeros_like(trial), where=size[:, None] > 0)
             shear = np.where(stuck[:, None], trial, (f.mu * pa)[:, None] * unit)
             residual += np.einsum("np,npr->nr", shear, grad_s)
@@ -599,8 +622,11 @@ class PinBoreContact:
 
     def add_residual(self, u: PETSc.Vec, F: PETSc.Vec) -> None:
         """F += f_c(u). Collective; call F.assemble() afterwards."""
-        if self.friction is not None:
+        if self.friction is not None and self.active_set_updates > 0:
+            self.active_set_updates -= 1
             self.friction.freeze(self.state(u))  # the active-set update of this iterate
+        elif self.friction is not None and self.normal_set is None:
+            self.normal_set = self.state(u).pressure > 0
         _, rows, residual, _ = self._local_terms(u, with_tangent=False)
         if self.comm.rank == 0:
             F.setValues(rows.ravel(), residual.ravel(), addv=PETSc.InsertMode.ADD_VALUES)

@@ -1,13 +1,16 @@
-"""Plane-strain linear elasticity of the two bodies, the way a DOLFINx demo writes it.
+"""Linear elasticity of the two bodies, plane strain (2D) or 3D, the way a DOLFINx demo
+writes it.
 
 Small strain, isotropic, each body with its own (E, nu):
 
     sigma(u) = lambda tr(eps(u)) I + 2 mu eps(u),   eps(u) = sym(grad u),
-    a(u, v)  = int_Omega sigma(u) : eps(v) dx          (per unit thickness, N/m)
+    a(u, v)  = int_Omega sigma(u) : eps(v) dx          (2D: per unit thickness, N/m)
 
 Plane strain keeps eps_zz = 0, so sigma_zz = nu (sigma_xx + sigma_yy); the von Mises stress
-includes it. The stiffness is linear and assembled once; the contact terms are added to it
-at every Newton iteration.
+includes it. Boundary conditions: the hub (the pin's bore) moves rigidly, the housing's outer
+surface is clamped, the 3D ends are free, and a 3D half model holds u_z = 0 on its plane of
+symmetry. The stiffness is linear and assembled once; the contact terms are added to it at
+every Newton iteration.
 """
 
 import dolfinx_solver  # noqa: F401  (must precede dolfinx)
@@ -15,9 +18,10 @@ import dolfinx
 import dolfinx.fem.petsc
 import numpy as np
 import ufl
+from mpi4py import MPI
 from petsc4py import PETSc
 
-from meshes.model import BORE_SURFACE, HOUSING, HOUSING_EDGE, HUB, PIN, PIN_SURFACE
+from meshes.model import BORE_SURFACE, HOUSING, HOUSING_EDGE, HUB, PIN, PIN_SURFACE, SYMMETRY
 
 
 def lame(E: float, nu: float) -> tuple[float, float]:
@@ -40,7 +44,8 @@ class Elasticity:
 
     def __init__(self, mesh, cell_tags, facet_tags, pin_material, bore_material):
         self.mesh = mesh
-        self.V = V = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (2,)))
+        self.dim = dim = mesh.geometry.dim
+        self.V = V = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (dim,)))
         lam_pin, mu_pin = lame(pin_material.E, pin_material.nu)
         lam_bore, mu_bore = lame(bore_material.E, bore_material.nu)
         self.lmbda = piecewise(mesh, cell_tags, {PIN: lam_pin, HOUSING: lam_bore})
@@ -56,9 +61,14 @@ class Elasticity:
                                        ("pin_surface", PIN_SURFACE), ("bore_surface", BORE_SURFACE))}
         self.pin_nodes = dolfinx.fem.locate_dofs_topological(V, mesh.topology.dim, cell_tags.find(PIN))
         self.hub_motion = dolfinx.fem.Function(V)
-        self.hub_X = V.tabulate_dof_coordinates()[self.dofs["hub"], :2]
+        self.hub_X = V.tabulate_dof_coordinates()[self.dofs["hub"], :dim]
         self.bcs = [dolfinx.fem.dirichletbc(self.hub_motion, self.dofs["hub"]),
-                    dolfinx.fem.dirichletbc(np.zeros(2), self.dofs["housing_edge"], V)]
+                    dolfinx.fem.dirichletbc(np.zeros(dim), self.dofs["housing_edge"], V)]
+        self.symmetric = bool(mesh.comm.allreduce(int(SYMMETRY in facet_tags.values), op=MPI.MAX))
+        if self.symmetric:
+            axial = V.sub(2)
+            plane = dolfinx.fem.locate_dofs_topological(axial, fdim, facet_tags.find(SYMMETRY))
+            self.bcs.append(dolfinx.fem.dirichletbc(0.0, plane, axial))
 
         # K: full stiffness, for residuals and reactions. K_bc: rows and columns of prescribed
         # dofs replaced by the identity, the Jacobian of the constrained problem.
@@ -71,10 +81,15 @@ class Elasticity:
         return ufl.sym(ufl.grad(u))
 
     def sigma(self, u):
-        return self.lmbda * ufl.tr(self.epsilon(u)) * ufl.Identity(2) + 2 * self.mu * self.epsilon(u)
+        return (self.lmbda * ufl.tr(self.epsilon(u)) * ufl.Identity(self.dim)
+                + 2 * self.mu * self.epsilon(u))
 
     def von_mises(self, u) -> ufl.core.expr.Expr:
-        """sqrt(3/2 s:s) of the plane-strain stress, with sigma_zz = nu (sigma_xx + sigma_yy)."""
+        """sqrt(3/2 s:s), s the deviatoric stress; plane strain with sigma_zz = nu
+        (sigma_xx + sigma_yy)."""
+        if self.dim == 3:
+            s3 = ufl.dev(self.sigma(u))
+            return ufl.sqrt(1.5 * ufl.inner(s3, s3))
         s2 = self.sigma(u)
         nu = self.lmbda / (2 * (self.lmbda + self.mu))
         s_zz = nu * ufl.tr(s2)
@@ -91,7 +106,7 @@ class Elasticity:
         """Write the prescribed values into x: the hub moves rigidly, translated by `shift`
         (m) and turned by `rotation` (rad, linearised, u = shift + rotation e_z x X, the
         small-strain rigid motion), the outer edge stays clamped."""
-        self.hub_motion.x.array.reshape(-1, 2)[self.dofs["hub"]] = rigid_motion(
+        self.hub_motion.x.array.reshape(-1, self.dim)[self.dofs["hub"]] = rigid_motion(
             self.hub_X, shift, rotation)
         dolfinx.fem.petsc.set_bc(x, self.bcs)
 
@@ -99,9 +114,15 @@ class Elasticity:
         """A vector that moves every pin node rigidly (see set_boundary_values), the housing
         at rest."""
         f = dolfinx.fem.Function(self.V)
-        X = self.V.tabulate_dof_coordinates()[self.pin_nodes, :2]
-        f.x.array.reshape(-1, 2)[self.pin_nodes] = rigid_motion(X, shift, rotation)
+        X = self.V.tabulate_dof_coordinates()[self.pin_nodes, :self.dim]
+        f.x.array.reshape(-1, self.dim)[self.pin_nodes] = rigid_motion(X, shift, rotation)
         return f.x.petsc_vec.copy()
+
+    def prescribed_rows(self) -> np.ndarray:
+        """Global rows of the prescribed dofs owned by this rank."""
+        imap, bs = self.V.dofmap.index_map, self.V.dofmap.index_map_bs
+        local = [bc.dof_indices()[0][:bc.dof_indices()[1]] for bc in self.bcs]
+        return (imap.local_range[0] * bs + np.unique(np.concatenate(local))).astype(PETSc.IntType)
 
     def zero_prescribed(self, F: PETSc.Vec) -> None:
         """F = 0 at the prescribed dofs (their values are set, not solved for)."""
@@ -112,15 +133,18 @@ class Elasticity:
         self.K.mult(x, out)
 
     def hub_reaction(self, x: PETSc.Vec, work: PETSc.Vec) -> np.ndarray:
-        """Force (N/m) the hub exerts on the pin, summed over its dofs: (K x) at the hub."""
+        """Force (N/m in 2D, N in 3D) the hub exerts on the pin, summed over its dofs: (K x)
+        at the hub."""
         self.K.mult(x, work)
-        local = work.getArray(readonly=True).reshape(-1, 2)
+        local = work.getArray(readonly=True).reshape(-1, self.dim)
         hub = self.dofs["hub"]
         owned = hub[hub < self.V.dofmap.index_map.size_local]
         return self.mesh.comm.allreduce(local[owned].sum(axis=0))
 
 
 def rigid_motion(X: np.ndarray, shift, rotation: float) -> np.ndarray:
-    """Small-strain rigid motion u = shift + rotation e_z x X of points X (n, 2) about the
-    origin (the pin's axis in the reference configuration)."""
-    return np.asarray(shift) + rotation * np.stack([-X[:, 1], X[:, 0]], axis=1)
+    """Small-strain rigid motion u = shift + rotation e_z x X of points X (n, 2 or 3) about
+    the z axis (the pin's axis in the reference configuration)."""
+    turn = np.zeros_like(X)
+    turn[:, 0], turn[:, 1] = -X[:, 1], X[:, 0]
+    return np.asarray(shift) + rotation * turn

@@ -10,9 +10,12 @@ from fem.elasticity import Elasticity
 from fem.scene import FemScene
 from fem.solver import LoadStepper
 from meshes import pin_in_bore
+from meshes.model import Relief
 from meshes.sizing import estimate_sizing
 
-DEFAULT_PENALTY_FACTOR = 100.0
+# eps = factor E*/h. In 3D a stiffer penalty made the frictional Newton cycle at the edges of
+# the contact (coarse 3D meshes); the augmented Lagrangian makes either exact.
+DEFAULT_PENALTY_FACTOR = {2: 100.0, 3: 10.0}
 DEFAULT_GAP_TOLERANCE = 1e-4  # fraction of max_approach
 
 
@@ -26,14 +29,14 @@ def mesh_of(scene: FemScene, comm=MPI.COMM_WORLD):
     sizing = sizing_of(scene)
     with pin_in_bore.session():
         if comm.rank == 0:
-            pin_in_bore.build(scene.geometry, sizing, scene.load.direction_deg, scene.mesh.layers)
+            pin_in_bore.build(scene.geometry, sizing, scene.load.direction_deg, scene.mesh)
         data = dolfinx.io.gmsh.model_to_mesh(pin_in_bore.gmsh.model, comm, 0, gdim=scene.geometry.dim)
     return data, sizing
 
 
 def penalty_of(scene: FemScene, contact_size: float) -> float:
     """Penalty stiffness eps = factor * E* / h (Pa/m), h the element size on the contact arc."""
-    factor = scene.contact.penalty_factor or DEFAULT_PENALTY_FACTOR
+    factor = scene.contact.penalty_factor or DEFAULT_PENALTY_FACTOR[scene.geometry.dim]
     return factor * scene.effective_modulus / contact_size
 
 
@@ -49,6 +52,23 @@ def residual_tolerance(scene: FemScene, penalty_per_node: float) -> float:
     return max(1e-9 * scene.effective_modulus * scene.load.max_approach, floor)
 
 
+def tilt_frame(scene: FemScene) -> np.ndarray:
+    """The pin's tilt (geometry.tilt_frame) in the scene's frame, the load along its direction."""
+    a = np.radians(scene.load.direction_deg - pin_in_bore.CANONICAL_DIRECTION_DEG)
+    turn = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
+    return turn @ scene.geometry.tilt_frame @ turn.T
+
+
+def first_touch(pin_X: np.ndarray, direction, geometry) -> float:
+    """Hub travel (m) along `direction` at which the first pin node meets the bore: the
+    clearance, or less for a tilted pin (its end reaches out)."""
+    if not geometry.tilt_deg:
+        return geometry.clearance
+    along = pin_X[:, :2] @ np.asarray(direction)[:2]
+    radius = geometry.bore_radius_at(pin_X[:, 2])
+    return float(np.min(-along + np.sqrt(along**2 - np.sum(pin_X[:, :2]**2, axis=1) + radius**2)))
+
+
 def build(scene: FemScene, comm=MPI.COMM_WORLD):
     """Everything needed to solve the scene: (stepper, elasticity, contact, sizing, mesh data)."""
     data, sizing = mesh_of(scene, comm)
@@ -56,12 +76,16 @@ def build(scene: FemScene, comm=MPI.COMM_WORLD):
                     scene.materials.pin, scene.materials.bore)
     owned = el.V.dofmap.index_map.size_local
     surface = [d[d < owned] for d in (el.dofs["pin_surface"], el.dofs["bore_surface"])]
-    contact = PinBoreContact(el.V, *surface, scene.geometry.bore_radius,
-                             penalty_of(scene, sizing.contact_size), el.K.createVecRight(),
-                             friction=scene.contact.friction)
+    g = scene.geometry
+    three_d = {} if g.dim == 2 else {
+        "relief": Relief(g.relief_length, g.relief_depth) if g.relief_length else None,
+        "bore_end": g.length, "pin_frame": tilt_frame(scene), "pivot": g.length / 2}
+    contact = PinBoreContact(el.V, *surface, g.bore_radius, penalty_of(scene, sizing.contact_size),
+                             el.K.createVecRight(), friction=scene.contact.friction, **three_d)
+    direction = np.append(scene.load.direction, [0.0] * (g.dim - 2))
     tolerance = scene.contact.gap_tolerance or DEFAULT_GAP_TOLERANCE * scene.load.max_approach
-    stepper = LoadStepper(el, contact, clearance=scene.geometry.clearance,
-                          direction=scene.load.direction, method=scene.contact.method,
+    stepper = LoadStepper(el, contact, clearance=first_touch(contact.pin_X, direction, g),
+                          direction=direction, method=scene.contact.method,
                           gap_tolerance=tolerance, newton_max_it=scene.solver.newton_max_it,
                           uzawa_max_it=scene.solver.uzawa_max_it,
                           max_cutbacks=scene.solver.max_cutbacks,

@@ -1,4 +1,8 @@
-"""Files of an FE run: curve.csv, pressure.csv, result.json, fields (XDMF) and a picture."""
+"""Files of an FE run: curve.csv, pressure.csv, result.json, fields (XDMF) and pictures
+(2D: contact.png; 3D: pressure_map.png and axial_profile.png).
+
+Forces, torques and work are per unit length in 2D and of the whole pin in 3D (a half model
+counts twice); 3D half-angles are those of the section at the pin's middle."""
 
 import csv
 import json
@@ -10,17 +14,22 @@ import dolfinx.io
 import matplotlib
 import numpy as np
 
-from fem.contact import OPEN, SLIP, STATE_NAMES, STICK
+from fem.contact import OPEN, SLIP, STATE_NAMES, STICK, tributary_lengths
 from fem.post import angle_from, half_angle
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-CURVE_COLUMNS = ["step", "stage", "approach_m", "rotation_deg", "tangential_push_m",
-                 "force_per_length_N_per_m", "tangential_force_per_length_N_per_m",
-                 "friction_torque_per_length_N", "half_angle_deg", "stick_fraction",
-                 "dissipated_work_J_per_m", "newton_iterations", "uzawa_iterations",
-                 "gap_violation_m"]
+RESULTANTS = {2: ["force_per_length_N_per_m", "tangential_force_per_length_N_per_m",
+                  "friction_torque_per_length_N", "dissipated_work_J_per_m"],
+              3: ["force_N", "tangential_force_N", "friction_torque_N_m", "dissipated_work_J"]}
+
+
+def curve_columns(dim: int) -> list[str]:
+    force, tangential, torque, work = RESULTANTS[dim]
+    return ["step", "stage", "approach_m", "rotation_deg", "tangential_push_m", force,
+            tangential, torque, "half_angle_deg", "stick_fraction", work, "newton_iterations",
+            "uzawa_iterations", "gap_violation_m"]
 
 
 def stage_of(step) -> str:
@@ -28,43 +37,50 @@ def stage_of(step) -> str:
     return "rotate" if step.point[1] else ("slide" if step.point[2] else "push")
 
 
-def curve_rows(run, direction_deg):
+def curve_rows(run, direction_deg, section):
     dissipated = 0.0
     for i, step in enumerate(run.steps, start=1):
-        alpha = angle_from(direction_deg, step.contact.angle)
+        alpha = angle_from(direction_deg, step.contact.angle[section])
         touching = step.contact.status != OPEN
         stuck = np.count_nonzero(step.contact.status == STICK) / max(np.count_nonzero(touching), 1)
         dissipated += step.dissipated
         yield [i, stage_of(step), step.point[0], np.degrees(step.point[1]), step.point[2],
                step.force[0], step.force[1], step.torque,
-               np.degrees(half_angle(alpha, step.contact.pressure)), stuck, dissipated,
+               np.degrees(half_angle(alpha, step.contact.pressure[section])), stuck, dissipated,
                step.newton_iterations, step.uzawa_iterations, step.gap_violation]
 
 
-def write_curve(path: Path, run, direction_deg) -> None:
-    """One row per converged step; forces, torque and work per unit length of the pin."""
+def write_curve(path: Path, run, direction_deg, contact) -> None:
+    """One row per converged step (see the module docstring for the units)."""
     with open(path, "w", newline="") as f:
         out = csv.writer(f)
-        out.writerow(CURVE_COLUMNS)
-        for row in curve_rows(run, direction_deg):
+        out.writerow(curve_columns(contact.dim))
+        for row in curve_rows(run, direction_deg, contact.mid_section()):
             out.writerow(row[:2] + [f"{v:.9e}" for v in row[2:8]]
                          + [f"{row[8]:.6f}", f"{row[9]:.4f}", f"{row[10]:.9e}",
                             row[11], row[12], f"{row[13]:.3e}"])
 
 
-def write_pressure(path: Path, run, direction_deg, arc_half_angle) -> None:
-    """Nodal pressure, shear (on the bore, along +theta) and stick/slip/open state on the
-    refined arc (where contact can be), by angle from the load."""
+def write_pressure(path: Path, run, direction_deg, arc_half_angle, contact) -> None:
+    """Nodal pressure, shear on the bore (along +theta; 3D: and +z) and stick/slip/open
+    state on the refined arc (where contact can be), by angle from the load (3D: and by the
+    axial position z of the node on the untilted pin, over the modelled length)."""
+    three_d = contact.dim == 3
     with open(path, "w", newline="") as f:
         out = csv.writer(f)
-        out.writerow(["step", "angle_deg", "pressure_Pa", "shear_Pa", "state"])
+        out.writerow(["step", "angle_deg"] + ["z_m"] * three_d + ["pressure_Pa", "shear_Pa"]
+                     + ["shear_axial_Pa"] * three_d + ["state"])
         for i, step in enumerate(run.steps, start=1):
             c = step.contact
             alpha = angle_from(direction_deg, c.angle)
             keep = np.flatnonzero(np.abs(alpha) <= arc_half_angle)
-            for j in keep[np.argsort(alpha[keep])]:
-                out.writerow([i, f"{np.degrees(alpha[j]):.6f}", f"{c.pressure[j]:.9e}",
-                              f"{c.shear[j, 0]:.9e}", STATE_NAMES[c.status[j]]])
+            level = contact.pin_reference[keep, 2] if three_d else np.zeros(keep.size)
+            for j in keep[np.lexsort((alpha[keep], level))]:
+                where = [f"{np.degrees(alpha[j]):.6f}"]
+                if three_d:
+                    where.append(f"{contact.pin_reference[j, 2]:.9e}")
+                out.writerow([i] + where + [f"{c.pressure[j]:.9e}"]
+                             + [f"{v:.9e}" for v in c.shear[j]] + [STATE_NAMES[c.status[j]]])
 
 
 def write_result(path: Path, result: dict) -> None:
@@ -195,3 +211,62 @@ def shear_panel(ax, run, scene, arc_half_angle):
     ax.set_title("friction: shear at every step")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
+
+
+def pressure_grid(contact, values, symmetric: bool):
+    """Nodal values of the pin surface as a grid (levels, angles), the angles and the levels
+    z (m); a half model mirrored about its top level to the whole pin."""
+    angles, levels = contact.pin_grid
+    grid = values.reshape(levels.size, angles.size)
+    if symmetric:
+        levels = np.concatenate([levels, 2 * levels[-1] - levels[-2::-1]])
+        grid = np.concatenate([grid, grid[-2::-1]])
+    return grid, angles, levels
+
+
+def pressure_pictures(folder: Path, run, scene, contact) -> None:
+    """3D: the contact pressure of the last step on the pin's surface (pressure_map.png,
+    pyvista off-screen), and its peak and resultant along the axis at every step
+    (axial_profile.png)."""
+    import pyvista
+
+    symmetric = contact.bore.end > 1.5 * contact.pin_grid[1][-1]   # modelled half the length
+    last = run.steps[-1]
+    grid, angles, levels = pressure_grid(contact, last.contact.pressure, symmetric)
+    theta = np.append(angles, angles[0] + 2 * np.pi)
+    grid = np.concatenate([grid, grid[:, :1]], axis=1)
+    t, z = np.meshgrid(theta, levels)
+    r = scene.geometry.pin_radius
+    surface = pyvista.StructuredGrid(r * np.cos(t), r * np.sin(t), z)
+    surface["pressure (MPa)"] = grid.ravel(order="F") / 1e6
+    plotter = pyvista.Plotter(off_screen=True, window_size=(1200, 900))
+    plotter.add_mesh(surface, scalars="pressure (MPa)", cmap="viridis", smooth_shading=True)
+    d = np.asarray(scene.load.direction)
+    middle = 0.5 * levels[-1]
+    plotter.camera_position = [(3 * r * d[0] - 2 * r * d[1], 3 * r * d[1] + 2 * r * d[0],
+                                middle + 0.6 * levels[-1]), (0, 0, middle), (0, 0, 1)]
+    plotter.add_text(f"contact pressure on the pin, approach {last.approach * 1e6:.3g} um, "
+                     f"tilt {scene.geometry.tilt_deg:g} deg", font_size=10)
+    plotter.screenshot(str(folder / "pressure_map.png"))
+    plotter.close()
+
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 4.5))
+    ring = tributary_lengths(contact.pin_reference[:angles.size, :2])
+    for i, step in enumerate(run.steps, start=1):
+        p, _, z = pressure_grid(contact, step.contact.pressure, symmetric)
+        along, _, _ = pressure_grid(contact, np.cos(step.contact.angle - np.arctan2(d[1], d[0])),
+                                    symmetric)
+        colour = plt.cm.plasma(i / (len(run.steps) + 1))
+        ax.plot(z * 1e3, p.max(axis=1) / 1e6, color=colour, lw=1)
+        bx.plot(z * 1e3, (p * along * ring).sum(axis=1) / 1e3, color=colour, lw=1)
+    ax.set_xlabel("z (mm)")
+    ax.set_ylabel("peak contact pressure (MPa)")
+    ax.set_title("peak pressure along the pin, every step")
+    bx.set_xlabel("z (mm)")
+    bx.set_ylabel("line load along the load (kN/m)")
+    bx.set_title("pressure resultant per unit length")
+    for a in (ax, bx):
+        a.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(folder / "axial_profile.png", dpi=110)
+    plt.close(fig)

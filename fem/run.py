@@ -14,21 +14,12 @@ from tqdm import tqdm
 from fem import model, outputs
 from fem.scene import FemScene
 from pinbore import scene as scenes
-from pinbore.errors import InputError
 from pinbore.output import atomic_directory
-
-
-def load_scene(path) -> FemScene:
-    scene = scenes.load(FemScene, path)
-    if scene.geometry.dim != 2:
-        raise InputError(f"{path}: geometry.dim: the FE solver is 2D so far (3D contact is "
-                         "issue 3); `pinbore mesh` builds the 3D mesh")
-    return scene
 
 
 def run(scene_path, out, comm=MPI.COMM_WORLD) -> int:
     """Solve and write DIR; 0 when every step converged, 1 when the run stopped early."""
-    scene = load_scene(scene_path)
+    scene = scenes.load(FemScene, scene_path)
     start = time.perf_counter()
     with atomic_directory(out, comm) as tmp:
         stepper, el, contact, sizing, data = model.build(scene, comm)
@@ -44,11 +35,16 @@ def run(scene_path, out, comm=MPI.COMM_WORLD) -> int:
             fields.close()
         solve = time.perf_counter() - start - setup
         if result.steps and scene.output.picture:
-            outputs.picture(tmp / "contact.png", el, stepper.x, result, scene, sizing.arc_half_angle)
+            if scene.geometry.dim == 2:
+                outputs.picture(tmp / "contact.png", el, stepper.x, result, scene,
+                                sizing.arc_half_angle)
+            elif comm.rank == 0:
+                outputs.pressure_pictures(tmp, result, scene, contact)
         if comm.rank == 0:
             direction = scene.load.direction_deg
-            outputs.write_curve(tmp / "curve.csv", result, direction)
-            outputs.write_pressure(tmp / "pressure.csv", result, direction, sizing.arc_half_angle)
+            outputs.write_curve(tmp / "curve.csv", result, direction, contact)
+            outputs.write_pressure(tmp / "pressure.csv", result, direction, sizing.arc_half_angle,
+                                   contact)
             outputs.write_result(tmp / "result.json", summary(
                 scene, scene_path, result, el, contact, stepper, sizing, comm,
                 {"setup": setup, "solve": solve, "total": time.perf_counter() - start}))
@@ -59,6 +55,17 @@ def run(scene_path, out, comm=MPI.COMM_WORLD) -> int:
                   file=sys.stderr)
         return 1
     return 0
+
+
+def symmetry_note(scene, el) -> str | None:
+    """What result.json says about the model's extent (3D)."""
+    if scene.geometry.dim == 2:
+        return None
+    if el.symmetric:
+        return ("half model z <= length/2, u_z = 0 on the mid-plane; forces, torque and work "
+                "are those of the whole pin, pressure.csv covers the modelled half")
+    why = "tilted pin" if scene.geometry.tilt_deg else "mesh.symmetry = false"
+    return f"full model ({why})"
 
 
 def summary(scene, scene_path, result, el, contact, stepper, sizing, comm, wall):
@@ -73,8 +80,9 @@ def summary(scene, scene_path, result, el, contact, stepper, sizing, comm, wall)
         "ranks": comm.size,
         "mesh": {"contact_size_m": sizing.contact_size,
                  "refined_arc_half_angle_deg": math.degrees(sizing.arc_half_angle),
-                 "cells": el.mesh.topology.index_map(2).size_global,
-                 "pin_surface_nodes": len(contact.pin_X)},
+                 "cells": el.mesh.topology.index_map(scene.geometry.dim).size_global,
+                 "pin_surface_nodes": len(contact.pin_X),
+                 "symmetry": symmetry_note(scene, el)},
         "contact": {"method": scene.contact.method, "penalty_Pa_per_m": contact.penalty,
                     "gap_tolerance_m": stepper.gap_tolerance
                     if scene.contact.method == "augmented-lagrangian" else None,

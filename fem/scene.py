@@ -128,6 +128,8 @@ class FemScene(Strict):
             raise ValueError("mesh.contact_size must be smaller than pin_radius - hub_radius")
         if self.load.max_approach >= self.geometry.pin_radius - self.geometry.hub_radius:
             raise ValueError("load.max_approach must be smaller than the pin wall (small strain)")
+        if self.mesh.symmetry and self.geometry.tilt_deg:
+            raise ValueError("mesh.symmetry: a tilted pin is not symmetric about the mid-plane")
         if self.load.rotation_deg is not None:
             phi = math.radians(self.load.rotation_deg)
             if self.geometry.pin_radius * phi**2 / 2 > 0.01 * self.load.max_approach:

@@ -17,7 +17,8 @@ augmented-lagrangian: after each Newton solve the multipliers take the converged
 is below `gap_tolerance`; the normal ones start each step from the extrapolation of the
 last two steps, so one or two solves per step usually suffice. The predictor extrapolates
 along the programme only while the step continues the previous one; at a change of
-programme (push to rotation) it moves the pin rigidly with the hub.
+programme (push to rotation) it starts from the last state with only the hub moved: moving
+the pin rigidly with the hub sent every stuck node past its bound and Newton cycled.
 
 A step whose Newton (or Uzawa) iteration fails is retried from the last converged state
 with half the increment, up to `max_cutbacks` times per load step (converged intermediate
@@ -44,9 +45,9 @@ class StepResult:
     """One converged load step."""
 
     point: np.ndarray            # (approach (m), rotation (rad), tangential push (m))
-    force: np.ndarray            # N/m, hub force on the pin along (d, d_perp)
-    torque: float                # N m/m, friction torque about the pin's axis (contact.torque)
-    dissipated: float            # J/m, frictional work of this step
+    force: np.ndarray            # N/m (3D: N), hub force on the pin along (d, d_perp)
+    torque: float                # N m/m (3D: N m), friction torque about the pin's axis
+    dissipated: float            # J/m (3D: J), frictional work of this step
     newton_iterations: int       # summed over Uzawa updates
     uzawa_iterations: int
     gap_violation: float         # m, largest penetration
@@ -79,11 +80,14 @@ class LoadStepper:
                  method, gap_tolerance, newton_max_it, uzawa_max_it, max_cutbacks, force_atol):
         self.el, self.contact = elasticity, contact
         self.clearance, self.direction = clearance, np.asarray(direction, dtype=float)
-        self.across = np.array([-self.direction[1], self.direction[0]])
+        self.across = np.zeros_like(self.direction)      # e_z x direction
+        self.across[:2] = -self.direction[1], self.direction[0]
         self.method, self.gap_tolerance = method, gap_tolerance
         self.augmented = method == "augmented-lagrangian"
         self.uzawa_max_it = uzawa_max_it if self.augmented or contact.friction else 1
         self.max_cutbacks = max_cutbacks
+        self.prescribed = elasticity.prescribed_rows()
+        self.copies = 2 if elasticity.symmetric else 1  # a half model reports the whole pin
         self.x = elasticity.K.createVecRight()
         self.work = self.x.duplicate()
         self.snes = self._make_snes(newton_max_it, force_atol)
@@ -121,6 +125,7 @@ class LoadStepper:
         J.axpy(1.0, self.el.K_bc, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
         self.contact.add_tangent(x, J)
         J.assemble()
+        J.zeroRows(self.prescribed, diag=1.0)  # contact terms on a plane of symmetry
 
     def run(self, programme, progress=None, on_step=None) -> Run:
         """Solve for each load point in turn (see the module docstring); cut back and retry
@@ -159,7 +164,8 @@ class LoadStepper:
 
     def _predict(self, history, target):
         """Half-secant extrapolation of displacements and normal multipliers while the step
-        continues the previous one; else the pin moved rigidly with the hub."""
+        continues the previous one; at a change of programme the last state (the hub alone
+        moves); at the first step the pin moved rigidly with the hub."""
         point, x, snapshot = history[-1]
         self.contact.restore(snapshot)
         step = target - point
@@ -171,6 +177,7 @@ class LoadStepper:
                 lam = self.contact.lam
                 self.contact.lam = np.maximum(lam + ratio * (lam - lam_0), 0.0)
                 return x + ratio * (x - x_0)
+            return x.copy()  # a new programme: only the hub moves (the pin is held by friction)
         return x + self.el.pin_rigid_motion(step[0] * self.direction + step[2] * self.across,
                                             step[1])
 
@@ -181,6 +188,7 @@ class LoadStepper:
         self.el.set_boundary_values(self.x, self.hub_shift(target), target[1])
         newton, reasons = 0, []
         for uzawa in range(1, self.uzawa_max_it + 1):
+            self.contact.start_solve()
             self.snes.solve(None, self.x)
             reason = self.snes.getConvergedReason()
             newton += self.snes.getIterationNumber()
@@ -199,11 +207,11 @@ class LoadStepper:
             return (f"augmented Lagrangian left a penetration (or stuck-node slip) of "
                     f"{worst:.3g} m > gap_tolerance {self.gap_tolerance:.3g} m after "
                     f"{self.uzawa_max_it} updates")
-        force = self.el.hub_reaction(self.x, self.work)
-        torque = self.contact.torque(self.x, self.hub_shift(target))
+        force = self.copies * self.el.hub_reaction(self.x, self.work)
+        torque = self.copies * self.contact.torque(self.x, self.hub_shift(target))
         return StepResult(target, np.array([force @ self.direction, force @ self.across]), torque,
-                          state.dissipated(self.contact.weights), newton, uzawa, violation,
-                          reasons, state, time.perf_counter() - start)
+                          self.copies * state.dissipated(self.contact.weights), newton, uzawa,
+                          violation, reasons, state, time.perf_counter() - start)
 
     def hub_shift(self, point) -> np.ndarray:
         return (self.clearance + point[0]) * self.direction + point[2] * self.across

@@ -1,7 +1,10 @@
 """The geometry and meshing tables of a scene, and the physical-group tags every stage uses."""
 
+import math
+from dataclasses import dataclass
 from typing import Literal
 
+import numpy as np
 import pydantic
 
 from pinbore.scene import Strict
@@ -10,10 +13,36 @@ from pinbore.scene import Strict
 PIN, HOUSING = 1, 2
 HUB, PIN_SURFACE, BORE_SURFACE, HOUSING_EDGE = 11, 12, 13, 14
 PIN_ENDS, HOUSING_ENDS = 15, 16  # 3D only: the planes z = 0 and z = length
+SYMMETRY = 17                    # 3D half model: the mid-plane z = length / 2 of both bodies
+
+
+@dataclass(frozen=True)
+class Relief:
+    """Edge relief of the bore: over `length` (m) from each end the bore radius grows along a
+    circular arc, tangent to the bore, to `depth` (m) more at the end face; the arc's radius
+    is r = (length^2 + depth^2) / (2 depth)."""
+
+    length: float
+    depth: float
+
+    def profile(self, z, z_low, z_high):
+        """delta(z), delta'(z), delta''(z) (m, -, 1/m) of the bore between z_low and z_high."""
+        r = (self.length**2 + self.depth**2) / (2 * self.depth)
+        into = np.clip(self.length - np.minimum(z - z_low, z_high - z), 0.0, self.length)
+        side = np.where(z - z_low < z_high - z, -1.0, 1.0)                      # d(into)/dz
+        root = np.sqrt(r**2 - into**2)
+        return r - root, side * into / root, np.where(into > 0, r**2 / root**3, 0.0)
 
 
 class Geometry(Strict):
-    """Pin (with a rigid hub) inside the bore of an annular housing; SI units (m)."""
+    """Pin (with a rigid hub) inside the bore of an annular housing; SI units (m).
+
+    3D: pin and housing of the same `length` along z. `tilt_deg` tilts the pin about the
+    axis through its middle normal to the load (the end z = length leans towards the load:
+    edge loading); `relief_length` and `relief_depth` round the bore's edges (see
+    Relief): a profile of micrometres that the contact sees exactly and the mesh, built
+    cylindrical, does not.
+    """
 
     dim: Literal[2, 3]
     pin_radius: float = pydantic.Field(gt=0)
@@ -21,6 +50,9 @@ class Geometry(Strict):
     housing_radius: float = pydantic.Field(gt=0)
     hub_radius: float = pydantic.Field(gt=0)
     length: float | None = pydantic.Field(default=None, gt=0)
+    tilt_deg: float = pydantic.Field(default=0.0, ge=-10, le=10)
+    relief_length: float | None = pydantic.Field(default=None, gt=0)
+    relief_depth: float | None = pydantic.Field(default=None, gt=0)
 
     @pydantic.model_validator(mode="after")
     def _consistent(self):
@@ -32,7 +64,52 @@ class Geometry(Strict):
             raise ValueError("housing_radius must exceed bore_radius")
         if self.dim == 3 and self.length is None:
             raise ValueError("length is required when dim = 3")
+        three_d = {"tilt_deg": self.tilt_deg or None,
+                   "relief_length": self.relief_length, "relief_depth": self.relief_depth}
+        for key, value in three_d.items():
+            if self.dim == 2 and value is not None:
+                raise ValueError(f"{key} applies to dim = 3 only")
+        if (self.relief_length is None) != (self.relief_depth is None):
+            raise ValueError("relief_length and relief_depth go together")
+        if self.relief_length is not None and self.relief_length >= self.length / 2:
+            raise ValueError("relief_length must be below length / 2")
+        if self.tilt_deg:
+            reach = self.tilted_reach()
+            if reach >= 0:
+                raise ValueError(f"tilt_deg = {self.tilt_deg:g}: the tilted pin's end reaches "
+                                 f"{reach * 1e6:.3g} um into the bore at rest; the tilt must "
+                                 f"keep it inside (|tilt| below about "
+                                 f"{math.degrees(2 * self.clearance / self.length):.3g} deg)")
         return self
+
+    def bore_radius_at(self, z):
+        """Bore radius (m) at axial positions z, with the edge relief."""
+        if self.relief_length is None:
+            return np.full_like(np.asarray(z, dtype=float), self.bore_radius)
+        delta = Relief(self.relief_length, self.relief_depth).profile(np.asarray(z, float), 0.0,
+                                                                      self.length)[0]
+        return self.bore_radius + delta
+
+    @property
+    def tilt_frame(self) -> np.ndarray:
+        """The pin's tilt in the canonical frame (load along -y): a rotation about +x through
+        the middle (0, 0, length / 2), turning +z towards -y."""
+        a = math.radians(self.tilt_deg)
+        return np.array([[1.0, 0.0, 0.0], [0.0, math.cos(a), -math.sin(a)],
+                         [0.0, math.sin(a), math.cos(a)]])
+
+    def tilted_reach(self) -> float:
+        """How far (m) the tilted pin's surface reaches past the bore at rest, the pin's axis
+        on the bore's (< 0: it stays clear), over its two end circles, where it reaches
+        furthest."""
+        t = np.linspace(0, 2 * np.pi, 721)
+        reach = -np.inf
+        for z in (0.0, self.length):
+            ring = np.stack([self.pin_radius * np.cos(t), self.pin_radius * np.sin(t),
+                             np.full_like(t, z - self.length / 2)], axis=1) @ self.tilt_frame.T
+            r = np.hypot(ring[:, 0], ring[:, 1])
+            reach = max(reach, float(np.max(r - self.bore_radius_at(ring[:, 2] + self.length / 2))))
+        return reach
 
     @property
     def clearance(self) -> float:
@@ -45,10 +122,20 @@ class MeshOptions(Strict):
 
     contact_size (m) on the contact arc; grading: growth of the size per unit distance from
     it; refine: halve every element size this many times (convergence studies); layers: 3D
-    layers along the axis.
+    layers along the modelled length, closer towards the ends (default 12); symmetry: model
+    half the length with the mid-plane as a plane of symmetry (default: whenever the scene
+    is symmetric about it, that is without tilt).
     """
 
     contact_size: float | None = pydantic.Field(default=None, gt=0)
     grading: float = pydantic.Field(default=0.25, gt=0, le=1)
     refine: int = pydantic.Field(default=0, ge=0, le=6)
     layers: int | None = pydantic.Field(default=None, ge=1)
+    symmetry: bool | None = None
+
+
+def uses_symmetry(geometry: Geometry, mesh: MeshOptions) -> bool:
+    """Whether the 3D model is the half z <= length / 2 (see MeshOptions)."""
+    if geometry.dim == 2:
+        return False
+    return not geometry.tilt_deg if mesh.symmetry is None else mesh.symmetry

@@ -1,6 +1,7 @@
 """Gmsh models of a pin in a bore.
 
-Geometry (2D, plane strain; 3D: the same section extruded over `length` along z):
+Geometry (2D, plane strain; 3D: the same section extruded along z over `length`, or over
+half of it when the mid-plane is a plane of symmetry):
 
     housing: annulus  bore_radius  < r < housing_radius   (outer edge clamped)
     pin:     annulus  hub_radius   < r < pin_radius       (inner edge = rigid hub)
@@ -9,7 +10,9 @@ The two bodies do not touch: the clearance c = bore_radius - pin_radius separate
 The mesh is built in a frame where the load points along -y, so that the contact arc is
 centred on the angle -90 deg, and then rotated rigidly into the scene's load direction.
 Rotating the finished mesh keeps scenes that differ only in load direction exact rotations
-of each other.
+of each other. In 3D the layers close in towards the ends (z_k = L/2 (1 - cos(pi k / n))
+over the whole length: the half model has exactly the nodes of the full one below the
+mid-plane), and a tilted pin is turned about the axis through its middle normal to the load.
 """
 
 import contextlib
@@ -19,7 +22,7 @@ import gmsh
 import numpy as np
 
 from meshes.model import (BORE_SURFACE, HOUSING, HOUSING_EDGE, HOUSING_ENDS, HUB, PIN,
-                          PIN_ENDS, PIN_SURFACE)
+                          PIN_ENDS, PIN_SURFACE, SYMMETRY, MeshOptions, uses_symmetry)
 from meshes.sizing import Sizing
 
 CANONICAL_DIRECTION_DEG = -90.0
@@ -61,11 +64,19 @@ def size_field(geometry, sizing: Sizing):
     return h
 
 
-def build(geometry, sizing: Sizing, direction_deg: float, layers: int | None = None) -> None:
-    """Build and mesh the model in the current gmsh session (see `session`).
+DEFAULT_LAYERS = 12
 
-    3D: the section is extruded into `layers` equal layers along z (default 10).
-    """
+
+def layer_heights(n: int, half: bool) -> list[float]:
+    """Cumulative heights (fractions of the extrusion) of n layers closing in towards the
+    ends: z_k = (1 - cos(pi k / N)) / 2 of the length, N = n (whole) or 2 n (half model)."""
+    total = 2 * n if half else n
+    z = [0.5 * (1 - math.cos(math.pi * k / total)) for k in range(1, n + 1)]
+    return [v / z[-1] for v in z]
+
+
+def build(geometry, sizing: Sizing, direction_deg: float, mesh: MeshOptions = MeshOptions()) -> None:
+    """Build and mesh the model in the current gmsh session (see `session`)."""
     gmsh.model.add("pin_in_bore")
     occ = gmsh.model.occ
     # The pin and bore circles are split at the ends of the refined arc, so that gmsh meshes
@@ -92,12 +103,15 @@ def build(geometry, sizing: Sizing, direction_deg: float, layers: int | None = N
     pin = [(2, occ.addPlaneSurface([split_circle(geometry.pin_radius), circle(geometry.hub_radius)]))]
     housing = [(2, occ.addPlaneSurface([circle(geometry.housing_radius),
                                         split_circle(geometry.bore_radius)]))]
+    half = uses_symmetry(geometry, mesh)
     if geometry.dim == 3:
-        n = layers or 10
-        pin = [e for e in occ.extrude(pin, 0, 0, geometry.length, [n]) if e[0] == 3]
-        housing = [e for e in occ.extrude(housing, 0, 0, geometry.length, [n]) if e[0] == 3]
+        n = mesh.layers or DEFAULT_LAYERS
+        height = geometry.length / 2 if half else geometry.length
+        heights = layer_heights(n, half)
+        pin, housing = ([e for e in occ.extrude(body, 0, 0, height, [1] * n, heights) if e[0] == 3]
+                        for body in (pin, housing))
     occ.synchronize()
-    _tag_groups(geometry, pin, housing)
+    _tag_groups(geometry, pin, housing, half)
 
     h = size_field(geometry, sizing)
     gmsh.model.mesh.setSizeCallback(lambda dim, tag, x, y, z, lc: h(x, y))
@@ -105,27 +119,45 @@ def build(geometry, sizing: Sizing, direction_deg: float, layers: int | None = N
                           ("Mesh.MeshSizeFromCurvature", 0), ("Mesh.Algorithm", 6)):
         gmsh.option.setNumber(option, value)
     gmsh.model.mesh.generate(geometry.dim)
+    if geometry.tilt_deg:
+        _tilt_pin(pin, geometry)
     _rotate_mesh(math.radians(direction_deg - CANONICAL_DIRECTION_DEG))
 
 
-def _tag_groups(geometry, pin, housing) -> None:
+def _tilt_pin(pin, geometry) -> None:
+    """Turn the pin's mesh nodes by geometry.tilt_frame about (0, 0, length / 2)."""
+    centre = np.array([0.0, 0.0, geometry.length / 2])
+    done = set()
+    for _, volume in pin:
+        tags, coords, _ = gmsh.model.mesh.getNodes(3, volume, includeBoundary=True)
+        for tag, x in zip(tags, coords.reshape(-1, 3)):
+            if tag not in done:
+                done.add(tag)
+                gmsh.model.mesh.setNode(int(tag), list((x - centre) @ geometry.tilt_frame.T + centre), [])
+
+
+def _tag_groups(geometry, pin, housing, half: bool) -> None:
     """Physical groups: the two bodies and their named boundaries, found by their radius."""
     dim = geometry.dim
     gmsh.model.addPhysicalGroup(dim, [t for _, t in pin], PIN, "pin")
     gmsh.model.addPhysicalGroup(dim, [t for _, t in housing], HOUSING, "housing")
     by_radius = {HUB: geometry.hub_radius, PIN_SURFACE: geometry.pin_radius,
                  BORE_SURFACE: geometry.bore_radius, HOUSING_EDGE: geometry.housing_radius}
-    groups = {tag: [] for tag in by_radius} | {PIN_ENDS: [], HOUSING_ENDS: []}
+    groups = {tag: [] for tag in by_radius} | {PIN_ENDS: [], HOUSING_ENDS: [], SYMMETRY: []}
     for _, tag in gmsh.model.getEntities(dim - 1):
         if dim == 3 and gmsh.model.getType(2, tag) == "Plane":
-            outer = gmsh.model.getBoundingBox(2, tag)[3]
+            box = gmsh.model.getBoundingBox(2, tag)
             split = 0.5 * (geometry.bore_radius + geometry.housing_radius)
-            groups[PIN_ENDS if outer < split else HOUSING_ENDS].append(tag)
+            if half and box[2] > 0.25 * geometry.length:
+                groups[SYMMETRY].append(tag)
+            else:
+                groups[PIN_ENDS if box[3] < split else HOUSING_ENDS].append(tag)
             continue
         radius = math.hypot(*_point_on(dim - 1, tag)[:2])
         groups[min(by_radius, key=lambda g: abs(by_radius[g] - radius))].append(tag)
     names = {HUB: "hub", PIN_SURFACE: "pin_surface", BORE_SURFACE: "bore_surface",
-             HOUSING_EDGE: "housing_edge", PIN_ENDS: "pin_ends", HOUSING_ENDS: "housing_ends"}
+             HOUSING_EDGE: "housing_edge", PIN_ENDS: "pin_ends", HOUSING_ENDS: "housing_ends",
+             SYMMETRY: "symmetry"}
     for group, tags in groups.items():
         if tags:
             gmsh.model.addPhysicalGroup(dim - 1, tags, group, names[group])

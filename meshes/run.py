@@ -7,10 +7,10 @@ import gmsh
 from meshes import pin_in_bore, preview
 
 
-def write(geometry, sizing, direction_deg, layers, out: Path) -> None:
+def write(geometry, sizing, direction_deg, mesh, out: Path) -> None:
     """mesh.msh (gmsh 4.1, physical groups as in meshes.model) and preview.png into `out`."""
     with pin_in_bore.session():
-        pin_in_bore.build(geometry, sizing, direction_deg, layers)
+        pin_in_bore.build(geometry, sizing, direction_deg, mesh)
         gmsh.write(str(out / "mesh.msh"))
         if geometry.dim == 2:
             preview.preview_2d(out / "preview.png", geometry, direction_deg, sizing.arc_half_angle)

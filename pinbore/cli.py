@@ -20,7 +20,7 @@ def _mesh(args) -> int:
     scene = scenes.load(FemScene, args.scene)
     with atomic_directory(args.out) as tmp:
         mesh_run.write(scene.geometry, sizing_of(scene), scene.load.direction_deg,
-                       scene.mesh.layers, tmp)
+                       scene.mesh, tmp)
     return 0
 
 

@@ -8,7 +8,7 @@ import pytest
 from conftest import ROOT, pinbore, scene_dict
 
 from meshes.model import (BORE_SURFACE, HOUSING, HOUSING_EDGE, HOUSING_ENDS, HUB, PIN, PIN_ENDS,
-                          PIN_SURFACE)
+                          PIN_SURFACE, SYMMETRY)
 
 
 def test_fem_writes_curve_pressure_result_fields_picture(write_scene, tmp_path):
@@ -51,8 +51,8 @@ def test_mesh_has_every_physical_group(write_scene, tmp_path, dim):
         gmsh.finalize()
     expected = {(dim, PIN), (dim, HOUSING), (dim - 1, HUB), (dim - 1, PIN_SURFACE),
                 (dim - 1, BORE_SURFACE), (dim - 1, HOUSING_EDGE)}
-    if dim == 3:
-        expected |= {(2, PIN_ENDS), (2, HOUSING_ENDS)}
+    if dim == 3:   # a half model: the ends z = 0 and the mid-plane
+        expected |= {(2, PIN_ENDS), (2, HOUSING_ENDS), (2, SYMMETRY)}
     assert groups == expected
 
 
