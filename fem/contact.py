@@ -19,8 +19,8 @@ bore meshed at 0.09 mm). (In 3D the FE trace of the bore's displacement is linea
 triangles of the grid's quads; the bilinear interpolation differs from it by O(h^2 grad^2 u).)
 A pin node at x is projected onto the closest point of the bore, (x - Y) . Y_,a = 0 for each
 surface coordinate zeta_a (Newton in zeta, moving to the next patch when zeta leaves
-[0, 1]; past the bore's ends the end patches are continued by half a layer, beyond that a
-node is out of contact), and the
+[0, 1]; past the bore's ends the end patches are continued a little, beyond that a node is
+out of contact), and the
 normal gap (positive open, negative penetrating) is
 
     g = (Y(zeta) - x) . nu,    nu = outward unit normal of the bore at zeta.
@@ -133,7 +133,9 @@ class BoreSurface:
     relief: Relief | None = None
     end: float | None = None             # z of the bore's far end (the last level, or beyond
                                          # it when a symmetry plane cuts the model)
-
+    continuation: float = 0.5            # of the end layers, past the ends (closest_point):
+                                         # half a layer where the pin ends with the bore, a
+                                         # twentieth where it runs on beyond
     def __post_init__(self):
         self.widths = np.diff(np.append(self.angles, self.angles[0] + 2 * np.pi))
         self.dim = 2 if self.levels is None else 3
@@ -235,9 +237,6 @@ class Projection:
         return Projection(*(getattr(self, f.name)[index] for f in fields(self)))
 
 
-END_OVERHANG = 0.5  # of the end layer: how far the end patches continue past the bore's ends
-
-
 def closest_point(x: np.ndarray, bore: BoreSurface, newton_steps: int = 4, hops: int = 8):
     """The closest bore point to each x (n, d), a Projection."""
     k, xi = bracket(np.arctan2(x[:, 1], x[:, 0]), bore.angles)
@@ -271,9 +270,10 @@ def closest_point(x: np.ndarray, bore: BoreSurface, newton_steps: int = 4, hops:
     if bore.dim == 3:
         # Past the bore's ends the end patches continue smoothly (a pin node that moves a
         # little beyond the end keeps its contact; cutting it off there made Newton cycle);
-        # further than half a layer, the node is out of contact.
-        inside = (zeta[:, 1] >= -END_OVERHANG) & (zeta[:, 1] <= 1 + END_OVERHANG)
-        zeta[:, 1] = np.clip(zeta[:, 1], -END_OVERHANG, 1 + END_OVERHANG)
+        # further than bore.continuation of the end layer, the node is out of contact.
+        c = bore.continuation
+        inside = (zeta[:, 1] >= -c) & (zeta[:, 1] <= 1 + c)
+        zeta[:, 1] = np.clip(zeta[:, 1], -c, 1 + c)
     return Projection(k, l, zeta, inside)
 
 
@@ -426,14 +426,15 @@ class PinBoreContact:
     pin_dofs / bore_dofs: local block (node) indices in V owned by this rank. Every rank
     holds both surfaces whole: pin_X, pin_nodes (global node indices), weights (tributary
     lengths or areas), the bore's grid, the multipliers lam and, with mu > 0, the friction
-    state. 3D: `levels_end` is the bore's far end (m), `relief` its edge relief, and
-    `pin_frame` a rotation (3, 3) about the point (0, 0, pivot) that tilts the pin: its
-    inverse takes the pin's nodes back onto their grid of angles and levels.
+    state. 3D: `bore_end` is the bore's far end (m), `relief` its edge relief, `pin_frame`
+    a rotation (3, 3) about the point (0, 0, pivot) that tilts the pin (its inverse takes
+    the pin's nodes back onto their grid of angles and levels), and `pin_runs_on` says that
+    the pin runs on beyond the bore's ends.
     """
 
     def __init__(self, V, pin_dofs, bore_dofs, bore_radius, penalty, template: PETSc.Vec,
                  friction: float = 0.0, relief: Relief | None = None, bore_end=None,
-                 pin_frame=None, pivot: float = 0.0):
+                 pin_frame=None, pivot: float = 0.0, pin_runs_on: bool = False):
         self.comm = V.mesh.comm
         self.penalty = penalty
         self.dim = dim = V.mesh.geometry.dim
@@ -451,7 +452,8 @@ class PinBoreContact:
         self.weights = tributary_weights(pin_ref[order_p], *pin_grid)
         angles, levels = bore_grid
         self.bore = BoreSurface(bore_radius, angles, np.zeros((len(bore_X), dim)), levels,
-                                relief, bore_end if dim == 3 else None)
+                                relief, bore_end if dim == 3 else None,
+                                0.05 if pin_runs_on else 0.5)
         rows = np.arange(dim)
         self.pin_rows = (dim * self.pin_nodes[:, None] + rows).astype(PETSc.IntType)
         self.bore_rows = (dim * bore_nodes[order_b][:, None] + rows).astype(PETSc.IntType)
@@ -467,9 +469,9 @@ class PinBoreContact:
         pin's middle, the top level of a half model)."""
         if self.dim == 2:
             return np.arange(len(self.pin_X))
-        z = self.pin_reference[:, 2]
-        middle = z[np.argmin(np.abs(z - self.bore.end / 2))]
-        return np.flatnonzero(z == middle)
+        angles, levels = self.pin_grid
+        level = np.argmin(np.abs(levels - self.bore.end / 2))
+        return np.arange(level * angles.size, (level + 1) * angles.size)
 
     def _gather(self, coords, global_nodes):
         coords = np.concatenate(self.comm.allgather(coords))

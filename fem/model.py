@@ -79,7 +79,8 @@ def build(scene: FemScene, comm=MPI.COMM_WORLD):
     g = scene.geometry
     three_d = {} if g.dim == 2 else {
         "relief": Relief(g.relief_length, g.relief_depth) if g.relief_length else None,
-        "bore_end": g.length, "pin_frame": tilt_frame(scene), "pivot": g.length / 2}
+        "bore_end": g.length, "pin_frame": tilt_frame(scene), "pivot": g.length / 2,
+        "pin_runs_on": g.pin_overhang > 0}
     contact = PinBoreContact(el.V, *surface, g.bore_radius, penalty_of(scene, sizing.contact_size),
                              el.K.createVecRight(), friction=scene.contact.friction, **three_d)
     direction = np.append(scene.load.direction, [0.0] * (g.dim - 2))

@@ -16,6 +16,7 @@ import numpy as np
 
 from fem.contact import OPEN, SLIP, STATE_NAMES, STICK, tributary_lengths
 from fem.post import angle_from, half_angle
+from pinbore.output import offscreen_pyvista
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -228,8 +229,7 @@ def pressure_pictures(folder: Path, run, scene, contact) -> None:
     """3D: the contact pressure of the last step on the pin's surface (pressure_map.png,
     pyvista off-screen), and its peak and resultant along the axis at every step
     (axial_profile.png)."""
-    import pyvista
-
+    pyvista = offscreen_pyvista()
     symmetric = contact.bore.end > 1.5 * contact.pin_grid[1][-1]   # modelled half the length
     last = run.steps[-1]
     grid, angles, levels = pressure_grid(contact, last.contact.pressure, symmetric)
@@ -242,9 +242,11 @@ def pressure_pictures(folder: Path, run, scene, contact) -> None:
     plotter = pyvista.Plotter(off_screen=True, window_size=(1200, 900))
     plotter.add_mesh(surface, scalars="pressure (MPa)", cmap="viridis", smooth_shading=True)
     d = np.asarray(scene.load.direction)
-    middle = 0.5 * levels[-1]
-    plotter.camera_position = [(3 * r * d[0] - 2 * r * d[1], 3 * r * d[1] + 2 * r * d[0],
-                                middle + 0.6 * levels[-1]), (0, 0, middle), (0, 0, 1)]
+    middle = 0.5 * (levels[0] + levels[-1])
+    distance = 1.8 * max(levels[-1] - levels[0], 4 * r)
+    view = np.array([d[0], d[1], 0.35])   # from the loaded side, a little above
+    plotter.camera_position = [tuple(np.array([0, 0, middle]) + distance * view / np.linalg.norm(view)),
+                               (0, 0, middle), (0, 0, 1)]
     plotter.add_text(f"contact pressure on the pin, approach {last.approach * 1e6:.3g} um, "
                      f"tilt {scene.geometry.tilt_deg:g} deg", font_size=10)
     plotter.screenshot(str(folder / "pressure_map.png"))

@@ -37,8 +37,9 @@ class Relief:
 class Geometry(Strict):
     """Pin (with a rigid hub) inside the bore of an annular housing; SI units (m).
 
-    3D: pin and housing of the same `length` along z. `tilt_deg` tilts the pin about the
-    axis through its middle normal to the load (the end z = length leans towards the load:
+    3D: the housing's bore spans 0 <= z <= `length`; the pin as well, or `pin_overhang` (m)
+    further beyond each end (a pin through a lug). `tilt_deg` tilts the pin about the axis
+    through its middle normal to the load (the end z = length leans towards the load:
     edge loading); `relief_length` and `relief_depth` round the bore's edges (see
     Relief): a profile of micrometres that the contact sees exactly and the mesh, built
     cylindrical, does not.
@@ -51,6 +52,7 @@ class Geometry(Strict):
     hub_radius: float = pydantic.Field(gt=0)
     length: float | None = pydantic.Field(default=None, gt=0)
     tilt_deg: float = pydantic.Field(default=0.0, ge=-10, le=10)
+    pin_overhang: float = pydantic.Field(default=0.0, ge=0)
     relief_length: float | None = pydantic.Field(default=None, gt=0)
     relief_depth: float | None = pydantic.Field(default=None, gt=0)
 
@@ -64,7 +66,7 @@ class Geometry(Strict):
             raise ValueError("housing_radius must exceed bore_radius")
         if self.dim == 3 and self.length is None:
             raise ValueError("length is required when dim = 3")
-        three_d = {"tilt_deg": self.tilt_deg or None,
+        three_d = {"tilt_deg": self.tilt_deg or None, "pin_overhang": self.pin_overhang or None,
                    "relief_length": self.relief_length, "relief_depth": self.relief_depth}
         for key, value in three_d.items():
             if self.dim == 2 and value is not None:
@@ -100,16 +102,15 @@ class Geometry(Strict):
 
     def tilted_reach(self) -> float:
         """How far (m) the tilted pin's surface reaches past the bore at rest, the pin's axis
-        on the bore's (< 0: it stays clear), over its two end circles, where it reaches
-        furthest."""
-        t = np.linspace(0, 2 * np.pi, 721)
-        reach = -np.inf
-        for z in (0.0, self.length):
-            ring = np.stack([self.pin_radius * np.cos(t), self.pin_radius * np.sin(t),
-                             np.full_like(t, z - self.length / 2)], axis=1) @ self.tilt_frame.T
-            r = np.hypot(ring[:, 0], ring[:, 1])
-            reach = max(reach, float(np.max(r - self.bore_radius_at(ring[:, 2] + self.length / 2))))
-        return reach
+        on the bore's (< 0: it stays clear), sampled over the pin's surface inside the bore."""
+        t, z = np.meshgrid(np.linspace(0, 2 * np.pi, 721),
+                           np.linspace(-self.pin_overhang, self.length + self.pin_overhang, 201))
+        surface = np.stack([self.pin_radius * np.cos(t), self.pin_radius * np.sin(t),
+                            z - self.length / 2], axis=-1).reshape(-1, 3) @ self.tilt_frame.T
+        z_tilted = surface[:, 2] + self.length / 2
+        inside = (z_tilted >= 0) & (z_tilted <= self.length)
+        r = np.hypot(surface[inside, 0], surface[inside, 1])
+        return float(np.max(r - self.bore_radius_at(z_tilted[inside])))
 
     @property
     def clearance(self) -> float:

@@ -10,7 +10,8 @@ The two bodies do not touch: the clearance c = bore_radius - pin_radius separate
 The mesh is built in a frame where the load points along -y, so that the contact arc is
 centred on the angle -90 deg, and then rotated rigidly into the scene's load direction.
 Rotating the finished mesh keeps scenes that differ only in load direction exact rotations
-of each other. In 3D the layers close in towards the ends (z_k = L/2 (1 - cos(pi k / n))
+of each other. In 3D the pin may run on beyond the bore's ends (pin_overhang: a pin
+through a lug, whose bore edges then carry the edge loading). The layers close in towards the ends (z_k = L/2 (1 - cos(pi k / n))
 over the whole length: the half model has exactly the nodes of the full one below the
 mid-plane), and a tilted pin is turned about the axis through its middle normal to the load.
 """
@@ -108,8 +109,16 @@ def build(geometry, sizing: Sizing, direction_deg: float, mesh: MeshOptions = Me
         n = mesh.layers or DEFAULT_LAYERS
         height = geometry.length / 2 if half else geometry.length
         heights = layer_heights(n, half)
-        pin, housing = ([e for e in occ.extrude(body, 0, 0, height, [1] * n, heights) if e[0] == 3]
+        pin_base = pin
+        pin, housing = (occ.extrude(body, 0, 0, height, [1] * n, heights)
                         for body in (pin, housing))
+        pin_top, pin, housing = [pin[0]], [pin[1]], [housing[1]]
+        overhang = geometry.pin_overhang
+        if overhang:   # the pin runs on beyond the bore's ends, in layers growing outwards
+            m = max(2, n // 3)
+            ends = [(pin_base, -overhang)] + ([] if half else [(pin_top, overhang)])
+            pin += [occ.extrude(face, 0, 0, dz, [1] * m, layer_heights(m, True))[1]
+                    for face, dz in ends]
     occ.synchronize()
     _tag_groups(geometry, pin, housing, half)
 
@@ -144,7 +153,9 @@ def _tag_groups(geometry, pin, housing, half: bool) -> None:
     by_radius = {HUB: geometry.hub_radius, PIN_SURFACE: geometry.pin_radius,
                  BORE_SURFACE: geometry.bore_radius, HOUSING_EDGE: geometry.housing_radius}
     groups = {tag: [] for tag in by_radius} | {PIN_ENDS: [], HOUSING_ENDS: [], SYMMETRY: []}
-    for _, tag in gmsh.model.getEntities(dim - 1):
+    faces = {t for body in (pin, housing)
+             for _, t in gmsh.model.getBoundary(body, combined=True, oriented=False)}
+    for tag in sorted(faces):
         if dim == 3 and gmsh.model.getType(2, tag) == "Plane":
             box = gmsh.model.getBoundingBox(2, tag)
             split = 0.5 * (geometry.bore_radius + geometry.housing_radius)

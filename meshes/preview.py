@@ -7,6 +7,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from pinbore.output import offscreen_pyvista  # noqa: E402
+
 
 def _triangles_2d():
     """Node coordinates and triangle connectivity (indices into them) of the 2D mesh."""
@@ -43,8 +45,7 @@ def preview_2d(path, geometry, direction_deg: float, zoom_half_angle: float) -> 
 
 def preview_3d(path) -> None:
     """Off-screen pyvista rendering of the 3D mesh's surface, pin and housing cut open."""
-    import pyvista
-
+    pyvista = offscreen_pyvista()
     tags, coords, _ = gmsh.model.mesh.getNodes()
     index = np.zeros(int(tags.max()) + 1, dtype=int)
     index[tags.astype(int)] = np.arange(tags.size)
@@ -55,7 +56,7 @@ def preview_3d(path) -> None:
                                     coords.reshape(-1, 3))
     half = grid.clip(normal="x", origin=(0, 0, 0))
     plotter = pyvista.Plotter(off_screen=True, window_size=(1200, 900))
-    plotter.add_mesh(half.extract_surface(), show_edges=True, color="lightsteelblue",
+    plotter.add_mesh(half.extract_surface(algorithm="dataset_surface"), show_edges=True, color="lightsteelblue",
                      edge_color="black", line_width=0.3)
     plotter.add_text(f"{tets.shape[0]} tetrahedra, {coords.size // 3} nodes (cut at x = 0)",
                      font_size=10)

@@ -79,6 +79,28 @@ BAD_LOADS = [
 ]
 
 
+BAD_3D = [
+    ({"length": 0.0}, {}, "geometry.length"),
+    ({"length": 0.02, "tilt_deg": 0.1}, {}, "the tilted pin's end reaches"),
+    ({"length": 0.02, "tilt_deg": 0.02}, {"symmetry": True}, "mesh.symmetry: a tilted pin"),
+    ({"length": 0.02, "relief_length": 1e-3}, {}, "relief_length and relief_depth go together"),
+]
+
+
+@pytest.mark.parametrize("geometry, mesh, message", BAD_3D)
+def test_bad_3d_geometry_is_one_line_exit_2(write_scene, tmp_path, geometry, mesh, message):
+    data = scene_dict(geometry={"dim": 3} | geometry, mesh=mesh)
+    done = pinbore("fem", write_scene(data), "--out", tmp_path / "out")
+    assert done.returncode == 2 and "Traceback" not in done.stderr
+    assert message in done.stderr and len(done.stderr.strip().splitlines()) == 1
+
+
+def test_3d_options_in_a_2d_scene_are_refused(write_scene, tmp_path):
+    done = pinbore("fem", write_scene(scene_dict(geometry={"tilt_deg": 0.01})), "--out",
+                   tmp_path / "out")
+    assert done.returncode == 2 and "tilt_deg applies to dim = 3 only" in done.stderr
+
+
 @pytest.mark.parametrize("load, message", BAD_LOADS)
 def test_bad_load_programme_is_one_line_exit_2(write_scene, tmp_path, load, message):
     done = pinbore("fem", write_scene(scene_dict(load=load)), "--out", tmp_path / "out")

@@ -1,4 +1,4 @@
-"""`mpiexec -n 2 pinbore fem` gives the same curve as one process."""
+"""`mpiexec -n 2 pinbore fem` gives the same curve as one process, 2D with friction and 3D."""
 
 import csv
 import subprocess
@@ -14,12 +14,25 @@ MPIEXEC = Path(sys.executable).parent / "mpiexec"
 
 def curve(path):
     rows = list(csv.DictReader(open(path)))
-    return np.array([[float(r["force_per_length_N_per_m"]), float(r["half_angle_deg"])] for r in rows])
+    force = "force_N" if "force_N" in rows[0] else "force_per_length_N_per_m"
+    return np.array([[float(r[force]), float(r["half_angle_deg"]), float(r["stick_fraction"])]
+                     for r in rows])
+
+
+SCENES = {
+    "2D frictional": scene_dict(output={"fields": True, "picture": True},
+                                contact={"friction": 0.3}, load={"rotation_deg": 0.05,
+                                                                 "slide_steps": 2}),
+    "3D": scene_dict(geometry={"dim": 3, "length": 0.02}, output={"fields": True, "picture": True},
+                     mesh={"contact_size": 5e-4, "grading": 0.5, "layers": 3},
+                     load={"steps": 2}),
+}
 
 
 @pytest.mark.mpi
-def test_two_ranks_match_one(write_scene, tmp_path):
-    scene = write_scene(scene_dict(output={"fields": True, "picture": True}))
+@pytest.mark.parametrize("name", SCENES)
+def test_two_ranks_match_one(write_scene, tmp_path, name):
+    scene = write_scene(SCENES[name])
     serial = pinbore("fem", scene, "--out", tmp_path / "serial")
     assert serial.returncode == 0, serial.stderr
     parallel = subprocess.run([str(MPIEXEC), "-n", "2", sys.executable, "-m", "pinbore.cli", "fem",
@@ -28,4 +41,5 @@ def test_two_ranks_match_one(write_scene, tmp_path):
     assert parallel.returncode == 0, parallel.stderr
     np.testing.assert_allclose(curve(tmp_path / "mpi" / "curve.csv"),
                                curve(tmp_path / "serial" / "curve.csv"), rtol=1e-8)
-    assert (tmp_path / "mpi" / "contact.png").exists() and (tmp_path / "mpi" / "fields.xdmf").exists()
+    picture = "contact.png" if name.startswith("2D") else "pressure_map.png"
+    assert (tmp_path / "mpi" / picture).exists() and (tmp_path / "mpi" / "fields.xdmf").exists()
