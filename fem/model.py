@@ -90,5 +90,6 @@ def build(scene: FemScene, comm=MPI.COMM_WORLD):
                           gap_tolerance=tolerance, newton_max_it=scene.solver.newton_max_it,
                           uzawa_max_it=scene.solver.uzawa_max_it,
                           max_cutbacks=scene.solver.max_cutbacks,
-                          force_atol=residual_tolerance(scene, contact.penalty * sizing.contact_size))
+                          force_atol=residual_tolerance(scene, contact.penalty * sizing.contact_size),
+                          couplings=contact.couplings(direction, sizing.arc_half_angle))
     return stepper, el, contact, sizing, data

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 
 import dolfinx_solver  # noqa: F401  (loads PETSc's libraries; precedes petsc4py)
 import numpy as np
+import scipy.sparse
 from petsc4py import PETSc
 
 from fem.contact import ContactState, PinBoreContact
@@ -77,7 +78,8 @@ class Run:
 
 class LoadStepper:
     def __init__(self, elasticity: Elasticity, contact: PinBoreContact, *, clearance, direction,
-                 method, gap_tolerance, newton_max_it, uzawa_max_it, max_cutbacks, force_atol):
+                 method, gap_tolerance, newton_max_it, uzawa_max_it, max_cutbacks, force_atol,
+                 couplings):
         self.el, self.contact = elasticity, contact
         self.clearance, self.direction = clearance, np.asarray(direction, dtype=float)
         self.across = np.zeros_like(self.direction)      # e_z x direction
@@ -90,12 +92,11 @@ class LoadStepper:
         self.copies = 2 if elasticity.symmetric else 1  # a half model reports the whole pin
         self.x = elasticity.K.createVecRight()
         self.work = self.x.duplicate()
-        self.snes = self._make_snes(newton_max_it, force_atol)
+        self.snes = self._make_snes(newton_max_it, force_atol, couplings)
 
-    def _make_snes(self, max_it, force_atol):
+    def _make_snes(self, max_it, force_atol, couplings):
         comm = self.el.mesh.comm
-        J = self.el.K_bc.duplicate(copy=True)
-        J.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+        J = jacobian_matrix(self.el.K_bc, couplings)
         snes = PETSc.SNES().create(comm)
         snes.setOptionsPrefix("pinbore_")
         snes.setType("newtonls")
@@ -215,6 +216,35 @@ class LoadStepper:
 
     def hub_shift(self, point) -> np.ndarray:
         return (self.clearance + point[0]) * self.direction + point[2] * self.across
+
+
+def jacobian_matrix(K: PETSc.Mat, couplings: np.ndarray) -> PETSc.Mat:
+    """A copy of K whose pattern also holds the (row, column) pairs the contact terms may
+    couple (PinBoreContact.couplings), as explicit zeros.
+
+    Inserting the contact terms into K's exact pattern reallocated the matrix row by row at
+    the first Jacobian (2-3 s, a third of a 3D solve on 30k dofs, growing with the size)."""
+    start, end = K.getOwnershipRange()
+    indptr, columns, values = K.getValuesCSR()
+    mine = couplings[(couplings[:, 0] >= start) & (couplings[:, 0] < end)]
+    rows = np.concatenate([np.repeat(np.arange(start, end), np.diff(indptr)), mine[:, 0]])
+    cols = np.concatenate([columns, mine[:, 1]])
+    pattern = scipy.sparse.coo_matrix((np.ones(rows.size), (rows - start, cols)),
+                                      shape=(end - start, K.getSize()[1])).tocsr()
+    local = (pattern.indices >= start) & (pattern.indices < end)
+    row_of = np.repeat(np.arange(end - start), np.diff(pattern.indptr))
+    nnz = [np.bincount(row_of[part], minlength=end - start).astype(PETSc.IntType)
+           for part in (local, ~local)]
+    J = PETSc.Mat().createAIJ(K.getSizes(), nnz=tuple(nnz), comm=K.getComm())
+    J.setOption(PETSc.Mat.Option.NEW_NONZERO_ALLOCATION_ERR, False)
+    J.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)   # through zeroRows
+    zero = np.zeros(pattern.nnz)
+    J.setValuesIJV(pattern.indptr.astype(PETSc.IntType), pattern.indices.astype(PETSc.IntType),
+                   zero, addv=PETSc.InsertMode.ADD_VALUES,
+                   rowmap=np.arange(start, end, dtype=PETSc.IntType))
+    J.setValuesCSR(indptr, columns, values, addv=PETSc.InsertMode.ADD_VALUES)
+    J.assemble()
+    return J
 
 
 def describe(point) -> str:
