@@ -43,6 +43,8 @@ METHODS = ["penalty", "augmented-lagrangian"]
 
 
 def run(scene: dict, workdir: Path, name: str, ranks: int = 1) -> dict:
+    """`pinbore fem` on `scene` (on `ranks` MPI ranks): its wall time, result.json, and the
+    force (2D: per length) and half-angle of every step."""
     path = workdir / f"{name}.toml"
     path.write_text(tomli_w.dumps(scene))
     out = workdir / name
@@ -54,8 +56,9 @@ def run(scene: dict, workdir: Path, name: str, ranks: int = 1) -> dict:
     wall = time.perf_counter() - start
     rows = list(csv.DictReader(open(out / "curve.csv")))
     result = json.loads((out / "result.json").read_text())
+    force = "force_N" if "force_N" in rows[0] else "force_per_length_N_per_m"   # 3D or 2D
     return {"wall": wall, "result": result,
-            "force": np.array([float(r["force_per_length_N_per_m"]) for r in rows]),
+            "force": np.array([float(r[force]) for r in rows]),
             "angle": np.array([float(r["half_angle_deg"]) for r in rows])}
 
 
@@ -97,15 +100,20 @@ def main(out: Path) -> None:
                          f"{np.median(its):g}", max(its), f"{r['force'][-1]:.6e}",
                          f"{abs(r['force'][-1] / limit - 1):.2e}", f"{force_error:.2e}",
                          f"{angle_error:.3f}", f"{order:.2f}"])
-    out.mkdir(parents=True, exist_ok=True)
     header = ["mesh", "method", "ranks", "dofs", "contact_size_m", "wall_time_s",
               "newton_per_step_median", "newton_per_step_max", "force_N_per_m",
               "force_error_rel", "force_error_vs_persson", "half_angle_error_deg",
               "observed_order"]
-    with open(out / "fem2d.csv", "w", newline="") as f:
+    write_table(out, "fem2d", header, rows, plot)
+
+
+def write_table(out: Path, name: str, header, rows, plot) -> None:
+    """OUT/name.csv and the plot(OUT/name.png, header, rows) of a benchmark; print the table."""
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / f"{name}.csv", "w", newline="") as f:
         csv.writer(f).writerows([header] + rows)
-    plot(out / "fem2d.png", header, rows)
-    print((out / "fem2d.csv").read_text())
+    plot(out / f"{name}.png", header, rows)
+    print((out / f"{name}.csv").read_text())
 
 
 def plot(path: Path, header, rows) -> None:
@@ -131,11 +139,17 @@ def plot(path: Path, header, rows) -> None:
     axes[1].set_ylabel("largest |half-angle - Persson| (deg)")
     for ax in axes:
         ax.set_xlabel("wall time of `pinbore fem` (s)")
-        ax.grid(alpha=0.3, which="both")
         ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         ax.xaxis.set_major_formatter(matplotlib.ticker.ScalarFormatter())
+    finish(fig, axes, path, "2D FE, scene steel_c10um (c = 10 um, 10 load steps)")
+
+
+def finish(fig, axes, path: Path, title: str) -> None:
+    """Grids, legends and a title; write the PNG without time stamps."""
+    for ax in axes:
+        ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=8)
-    fig.suptitle("2D FE, scene steel_c10um (c = 10 um, 10 load steps)")
+    fig.suptitle(title)
     fig.tight_layout()
     fig.savefig(path, dpi=110, metadata={"Software": None})
     plt.close(fig)

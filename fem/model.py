@@ -13,9 +13,7 @@ from meshes import pin_in_bore
 from meshes.model import Relief
 from meshes.sizing import estimate_sizing
 
-# eps = factor E*/h. In 3D a stiffer penalty made the frictional Newton cycle at the edges of
-# the contact (coarse 3D meshes); the augmented Lagrangian makes either exact.
-DEFAULT_PENALTY_FACTOR = {2: 100.0, 3: 10.0}
+DEFAULT_PENALTY_FACTOR = 100.0   # eps = factor E*/h
 DEFAULT_GAP_TOLERANCE = 1e-4  # fraction of max_approach
 
 
@@ -36,7 +34,7 @@ def mesh_of(scene: FemScene, comm=MPI.COMM_WORLD):
 
 def penalty_of(scene: FemScene, contact_size: float) -> float:
     """Penalty stiffness eps = factor * E* / h (Pa/m), h the element size on the contact arc."""
-    factor = scene.contact.penalty_factor or DEFAULT_PENALTY_FACTOR[scene.geometry.dim]
+    factor = scene.contact.penalty_factor or DEFAULT_PENALTY_FACTOR
     return factor * scene.effective_modulus / contact_size
 
 

@@ -225,12 +225,11 @@ def pressure_grid(contact, values, symmetric: bool):
     return grid, angles, levels
 
 
-def pressure_pictures(folder: Path, run, scene, contact) -> None:
+def pressure_pictures(folder: Path, run, scene, contact, symmetric: bool) -> None:
     """3D: the contact pressure of the last step on the pin's surface (pressure_map.png,
     pyvista off-screen), and its peak and resultant along the axis at every step
-    (axial_profile.png)."""
+    (axial_profile.png); a half model (symmetric) shown whole."""
     pyvista = offscreen_pyvista()
-    symmetric = contact.bore.end > 1.5 * contact.pin_grid[1][-1]   # modelled half the length
     last = run.steps[-1]
     grid, angles, levels = pressure_grid(contact, last.contact.pressure, symmetric)
     theta = np.append(angles, angles[0] + 2 * np.pi)
@@ -245,8 +244,8 @@ def pressure_pictures(folder: Path, run, scene, contact) -> None:
     middle = 0.5 * (levels[0] + levels[-1])
     distance = 1.8 * max(levels[-1] - levels[0], 4 * r)
     view = np.array([d[0], d[1], 0.35])   # from the loaded side, a little above
-    plotter.camera_position = [tuple(np.array([0, 0, middle]) + distance * view / np.linalg.norm(view)),
-                               (0, 0, middle), (0, 0, 1)]
+    eye = np.array([0, 0, middle]) + distance * view / np.linalg.norm(view)
+    plotter.camera_position = [tuple(eye), (0, 0, middle), (0, 0, 1)]
     plotter.add_text(f"contact pressure on the pin, approach {last.approach * 1e6:.3g} um, "
                      f"tilt {scene.geometry.tilt_deg:g} deg", font_size=10)
     plotter.screenshot(str(folder / "pressure_map.png"))

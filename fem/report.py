@@ -104,8 +104,27 @@ def friction_figure(runs) -> str | None:
     return figure_data(fig)
 
 
+PICTURES = {   # the pictures of a run and their captions (scene name, result.json)
+    "contact.png": lambda name, r: (
+        f"Scene {name}: deformed contact zone coloured by von Mises stress at the largest "
+        f"approach, and the contact pressure along the bore at every load step."),
+    "pressure_map.png": lambda name, r: (
+        f"Scene {name} (3D, {r['dofs']} dofs, {html.escape(r['mesh']['symmetry'])}): contact "
+        f"pressure on the pin at the end of the run."),
+    "axial_profile.png": lambda name, r: (
+        f"Scene {name}: peak pressure and line load along the axis, every load step."),
+}
+
+
+def run_pictures(runs) -> list[str]:
+    return [figure(png_data(folder / picture), caption(html.escape(name), result))
+            for name, result, _, folder in runs for picture, caption in PICTURES.items()
+            if (folder / picture).exists()]
+
+
 def section(build_dir: Path, bench_dir: Path) -> str:
     runs = load_runs(build_dir)
+    plane = [run for run in runs if run[1]["scene"]["geometry"]["dim"] == 2]
     parts = ["<h2>2D finite-element contact</h2>",
              "<p>Plane strain, P1 elements, both bodies elastic. Contact: node-to-segment gap "
              "between the pin nodes and the bore circle, penalty or augmented Lagrangian "
@@ -121,10 +140,10 @@ def section(build_dir: Path, bench_dir: Path) -> str:
           r["steps_converged"], f"{np.median(r['newton_iterations']):g}",
           f"{r['max_gap_violation_m']:.2e}", f"{r['wall_time_s']['total']:.2f}", r["status"]]
          for name, r, _, _ in runs]))
-    parts.append(figure(curves_figure(runs),
+    parts.append(figure(curves_figure(plane),
                         "Force per unit length against approach, every shipped FE scene "
                         "(build/fem/&lt;scene&gt;/curve.csv)."))
-    data, rows = persson_figure(runs)
+    data, rows = persson_figure(plane)
     parts.append(figure(data, "Validation: contact half-angle against the dimensionless load, "
                               "FE (similar materials) beside the Persson conformal solution for a "
                               "pin in an infinite plate. The FE model has a housing of 20 radii and "
@@ -132,30 +151,28 @@ def section(build_dir: Path, bench_dir: Path) -> str:
                               "angle up to about 1 deg below the closed form."))
     if rows:
         parts.append(table(["scene", "FE half-angle range (deg)", "max |FE - Persson| (deg)"], rows))
-    friction = friction_figure(runs)
+    friction = friction_figure(plane)
     if friction:
         parts.append(figure(friction, "Coulomb friction after the push: the hub turns the pin "
                                       "(or pushes it sideways) with the approach held. The arc "
                                       "sticks, slips from its edges inwards, then slips whole; "
                                       "the full-slip torque equals mu R int p ds within 0.1 % "
                                       "(tests/test_fem_friction.py)."))
-    for name, result, _, folder in runs:
-        if (folder / "contact.png").exists():
-            parts.append(figure(png_data(folder / "contact.png"),
-                                f"Scene {html.escape(name)}: deformed contact zone coloured by "
-                                f"von Mises stress at the largest approach, and the contact "
-                                f"pressure along the bore at every load step."))
+    parts += run_pictures(runs)
     for preview in sorted((build_dir / "mesh").glob("*/preview.png")):
         parts.append(figure(png_data(preview), f"Mesh of scene {html.escape(preview.parent.name)}: "
                                                "whole model, pin and bore, contact arc."))
-    bench = bench_dir / "fem2d.csv"
-    if bench.exists():
-        with open(bench, newline="") as f:
-            rows = list(csv.reader(f))
-        parts.append("<h3>Benchmark: run time against error (make bench)</h3>")
-        parts.append(table(rows[0], rows[1:]))
-        if (bench_dir / "fem2d.png").exists():
-            parts.append(figure(png_data(bench_dir / "fem2d.png"),
-                                "Wall time against the error in force and half-angle, 2D FE, "
-                                "for several mesh sizes and both methods (bench/fem2d.csv)."))
+    captions = {"fem2d": "Wall time against the error in force and half-angle, 2D FE, for "
+                         "several mesh sizes and both methods (bench/fem2d.csv).",
+                "fem3d": "3D FE: wall time against the force error over mesh levels, on 1 and "
+                         "2 MPI ranks, and the cost of friction (bench/fem3d.csv)."}
+    for name, caption in captions.items():
+        bench = bench_dir / f"{name}.csv"
+        if bench.exists():
+            with open(bench, newline="") as f:
+                rows = list(csv.reader(f))
+            parts.append(f"<h3>Benchmark {name}: run time against error (make bench)</h3>")
+            parts.append(table(rows[0], rows[1:]))
+            if (bench_dir / f"{name}.png").exists():
+                parts.append(figure(png_data(bench_dir / f"{name}.png"), caption))
     return "".join(parts)

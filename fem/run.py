@@ -39,7 +39,7 @@ def run(scene_path, out, comm=MPI.COMM_WORLD) -> int:
                 outputs.picture(tmp / "contact.png", el, stepper.x, result, scene,
                                 sizing.arc_half_angle)
             elif comm.rank == 0:
-                outputs.pressure_pictures(tmp, result, scene, contact)
+                outputs.pressure_pictures(tmp, result, scene, contact, el.symmetric)
         if comm.rank == 0:
             direction = scene.load.direction_deg
             outputs.write_curve(tmp / "curve.csv", result, direction, contact)

@@ -23,10 +23,12 @@ class Materials(Strict):
 
 
 class Contact(Strict):
-    """Unilateral contact between the pin surface and the bore surface.
+    """Unilateral contact between the pin surface and the bore surface, with Coulomb
+    friction of coefficient `friction` (fem.contact explains the scheme).
 
     penalty_factor scales the penalty stiffness E*/h (h: element size on the contact arc).
-    gap_tolerance (m) is the largest penetration the augmented Lagrangian accepts.
+    gap_tolerance (m) is the largest penetration, and the largest slip of a stuck node over a
+    step, that the augmented Lagrangian accepts.
     """
 
     method: Literal["penalty", "augmented-lagrangian"]
@@ -35,7 +37,7 @@ class Contact(Strict):
     gap_tolerance: float | None = pydantic.Field(default=None, gt=0)
 
     @pydantic.model_validator(mode="after")
-    def _supported(self):
+    def _consistent(self):
         if self.gap_tolerance is not None and self.method != "augmented-lagrangian":
             raise ValueError("gap_tolerance applies to method = \"augmented-lagrangian\" only")
         return self

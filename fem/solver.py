@@ -164,19 +164,18 @@ class LoadStepper:
         return run
 
     def _predict(self, history, target):
-        """Half-secant extrapolation of displacements and normal multipliers while the step
+        """Half-secant extrapolation of displacements and multipliers while the step
         continues the previous one; at a change of programme the last state (the hub alone
         moves); at the first step the pin moved rigidly with the hub."""
         point, x, snapshot = history[-1]
         self.contact.restore(snapshot)
         step = target - point
         if len(history) > 1:
-            point_0, x_0, (lam_0, _) = history[-2]
+            point_0, x_0, snapshot_0 = history[-2]
             previous = point - point_0
             if np.allclose(np.cross(step, previous), 0.0, atol=1e-12 * np.abs(step).max()):
                 ratio = PREDICTOR_RATIO * float(step @ previous) / float(previous @ previous)
-                lam = self.contact.lam
-                self.contact.lam = np.maximum(lam + ratio * (lam - lam_0), 0.0)
+                self.contact.extrapolate(snapshot_0, ratio, self.augmented)
                 return x + ratio * (x - x_0)
             return x.copy()  # a new programme: only the hub moves (the pin is held by friction)
         return x + self.el.pin_rigid_motion(step[0] * self.direction + step[2] * self.across,

@@ -10,10 +10,13 @@ The two bodies do not touch: the clearance c = bore_radius - pin_radius separate
 The mesh is built in a frame where the load points along -y, so that the contact arc is
 centred on the angle -90 deg, and then rotated rigidly into the scene's load direction.
 Rotating the finished mesh keeps scenes that differ only in load direction exact rotations
-of each other. In 3D the pin may run on beyond the bore's ends (pin_overhang: a pin
-through a lug, whose bore edges then carry the edge loading). The layers close in towards the ends (z_k = L/2 (1 - cos(pi k / n))
-over the whole length: the half model has exactly the nodes of the full one below the
-mid-plane), and a tilted pin is turned about the axis through its middle normal to the load.
+of each other.
+
+In 3D the pin may run on beyond the bore's ends (pin_overhang: a pin through a lug, whose
+bore edges then carry the edge loading). The layers close in towards the ends
+(z_k = L/2 (1 - cos(pi k / n)) over the whole length: the half model has exactly the nodes
+of the full one below the mid-plane), and a tilted pin is turned about the axis through its
+middle normal to the load.
 """
 
 import contextlib
