@@ -125,12 +125,13 @@ def run_pictures(runs) -> list[str]:
 def section(build_dir: Path, bench_dir: Path) -> str:
     runs = load_runs(build_dir)
     plane = [run for run in runs if run[1]["scene"]["geometry"]["dim"] == 2]
-    parts = ["<h2>2D finite-element contact</h2>",
-             "<p>Plane strain, P1 elements, both bodies elastic. Contact: node-to-segment gap "
-             "between the pin nodes and the bore circle, penalty or augmented Lagrangian "
-             "(Uzawa), Newton (PETSc SNES, MUMPS) with load-step cutbacks. The approach is "
+    parts = ["<h2>Finite-element contact</h2>",
+             "<p>Plane strain (2D) or 3D, P1 elements, both bodies elastic. Contact: "
+             "node-to-surface gap between the pin nodes and the curved bore, penalty or "
+             "augmented Lagrangian (Uzawa), Coulomb friction with a return map and an "
+             "active-set Newton (PETSc SNES, MUMPS) with load-step cutbacks. The approach is "
              "the hub displacement beyond first touch; the force is the hub reaction along "
-             "the load, per unit length.</p>"]
+             "the load, per unit length in 2D, of the whole pin in 3D.</p>"]
     if not runs:
         return "".join(parts) + "<p class='note'>No FE results under build/fem: run <code>make fem</code>.</p>"
     parts.append(table(

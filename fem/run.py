@@ -1,4 +1,4 @@
-"""`pinbore fem SCENE --out DIR`: solve a 2D pin-in-bore scene and write its results."""
+"""`pinbore fem SCENE --out DIR`: solve a 2D or 3D pin-in-bore scene and write its results."""
 
 import math
 import platform

@@ -71,10 +71,11 @@ def parser() -> argparse.ArgumentParser:
                    "Build the 2D or 3D gmsh model of an FE scene; write DIR/mesh.msh and "
                    "DIR/preview.png.")
     _scene_command(sub, "fem", _fem,
-                   "solve a 2D FE contact scene: curve.csv, pressure.csv, result.json",
-                   "Solve the pin-in-bore contact of an FE scene; write DIR/curve.csv, "
-                   "DIR/pressure.csv, DIR/result.json and, when the scene asks, "
-                   "DIR/fields.xdmf and DIR/contact.png. Runs under mpiexec -n N.")
+                   "solve a 2D or 3D FE contact scene: curve.csv, pressure.csv, result.json",
+                   "Solve the (frictional) pin-in-bore contact of an FE scene; write "
+                   "DIR/curve.csv, DIR/pressure.csv, DIR/result.json and, when the scene asks, "
+                   "DIR/fields.xdmf and pictures (2D: contact.png; 3D: pressure_map.png, "
+                   "axial_profile.png). Runs under mpiexec -n N.")
     c = sub.add_parser("calibrate", help="fit and rank the contact laws on FE curves: laws.json",
                        description="Fit every contact law to FE load-approach curves (2D, per "
                                    "unit length; each curve.csv with its result.json beside it) "
