@@ -633,7 +633,7 @@ class PinBoreContact:
             p = pressure(self.lam, self.penalty, kin.gap)
             act = np.flatnonzero(p > 0)
         else:   # the kept set: its nodes are pressed by lambda - eps g, whatever its sign
-            act = np.flatnonzero(self.normal_set)
+            act = np.flatnonzero(self.normal_set & np.isfinite(kin.gap))
             p = np.zeros_like(kin.gap)
             p[act] = self.lam[act] - self.penalty * kin.gap[act]
         proj = kin.projection
@@ -660,9 +660,9 @@ class PinBoreContact:
             return act, rows, residual, None
         t = kin.tangent[act]
         curvature = np.einsum("ni,nj->nij", t, t) / kin.rho[act][:, None, None]
+        dofs = grad.shape[1]
         tangent = (self.penalty * np.einsum("ni,nj->nij", grad, grad)
-                   + np.einsum("n,na,nb,nij->naibj", pa, b, b, curvature).reshape(len(act),
-                                                                                   *grad.shape[1:] * 2))
+                   + np.einsum("n,na,nb,nij->naibj", pa, b, b, curvature).reshape(-1, dofs, dofs))
         if f is not None:
             projector = np.eye(self.dim - 1) - np.einsum("np,nq->npq", unit, unit)
             ratio = np.divide(f.mu * pa, size, out=np.zeros_like(size), where=size > 0)

@@ -7,7 +7,6 @@ import time
 from pathlib import Path
 
 import dolfinx_solver  # noqa: F401  (must precede dolfinx)
-import numpy as np
 from mpi4py import MPI
 from tqdm import tqdm
 
