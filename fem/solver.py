@@ -14,8 +14,10 @@ step, 5-7 with a full one.
 
 augmented-lagrangian: after each Newton solve the multipliers take the converged pressure
 (and shear) (Uzawa) until the largest penetration, and the largest motion of a stuck node,
-is below `gap_tolerance`; the normal ones start each step from the extrapolation of the
-last two steps, so one or two solves per step usually suffice. The predictor extrapolates
+is below `gap_tolerance`; they start each step from the extrapolation of the last two
+steps, so one or two solves per step usually suffice. With friction (either method), a
+solve whose kept active sets differ from those of its solution is followed by another
+(fem.contact.PinBoreContact.start_solve). The predictor extrapolates
 along the programme only while the step continues the previous one; at a change of
 programme (push to rotation) it starts from the last state with only the hub moved: moving
 the pin rigidly with the hub sent every stuck node past its bound and Newton cycled.
