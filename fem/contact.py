@@ -544,7 +544,9 @@ class PinBoreContact:
         return self.bore.position(proj.k, proj.l, proj.zeta, previous)
 
     def state(self, u: PETSc.Vec) -> ContactState:
-        kin = self._kinematics(u)
+        return self._state(self._kinematics(u))
+
+    def _state(self, kin: Kinematics) -> ContactState:
         g = kin.gap
         p = pressure(self.lam, self.penalty, g)
         angle = np.arctan2(kin.x[:, 1], kin.x[:, 0])
@@ -621,14 +623,14 @@ class PinBoreContact:
         that balances the contact tractions on the pin, taken in the current configuration:
         the friction torque the hub applies (the normal tractions pass through the bore's
         axis and contribute only through the offset of the two axes). Collective."""
-        act, _, residual, _ = self._local_terms(u, with_tangent=False)
-        arm = self.pin_X[act, :2] + self._surface_displacements(u)[0][act, :2] - np.asarray(centre)[:2]
+        kin = self._kinematics(u)
+        act, _, residual, _ = self._local_terms(kin, with_tangent=False)
+        arm = kin.x[act, :2] - np.asarray(centre)[:2]
         return float(np.sum(arm[:, 0] * residual[:, 1] - arm[:, 1] * residual[:, 0]))
 
-    def _local_terms(self, u: PETSc.Vec, with_tangent: bool):
+    def _local_terms(self, kin: Kinematics, with_tangent: bool):
         """Active nodes: their indices, global rows (n, (1 + c) d) and residual (n, (1 + c) d)
         [, tangent (n, (1 + c) d, (1 + c) d)]."""
-        kin = self._kinematics(u)
         if self.normal_set is None:
             p = pressure(self.lam, self.penalty, kin.gap)
             act = np.flatnonzero(p > 0)
@@ -676,18 +678,19 @@ class PinBoreContact:
 
     def add_residual(self, u: PETSc.Vec, F: PETSc.Vec) -> None:
         """F += f_c(u). Collective; call F.assemble() afterwards."""
+        kin = self._kinematics(u)
         if self.friction is not None and self.active_set_updates > 0:
             self.active_set_updates -= 1
-            self.friction.freeze(self.state(u))  # the active-set update of this iterate
+            self.friction.freeze(self._state(kin))  # the active-set update of this iterate
         elif self.friction is not None and self.normal_set is None:
-            self.normal_set = self.state(u).pressure > 0
-        _, rows, residual, _ = self._local_terms(u, with_tangent=False)
+            self.normal_set = self._state(kin).pressure > 0
+        _, rows, residual, _ = self._local_terms(kin, with_tangent=False)
         if self.comm.rank == 0:
             F.setValues(rows.ravel(), residual.ravel(), addv=PETSc.InsertMode.ADD_VALUES)
 
     def add_tangent(self, u: PETSc.Vec, J: PETSc.Mat) -> None:
         """J += K_c(u). Collective; call J.assemble() afterwards."""
-        _, rows, _, tangent = self._local_terms(u, with_tangent=True)
+        _, rows, _, tangent = self._local_terms(self._kinematics(u), with_tangent=True)
         if self.comm.rank == 0 and len(rows):
             # all blocks in one call: summed into CSR rows (a call per node cost a third of
             # a 3D solve)

@@ -10,7 +10,6 @@ from fem.elasticity import Elasticity
 from fem.scene import FemScene
 from fem.solver import LoadStepper
 from meshes import pin_in_bore
-from meshes.model import Relief
 from meshes.sizing import estimate_sizing
 
 DEFAULT_PENALTY_FACTOR = 100.0   # eps = factor E*/h
@@ -76,7 +75,7 @@ def build(scene: FemScene, comm=MPI.COMM_WORLD):
     surface = [d[d < owned] for d in (el.dofs["pin_surface"], el.dofs["bore_surface"])]
     g = scene.geometry
     three_d = {} if g.dim == 2 else {
-        "relief": Relief(g.relief_length, g.relief_depth) if g.relief_length else None,
+        "relief": g.relief,
         "bore_end": g.length, "pin_frame": tilt_frame(scene), "pivot": g.length / 2,
         "pin_runs_on": g.pin_overhang > 0}
     contact = PinBoreContact(el.V, *surface, g.bore_radius, penalty_of(scene, sizing.contact_size),

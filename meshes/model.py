@@ -84,13 +84,17 @@ class Geometry(Strict):
                                  f"{math.degrees(2 * self.clearance / self.length):.3g} deg)")
         return self
 
+    @property
+    def relief(self) -> Relief | None:
+        """The bore's edge relief, if the scene gives one."""
+        return None if self.relief_length is None else Relief(self.relief_length, self.relief_depth)
+
     def bore_radius_at(self, z):
         """Bore radius (m) at axial positions z, with the edge relief."""
-        if self.relief_length is None:
-            return np.full_like(np.asarray(z, dtype=float), self.bore_radius)
-        delta = Relief(self.relief_length, self.relief_depth).profile(np.asarray(z, float), 0.0,
-                                                                      self.length)[0]
-        return self.bore_radius + delta
+        z = np.asarray(z, dtype=float)
+        if self.relief is None:
+            return np.full_like(z, self.bore_radius)
+        return self.bore_radius + self.relief.profile(z, 0.0, self.length)[0]
 
     @property
     def tilt_frame(self) -> np.ndarray:
