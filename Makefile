@@ -22,11 +22,11 @@ MESHES := $(filter-out build/mesh/study_%,$(FEM_SCENES:%=build/mesh/%/mesh.msh))
 STUDY_CURVES := $(filter build/fem/study_%,$(FEM_CURVES))
 REDUCED_SCENES := $(basename $(notdir $(wildcard scenes/reduced/*.toml)))
 REDUCED_RUNS := $(REDUCED_SCENES:%=build/reduced/%/summary.json)
-STAGE_CODE := $(wildcard pinbore/*.py laws/*.py meshes/*.py fem/*.py)
+STAGE_CODE := $(wildcard pinbore/cli.py core/*.py laws/*.py meshes/*.py fem/*.py)
 MPIEXEC := $(if $(filter-out 1,$(NP)),$(VENV)/bin/mpiexec -n $(NP))
 DYNAMICS_SCENE := scenes/reduced/slider_crank_flores2004.toml
 DYNAMICS := $(addprefix build/dynamics/,poincare/summary.json bifurcation/summary.json design/summary.json)
-DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(wildcard pinbore/*.py laws/*.py reduced/*.py) $(STAMP)
+DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(wildcard pinbore/cli.py core/*.py laws/*.py reduced/*.py) $(STAMP)
 
 .PHONY: all venv mesh fem calibration reduced dynamics report bench test test-slow clean help
 .DELETE_ON_ERROR:
@@ -64,7 +64,7 @@ build/calibration/laws.json: $(STUDY_CURVES) fem/scene.py $(wildcard laws/*.py c
 reduced: $(REDUCED_RUNS) ## run the mechanisms with clearance joints (build/reduced/<scene>/)
 
 build/reduced/%/summary.json: scenes/reduced/%.toml build/calibration/laws.json \
-                              $(wildcard pinbore/*.py laws/*.py reduced/*.py) $(STAMP)
+                              $(wildcard core/*.py laws/*.py reduced/*.py) $(STAMP)
 	$(PINBORE) reduced $< --out build/reduced/$*
 
 dynamics: $(DYNAMICS) ## Poincare map, bifurcation diagram and design map of the slider-crank (build/dynamics/)
@@ -86,7 +86,7 @@ build/dynamics/design/summary.json: $(DYNAMICS_DEPS)
 report: build/report/index.html ## build build/report/index.html from the results
 
 build/report/index.html: $(FEM_CURVES) $(MESHES) build/calibration/laws.json $(REDUCED_RUNS) $(DYNAMICS) \
-                         $(wildcard bench/*.csv) $(STAGE_CODE) $(wildcard calibration/*.py reduced/*.py) $(STAMP)
+                         $(wildcard bench/*.csv) $(STAGE_CODE) $(wildcard pinbore/*.py calibration/*.py reduced/*.py) $(STAMP)
 	$(PINBORE) report --build build --out build/report
 	@echo "report: $(abspath $@)"
 

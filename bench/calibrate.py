@@ -9,8 +9,8 @@ import statistics
 import time
 from pathlib import Path
 
-from calibration.curves import read_curve
-from calibration.run import LAWS, evaluate, ranking
+from pinbore.calibration.curves import read_curve
+from pinbore.calibration.run import LAWS, evaluate, ranking
 
 ROOT = Path(__file__).resolve().parent.parent
 

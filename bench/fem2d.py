@@ -24,16 +24,13 @@ import time
 import tomllib
 from pathlib import Path
 
-import matplotlib
+import matplotlib.ticker
+import numpy as np
+import tomli_w
 
-matplotlib.use("Agg")
-import matplotlib.ticker  # noqa: E402
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-import tomli_w  # noqa: E402
-
-from fem.scene import FemScene  # noqa: E402
-from laws.elastic import persson_half_angles, persson_load  # noqa: E402
+from pinbore.core.figures import plt, save_png
+from pinbore.fem.scene import FemScene
+from pinbore.laws.elastic import persson_half_angles, persson_load
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "fem" / "steel_c10um.toml"
@@ -150,9 +147,7 @@ def finish(fig, axes, path: Path, title: str) -> None:
         ax.grid(alpha=0.3, which="both")
         ax.legend(fontsize=8)
     fig.suptitle(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110, metadata={"Software": None})
-    plt.close(fig)
+    save_png(fig, path, layout=True)
 
 
 if __name__ == "__main__":

@@ -23,12 +23,10 @@ import math
 import tempfile
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from fem2d import finish, run, write_table
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from fem2d import finish, run, write_table  # noqa: E402
+from pinbore.core.figures import plt
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = {

@@ -14,17 +14,14 @@ import statistics
 import tomllib
 from pathlib import Path
 
-import matplotlib
+import numpy as np
+from tqdm import tqdm
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from tqdm import tqdm  # noqa: E402
-
-from reduced.model import build  # noqa: E402
-from reduced.outputs import per_step, refined_peak, save_png  # noqa: E402
-from reduced.run import simulate  # noqa: E402
-from reduced.scene import ReducedScene  # noqa: E402
+from pinbore.core.figures import plt, save_png
+from pinbore.reduced.model import build
+from pinbore.reduced.outputs import per_step, refined_peak
+from pinbore.reduced.run import simulate
+from pinbore.reduced.scene import ReducedScene
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml"
@@ -85,7 +82,7 @@ def main(out: Path) -> None:
     ax.set_ylabel("first-impact peak force error")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
-    save_png(fig, out / "reduced.png")
+    save_png(fig, out / "reduced.png", layout=True)
     print((out / "reduced.csv").read_text())
 
 

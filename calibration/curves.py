@@ -8,10 +8,10 @@ from pathlib import Path
 
 import numpy as np
 
-from fem.scene import FemScene
-from laws.elastic import Joint
-from pinbore.errors import InputError
-from pinbore.scene import validate
+from pinbore.fem.scene import FemScene
+from pinbore.laws.elastic import Joint
+from pinbore.core.errors import InputError
+from pinbore.core.scene import validate
 
 APPROACH, FORCE, ANGLE = "approach_m", "force_per_length_N_per_m", "half_angle_deg"
 STAGE = "stage"  # push, rotate or slide: the calibration reads the push

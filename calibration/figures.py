@@ -1,12 +1,10 @@
 """Figures of a calibration: every law over every FE curve; error maps."""
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+from pinbore.core.figures import plt, save_png
 
-from calibration.fit import law_force  # noqa: E402
+from pinbore.calibration.fit import law_force  # noqa: E402
 
 COLOURS = dict(zip(["hertz", "johnson", "liu", "bai_zhao", "pereira", "radzimovsky",
                     "dubowsky_freudenstein", "esdu_78035", "linear"], plt.cm.tab10.colors))
@@ -43,8 +41,7 @@ def curves(path, curves, table, laws) -> None:
     handles, labels = axes.flat[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="lower center", ncol=len(labels), fontsize=8)
     fig.tight_layout(rect=(0, 0.06, 1, 1))
-    fig.savefig(path, dpi=100, metadata={"Software": None})
-    plt.close(fig)
+    save_png(fig, path, dpi=100)
 
 
 def error_maps(path, curves, table, laws) -> None:
@@ -64,5 +61,4 @@ def error_maps(path, curves, table, laws) -> None:
                       fontsize=7, rotation=90)
         ax.set_title(f"RMS force error (%), {kind}" + (" (linear: fit only)" if kind == "published" else ""))
     fig.colorbar(shown, ax=axes, label="log10 RMS relative error")
-    fig.savefig(path, dpi=100, metadata={"Software": None}, bbox_inches="tight")
-    plt.close(fig)
+    save_png(fig, path, dpi=100, bbox_inches="tight")

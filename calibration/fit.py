@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from laws import elastic
+from pinbore.laws import elastic
 
 
 @dataclass(frozen=True)

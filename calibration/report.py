@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pinbore.report import figure, png_data, table
+from pinbore.core.html import figure, png_data, table
 
 
 def _pct(value) -> str:

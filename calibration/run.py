@@ -12,11 +12,11 @@ import warnings
 
 import numpy as np
 
-from calibration import figures
-from calibration.curves import read_curve
-from calibration.fit import NotFitted, errors, fit, law_force
-from laws import elastic
-from pinbore.output import atomic_directory
+from pinbore.calibration import figures
+from pinbore.calibration.curves import read_curve
+from pinbore.calibration.fit import NotFitted, errors, fit, law_force
+from pinbore.laws import elastic
+from pinbore.core.output import atomic_directory
 
 LAWS = list(elastic.PUBLISHED) + ["linear"]
 

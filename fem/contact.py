@@ -113,7 +113,7 @@ import numpy as np
 import scipy.sparse
 from petsc4py import PETSc
 
-from meshes.model import Relief
+from pinbore.meshes.model import Relief
 
 
 # --- the bore: reference geometry, curved patches, closest points (vectorized over nodes) ------

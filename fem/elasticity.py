@@ -21,7 +21,7 @@ import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from meshes.model import BORE_SURFACE, HOUSING, HOUSING_EDGE, HUB, PIN, PIN_SURFACE, SYMMETRY
+from pinbore.meshes.model import BORE_SURFACE, HOUSING, HOUSING_EDGE, HUB, PIN, PIN_SURFACE, SYMMETRY
 
 
 def lame(E: float, nu: float) -> tuple[float, float]:

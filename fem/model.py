@@ -5,25 +5,19 @@ import dolfinx.io.gmsh
 import numpy as np
 from mpi4py import MPI
 
-from fem.contact import PinBoreContact
-from fem.elasticity import Elasticity
-from fem.scene import FemScene
-from fem.solver import LoadStepper
-from meshes import pin_in_bore
-from meshes.sizing import estimate_sizing
+from pinbore.fem.contact import PinBoreContact
+from pinbore.fem.elasticity import Elasticity
+from pinbore.fem.scene import FemScene
+from pinbore.fem.solver import LoadStepper
+from pinbore.meshes import pin_in_bore
 
 DEFAULT_PENALTY_FACTOR = 100.0   # eps = factor E*/h
 DEFAULT_GAP_TOLERANCE = 1e-4  # fraction of max_approach
 
 
-def sizing_of(scene: FemScene):
-    return estimate_sizing(scene.joint, scene.load.max_approach, scene.mesh.contact_size,
-                           scene.mesh.grading, scene.mesh.refine)
-
-
 def mesh_of(scene: FemScene, comm=MPI.COMM_WORLD):
     """Build the gmsh model on rank 0 and distribute it: (MeshData, Sizing)."""
-    sizing = sizing_of(scene)
+    sizing = scene.sizing
     with pin_in_bore.session():
         if comm.rank == 0:
             pin_in_bore.build(scene.geometry, sizing, scene.load.direction_deg, scene.mesh)

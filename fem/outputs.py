@@ -11,15 +11,11 @@ from pathlib import Path
 import dolfinx_solver  # noqa: F401  (must precede dolfinx)
 import dolfinx
 import dolfinx.io
-import matplotlib
 import numpy as np
 
-from fem.contact import OPEN, SLIP, STATE_NAMES, STICK, tributary_lengths
-from fem.post import angle_from, half_angle
-from pinbore.output import offscreen_pyvista
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+from pinbore.fem.contact import OPEN, SLIP, STATE_NAMES, STICK, tributary_lengths
+from pinbore.fem.post import angle_from, half_angle
+from pinbore.core.figures import offscreen_pyvista, plt, save_image, save_png
 
 RESULTANTS = {2: ["force_per_length_N_per_m", "tangential_force_per_length_N_per_m",
                   "friction_torque_per_length_N", "dissipated_work_J_per_m"],
@@ -185,9 +181,7 @@ def picture(path: Path, elasticity, x, run, scene, arc_half_angle):
     bx.grid(alpha=0.3)
     if friction:
         shear_panel(axes[2], run, scene, arc_half_angle)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_png(fig, path, layout=True)
 
 
 def shear_panel(ax, run, scene, arc_half_angle):
@@ -248,7 +242,7 @@ def pressure_pictures(folder: Path, run, scene, contact, symmetric: bool) -> Non
     plotter.camera_position = [tuple(eye), (0, 0, middle), (0, 0, 1)]
     plotter.add_text(f"contact pressure on the pin, approach {last.approach * 1e6:.3g} um, "
                      f"tilt {scene.geometry.tilt_deg:g} deg", font_size=10)
-    plotter.screenshot(str(folder / "pressure_map.png"))
+    save_image(plotter.screenshot(return_img=True), folder / "pressure_map.png")
     plotter.close()
 
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 4.5))
@@ -268,6 +262,4 @@ def pressure_pictures(folder: Path, run, scene, contact, symmetric: bool) -> Non
     bx.set_title("pressure resultant per unit length")
     for a in (ax, bx):
         a.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(folder / "axial_profile.png", dpi=110)
-    plt.close(fig)
+    save_png(fig, folder / "axial_profile.png", layout=True)

@@ -7,9 +7,10 @@ from pathlib import Path
 
 import numpy as np
 
-from fem.scene import FemScene
-from laws.elastic import persson_half_angle, persson_half_angles
-from pinbore.report import figure, figure_data, png_data, plt, table
+from pinbore.fem.scene import FemScene
+from pinbore.laws.elastic import persson_half_angle, persson_half_angles
+from pinbore.core.figures import plt
+from pinbore.core.html import figure, figure_data, png_data, table
 
 
 def read_csv(path: Path, stage: str = "push") -> dict[str, np.ndarray]:

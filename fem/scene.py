@@ -5,9 +5,10 @@ from typing import Literal
 
 import pydantic
 
-from laws.elastic import Joint
-from meshes.model import Geometry, MeshOptions
-from pinbore.scene import Strict
+from pinbore.core.scene import Strict
+from pinbore.laws.elastic import Joint
+from pinbore.meshes.model import Geometry, MeshOptions
+from pinbore.meshes.sizing import Sizing, estimate_sizing
 
 
 class Material(Strict):
@@ -145,6 +146,12 @@ class FemScene(Strict):
         """The joint of the contact laws (2D: per unit length; length = 1 m unless given)."""
         g, pin, bore = self.geometry, self.materials.pin, self.materials.bore
         return Joint(g.bore_radius, g.pin_radius, bore.E, bore.nu, pin.E, pin.nu, g.length or 1.0)
+
+    @property
+    def sizing(self) -> Sizing:
+        """Where the mesh is refined and how finely (meshes.sizing), for this scene's joint and load."""
+        return estimate_sizing(self.joint, self.load.max_approach, self.mesh.contact_size,
+                               self.mesh.grading, self.mesh.refine)
 
     @property
     def effective_modulus(self) -> float:

@@ -36,8 +36,8 @@ import numpy as np
 import scipy.sparse
 from petsc4py import PETSc
 
-from fem.contact import ContactState, PinBoreContact
-from fem.elasticity import Elasticity
+from pinbore.fem.contact import ContactState, PinBoreContact
+from pinbore.fem.elasticity import Elasticity
 
 PREDICTOR_RATIO = 0.5
 SNES_REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}

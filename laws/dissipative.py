@@ -12,7 +12,7 @@ import math
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from laws.elastic import warn_once
+from pinbore.laws.elastic import warn_once
 
 
 def _check(e: float) -> None:

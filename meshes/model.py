@@ -7,7 +7,7 @@ from typing import Literal
 import numpy as np
 import pydantic
 
-from pinbore.scene import Strict
+from pinbore.core.scene import Strict
 
 # Physical groups (cells of each body, facets of each boundary). Stages downstream use these.
 PIN, HOUSING = 1, 2

@@ -25,9 +25,9 @@ import math
 import gmsh
 import numpy as np
 
-from meshes.model import (BORE_SURFACE, HOUSING, HOUSING_EDGE, HOUSING_ENDS, HUB, PIN,
+from pinbore.meshes.model import (BORE_SURFACE, HOUSING, HOUSING_EDGE, HOUSING_ENDS, HUB, PIN,
                           PIN_ENDS, PIN_SURFACE, SYMMETRY, MeshOptions, uses_symmetry)
-from meshes.sizing import Sizing
+from pinbore.meshes.sizing import Sizing
 
 CANONICAL_DIRECTION_DEG = -90.0
 

@@ -1,13 +1,9 @@
 """PNG previews of the gmsh model in the current session."""
 
 import gmsh
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from pinbore.output import offscreen_pyvista  # noqa: E402
+from pinbore.core.figures import offscreen_pyvista, plt, save_image, save_png
 
 
 def _triangles_2d():
@@ -39,8 +35,7 @@ def preview_2d(path, geometry, direction_deg: float, zoom_half_angle: float) -> 
     axes[0].set_ylabel("y (mm)")
     fig.suptitle(f"{triangles.shape[0]} triangles, {xy.shape[0]} nodes; load at {direction_deg:g} deg")
     fig.tight_layout(rect=(0, 0, 1, 0.95))
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_png(fig, path)
 
 
 def preview_3d(path) -> None:
@@ -61,5 +56,5 @@ def preview_3d(path) -> None:
     plotter.add_text(f"{tets.shape[0]} tetrahedra, {coords.size // 3} nodes (cut at x = 0)",
                      font_size=10)
     plotter.camera_position = "iso"
-    plotter.screenshot(str(path))
+    save_image(plotter.screenshot(return_img=True), path)
     plotter.close()

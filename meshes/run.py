@@ -4,7 +4,7 @@ from pathlib import Path
 
 import gmsh
 
-from meshes import pin_in_bore, preview
+from pinbore.meshes import pin_in_bore, preview
 
 
 def write(geometry, sizing, direction_deg, mesh, out: Path) -> None:

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from laws.elastic import Joint, johnson, liu, persson_half_angle
+from pinbore.laws.elastic import Joint, johnson, liu, persson_half_angle
 
 
 @dataclass(frozen=True)

@@ -7,43 +7,42 @@ import argparse
 import math
 import sys
 
-from pinbore.errors import InputError
+from pinbore.core.errors import InputError
 
 
 def _mesh(args) -> int:
-    from fem.model import sizing_of
-    from fem.scene import FemScene
-    from meshes import run as mesh_run
-    from pinbore import scene as scenes
-    from pinbore.output import atomic_directory
+    from pinbore.core import scene as scenes
+    from pinbore.core.output import atomic_directory
+    from pinbore.fem.scene import FemScene   # the scene model only: no DOLFINx to mesh
+    from pinbore.meshes import run as mesh_run
 
     scene = scenes.load(FemScene, args.scene)
     with atomic_directory(args.out) as tmp:
-        mesh_run.write(scene.geometry, sizing_of(scene), scene.load.direction_deg,
+        mesh_run.write(scene.geometry, scene.sizing, scene.load.direction_deg,
                        scene.mesh, tmp)
     return 0
 
 
 def _fem(args) -> int:
-    from fem import run as fem_run
+    from pinbore.fem import run as fem_run
 
     return fem_run.run(args.scene, args.out)
 
 
 def _calibrate(args) -> int:
-    from calibration import run as calibration_run
+    from pinbore.calibration import run as calibration_run
 
     return calibration_run.run(args.curves, args.out, args.length)
 
 
 def _reduced(args) -> int:
-    from reduced import run as reduced_run
+    from pinbore.reduced import run as reduced_run
 
     return reduced_run.run(args.scene, args.out)
 
 
 def _dynamics(args) -> int:
-    from reduced import studies
+    from pinbore.reduced import studies
 
     return studies.run(args)
 

@@ -29,9 +29,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 from tqdm import tqdm
 
-from reduced import kernel
-from reduced.model import Model, project
-from reduced.run import simulate
+from pinbore.reduced import kernel
+from pinbore.reduced.model import Model, project
+from pinbore.reduced.run import simulate
 
 MAX_PERIOD = 16
 

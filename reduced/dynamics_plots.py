@@ -2,13 +2,9 @@
 
 import csv
 
-import matplotlib
 import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-from reduced.outputs import save_png  # noqa: E402
+from pinbore.core.figures import plt, save_png
 
 KIND_COLOURS = {"periodic": "tab:blue", "quasi-periodic": "tab:green", "chaotic": "tab:red"}
 
@@ -38,7 +34,7 @@ def poincare(path, samples, clearance, title, observed) -> None:
     for a in (ax, bx):
         a.grid(alpha=0.3)
     fig.suptitle(f"Poincare map, once per drive revolution ({title})")
-    save_png(fig, path)
+    save_png(fig, path, layout=True)
 
 
 def convergence(path, running) -> None:
@@ -47,7 +43,7 @@ def convergence(path, running) -> None:
     ax.set_xlabel("periods")
     ax.set_ylabel("largest Lyapunov exponent estimate (1/s)")
     ax.grid(alpha=0.3)
-    save_png(fig, path)
+    save_png(fig, path, layout=True)
 
 
 def bifurcation(path, rows, parameter, unit) -> None:
@@ -63,7 +59,7 @@ def bifurcation(path, rows, parameter, unit) -> None:
     ax.set_ylabel("journal centre x at the Poincare section (mm)")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
-    save_png(fig, path)
+    save_png(fig, path, layout=True)
 
 
 def design(path, rows, clearances, speeds, max_force, max_deviation) -> None:
@@ -82,4 +78,4 @@ def design(path, rows, clearances, speeds, max_force, max_deviation) -> None:
         ax.set_xlabel("clearance (mm)")
         ax.set_ylabel("drive speed (rpm)")
         ax.set_title(f"{label}; white: threshold {limit:g}", fontsize=9)
-    save_png(fig, path)
+    save_png(fig, path, layout=True)

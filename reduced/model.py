@@ -9,10 +9,10 @@ from pathlib import Path
 
 import numpy as np
 
-from laws import dissipative, elastic
-from pinbore.errors import InputError
-from reduced import kernel
-from reduced.scene import GROUND, ReducedScene
+from pinbore.laws import dissipative, elastic
+from pinbore.core.errors import InputError
+from pinbore.reduced import kernel
+from pinbore.reduced.scene import GROUND, ReducedScene
 
 GRID_POINTS = 600
 GRID_LOW = 1e-12       # m, smallest tabulated penetration (power law below)

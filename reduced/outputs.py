@@ -4,20 +4,10 @@ constraint drift) and the plots."""
 import csv
 import math
 
-import matplotlib
 import numpy as np
 
-from reduced import kernel
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-
-
-def save_png(fig, path) -> None:
-    """Lay out, write without metadata that would change between runs, close."""
-    fig.tight_layout()
-    fig.savefig(path, dpi=110, metadata={"Software": None})
-    plt.close(fig)
+from pinbore.core.figures import plt, save_png
+from pinbore.reduced import kernel
 
 
 def per_step(model, run):
@@ -192,7 +182,7 @@ def plots(folder, model, series, twin) -> None:
         ax.set_ylabel(f"{slider.body} acceleration (m/s^2)")
         ax.grid(alpha=0.3)
         ax.legend()
-        save_png(fig, folder / "acceleration.png")
+        save_png(fig, folder / "acceleration.png", layout=True)
     if s.drive is None and twin is not None:
         body = s.bodies[0].name
         t_model, t_run = twin
@@ -208,7 +198,7 @@ def plots(folder, model, series, twin) -> None:
         bx.set_ylabel("difference (rad/s)")
         bx.set_xlabel("time (s)")
         bx.grid(alpha=0.3)
-        save_png(fig, folder / "attitude.png")
+        save_png(fig, folder / "attitude.png", layout=True)
     for c in s.clearance_joints:
         fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 5))
         clearance = c.bearing_radius - c.journal_radius
@@ -224,4 +214,4 @@ def plots(folder, model, series, twin) -> None:
         bx.set_xlabel(f"{s.drive.body} angle (deg)" if angle is not None else "time (s)")
         bx.set_ylabel("normal contact force (N)")
         bx.grid(alpha=0.3)
-        save_png(fig, folder / f"{c.name}.png")
+        save_png(fig, folder / f"{c.name}.png", layout=True)

@@ -3,7 +3,7 @@
 import json
 from pathlib import Path
 
-from pinbore.report import figure, png_data, table
+from pinbore.core.html import figure, png_data, table
 
 
 def section(build_dir: Path) -> str:

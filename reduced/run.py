@@ -14,11 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
-from pinbore import scene as scenes
-from pinbore.output import atomic_directory
-from reduced import kernel, outputs
-from reduced.model import SPEED_FLOOR, Model, build
-from reduced.scene import ReducedScene
+from pinbore.core import scene as scenes
+from pinbore.core.output import atomic_directory
+from pinbore.reduced import kernel, outputs
+from pinbore.reduced.model import SPEED_FLOOR, Model, build
+from pinbore.reduced.scene import ReducedScene
 
 MAX_STEPS = 5_000_000
 STATUS = {kernel.OK: "complete", kernel.BLOWN_UP: "blown up (NaN, or a penetration beyond a "

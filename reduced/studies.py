@@ -21,15 +21,15 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
-from pinbore import scene as scenes
-from pinbore.errors import InputError
-from pinbore.output import atomic_directory
-from reduced import dynamics
-from reduced import dynamics_plots as plots
-from reduced.model import build
-from reduced.outputs import per_step
-from reduced.run import ideal_twin
-from reduced.scene import ReducedScene
+from pinbore.core import scene as scenes
+from pinbore.core.errors import InputError
+from pinbore.core.output import atomic_directory
+from pinbore.reduced import dynamics
+from pinbore.reduced import dynamics_plots as plots
+from pinbore.reduced.model import build
+from pinbore.reduced.outputs import per_step
+from pinbore.reduced.run import ideal_twin
+from pinbore.reduced.scene import ReducedScene
 
 PARAMETERS = {"clearance": "m, radial clearance of every clearance joint",
               "speed": "rpm, the drive's speed",

@@ -49,9 +49,9 @@ class Solved:
     """An in-process FE solve of a scene dict: the run and the objects behind it."""
 
     def __init__(self, data: dict, approaches=None, on_step=None):
-        from fem import model
-        from fem.scene import FemScene
-        from pinbore.scene import validate
+        from pinbore.fem import model
+        from pinbore.fem.scene import FemScene
+        from pinbore.core.scene import validate
 
         self.scene = validate(FemScene, data, "test scene")
         self.stepper, self.el, self.contact, self.sizing, _ = model.build(self.scene)
@@ -64,7 +64,7 @@ class Solved:
         return [s.force[0] for s in self.run.steps]
 
     def half_angles_deg(self):
-        from fem.post import angle_from, half_angle
+        from pinbore.fem.post import angle_from, half_angle
 
         d = self.scene.load.direction_deg
         return [math.degrees(half_angle(angle_from(d, s.contact.angle), s.contact.pressure))

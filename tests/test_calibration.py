@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 from conftest import pinbore, scene_dict
 
-from calibration.curves import Curve
-from calibration.fit import errors, fit, law_force
-from laws.elastic import Joint
+from pinbore.calibration.curves import Curve
+from pinbore.calibration.fit import errors, fit, law_force
+from pinbore.laws.elastic import Joint
 
 JOINT = Joint(10e-3, 9.95e-3, 210e9, 0.3, 210e9, 0.3, 0.02)
 APPROACH = np.linspace(1e-6, 1e-5, 10)

@@ -7,7 +7,7 @@ import gmsh
 import pytest
 from conftest import ROOT, pinbore, scene_dict
 
-from meshes.model import (BORE_SURFACE, HOUSING, HOUSING_EDGE, HOUSING_ENDS, HUB, PIN, PIN_ENDS,
+from pinbore.meshes.model import (BORE_SURFACE, HOUSING, HOUSING_EDGE, HOUSING_ENDS, HUB, PIN, PIN_ENDS,
                           PIN_SURFACE, SYMMETRY)
 
 
@@ -165,8 +165,8 @@ def test_help_lists_every_command():
 
 
 def test_every_shipped_scene_is_valid():
-    from fem.scene import FemScene
-    from pinbore import scene
+    from pinbore.fem.scene import FemScene
+    from pinbore.core import scene
 
     paths = sorted((ROOT / "scenes" / "fem").glob("*.toml"))
     assert paths

@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
-from fem.contact import BoreSurface, bracket, kinematics, tributary_lengths
-from fem.post import angle_from, half_angle
+from pinbore.fem.contact import BoreSurface, bracket, kinematics, tributary_lengths
+from pinbore.fem.post import angle_from, half_angle
 
 R_BORE, R_PIN = 10.0e-3, 9.9e-3
 

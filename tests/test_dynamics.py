@@ -13,7 +13,7 @@ import pytest
 from conftest import ROOT, pinbore
 from scipy.integrate import solve_ivp
 
-from reduced import dynamics, studies
+from pinbore.reduced import dynamics, studies
 
 FLORES = ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml"
 DAMPING, FREQUENCY = 0.3, 1.2

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from conftest import Solved, scene_dict
 
-from fem.contact import STICK, tributary_lengths
+from pinbore.fem.contact import STICK, tributary_lengths
 
 COARSE = {"contact_size": 5e-4, "grading": 0.5}
 

@@ -7,9 +7,9 @@ import scipy.sparse
 import scipy.sparse.linalg
 from conftest import Solved, scene_dict, with_clearance
 
-from fem.contact import OPEN, SLIP, STICK
-from fem.elasticity import rigid_motion
-from fem.post import angle_from, half_angle
+from pinbore.fem.contact import OPEN, SLIP, STICK
+from pinbore.fem.elasticity import rigid_motion
+from pinbore.fem.post import angle_from, half_angle
 
 PIN_RADIUS = 9.99e-3
 MU = 0.3

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from conftest import Solved, effective_modulus, scene_dict, with_clearance
 
-from laws.elastic import persson_half_angle
+from pinbore.laws.elastic import persson_half_angle
 
 RADIUS = 10.0e-3
 

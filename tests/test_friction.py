@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from laws import friction as fr
+from pinbore.laws import friction as fr
 
 # LuGre parameters of Canudas de Wit et al. 1995, Table I
 SIGMA0, SIGMA1, SIGMA2 = 1e5, math.sqrt(1e5), 0.4

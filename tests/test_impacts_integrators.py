@@ -12,12 +12,12 @@ import pytest
 from conftest import ROOT
 from test_reduced import free_mechanism, solve
 
-from laws import dissipative
-from laws.elastic import Joint, hertz_point
-from reduced.model import build
-from reduced.outputs import per_step
-from reduced.run import simulate
-from reduced.scene import ReducedScene
+from pinbore.laws import dissipative
+from pinbore.laws.elastic import Joint, hertz_point
+from pinbore.reduced.model import build
+from pinbore.reduced.outputs import per_step
+from pinbore.reduced.run import simulate
+from pinbore.reduced.scene import ReducedScene
 
 
 def rigid(data, model="newton", e=0.9):

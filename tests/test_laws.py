@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from laws import dissipative as dis
-from laws import elastic as el
+from pinbore.laws import dissipative as dis
+from pinbore.laws import elastic as el
 
 STEEL = dict(E_bore=207e9, nu_bore=0.3, E_pin=207e9, nu_pin=0.3)
 FLORES = el.Joint(r_bore=10.0e-3, r_pin=9.5e-3, length=0.02, **STEEL)

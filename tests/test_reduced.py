@@ -12,13 +12,13 @@ import numpy as np
 import pytest
 from conftest import ROOT, pinbore
 
-from laws import dissipative
-from laws import friction as friction_laws
-from laws.elastic import Joint, hertz_point
-from reduced.model import build
-from reduced.outputs import per_step
-from reduced.run import ideal_twin, simulate
-from reduced.scene import ReducedScene
+from pinbore.laws import dissipative
+from pinbore.laws import friction as friction_laws
+from pinbore.laws.elastic import Joint, hertz_point
+from pinbore.reduced.model import build
+from pinbore.reduced.outputs import per_step
+from pinbore.reduced.run import ideal_twin, simulate
+from pinbore.reduced.scene import ReducedScene
 
 FLORES = tomllib.loads((ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml").read_text())
 

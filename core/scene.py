@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pydantic
 
-from pinbore.errors import InputError
+from pinbore.core.errors import InputError
 
 
 class Strict(pydantic.BaseModel):

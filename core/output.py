@@ -54,14 +54,3 @@ def write_text_atomic(path: str | Path, text: str) -> None:
     tmp.write_text(text, encoding="utf-8")
     tmp.rename(path)
 
-
-def offscreen_pyvista():
-    """pyvista for off-screen pictures. Without an X display VTK's default window warns and
-    falls back; EGL renders head-less, so it is chosen unless the user set a window."""
-    import os
-
-    if not os.environ.get("DISPLAY"):
-        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
-    import pyvista
-
-    return pyvista

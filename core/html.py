@@ -1,0 +1,48 @@
+"""Pieces of the report page: PNGs inline as base64, figures with captions, tables.
+
+A stage's report section (`pinbore.<stage>.report.section`) builds its HTML from these and
+from what the stage wrote under build/; the page itself is put together by `pinbore.report`.
+"""
+
+import base64
+import html
+import io
+from pathlib import Path
+
+from pinbore.core.figures import save_png
+
+STYLE = """
+body { font-family: system-ui, sans-serif; max-width: 1100px; margin: 2em auto; color: #222;
+       line-height: 1.45; padding: 0 1em; }
+h1 { border-bottom: 2px solid #446; } h2 { margin-top: 2em; border-bottom: 1px solid #aaa; }
+figure { margin: 1.5em 0; } figure img { max-width: 100%; border: 1px solid #ddd; }
+figcaption { font-size: 0.92em; color: #444; }
+table { border-collapse: collapse; font-size: 0.9em; margin: 1em 0; }
+td, th { border: 1px solid #bbb; padding: 0.25em 0.6em; text-align: right; }
+th { background: #eef; } td:first-child, th:first-child { text-align: left; }
+.note { background: #f6f6f0; border-left: 4px solid #cc8; padding: 0.5em 1em; }
+"""
+
+
+def png_data(path: Path) -> str:
+    """A PNG file as base64."""
+    return base64.b64encode(Path(path).read_bytes()).decode()
+
+
+def figure_data(fig) -> str:
+    """A matplotlib figure as base64 PNG (through save_png: no metadata; closed)."""
+    buffer = io.BytesIO()
+    save_png(fig, buffer, dpi=100)
+    return base64.b64encode(buffer.getvalue()).decode()
+
+
+def figure(data: str, caption: str) -> str:
+    return (f'<figure><img src="data:image/png;base64,{data}" alt="{html.escape(caption)}">'
+            f"<figcaption>{caption}</figcaption></figure>")
+
+
+def table(header: list[str], rows: list[list]) -> str:
+    head = "".join(f"<th>{html.escape(str(h))}</th>" for h in header)
+    body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in row) + "</tr>"
+                   for row in rows)
+    return f"<table><tr>{head}</tr>{body}</table>"
