@@ -87,7 +87,7 @@ is unsymmetric (MUMPS takes it as it is).
 Newton on the plain return map cycled (a node near the stick/slip boundary flips between
 the branches, or slips one way, then the other; a softer stick, eps_T = eps / 10, did not
 cure it and made the tangential Uzawa iteration contract only 4-fold per update). What
-converges: the primal-dual active-set rule of Hueber, Stadler & Wohlmuth (2008)
+converges: the primal-dual active-set rule of Hueber, Stadler & Wohlmuth [HueberStadlerWohlmuth2008]
 (`active_set`: a slipping node keeps slipping while its trial shear exceeds the bound and
 does not turn back, and sticks otherwise) applied at the first ACTIVE_SET_UPDATES residual
 evaluations of a Newton solve; then the stick/slip set and the set of nodes in contact are

@@ -5,7 +5,8 @@ Notation: clearance c = R_i - R_j > 0, approach (penetration) d >= 0, composite 
 (N/m), F = P L a force (N) on a joint of axial length L. Every function takes arrays of d.
 
 Sources are named in each docstring; "unverified" marks a form read from a secondary source
-(the formula sheet or Pereira et al. 2011's comparison) and not checked against the paper.
+(Pereira et al. 2011's comparison [Pereira2011]) and not checked against the paper. Keys in
+brackets are entries of REFERENCES.md.
 """
 
 import math
@@ -63,15 +64,15 @@ class Joint:
 def hertz_point(d, joint: Joint):
     """Hertz point-contact form used for revolute joints, F = K d^1.5 (N).
 
-    K = (4/3) E* sqrt(R*)  (Lankarani & Nikravesh 1990; Flores & Ambrosio 2004). Written with
-    h_k = (1 - nu_k^2)/(pi E_k) it reads K = 4/(3 pi (h_i + h_j)) sqrt(R*) (review eq. 3).
+    K = (4/3) E* sqrt(R*)  [LankaraniNikravesh1990; FloresAmbrosio2004]. Written with
+    h_k = (1 - nu_k^2)/(pi E_k) it reads K = 4/(3 pi (h_i + h_j)) sqrt(R*) ([Cao2013] eq. 3).
     A sphere law: it has no length; per unit length it is F / L.
     """
     return 4.0 / 3.0 * joint.e_star * math.sqrt(joint.r_star) * np.asarray(d, float) ** 1.5
 
 
 def liu(d, joint: Joint):
-    """Liu, Zhang & Yang 2007 (Mech. Mach. Theory 42:183), improved elastic foundation:
+    """Liu, Zhang & Yang 2007 [Liu2007], improved elastic foundation:
 
     P = (pi/2) E* d sqrt(d / (2 (c + d)))   (N/m).
     Limits: d << c gives P = (sqrt(2) pi / 4) E* c^-1/2 d^1.5; d >> c gives P = pi E* d / (2 sqrt 2).
@@ -81,7 +82,7 @@ def liu(d, joint: Joint):
 
 
 def liu_stiffness(d, joint: Joint):
-    """K = (pi/8) E* sqrt(2 d (3c + 2d)^2 / (c + d)^3)  (Pa): review eq. 10 (Bai & Zhao after
+    """K = (pi/8) E* sqrt(2 d (3c + 2d)^2 / (c + d)^3)  (Pa): [Cao2013] eq. 10 (Bai & Zhao after
     Liu et al.). It is exactly dP/dd of `liu`, a tangent stiffness per unit length."""
     d = np.asarray(d, float)
     c = joint.clearance
@@ -89,11 +90,11 @@ def liu_stiffness(d, joint: Joint):
 
 
 def bai_zhao(d, joint: Joint):
-    """Bai & Zhao 2012 (Int. J. Mech. Sci. 54:190), hybrid model, elastic part:
+    """Bai & Zhao 2012 [BaiZhao2012], hybrid model, elastic part:
 
-    P = K_L(d) d   (N/m),   K_L = review eq. 10 (`liu_stiffness`).
+    P = K_L(d) d   (N/m),   K_L = [Cao2013] eq. 10 (`liu_stiffness`).
     As printed, F = K_L d^n with n = 1.5, whose units do not close (K_L is in Pa); n = 1 is
-    the only exponent that does, and the review writes the L-N framework F = K d^n with this
+    the only exponent that does, and [Cao2013] writes the L-N framework F = K d^n with this
     K. K_L is Liu's tangent used as a secant: P exceeds Liu's force, by 50 % at d << c.
     """
     return liu_stiffness(d, joint) * np.asarray(d, float)
@@ -150,7 +151,7 @@ def johnson(d, joint: Joint):
 
 
 def radzimovsky(d, joint: Joint):
-    """Radzimovsky, as compared by Pereira et al. 2011 (unverified), solved for P (N/m):
+    """Radzimovsky [Radzimovsky1953], as compared by [Pereira2011] (unverified), solved for P (N/m):
 
     d = (P / (pi E*)) [2/3 + ln(4 R_i / b) + ln(4 R_j / b)],  b = 1.6 sqrt(P R* / E*).
     """
@@ -163,7 +164,7 @@ def radzimovsky(d, joint: Joint):
 
 
 def dubowsky_freudenstein(d, joint: Joint):
-    """Dubowsky & Freudenstein 1971, as quoted by Pereira et al. 2011 (unverified), for P (N/m):
+    """Dubowsky & Freudenstein [DubowskyFreudenstein1971], as quoted by [Pereira2011] (unverified), for P (N/m):
 
     d = P (h_i + h_j) [ln(L^2 c / (P (h_i + h_j) R_i R_j)) + 1],  h_k = (1 - nu_k^2)/(pi E_k).
     Dimensionally consistent, but the approach depends on the joint length L.
@@ -178,7 +179,7 @@ def dubowsky_freudenstein(d, joint: Joint):
 
 
 def esdu_78035(d, joint: Joint):
-    """ESDU-78035, as quoted by Pereira et al. 2011 (unverified), solved for P (N/m):
+    """ESDU-78035 [ESDU78035], as quoted by [Pereira2011] (unverified), solved for P (N/m):
 
     d = P (h_i + h_j) [ln(4 c / (P (h_i + h_j))) - 1],  h_k = (1 - nu_k^2)/(pi E_k),
     i.e. Johnson's equal-material form with E* for any pair of materials.
@@ -192,7 +193,7 @@ def esdu_78035(d, joint: Joint):
 
 
 def pereira(d, joint: Joint):
-    """Pereira, Ramalho & Ambrosio 2011 (Nonlinear Dyn. 63:681), fitted to FE, internal
+    """Pereira, Ramalho & Ambrosio 2011 [Pereira2011], fitted to FE, internal
     contact (unverified): in mm, MPa and N,
 
     F = ((a c + b) / c) L E* d^n,  a = 0.965, b = 0.0965,  n = Y c^-0.005,
@@ -220,7 +221,7 @@ def linear(d, stiffness):
 
 
 def persson_load(b):
-    """Persson 1964 / Ciavarella & Decuzzi 2001 (Int. J. Solids Struct. 38:4507): conformal
+    """Persson 1964 / Ciavarella & Decuzzi 2001 [Persson1964; CiavarellaDecuzzi2001]: conformal
     contact of elastically similar pin and infinite plate, plane strain,
 
     P / (E* c) = 2 pi b^2 (1 + b^2) / (2 - ln(1 + b^2) - 2 b^4),  b = tan(eps / 2),

@@ -63,7 +63,7 @@ class Drive(Strict):
 
 class Regularised(Strict):
     """Below v0 the friction force vanishes, between v0 and v1 it grows linearly to its full
-    value (Ambrosio 2003): the static laws need it to be continuous at zero slip."""
+    value [Ambrosio2003]: the static laws need it to be continuous at zero slip."""
 
     v0: float = pydantic.Field(default=1e-4, gt=0, description="m/s")
     v1: float = pydantic.Field(default=1e-3, gt=0, description="m/s")
@@ -83,7 +83,7 @@ class CoulombFriction(Regularised):
 
 
 class StribeckFriction(Regularised):
-    """Polynomial Stribeck (review eq. 14): mu_static at rest, mu_min at |v| = v_min."""
+    """Polynomial Stribeck ([ThomsenFidlin2003]; [Cao2013] eq. 14): mu_static at rest, mu_min at |v| = v_min."""
 
     law: Literal["stribeck"]
     mu_static: float = pydantic.Field(ge=0)
@@ -92,7 +92,7 @@ class StribeckFriction(Regularised):
 
 
 class LinearFriction(Regularised):
-    """mu = mu_static + alpha |v| (review eq. 15)."""
+    """mu = mu_static + alpha |v| ([Cao2013] eq. 15)."""
 
     law: Literal["linear"]
     mu_static: float = pydantic.Field(ge=0)
@@ -113,7 +113,7 @@ class LuGreFriction(Strict):
 
 
 class DahlFriction(Strict):
-    """Dahl (review eq. 16, alpha = 1) normalised by the normal force: F_t = F_n m,
+    """Dahl ([Dahl1976]; [Cao2013] eq. 16, alpha = 1) normalised by the normal force: F_t = F_n m,
     m' = sigma (1 - (m / mu) sgn v) v."""
 
     law: Literal["dahl"]
@@ -122,7 +122,7 @@ class DahlFriction(Strict):
 
 
 class IwanFriction(Strict):
-    """Bilinear Iwan element (review eq. 13) along the contact: a spring k1 in series with a
+    """Bilinear Iwan element ([Iwan1966]; [Cao2013] eq. 13) along the contact: a spring k1 in series with a
     Coulomb slider of strength mu F_n, in parallel with a spring k2; it starts unloaded at
     every new contact. For joints that oscillate rather than turn (k2 resists travel)."""
 

@@ -110,7 +110,7 @@ def stick_zone_ratio(step, radius):
 
 def test_cattaneo_mindlin_stick_zone():
     """Large clearance (Hertz line contact), the pin pushed sideways with the approach held:
-    the stick zone shrinks as c/a = sqrt(1 - Q/(mu P)) (Cattaneo 1938, Mindlin 1949; similar
+    the stick zone shrinks as c/a = sqrt(1 - Q/(mu P)) ([Cattaneo1938], [Mindlin1949]; similar
     materials), within 0.03, from Q/(mu P) = 0.1 to 0.95."""
     radius = 10.0e-3
     solved = Solved(with_clearance(5e-4, radius, contact={"friction": MU},

@@ -15,8 +15,9 @@ FLORES = el.Joint(r_bore=10.0e-3, r_pin=9.5e-3, length=0.02, **STEEL)
 TIGHT = el.Joint(r_bore=10.0e-3, r_pin=9.99e-3, length=0.02, **STEEL)
 
 
-def test_hertz_against_the_review_form():
-    """K = 4 / (3 pi (h_i + h_j)) sqrt(R_i R_j / (R_i - R_j)), h = (1 - nu^2)/(pi E) (eq. 3)."""
+def test_hertz_against_the_h_form():
+    """K = 4 / (3 pi (h_i + h_j)) sqrt(R_i R_j / (R_i - R_j)), h = (1 - nu^2)/(pi E)
+    ([Cao2013] eq. 3)."""
     h = (1 - 0.3**2) / (math.pi * 207e9)
     k = 4 / (3 * math.pi * 2 * h) * math.sqrt(10.0 * 9.5 / 0.5 * 1e-3)
     assert el.hertz_point(1e-5, FLORES) == pytest.approx(k * 1e-5**1.5, rel=1e-12)
@@ -33,7 +34,7 @@ def test_liu_value_asymptotes_and_tangent():
     large = 1.0
     assert el.liu(large, FLORES) == pytest.approx(math.pi * e_star * large / (2 * math.sqrt(2)),
                                                   rel=1e-3)
-    # review eq. 10 is the tangent dP/dd (formula sheet), and Bai-Zhao's P = K d exceeds Liu
+    # [Cao2013] eq. 10 is the tangent dP/dd of [Liu2007], and Bai-Zhao's P = K d exceeds Liu
     for d in (1e-7, 1e-5, 1e-3):
         slope = (el.liu(d * (1 + 1e-6), FLORES) - el.liu(d * (1 - 1e-6), FLORES)) / (2e-6 * d)
         assert el.liu_stiffness(d, FLORES) == pytest.approx(slope, rel=1e-6)
@@ -41,7 +42,7 @@ def test_liu_value_asymptotes_and_tangent():
 
 
 def test_johnson_general_form_reduces_to_the_equal_material_form():
-    """Equal materials: d = (P / (pi E*)) [ln(4 pi E* c / P) - 1] (formula sheet), which is
+    """Equal materials: d = (P / (pi E*)) [ln(4 pi E* c / P) - 1] ([Johnson1985] for internal contact of equal materials), which is
     also the ESDU form; the implicit solution reproduces the approach it was given."""
     e_star = TIGHT.e_star
     for joint in (FLORES, TIGHT):
@@ -132,7 +133,7 @@ def test_restitution_near_elastic(name):
     ("herbert_mcwhannell", False)])
 def test_restitution_far_from_elastic(name, accurate):
     """e = 0.5: the laws built for all e stay within 6 %; those derived for e near 1
-    under-damp: their rebound is too fast (Machado et al. 2012 make the same comparison)."""
+    under-damp: their rebound is too fast ([Machado2012] make the same comparison)."""
     with pytest.warns(UserWarning) if name == "lankarani_nikravesh" else contextlib.nullcontext():
         e = measured_e(dis.HYSTERESIS[name](0.5))
     if accurate:
