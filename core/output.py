@@ -1,49 +1,229 @@
-"""Outputs appear whole or not at all.
+"""Outputs appear whole or not at all, and never at the cost of a user's files.
 
-A run writes into a temporary sibling of its output directory and renames it into place
-only when everything is written; a failed run leaves the old directory (if any) untouched.
-Under MPI, rank 0 owns the file system: it creates the temporary directory, broadcasts its
-name, and renames it when the ranks agree that the run succeeded.
+A run writes into a temporary sibling of its output directory and renames it into place only
+when everything is written; a failed or interrupted run leaves the old directory (if any)
+untouched and removes its temporary one. Under MPI, rank 0 owns the file system: it creates
+the temporary directory, broadcasts its name, and renames it when the ranks agree that the
+run succeeded.
+
+What `--out` may be (`check_output`, applied by the CLI before any work and again by
+`atomic_directory` under its lock):
+- a path that does not exist yet, or an empty directory;
+- a directory that pinbore wrote itself (it holds the marker file `.pinbore-output`) and that
+  holds none of the run's inputs.
+Refused, with one line naming the rule: `""` and `.`, the working directory or a folder
+above it, a file, a directory that pinbore did not write and that is not empty, a path that
+contains an input (the scene, the curves, a cache), a parent that is a file or cannot be
+written. Two runs writing one `--out` at once: the second finds the lock (`flock` on
+`.<name>.pinbore-lock` beside it) and refuses. Temporary directories carry the writing
+process's id; one left by a killed process (SIGKILL) is removed by the next run for the same
+`--out`.
 """
 
 import contextlib
+import fcntl
+import os
+import re
 import shutil
+import signal
+import sys
 import tempfile
+import threading
 from pathlib import Path
 
 from mpi4py import MPI
 
+from pinbore.core.errors import InputError
+
+MARKER = ".pinbore-output"
+MARKER_TEXT = "Written by pinbore. A later run with this --out replaces this directory whole.\n"
+
+
+class Terminated(BaseException):
+    """SIGTERM arrived while an output was under way (raised where the process was)."""
+
+
+_stopped: list[int] = []   # the signals that arrived while an output was under way
+
+
+def _stop(signum, frame):
+    _stopped.append(signum)
+    raise KeyboardInterrupt if signum == signal.SIGINT else Terminated
+
+
+def _raise_if_stopped() -> None:
+    """A stop swallowed by a library's callback, after which the library carried on: stop now."""
+    if _stopped:
+        _stop(_stopped.pop(), None)
+
+
+def stop_signal() -> int | None:
+    """SIGINT or SIGTERM if one stopped an output under way. The exception it raised may have
+    been swallowed by a library's callback (Gmsh's size field, PETSc's residual), which then
+    fails in its own words: the caller asks here what really happened."""
+    return _stopped[-1] if _stopped else None
+
 
 @contextlib.contextmanager
-def atomic_directory(out: str | Path, comm=MPI.COMM_WORLD):
+def _stop_cleanly():
+    """Turn SIGINT and SIGTERM into exceptions for the block (main thread only), so that the
+    temporary directory is removed. Installed here, when the output starts, because libraries
+    loaded before it set handlers of their own."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    _stopped.clear()
+    previous = {s: signal.signal(s, _stop) for s in (signal.SIGINT, signal.SIGTERM)}
+    hook = sys.unraisablehook
+
+    def quiet(unraisable):   # a stop swallowed by a callback is reported once, by the CLI
+        if not isinstance(unraisable.exc_value, (KeyboardInterrupt, Terminated)):
+            hook(unraisable)
+
+    sys.unraisablehook = quiet
+    try:
+        yield
+    finally:
+        sys.unraisablehook = hook
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+
+def _inside(path: Path, folder: Path) -> bool:
+    """Whether `path` is `folder` or lies below it (both resolved)."""
+    return path == folder or folder in path.parents
+
+
+def check_output(out, inputs=()) -> Path:
+    """`out` as a Path if a run may write it (see the module's rules), else an InputError
+    naming the rule. `inputs`: files or folders the run reads, which `out` must not hold."""
+    text = str(out)
+    if text.strip() in ("", "."):
+        raise InputError(f"--out {text!r}: must name a directory of its own (not '' or '.')")
+    out = Path(out)
+    where = out.resolve()
+    if _inside(Path.cwd().resolve(), where):
+        raise InputError(f"--out {text}: is the working directory or a folder above it; "
+                         "name a directory of its own")
+    for item in inputs:
+        if item is not None and _inside(Path(item).resolve(), where):
+            raise InputError(f"--out {text}: holds the input {item}; pinbore would replace it "
+                             "(choose another output directory)")
+    if out.exists() or out.is_symlink():
+        if not out.is_dir():
+            raise InputError(f"--out {text}: is a file, not a directory (pinbore replaces "
+                             "only directories it wrote)")
+        if not (out / MARKER).is_file() and any(out.iterdir()):
+            raise InputError(f"--out {text}: a directory that pinbore did not write (no "
+                             f"{MARKER} in it; older pinbore versions wrote none) and that is "
+                             "not empty; choose another, or empty or remove it")
+    parent = where.parent
+    while not parent.exists():
+        parent = parent.parent
+    if not parent.is_dir():
+        raise InputError(f"--out {text}: {parent} is a file, not a directory")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError(f"--out {text}: cannot write in {parent} (permission denied)")
+    return out
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _temporary_prefix(out: Path, pid: int) -> str:
+    """Name prefix of the temporary directories of `out` written by process `pid`."""
+    return f".{out.name}.pinbore-{pid}-"
+
+
+def _sweep_stale(out: Path) -> None:
+    """Remove temporary directories of `out` left by processes that no longer run."""
+    own = re.compile(re.escape(f".{out.name}.pinbore-") + r"(\d+)-[^.]*\.tmp")
+    for stale in out.parent.iterdir():
+        match = own.fullmatch(stale.name)
+        if match and not _alive(int(match.group(1))):
+            shutil.rmtree(stale, ignore_errors=True)
+
+
+@contextlib.contextmanager
+def _lock(out: Path):
+    """Hold an exclusive lock on `out` (a lock file beside it) or refuse at once."""
+    path = out.parent / f".{out.name}.pinbore-lock"
+    while True:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o644)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            os.close(fd)
+            raise InputError(f"--out {out}: another pinbore run is writing it now") from None
+        try:   # the file we locked may have been removed by its last holder: lock the new one
+            if os.fstat(fd).st_ino == os.stat(path).st_ino:
+                break
+        except FileNotFoundError:
+            pass
+        os.close(fd)
+    try:
+        yield
+    finally:
+        with contextlib.suppress(FileNotFoundError):
+            path.unlink()
+        os.close(fd)
+
+
+@contextlib.contextmanager
+def atomic_directory(out: str | Path, comm=MPI.COMM_WORLD, inputs=()):
     """Yield a temporary directory that becomes `out` when the block exits cleanly.
 
-    An exception removes the temporary directory. A run that stops early but keeps what it
-    computed (non-convergence) writes its files, marks them, and leaves the block normally.
+    `out` is checked (check_output, with the run's `inputs`) and locked first. An exception,
+    Ctrl-C or SIGTERM (raised as KeyboardInterrupt, Terminated) removes the temporary
+    directory. A run that stops early but keeps what it computed (non-convergence) writes its
+    files, marks them, and leaves the block normally.
     """
     out = Path(out)
-    tmp = None
-    if comm.rank == 0:
-        out.parent.mkdir(parents=True, exist_ok=True)
-        tmp = tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
-    tmp = Path(comm.bcast(tmp, root=0))
-    try:
-        yield tmp
-    except BaseException:
+    tmp, error = None, None
+    with contextlib.ExitStack() as held:
+        held.enter_context(_stop_cleanly())
         if comm.rank == 0:
-            shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    comm.barrier()
-    if comm.rank == 0:
-        if out.exists():
-            old = out.with_name(f".{out.name}.old")
-            shutil.rmtree(old, ignore_errors=True)
-            out.rename(old)
-            tmp.rename(out)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            tmp.rename(out)
-    comm.barrier()
+            try:
+                check_output(out, inputs)
+                out.parent.mkdir(parents=True, exist_ok=True)
+                held.enter_context(_lock(out))
+                check_output(out, inputs)   # again, now that no other run can change it
+                _sweep_stale(out)
+                tmp = tempfile.mkdtemp(prefix=_temporary_prefix(out, os.getpid()), suffix=".tmp",
+                                       dir=out.parent)
+            except InputError as err:
+                error = str(err)
+            except OSError as err:
+                error = f"--out {out}: cannot write there ({err.strerror or err})"
+        error, tmp = comm.bcast((error, tmp), root=0)
+        if error:
+            raise InputError(error)
+        tmp = Path(tmp)
+        try:
+            yield tmp
+            _raise_if_stopped()
+        except BaseException:
+            if comm.rank == 0:
+                shutil.rmtree(tmp, ignore_errors=True)
+            raise
+        comm.barrier()
+        if comm.rank == 0:
+            (tmp / MARKER).write_text(MARKER_TEXT)
+            if out.exists():
+                old = out.with_name(f"{_temporary_prefix(out, os.getpid())}old.tmp")
+                out.rename(old)
+                tmp.rename(out)
+                shutil.rmtree(old, ignore_errors=True)
+            else:
+                tmp.rename(out)
+        comm.barrier()
 
 
 def write_text_atomic(path: str | Path, text: str) -> None:
@@ -53,4 +233,3 @@ def write_text_atomic(path: str | Path, text: str) -> None:
     tmp = path.with_name(f".{path.name}.tmp")
     tmp.write_text(text, encoding="utf-8")
     tmp.rename(path)
-

@@ -5,9 +5,15 @@ Bad input prints one line `pinbore <command>: <file>: <key>: <rule>` and exits w
 
 import argparse
 import math
+import os
+import signal
 import sys
+import tempfile
+import traceback
+from pathlib import Path
 
 from pinbore.core.errors import InputError
+from pinbore.core.output import Terminated, check_output, stop_signal
 
 
 def _mesh(args) -> int:
@@ -126,13 +132,50 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
+def _inputs(args) -> list:
+    """What a command reads and its --out must therefore not hold."""
+    return [*(getattr(args, "curves", None) or []), getattr(args, "scene", None),
+            getattr(args, "cache", None)]
+
+
+def _trace_file(command: str) -> Path:
+    """Write the current exception's traceback to a file; its path."""
+    handle, name = tempfile.mkstemp(prefix=f"pinbore-{command}-", suffix=".trace.txt")
+    with os.fdopen(handle, "w") as f:
+        traceback.print_exc(file=f)
+    return Path(name)
+
+
 def main(argv=None) -> int:
+    """Run a command. Known errors print one line: bad input exits 2, Ctrl-C 130, SIGTERM
+    while writing 143 (outputs under way are removed, nothing half written); anything
+    unexpected prints one line with where its traceback was written, and exits 3."""
     args = parser().parse_args(argv)
     try:
+        if args.command != "report":
+            check_output(args.out, _inputs(args))
         return args.func(args)
     except InputError as err:
         print(f"pinbore {args.command}: {err}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        return _stopped(args.command, signal.SIGINT)
+    except Terminated:
+        return _stopped(args.command, signal.SIGTERM)
+    except Exception as err:
+        if stop_signal() is not None:   # the stop surfaced as a library's error
+            return _stopped(args.command, stop_signal())
+        # a bug, not bad input: one line, the trace kept for a report
+        print(f"pinbore {args.command}: internal error ({type(err).__name__}: {err}); "
+              f"traceback in {_trace_file(args.command)}", file=sys.stderr)
+        return 3
+
+
+def _stopped(command: str, signum: int) -> int:
+    """One line for a run stopped by Ctrl-C or SIGTERM; the shell's exit code 128 + signal."""
+    word = "interrupted" if signum == signal.SIGINT else "terminated"
+    print(f"pinbore {command}: {word}; outputs under way removed", file=sys.stderr)
+    return 128 + signum
 
 
 if __name__ == "__main__":

@@ -1,0 +1,110 @@
+"""pinbore never destroys a user's files: what --out may be, the lock between concurrent
+runs, and the clean-up after Ctrl-C, SIGTERM and SIGKILL (core/output.py's rules)."""
+
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+from conftest import ROOT, pinbore
+
+from pinbore.core.output import MARKER, _lock
+
+SCENE = ROOT / "scenes" / "fem" / "steel_c100um.toml"
+
+
+@pytest.fixture
+def home(tmp_path):
+    """A user's folder: a scene and a notes file beside it."""
+    shutil.copy(SCENE, tmp_path / "scene.toml")
+    (tmp_path / "notes.txt").write_text("my notes\n")
+    (tmp_path / "a_file").write_text("keep me\n")
+    (tmp_path / "foreign").mkdir()
+    (tmp_path / "foreign" / "data.csv").write_text("1,2\n")
+    return tmp_path
+
+
+def snapshot(folder):
+    return {p.relative_to(folder): (p.read_bytes() if p.is_file() else None)
+            for p in sorted(folder.rglob("*"))}
+
+
+# (--out, what the one line must say)
+REFUSED = [
+    (".", "must name a directory of its own"),
+    ("", "must name a directory of its own"),
+    ("scene.toml", "holds the input"),              # the scene itself
+    ("{home}", "working directory or a folder above it"),
+    ("a_file", "is a file"),
+    ("foreign", "did not write"),
+    ("a_file/sub", "is a file, not a directory"),
+]
+
+
+@pytest.mark.parametrize("out, rule", REFUSED, ids=[r[1][:20] + "|" + r[0] for r in REFUSED])
+@pytest.mark.parametrize("command", ["mesh", "fem", "reduced"])
+def test_a_refused_out_destroys_nothing(home, out, rule, command):
+    scene = "scene.toml"
+    if command == "reduced":
+        shutil.copy(ROOT / "scenes" / "reduced" / "slider_crank_flores2004_ideal.toml", home / "scene.toml")
+    before = snapshot(home)
+    run = pinbore(command, scene, "--out", out.format(home=home), cwd=home)
+    assert run.returncode == 2
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and rule in lines[0], run.stderr
+    assert snapshot(home) == before   # nothing changed, nothing added (no hidden temporaries)
+
+
+def test_the_folder_holding_the_scene_is_refused(home, tmp_path_factory):
+    elsewhere = tmp_path_factory.mktemp("cwd")
+    before = snapshot(home)
+    run = pinbore("mesh", home / "scene.toml", "--out", home, cwd=elsewhere)
+    assert run.returncode == 2 and "holds the input" in run.stderr
+    assert snapshot(home) == before
+
+
+def test_own_output_is_replaced_whole_and_an_empty_folder_is_used(home):
+    (home / "empty").mkdir()
+    assert pinbore("mesh", "scene.toml", "--out", "empty", cwd=home).returncode == 0
+    assert (home / "empty" / MARKER).exists() and (home / "empty" / "mesh.msh").exists()
+    (home / "empty" / "stale.txt").write_text("from an older run\n")
+    assert pinbore("mesh", "scene.toml", "--out", "empty", cwd=home).returncode == 0
+    assert not (home / "empty" / "stale.txt").exists()          # replaced whole
+    assert sorted(p.name for p in home.iterdir() if p.name.startswith(".")) == []
+
+
+def test_a_second_writer_of_one_out_is_refused(home):
+    with _lock(home / "out"):
+        run = pinbore("mesh", "scene.toml", "--out", "out", cwd=home)
+    assert run.returncode == 2 and "another pinbore run is writing it" in run.stderr
+    assert not (home / "out").exists()
+    assert pinbore("mesh", "scene.toml", "--out", "out", cwd=home).returncode == 0
+
+
+def test_temporaries_of_a_killed_run_are_swept(home):
+    stale = home / ".out.pinbore-999999999-abc.tmp"   # no such process
+    stale.mkdir()
+    (stale / "fields.h5").write_bytes(b"half written")
+    assert pinbore("mesh", "scene.toml", "--out", "out", cwd=home).returncode == 0
+    assert not stale.exists()
+
+
+@pytest.mark.parametrize("sig, code, word", [(signal.SIGTERM, 143, "terminated"),
+                                             (signal.SIGINT, 130, "interrupted")])
+def test_a_stopped_run_leaves_no_temporaries_and_one_line(home, sig, code, word):
+    run = subprocess.Popen([sys.executable, "-m", "pinbore.cli", "fem", "scene.toml", "--out", "out"],
+                           cwd=home, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not list(home.glob(".out.pinbore-*.tmp")) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert run.poll() is None, "the run ended before it could be stopped"
+    run.send_signal(sig)
+    stderr = run.communicate(timeout=60)[1]
+    assert run.returncode == code
+    # the last line is pinbore's (a library may have said what it was doing when stopped)
+    assert stderr.strip().splitlines()[-1] == f"pinbore fem: {word}; outputs under way removed"
+    assert "Traceback" not in stderr
+    assert not (home / "out").exists()
+    assert [p.name for p in home.iterdir() if p.name.startswith(".")] == []
