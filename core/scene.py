@@ -13,9 +13,11 @@ from pinbore.core.errors import InputError
 
 
 class Strict(pydantic.BaseModel):
-    """Base of every scene table: no unknown keys, no silent type coercion, immutable."""
+    """Base of every scene table: no unknown keys, no silent type coercion, immutable, and
+    every number finite (inf and nan are refused wherever a float is read)."""
 
-    model_config = pydantic.ConfigDict(extra="forbid", strict=True, frozen=True)
+    model_config = pydantic.ConfigDict(extra="forbid", strict=True, frozen=True,
+                                       allow_inf_nan=False)
 
 
 def read_toml(path: str | Path) -> dict:
@@ -25,6 +27,8 @@ def read_toml(path: str | Path) -> dict:
         text = path.read_text(encoding="utf-8")
     except OSError as err:
         raise InputError(f"{path}: cannot read scene file ({err.strerror})") from None
+    except UnicodeDecodeError:
+        raise InputError(f"{path}: not a text file (a scene is TOML in UTF-8)") from None
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:

@@ -126,6 +126,10 @@ class FemScene(Strict):
 
     @pydantic.model_validator(mode="after")
     def _consistent(self):
+        if self.geometry.dim == 2:
+            for key in ("layers", "symmetry"):
+                if getattr(self.mesh, key) is not None:
+                    raise ValueError(f"mesh.{key} applies to dim = 3 only")
         wall = self.geometry.pin_radius - self.geometry.hub_radius
         if self.mesh.contact_size is not None and self.mesh.contact_size >= wall:
             raise ValueError("mesh.contact_size must be smaller than pin_radius - hub_radius")

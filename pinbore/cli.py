@@ -69,8 +69,27 @@ def _scene_command(sub, name, func, summary, description):
     command.set_defaults(func=func)
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """argparse whose usage errors are one line (`pinbore fem: error: ...`) and exit 2."""
+
+    def error(self, message):
+        print(f"{self.prog}: error: {message} (see {self.prog} --help)", file=sys.stderr)
+        sys.exit(2)
+
+
+def positive_length(text: str) -> float:
+    """A length in metres: a finite number above zero."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"{text!r}: must be a finite length above 0 m")
+    return value
+
+
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="pinbore", description=__doc__.splitlines()[0])
+    p = OneLineParser(prog="pinbore", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     _scene_command(sub, "mesh", _mesh, "build the gmsh model of an FE scene: mesh.msh, preview.png",
                    "Build the 2D or 3D gmsh model of an FE scene; write DIR/mesh.msh and "
@@ -88,7 +107,7 @@ def parser() -> argparse.ArgumentParser:
                                    "DIR/curves.png, DIR/errors.png.")
     c.add_argument("curves", nargs="+", help="curve.csv files written by `pinbore fem`")
     c.add_argument("--out", required=True, metavar="DIR", help="output directory (replaced when complete)")
-    c.add_argument("--length", type=float, default=None,
+    c.add_argument("--length", type=positive_length, default=None,
                    help="axial length (m) for the laws that need one; default: the bore diameter")
     c.set_defaults(func=_calibrate)
     _scene_command(sub, "reduced", _reduced,

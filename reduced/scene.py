@@ -252,6 +252,8 @@ class ReducedScene(Strict):
         for name, key in used:
             if name not in known:
                 raise ValueError(f"{key}: unknown body {name!r}; bodies: {', '.join(sorted(known))}")
+            if name == GROUND and key in ("drive.body", "joints.body"):
+                raise ValueError(f"{key}: must be a moving body, not {GROUND!r}")
         if any((c.normal_law or "").startswith("calibrated:") for c in self.clearance_joints) \
                 and self.laws_file is None:
             raise ValueError("laws_file is required by a calibrated:<law> normal law")

@@ -1,0 +1,88 @@
+"""Bad input in every command: one line naming the key (or option) and the rule, exit code 2,
+nothing written. One table per class of fault, so a class cannot come back."""
+
+import copy
+import math
+import tomllib
+
+import pytest
+from conftest import ROOT, pinbore, scene_dict
+
+INF, NAN = math.inf, math.nan
+FLORES = tomllib.loads((ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml").read_text())
+
+
+def fem_with(**tables):
+    return scene_dict(**tables)
+
+
+def reduced_with(edit):
+    data = copy.deepcopy(FLORES)
+    edit(data)
+    return data
+
+
+def expect_one_line(done, message, out):
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0], done.stderr
+    assert not out.exists() and not list(out.parent.glob(f".{out.name}*"))
+
+
+# numbers that are not finite, wherever a scene reads a float
+NOT_FINITE = [
+    ("mesh", fem_with(geometry={"housing_radius": INF}), "geometry.housing_radius: Input should be a finite number"),
+    ("fem", fem_with(materials={"pin": {"E": NAN, "nu": 0.3}}), "materials.pin.E: Input should be a finite number"),
+    ("fem", fem_with(load={"max_approach": INF}), "load.max_approach: Input should be a finite number"),
+    ("reduced", reduced_with(lambda d: d.update(duration=INF)), "duration: Input should be a finite number"),
+    ("reduced", reduced_with(lambda d: d["bodies"][0].update(mass=INF)), "bodies.0.mass: Input should be a finite number"),
+    ("reduced", reduced_with(lambda d: d["bodies"][1].update(inertia=INF)), "bodies.1.inertia: Input should be a finite"),
+    ("reduced", reduced_with(lambda d: d["bodies"][1].update(angle_deg=NAN)), "bodies.1.angle_deg: Input should be a finite"),
+    ("reduced", reduced_with(lambda d: d["bodies"][2].update(position=[0.0, INF])), "bodies.2.position.1: Input should be a finite"),
+    ("reduced", reduced_with(lambda d: d["drive"].update(speed_rpm=NAN)), "drive.speed_rpm: Input should be a finite"),
+    ("reduced", reduced_with(lambda d: d.update(gravity=[0.0, -INF])), "gravity.1: Input should be a finite"),
+    ("reduced", reduced_with(lambda d: d["clearance_joints"][0].update(E=INF)), "clearance_joints.0.E: Input should be a finite"),
+    ("reduced", reduced_with(lambda d: d["clearance_joints"][0].update(bearing_point=[NAN, 0.0])),
+     "clearance_joints.0.bearing_point.0: Input should be a finite"),
+]
+
+# keys that name the wrong thing or do not apply
+MISPLACED = [
+    ("mesh", fem_with(mesh={"layers": 8}), "mesh.layers applies to dim = 3 only"),
+    ("fem", fem_with(mesh={"symmetry": True}), "mesh.symmetry applies to dim = 3 only"),
+    ("reduced", reduced_with(lambda d: d["drive"].update(body="ground")), "drive.body: must be a moving body"),
+]
+
+
+@pytest.mark.parametrize("command, scene, message", NOT_FINITE + MISPLACED,
+                         ids=[m[2].split(":")[0] for m in NOT_FINITE + MISPLACED])
+def test_bad_scene_value(write_scene, tmp_path, command, scene, message):
+    out = tmp_path / "out"
+    expect_one_line(pinbore(command, write_scene(scene), "--out", out), message, out)
+
+
+@pytest.mark.parametrize("command", ["mesh", "fem", "reduced", "dynamics"])
+def test_a_binary_scene_is_one_line(tmp_path, command):
+    scene = tmp_path / "scene.toml"
+    scene.write_bytes(b"\xff\xfe\x00\x81binary")
+    extra = ["--analysis", "poincare"] if command == "dynamics" else []
+    out = tmp_path / "out"
+    expect_one_line(pinbore(command, scene, "--out", out, *extra), "not a text file", out)
+
+
+@pytest.mark.parametrize("length, rule", [("0", "must be a finite length above 0 m"),
+                                          ("nan", "must be a finite length above 0 m"),
+                                          ("-0.02", "must be a finite length above 0 m"),
+                                          ("inf", "must be a finite length above 0 m"),
+                                          ("x", "is not a number")])
+def test_calibrate_length_must_be_a_positive_length(tmp_path, length, rule):
+    out = tmp_path / "out"
+    done = pinbore("calibrate", tmp_path / "curve.csv", "--out", out, f"--length={length}")
+    expect_one_line(done, f"--length: '{length}'" if length != "x" else "--length", out)
+    assert rule in done.stderr
+
+
+def test_usage_errors_are_one_line():
+    done = pinbore("fem")
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
+    assert "required: scene, --out" in done.stderr
