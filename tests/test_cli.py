@@ -38,7 +38,7 @@ def test_fem_writes_curve_pressure_result_fields_picture(write_scene, tmp_path):
 
 @pytest.mark.parametrize("dim", [2, 3])
 def test_mesh_has_every_physical_group(write_scene, tmp_path, dim):
-    data = scene_dict(geometry={"dim": dim, "length": 0.02}, mesh={"layers": 3})
+    data = scene_dict(geometry={"dim": dim, "length": 0.02}, mesh={"layers": 3} if dim == 3 else {})
     out = tmp_path / "mesh"
     done = pinbore("mesh", write_scene(data), "--out", out)
     assert done.returncode == 0, done.stderr
