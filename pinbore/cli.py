@@ -48,9 +48,21 @@ def _reduced(args) -> int:
 
 
 def _dynamics(args) -> int:
-    from pinbore.reduced import studies
+    """Validate the options of the chosen analysis (its model in the table of analyses),
+    then run it with them."""
+    from pinbore.reduced import analyses, studies
 
-    return studies.run(args)
+    model, _ = studies.ANALYSES[args.analysis]
+    options = analyses.parse(model, _options_given(args), args.analysis)
+    return studies.run(args.scene, args.analysis, options)
+
+
+def _options_given(args) -> dict:
+    """The options given to `pinbore dynamics`, keyed by their model's field names (an option
+    left out is absent from `args`); an option of several values as a tuple."""
+    skip = {"command", "func", "scene", "analysis"}
+    return {name: tuple(value) if isinstance(value, list) else value
+            for name, value in vars(args).items() if name not in skip}
 
 
 def _report(args) -> int:
@@ -88,6 +100,47 @@ def positive_length(text: str) -> float:
     return value
 
 
+def _dynamics_command(sub) -> None:
+    """`pinbore dynamics`. Its options have no argparse defaults (an option left out is absent
+    from the parsed arguments): the options model of the analysis holds the defaults and the
+    rules, and rejects an option that the analysis does not use."""
+    from pinbore.reduced.analyses import PARAMETERS, Sampled, Sweep
+
+    def default(model, name):
+        return model.model_fields[name].default
+
+    d = sub.add_parser("dynamics", help="Poincare maps, bifurcations, Lyapunov exponents, shooting, design maps",
+                       description="Nonlinear dynamics of a driven mechanism with clearance "
+                                   "joints, sampled once per drive revolution; write DIR/summary.json "
+                                   "with tables and plots of the analysis.",
+                       argument_default=argparse.SUPPRESS)
+    d.add_argument("scene", help="reduced scene file (TOML) with a [drive]")
+    d.add_argument("--analysis", required=True,
+                   choices=["poincare", "bifurcation", "lyapunov", "shooting", "design"])
+    d.add_argument("--out", required=True, type=Path, metavar="DIR",
+                   help="output directory (replaced when complete)")
+    d.add_argument("--parameter", choices=list(PARAMETERS),
+                   help="bifurcation: the swept parameter (m, rpm, or mu)")
+    d.add_argument("--range", type=float, nargs=2, metavar=("LOW", "HIGH"),
+                   help="bifurcation: parameter range; design: clearance range (m)")
+    d.add_argument("--points", type=int, help=f"sweep points (default {default(Sweep, 'points')})")
+    d.add_argument("--speeds", type=float, nargs=3, metavar=("LOW", "HIGH", "N"),
+                   help="design: drive speeds (rpm)")
+    d.add_argument("--transient", type=int,
+                   help=f"drive periods discarded before sampling (default {default(Sampled, 'transient')})")
+    d.add_argument("--periods", type=int, help=f"periods sampled (default {default(Sampled, 'periods')})")
+    d.add_argument("--multiple", type=int, help="shooting: orbit period in drive periods")
+    d.add_argument("--max-force", type=float, help="design: threshold (N)")
+    d.add_argument("--max-deviation", type=float,
+                   help="design: threshold of the slider acceleration deviation (RMS / ideal RMS)")
+    d.add_argument("--workers", type=int, help="local processes (default: the cores)")
+    d.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run the sweep on this Dask scheduler instead of local processes")
+    d.add_argument("--cache", type=Path, metavar="DIR",
+                   help="per-point results, for resuming (default: OUT-cache)")
+    d.set_defaults(func=_dynamics)
+
+
 def parser() -> argparse.ArgumentParser:
     p = OneLineParser(prog="pinbore", description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
@@ -114,34 +167,7 @@ def parser() -> argparse.ArgumentParser:
                    "integrate a mechanism with clearance joints: timeseries.csv, summary.json",
                    "Integrate a planar mechanism with revolute clearance joints (scene kind = "
                    "\"reduced\"); write DIR/timeseries.csv, DIR/summary.json and plots.")
-    d = sub.add_parser("dynamics", help="Poincare maps, bifurcations, Lyapunov exponents, shooting, design maps",
-                       description="Nonlinear dynamics of a driven mechanism with clearance "
-                                   "joints, sampled once per drive revolution; write DIR/summary.json "
-                                   "with tables and plots of the analysis.")
-    d.add_argument("scene", help="reduced scene file (TOML) with a [drive]")
-    d.add_argument("--analysis", required=True,
-                   choices=["poincare", "bifurcation", "lyapunov", "shooting", "design"])
-    d.add_argument("--out", required=True, metavar="DIR", help="output directory (replaced when complete)")
-    d.add_argument("--parameter", choices=["clearance", "speed", "friction"],
-                   help="bifurcation: the swept parameter (m, rpm, or mu)")
-    d.add_argument("--range", type=float, nargs=2, metavar=("LOW", "HIGH"),
-                   help="bifurcation: parameter range; design: clearance range (m)")
-    d.add_argument("--points", type=int, default=50, help="sweep points (default 50)")
-    d.add_argument("--speeds", type=float, nargs=3, metavar=("LOW", "HIGH", "N"),
-                   help="design: drive speeds (rpm)")
-    d.add_argument("--transient", type=int, default=50,
-                   help="drive periods discarded before sampling (default 50)")
-    d.add_argument("--periods", type=int, default=50, help="periods sampled (default 50)")
-    d.add_argument("--multiple", type=int, default=1, help="shooting: orbit period in drive periods")
-    d.add_argument("--max-force", type=float, default=math.inf, help="design: threshold (N)")
-    d.add_argument("--max-deviation", type=float, default=math.inf,
-                   help="design: threshold of the slider acceleration deviation (RMS / ideal RMS)")
-    d.add_argument("--workers", type=int, default=None, help="local processes (default: the cores)")
-    d.add_argument("--scheduler", default=None, metavar="ADDRESS",
-                   help="run the sweep on this Dask scheduler instead of local processes")
-    d.add_argument("--cache", default=None, metavar="DIR",
-                   help="per-point results, for resuming (default: OUT-cache)")
-    d.set_defaults(func=_dynamics)
+    _dynamics_command(sub)
     r = sub.add_parser("report", help="build the HTML report from the results under build/",
                        description="Collect the results under BUILD into one self-contained "
                                    "HTML page, OUT/index.html.")
@@ -152,9 +178,9 @@ def parser() -> argparse.ArgumentParser:
 
 
 def _inputs(args) -> list:
-    """What a command reads and its --out must therefore not hold."""
-    return [*(getattr(args, "curves", None) or []), getattr(args, "scene", None),
-            getattr(args, "cache", None)]
+    """What a command reads and its --out must therefore not hold (the dynamics' --cache is
+    checked by its options model)."""
+    return [*(getattr(args, "curves", None) or []), getattr(args, "scene", None)]
 
 
 def _trace_file(command: str) -> Path:

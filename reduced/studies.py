@@ -1,6 +1,10 @@
 """`pinbore dynamics SCENE --analysis ... --out DIR`: Poincare maps, bifurcation diagrams,
 Lyapunov exponents, periodic orbits by shooting and design studies of a driven mechanism.
 
+`ANALYSES` maps each analysis to its options model (`pinbore.reduced.analyses`, validated
+before any work) and the function that runs it; `run` checks the scene against the options,
+runs the analysis into a temporary folder and moves it into place when complete.
+
 Sweeps run their points in parallel: on the local cores (a process pool), or on a Dask
 cluster when `--scheduler ADDRESS` is given (the same tasks through its executor). Each point
 is cached as JSON under the cache folder as soon as it is done, so an interrupted sweep
@@ -13,9 +17,9 @@ import hashlib
 import json
 import math
 import multiprocessing
-import os
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -26,14 +30,12 @@ from pinbore.core.errors import InputError
 from pinbore.core.output import atomic_directory
 from pinbore.reduced import dynamics
 from pinbore.reduced import dynamics_plots as plots
+from pinbore.reduced.analyses import (PARAMETERS, Analysis, BifurcationOptions, DesignOptions,
+                                      LyapunovOptions, PoincareOptions, Sampled, ShootingOptions)
 from pinbore.reduced.model import build
 from pinbore.reduced.outputs import per_step
 from pinbore.reduced.run import ideal_twin
 from pinbore.reduced.scene import ReducedScene
-
-PARAMETERS = {"clearance": "m, radial clearance of every clearance joint",
-              "speed": "rpm, the drive's speed",
-              "friction": "mu of every clearance joint's friction law"}
 
 
 def with_parameter(data: dict, parameter: str, value: float, source: str) -> dict:
@@ -66,6 +68,27 @@ def mechanism_flow(data: dict, base: Path, source: str) -> dynamics.MechanismFlo
     scene = ReducedScene.model_validate(data)
     require_drive(scene, source)
     return dynamics.MechanismFlow(build(scene, source, base))
+
+
+@dataclass(frozen=True)
+class SceneFile:
+    """The scene an analysis runs on: its file and its validated data (sweeps set their
+    parameter in copies of it)."""
+
+    path: Path
+    data: dict
+
+    @property
+    def source(self) -> str:
+        return str(self.path)
+
+    @property
+    def base(self) -> Path:
+        """The folder that relative paths in the scene (laws_file) start from."""
+        return self.path.parent
+
+    def flow(self) -> dynamics.MechanismFlow:
+        return mechanism_flow(self.data, self.base, self.source)
 
 
 def observed_samples(flow, states) -> np.ndarray:
@@ -133,10 +156,7 @@ def _executor(workers: int, scheduler: str | None):
         # spawned, not forked: the parent runs threads (numba, tqdm) that fork would copy mid-state
         return concurrent.futures.ProcessPoolExecutor(max_workers=workers,
                                                       mp_context=multiprocessing.get_context("spawn"))
-    try:
-        from distributed import Client   # noqa: PLC0415 (optional dependency)
-    except ImportError:
-        raise InputError("--scheduler: needs the dask 'distributed' package") from None
+    from distributed import Client   # noqa: PLC0415 (optional: the --scheduler rule checks it is there)
     return Client(scheduler).get_executor()
 
 
@@ -147,10 +167,6 @@ def sweep_key(data: dict, analysis: str, parameter: str, transient: int, periods
             for f in sorted((Path(__file__).resolve().parent.parent / package).glob("*.py"))]
     text = json.dumps([data, analysis, parameter, transient, periods, code], sort_keys=True)
     return f"{analysis}_{parameter}_{hashlib.sha256(text.encode()).hexdigest()[:12]}"
-
-
-def default_workers() -> int:
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
 class DesignPoint:
@@ -209,126 +225,137 @@ def design_band(rows, speeds, max_force, max_deviation) -> dict:
     return band
 
 
-def run(args) -> int:
-    """The `pinbore dynamics` command; outputs in args.out (replaced when complete)."""
-    path = Path(args.scene)
+def run(scene_file: str | Path, analysis: str, options: Analysis) -> int:
+    """The `pinbore dynamics` command: `analysis` (a key of ANALYSES) with its validated
+    options; outputs in options.out (replaced when complete). 1 if shooting did not
+    converge (its outputs are written, marked)."""
+    path = Path(scene_file)
     scene = scenes.load(ReducedScene, path)   # validates, one-line errors
-    data = scene.model_dump(exclude_none=True)
-    source, base = str(path), path.parent
-    _check_arguments(args, scene, source)
-    cache = Path(args.cache) if args.cache else Path(f"{args.out}-cache")
-    args.workers = args.workers or default_workers()
+    target = SceneFile(path, scene.model_dump(exclude_none=True))
+    check_scene(scene, target, options)
+    _, analyse = ANALYSES[analysis]
     start = time.perf_counter()
-    summary = {"scene_file": source, "analysis": args.analysis, "transient_periods": args.transient,
-               "periods": args.periods}
+    summary = {"scene_file": target.source, "analysis": analysis, "transient_periods": options.transient}
+    if isinstance(options, Sampled):
+        summary["periods"] = options.periods
     try:
-        status = _analyse(args, path, data, source, base, cache, start, summary)
+        with atomic_directory(options.out) as tmp:
+            summary |= analyse(target, options, tmp)
+            summary["wall_time_s"] = time.perf_counter() - start
+            (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
     except FloatingPointError as err:
-        print(f"pinbore dynamics: {source}: {err}; nothing written", file=sys.stderr)
+        print(f"pinbore dynamics: {target.source}: {err}; nothing written", file=sys.stderr)
         return 1
-    if status:
-        print(f"pinbore dynamics: {source}: {summary['reason']}; wrote {args.out}/summary.json "
-              "(converged: false)", file=sys.stderr)
-    return status
+    if summary.get("converged", True):
+        return 0
+    print(f"pinbore dynamics: {target.source}: {summary['reason']}; wrote {options.out}/summary.json "
+          "(converged: false)", file=sys.stderr)
+    return 1
 
 
-def _analyse(args, path, data, source, base, cache, start, summary) -> int:
-    """Run the analysis and write its outputs; 1 if shooting did not converge."""
-    status = 0
-    with atomic_directory(args.out) as tmp:
-        if args.analysis == "poincare":
-            flow = mechanism_flow(data, base, source)
-            coords, states = dynamics.poincare(flow, flow.start(), args.transient, args.periods,
-                                               progress=True)
-            exponent, _ = dynamics.lyapunov(flow, states[-1], args.periods)
-            kind, period = dynamics.classify(coords, exponent)
-            samples = observed_samples(flow, states)
-            plots.write_table(tmp / "poincare.csv", ["period", "x_m", "y_m", "vx_m_per_s", "vy_m_per_s"],
-                              [[args.transient + k + 1, *row] for k, row in enumerate(samples)])
-            plots.poincare(tmp / "poincare.png", samples, flow.length, f"{path.stem}: {kind}"
-                           + (f", period {period}" if period else ""), flow.observed_name())
-            summary |= {"observed": flow.observed_name(), "kind": kind, "period": period,
-                        "lyapunov_per_s": _finite(exponent)}
-        elif args.analysis == "lyapunov":
-            flow = mechanism_flow(data, base, source)
-            state = flow.advance(flow.start(), args.transient)
-            exponent, running = dynamics.lyapunov(flow, state, args.periods)
-            plots.write_table(tmp / "lyapunov.csv", ["period", "running_estimate_per_s"],
-                              [[k + 1, v] for k, v in enumerate(running)])
-            plots.convergence(tmp / "lyapunov.png", running)
-            tail = [v for v in running[len(running) * 3 // 4:] if math.isfinite(v)]
-            summary |= {"lyapunov_per_s": _finite(exponent),
-                        "last_quarter_spread_per_s": (max(tail) - min(tail)) if tail else None}
-        elif args.analysis == "shooting":
-            flow = mechanism_flow(data, base, source)
-            state = flow.advance(flow.start(), args.transient)
-            try:
-                orbit, multipliers, history = dynamics.shooting(flow, state, args.multiple)
-                summary |= {"converged": True, "residuals": history,
-                            "floquet_multipliers": [[m.real, m.imag] for m in multipliers],
-                            "largest_multiplier_modulus": float(np.max(np.abs(multipliers))),
-                            "stable": bool(np.max(np.abs(multipliers)) < 1),
-                            "observed": flow.observed(orbit).tolist()}
-            except FloatingPointError as err:
-                summary |= {"converged": False, "reason": str(err)}
-                status = 1
-        elif args.analysis == "bifurcation":
-            values = np.linspace(args.range[0], args.range[1], args.points).tolist()
-            task = BifurcationPoint(data, base, source, args.parameter, args.transient, args.periods)
-            key = sweep_key(data, "bifurcation", args.parameter, args.transient, args.periods)
-            rows = sweep(task, values, cache, args.workers, args.scheduler, key)
-            plots.write_table(tmp / "bifurcation.csv",
-                              ["value", "kind", "period", "lyapunov_per_s", "x_m", "y_m"],
-                              [[r["value"], r["kind"], r["period"], r["lyapunov_per_s"], *j[:2]]
-                               for r in rows for j in r["observed"]])
-            plots.bifurcation(tmp / "bifurcation.png", rows, args.parameter, PARAMETERS[args.parameter])
-            kinds = [r["kind"] for r in rows]
-            summary |= {"parameter": args.parameter, "range": args.range, "points": args.points,
-                        "counts": {k: kinds.count(k) for k in sorted(set(kinds))}}
-        else:   # design
-            clearances = np.linspace(args.range[0], args.range[1], args.points).tolist()
-            speeds = np.linspace(*args.speeds[:2], int(args.speeds[2])).tolist()
-            grid = [(c, v) for v in speeds for c in clearances]
-            task = DesignPoint(data, base, source, args.transient, args.periods)
-            key = sweep_key(data, "design", "clearance_speed", args.transient, args.periods)
-            rows = sweep(task, grid, cache, args.workers, args.scheduler, key)
-            names = ["clearance_m", "speed_rpm", "peak_force_N", "impacts_per_revolution",
-                     "acceleration_deviation"]
-            plots.write_table(tmp / "design.csv", names, [[r[n] for n in names] for r in rows])
-            plots.design(tmp / "design.png", rows, clearances, speeds, args.max_force, args.max_deviation)
-            summary |= {"thresholds": {"peak_force_N": args.max_force,
-                                       "acceleration_deviation": args.max_deviation},
-                        "band": design_band(rows, speeds, args.max_force, args.max_deviation)}
-        summary["wall_time_s"] = time.perf_counter() - start
-        (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
-    return status
+def check_scene(scene: ReducedScene, target: SceneFile, options: Analysis) -> None:
+    """What the options need of the scene, before any work: a drive (the section is taken
+    once per revolution); a valid scene at both ends of every swept range (e.g. a clearance
+    below the bearing's radius, a friction law with a coefficient mu to set); a prismatic
+    body for the design study to measure."""
+    require_drive(scene, target.source)
+    for option, parameter, span in options.swept():
+        for value in (span.low, span.high):
+            scenes.validate(ReducedScene, with_parameter(target.data, parameter, value, target.source),
+                            f"--{option}: {target.source} with {parameter} {value:g}")
+    if isinstance(options, DesignOptions) and not any(j.type == "prismatic" for j in scene.joints):
+        raise InputError(f"{target.source}: joints: the design study measures a prismatic body's "
+                         "acceleration; the scene has no prismatic joint")
+
+
+def poincare_map(target: SceneFile, options: PoincareOptions, tmp: Path) -> dict:
+    """The Poincare samples after the transient, their class and the largest exponent."""
+    flow = target.flow()
+    coords, states = dynamics.poincare(flow, flow.start(), options.transient, options.periods,
+                                       progress=True)
+    exponent, _ = dynamics.lyapunov(flow, states[-1], options.periods)
+    kind, period = dynamics.classify(coords, exponent)
+    samples = observed_samples(flow, states)
+    plots.write_table(tmp / "poincare.csv", ["period", "x_m", "y_m", "vx_m_per_s", "vy_m_per_s"],
+                      [[options.transient + k + 1, *row] for k, row in enumerate(samples)])
+    plots.poincare(tmp / "poincare.png", samples, flow.length, f"{target.path.stem}: {kind}"
+                   + (f", period {period}" if period else ""), flow.observed_name())
+    return {"observed": flow.observed_name(), "kind": kind, "period": period,
+            "lyapunov_per_s": _finite(exponent)}
+
+
+def lyapunov_exponent(target: SceneFile, options: LyapunovOptions, tmp: Path) -> dict:
+    """The largest Lyapunov exponent after the transient, and its running estimate."""
+    flow = target.flow()
+    state = flow.advance(flow.start(), options.transient)
+    exponent, running = dynamics.lyapunov(flow, state, options.periods)
+    plots.write_table(tmp / "lyapunov.csv", ["period", "running_estimate_per_s"],
+                      [[k + 1, v] for k, v in enumerate(running)])
+    plots.convergence(tmp / "lyapunov.png", running)
+    tail = [v for v in running[len(running) * 3 // 4:] if math.isfinite(v)]
+    return {"lyapunov_per_s": _finite(exponent),
+            "last_quarter_spread_per_s": (max(tail) - min(tail)) if tail else None}
+
+
+def periodic_orbit(target: SceneFile, options: ShootingOptions, tmp: Path) -> dict:
+    """The periodic orbit by shooting from the state after the transient, with its Floquet
+    multipliers; `converged: false` and the reason when Newton fails."""
+    flow = target.flow()
+    state = flow.advance(flow.start(), options.transient)
+    try:
+        orbit, multipliers, history = dynamics.shooting(flow, state, options.multiple)
+    except FloatingPointError as err:
+        return {"converged": False, "reason": str(err)}
+    return {"converged": True, "residuals": history,
+            "floquet_multipliers": [[m.real, m.imag] for m in multipliers],
+            "largest_multiplier_modulus": float(np.max(np.abs(multipliers))),
+            "stable": bool(np.max(np.abs(multipliers)) < 1),
+            "observed": flow.observed(orbit).tolist()}
+
+
+def bifurcation_diagram(target: SceneFile, options: BifurcationOptions, tmp: Path) -> dict:
+    """The swept parameter's points, each classified from its Poincare samples."""
+    values = np.linspace(options.range.low, options.range.high, options.points).tolist()
+    task = BifurcationPoint(target.data, target.base, target.source, options.parameter,
+                            options.transient, options.periods)
+    key = sweep_key(target.data, "bifurcation", options.parameter, options.transient, options.periods)
+    rows = sweep(task, values, options.cache, options.workers, options.scheduler, key)
+    plots.write_table(tmp / "bifurcation.csv",
+                      ["value", "kind", "period", "lyapunov_per_s", "x_m", "y_m"],
+                      [[r["value"], r["kind"], r["period"], r["lyapunov_per_s"], *j[:2]]
+                       for r in rows for j in r["observed"]])
+    plots.bifurcation(tmp / "bifurcation.png", rows, options.parameter, PARAMETERS[options.parameter].label)
+    kinds = [r["kind"] for r in rows]
+    return {"parameter": options.parameter, "range": list(options.range), "points": options.points,
+            "counts": {k: kinds.count(k) for k in sorted(set(kinds))}}
+
+
+def design_map(target: SceneFile, options: DesignOptions, tmp: Path) -> dict:
+    """The design study on the clearance x speed grid, and per speed the clearance band
+    within the thresholds."""
+    clearances = np.linspace(options.range.low, options.range.high, options.points).tolist()
+    speeds = np.linspace(options.speeds.low, options.speeds.high, options.speeds.count).tolist()
+    grid = [(c, v) for v in speeds for c in clearances]
+    task = DesignPoint(target.data, target.base, target.source, options.transient, options.periods)
+    key = sweep_key(target.data, "design", "clearance_speed", options.transient, options.periods)
+    rows = sweep(task, grid, options.cache, options.workers, options.scheduler, key)
+    names = ["clearance_m", "speed_rpm", "peak_force_N", "impacts_per_revolution",
+             "acceleration_deviation"]
+    plots.write_table(tmp / "design.csv", names, [[r[n] for n in names] for r in rows])
+    plots.design(tmp / "design.png", rows, clearances, speeds, options.max_force, options.max_deviation)
+    return {"thresholds": {"peak_force_N": options.max_force,
+                           "acceleration_deviation": options.max_deviation},
+            "band": design_band(rows, speeds, options.max_force, options.max_deviation)}
 
 
 def _finite(value):
     return value if value is not None and math.isfinite(value) else None
 
 
-def _check_arguments(args, scene, source) -> None:
-    require_drive(scene, source)
-    if args.analysis in ("bifurcation", "design"):
-        if args.range is None:
-            raise InputError(f"--range: {args.analysis} needs --range LOW HIGH")
-        low, high = args.range
-        if not high > low:
-            raise InputError(f"--range: HIGH must exceed LOW (got {low:g} {high:g})")
-        if args.points < 2:
-            raise InputError(f"--points: at least 2 (got {args.points})")
-        if args.analysis == "bifurcation" and args.parameter is None:
-            raise InputError(f"--parameter: bifurcation needs one of {', '.join(PARAMETERS)}")
-        parameter = "clearance" if args.analysis == "design" else args.parameter
-        with_parameter(scene.model_dump(exclude_none=True), parameter, args.range[0], source)
-        if parameter == "clearance" and low <= 0:
-            raise InputError(f"--range: a clearance must be > 0 (got {low:g})")
-    if args.analysis == "design":
-        if args.speeds is None or args.speeds[1] <= args.speeds[0] or int(args.speeds[2]) < 1:
-            raise InputError("--speeds: design needs --speeds LOW HIGH N (rpm, HIGH > LOW, N >= 1)")
-        if not any(j.type == "prismatic" for j in scene.joints):
-            raise InputError(f"{source}: joints: the design study measures a prismatic body's "
-                             "acceleration; the scene has no prismatic joint")
-    if args.periods < 1 or args.transient < 0:
-        raise InputError("--periods must be >= 1 and --transient >= 0")
+# analysis name -> (options model, the function that runs it into a temporary folder and
+# returns its entries of summary.json)
+ANALYSES = {"poincare": (PoincareOptions, poincare_map),
+            "lyapunov": (LyapunovOptions, lyapunov_exponent),
+            "shooting": (ShootingOptions, periodic_orbit),
+            "bifurcation": (BifurcationOptions, bifurcation_diagram),
+            "design": (DesignOptions, design_map)}

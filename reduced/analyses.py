@@ -1,0 +1,267 @@
+"""The options of `pinbore dynamics`: one model per analysis, validated before any work.
+
+Each model holds exactly the options its analysis uses, with their defaults and rules; it is
+strict and frozen like the scene models, so an analysis receives typed options and cannot
+change them. An option the analysis does not use is an error, and so is a missing one it
+needs. `parse` builds a model from the options given (keyed by field name: `--max-force` is
+`max_force`) and turns the first broken rule into one line `--option: rule`.
+
+Models: `PoincareOptions`, `LyapunovOptions` and `ShootingOptions` (one run of the mechanism),
+`BifurcationOptions` and `DesignOptions` (sweeps, run in parallel and cached point by point).
+Their shared bases: `Analysis` (--out, --transient), `Sampled` (+ --periods), `Sweep`
+(+ --points, --scheduler, --workers, --cache).
+
+Rules: counts are whole numbers (--transient >= 0; --periods, --multiple, --workers,
+--speeds N >= 1; --points >= 2); a range LOW HIGH is finite with LOW < HIGH, and a swept
+parameter stays physical (clearance > 0 m, speed > 0 rpm, friction mu >= 0); a design
+threshold is > 0 (inf, the default: no threshold); --workers goes with local processes, not
+with --scheduler, which needs the dask `distributed` package; the cache folder (--cache,
+default OUT-cache) is no existing file and lies outside OUT (replaced when a run completes).
+What the options need of the scene (a drive, a valid scene at both ends of every swept
+range) is checked against the scene by `pinbore.reduced.studies`.
+"""
+
+import importlib.util
+import math
+import os
+from pathlib import Path
+from typing import Annotated, Literal, NamedTuple
+
+import pydantic
+
+from pinbore.core.errors import InputError
+from pinbore.core.scene import Strict
+
+
+class Parameter(NamedTuple):
+    """A scene parameter that a study sets: its axis label, and whether a value must be
+    > 0 (a size or a speed) or only >= 0."""
+
+    label: str
+    positive: bool
+
+
+PARAMETERS = {"clearance": Parameter("m, radial clearance of every clearance joint", True),
+              "speed": Parameter("rpm, the drive's speed", True),
+              "friction": Parameter("mu of every clearance joint's friction law", False)}
+
+
+def default_workers() -> int:
+    """The cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def at_least(minimum: int) -> pydantic.AfterValidator:
+    """The rule of a count: a whole number >= minimum."""
+    def check(value: int) -> int:
+        if value < minimum:
+            raise ValueError(f"at least {minimum} (got {value})")
+        return value
+    return pydantic.AfterValidator(check)
+
+
+class Span(NamedTuple):
+    """LOW HIGH of a swept range."""
+
+    low: float
+    high: float
+
+
+class SpeedGrid(NamedTuple):
+    """LOW HIGH N: N drive speeds (rpm) from LOW to HIGH."""
+
+    low: float
+    high: float
+    count: int
+
+
+def _finite_and_increasing(span: Span | SpeedGrid) -> Span | SpeedGrid:
+    """LOW and HIGH finite, LOW < HIGH."""
+    for name, value in (("LOW", span.low), ("HIGH", span.high)):
+        if not math.isfinite(value):
+            raise ValueError(f"{name} must be a finite number (got {value})")
+    if not span.high > span.low:
+        raise ValueError(f"HIGH must exceed LOW (got {span.low:g} {span.high:g})")
+    return span
+
+
+def _whole_count(value):
+    """--speeds arrives as three floats: N becomes an integer when it is a whole number."""
+    if isinstance(value, tuple) and len(value) == 3 and isinstance(value[2], float):
+        if value[2].is_integer():
+            return (*value[:2], int(value[2]))
+        raise ValueError(f"N must be a whole number (got {value[2]:g})")
+    return value
+
+
+def _speed_count(grid: SpeedGrid) -> SpeedGrid:
+    if grid.count < 1:
+        raise ValueError(f"N must be at least 1 (got {grid.count})")
+    return grid
+
+
+def physical(parameter: str, span: Span | SpeedGrid) -> Span | SpeedGrid:
+    """The range of `parameter` within its physical bounds (LOW is the smallest value)."""
+    positive = PARAMETERS[parameter].positive
+    if span.low < 0 or (positive and span.low == 0):
+        raise ValueError(f"{parameter} must be {'>' if positive else '>='} 0 (got LOW {span.low:g})")
+    return span
+
+
+def _threshold(value: float) -> float:
+    if not value > 0:
+        raise ValueError(f"must be > 0, or inf for no threshold (got {value})")
+    return value
+
+
+Range = Annotated[Span, pydantic.AfterValidator(_finite_and_increasing)]
+Speeds = Annotated[SpeedGrid, pydantic.BeforeValidator(_whole_count),
+                   pydantic.AfterValidator(_finite_and_increasing), pydantic.AfterValidator(_speed_count)]
+Threshold = Annotated[float, pydantic.AfterValidator(_threshold)]
+
+
+class Analysis(Strict):
+    """What every analysis uses: where its outputs go, and the drive periods discarded
+    before it starts (the transient)."""
+
+    # the options check their numbers themselves: a threshold may be inf (none), and a
+    # range says which end is not finite
+    model_config = pydantic.ConfigDict(allow_inf_nan=True)
+
+    out: Path = pydantic.Field(description="the output directory")
+    transient: Annotated[int, at_least(0)] = 50
+
+    def swept(self) -> list[tuple[str, str, Span | SpeedGrid]]:
+        """(option, parameter, range) of every scene parameter the analysis varies."""
+        return []
+
+
+class Sampled(Analysis):
+    """An analysis that samples the mechanism over `periods` drive periods."""
+
+    periods: Annotated[int, at_least(1)] = 50
+
+
+class PoincareOptions(Sampled):
+    """`--analysis poincare`: the Poincare map of `periods` revolutions, classified."""
+
+
+class LyapunovOptions(Sampled):
+    """`--analysis lyapunov`: the largest Lyapunov exponent over `periods` revolutions."""
+
+
+class ShootingOptions(Analysis):
+    """`--analysis shooting`: a periodic orbit of `multiple` drive periods by Newton, from
+    the state after the transient (it samples no periods)."""
+
+    multiple: Annotated[int, at_least(1)] = 1
+
+
+class Sweep(Sampled):
+    """A study of `points` values run in parallel: on local processes (`workers`) or on the
+    Dask cluster at `scheduler`, each point cached in `cache` as it is done."""
+
+    points: Annotated[int, at_least(2)] = 50
+    scheduler: str | None = None
+    workers: Annotated[int, at_least(1)] = pydantic.Field(default_factory=default_workers)
+    cache: Path
+
+    @pydantic.model_validator(mode="before")
+    @classmethod
+    def _default_cache(cls, data):
+        """The cache folder defaults to OUT-cache, beside the outputs."""
+        if isinstance(data, dict) and "cache" not in data and isinstance(data.get("out"), Path):
+            return data | {"cache": Path(f"{data['out']}-cache")}
+        return data
+
+    @pydantic.field_validator("scheduler")
+    @classmethod
+    def _cluster(cls, address: str | None) -> str | None:
+        if address is None:
+            return None
+        if not address.strip():
+            raise ValueError("must be a scheduler's address, e.g. tcp://host:8786")
+        if importlib.util.find_spec("distributed") is None:
+            raise ValueError("needs the dask 'distributed' package")
+        return address
+
+    @pydantic.field_validator("workers")
+    @classmethod
+    def _local(cls, workers: int, info: pydantic.ValidationInfo) -> int:
+        """Local processes only (a field validator runs on given values, not on the default)."""
+        if info.data.get("scheduler") is not None:
+            raise ValueError("not used with --scheduler (the cluster has its own workers)")
+        return workers
+
+    @pydantic.field_validator("cache")
+    @classmethod
+    def _cache_folder(cls, folder: Path, info: pydantic.ValidationInfo) -> Path:
+        if folder.exists() and not folder.is_dir():
+            raise ValueError(f"{folder} is an existing file, not a folder")
+        out = info.data.get("out")
+        if out is not None and (folder.resolve() == out.resolve() or out.resolve() in folder.resolve().parents):
+            raise ValueError(f"{folder} lies in --out {out}, which is replaced when the run completes")
+        return folder
+
+
+class BifurcationOptions(Sweep):
+    """`--analysis bifurcation`: the Poincare samples and their classification at `points`
+    values of `parameter` across `range`."""
+
+    parameter: Literal[tuple(PARAMETERS)] = pydantic.Field(description=f"one of {', '.join(PARAMETERS)}")
+    range: Range = pydantic.Field(description="LOW HIGH of the swept parameter")
+
+    @pydantic.field_validator("range")
+    @classmethod
+    def _physical(cls, span: Span, info: pydantic.ValidationInfo) -> Span:
+        parameter = info.data.get("parameter")
+        return span if parameter is None else physical(parameter, span)
+
+    def swept(self):
+        return [("range", self.parameter, self.range)]
+
+
+class DesignOptions(Sweep):
+    """`--analysis design`: peak contact force, impacts and acceleration deviation on the
+    grid of `points` clearances across `range` by the drive speeds `speeds`, and per speed
+    the clearances within both thresholds."""
+
+    range: Range = pydantic.Field(description="LOW HIGH: the clearances, m")
+    speeds: Speeds = pydantic.Field(description="LOW HIGH N: the drive speeds, rpm")
+    max_force: Threshold = math.inf
+    max_deviation: Threshold = math.inf
+
+    @pydantic.field_validator("range")
+    @classmethod
+    def _clearances(cls, span: Span) -> Span:
+        return physical("clearance", span)
+
+    @pydantic.field_validator("speeds")
+    @classmethod
+    def _speeds(cls, grid: SpeedGrid) -> SpeedGrid:
+        return physical("speed", grid)
+
+    def swept(self):
+        return [("range", "clearance", self.range), ("speeds", "speed", self.speeds)]
+
+
+def parse(model: type[Analysis], given: dict, analysis: str) -> Analysis:
+    """`model` built from the options given (field name -> value; an option left out is
+    absent and takes its default); the first broken rule becomes one InputError line
+    `--option: rule`."""
+    try:
+        return model.model_validate(given)
+    except pydantic.ValidationError as err:
+        raise InputError(_line(model, err.errors()[0], analysis)) from None
+
+
+def _line(model: type[Analysis], error: dict, analysis: str) -> str:
+    """One pydantic error as `--option: rule`, the option named as on the command line."""
+    field = str(error["loc"][0]) if error["loc"] else ""
+    option = "--" + field.replace("_", "-")
+    if error["type"] == "missing":
+        what = model.model_fields[field].description
+        return f"{option}: --analysis {analysis} needs it" + (f" ({what})" if what else "")
+    if error["type"] == "extra_forbidden":
+        return f"{option}: not used by --analysis {analysis}"
+    return f"{option}: " + error["msg"].removeprefix("Value error, ").replace("Input should be", "must be")
