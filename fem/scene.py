@@ -8,7 +8,7 @@ import pydantic
 from pinbore.core.scene import Strict
 from pinbore.laws.elastic import Joint
 from pinbore.meshes.model import Geometry, MeshOptions
-from pinbore.meshes.sizing import Sizing, estimate_sizing
+from pinbore.meshes.sizing import Sizing, check_cells, estimate_sizing
 
 
 class Material(Strict):
@@ -137,6 +137,7 @@ class FemScene(Strict):
             raise ValueError("load.max_approach must be smaller than the pin wall (small strain)")
         if self.mesh.symmetry and self.geometry.tilt_deg:
             raise ValueError("mesh.symmetry: a tilted pin is not symmetric about the mid-plane")
+        check_cells(self.geometry, self.sizing, self.mesh)
         if self.load.rotation_deg is not None:
             phi = math.radians(self.load.rotation_deg)
             if self.geometry.pin_radius * phi**2 / 2 > 0.01 * self.load.max_approach:

@@ -25,9 +25,10 @@ import math
 import gmsh
 import numpy as np
 
-from pinbore.meshes.model import (BORE_SURFACE, HOUSING, HOUSING_EDGE, HOUSING_ENDS, HUB, PIN,
-                          PIN_ENDS, PIN_SURFACE, SYMMETRY, MeshOptions, uses_symmetry)
-from pinbore.meshes.sizing import Sizing
+from pinbore.meshes.model import (BORE_SURFACE, DEFAULT_LAYERS, HOUSING, HOUSING_EDGE,
+                                  HOUSING_ENDS, HUB, PIN, PIN_ENDS, PIN_SURFACE, SYMMETRY,
+                                  MeshOptions, overhang_layers, uses_symmetry)
+from pinbore.meshes.sizing import Sizing, far_size, wall_size
 
 CANONICAL_DIRECTION_DEG = -90.0
 
@@ -48,8 +49,7 @@ def size_field(geometry, sizing: Sizing):
     bore), growing linearly with the distance from it."""
     centre = math.radians(CANONICAL_DIRECTION_DEG)
     middle = 0.5 * (geometry.pin_radius + geometry.bore_radius)
-    far = sizing.scale * middle * math.pi / 24  # size on the circles away from the arc
-    wall_size = sizing.scale * (geometry.pin_radius - geometry.hub_radius) / 3
+    far, wall = far_size(geometry, sizing), wall_size(geometry, sizing)
 
     def h(x, y):
         r = math.hypot(x, y)
@@ -63,12 +63,9 @@ def size_field(geometry, sizing: Sizing):
                            for s in (-1, 1))
         size = min(sizing.contact_size + sizing.grading * distance,
                    far + sizing.grading * abs(r - surface))
-        return min(size, wall_size) if r < middle else size
+        return min(size, wall) if r < middle else size
 
     return h
-
-
-DEFAULT_LAYERS = 12
 
 
 def layer_heights(n: int, half: bool) -> list[float]:
@@ -118,7 +115,7 @@ def build(geometry, sizing: Sizing, direction_deg: float, mesh: MeshOptions = Me
         pin_top, pin, housing = [pin[0]], [pin[1]], [housing[1]]
         overhang = geometry.pin_overhang
         if overhang:   # the pin runs on beyond the bore's ends, in layers growing outwards
-            m = max(2, n // 3)
+            m = overhang_layers(n)
             ends = [(pin_base, -overhang)] + ([] if half else [(pin_top, overhang)])
             pin += [occ.extrude(face, 0, 0, dz, [1] * m, layer_heights(m, True))[1]
                     for face, dz in ends]

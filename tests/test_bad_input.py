@@ -86,3 +86,37 @@ def test_usage_errors_are_one_line():
     done = pinbore("fem")
     assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
     assert "required: scene, --out" in done.stderr
+
+
+# meshes that could not be solved: refused before meshing, from the estimated cell count
+TOO_LARGE = [
+    (fem_with(mesh={"contact_size": 1e-9}), "cells expected"),
+    (fem_with(geometry={"pin_radius": 8.0e-3}, load={"max_approach": 1e-9}), "cells expected"),
+    (fem_with(mesh={"max_cells": 1000}), "more than the limit 1e+03"),
+    (fem_with(geometry={"dim": 3, "length": 0.02}, mesh={"contact_size": 2e-5}), "cells expected"),
+]
+
+
+@pytest.mark.parametrize("scene, message", TOO_LARGE, ids=range(len(TOO_LARGE)))
+@pytest.mark.parametrize("command", ["mesh", "fem"])
+def test_a_mesh_too_large_is_refused_before_meshing(write_scene, tmp_path, scene, message, command):
+    out = tmp_path / "out"
+    expect_one_line(pinbore(command, write_scene(scene), "--out", out), message, out)
+
+
+@pytest.mark.parametrize("name", ["steel_c10um", "flores_c500um", "steel_lug_3d"])
+def test_the_cell_estimate_matches_gmsh(name):
+    """The estimate that guards the limit is within 25 % of the mesh Gmsh builds."""
+    import gmsh
+
+    from pinbore.core import scene as scenes
+    from pinbore.fem.scene import FemScene
+    from pinbore.meshes import pin_in_bore
+    from pinbore.meshes.sizing import expected_cells
+
+    scene = scenes.load(FemScene, ROOT / "scenes" / "fem" / f"{name}.toml")
+    with pin_in_bore.session():
+        pin_in_bore.build(scene.geometry, scene.sizing, scene.load.direction_deg, scene.mesh)
+        kind = 2 if scene.geometry.dim == 2 else 4   # triangles, tetrahedra
+        cells = len(gmsh.model.mesh.getElementsByType(kind)[0])
+    assert expected_cells(scene.geometry, scene.sizing, scene.mesh) == pytest.approx(cells, rel=0.25)
