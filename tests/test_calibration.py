@@ -101,6 +101,9 @@ def _edited(fe_run, tmp_path, edit):
     (lambda r: [r[0]] + [r[2], r[1]] + r[3:], "approach_m: must be positive and increase"),
     (lambda r: r[:2] + [r[2][:2] + ["nan"] + r[2][3:]] + r[3:], "row 2: nan is not finite"),
     (lambda r: r[:3], "2 points; a fit of 2 parameters needs at least 3"),
+    (lambda r: r[:1], "0 points; a fit of 2 parameters needs at least 3"),
+    (lambda r: [row[:-1] for row in r], "gap_violation_m: required column is missing (written "
+                                        "by another version of pinbore? run pinbore fem again)"),
     (lambda r: [[h.replace("force_per_length_N_per_m", "force_N") for h in r[0]]] + r[1:],
      "force_N: units do not match"),
     (lambda r: [[h.replace("approach_m", "approach_mm") for h in r[0]]] + r[1:],
