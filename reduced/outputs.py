@@ -151,7 +151,7 @@ def validity_warnings(model, joints) -> list[str]:
     out = []
     for c in model.scene.clearance_joints:
         if (c.normal_law or "").startswith("calibrated:") and model.calibration is not None:
-            low, high = model.calibration["laws"][c.normal_law.split(":", 1)[1]]["validity"]["approach_m"]
+            low, high = model.calibration.laws[c.normal_law.split(":", 1)[1]].validity.approach_m
             peak = joints[c.name]["peak_penetration_m"]
             if peak > high:
                 out.append(f"{c.name}: peak penetration {peak:.3g} m beyond the calibrated range "
