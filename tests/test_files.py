@@ -1,10 +1,13 @@
 """The files between the stages, each defined by one module: curve.csv and pressure.csv
-(pinbore.fem.curve). What is written reads back the same, and a file a reader cannot take
-(another version's, or corrupt) is refused as one line that names the file and what is
-wrong."""
+(pinbore.fem.curve), summary.json (pinbore.reduced.summary). What is written reads back the
+same, and a file a reader cannot take (another version's, or corrupt) is refused as one line
+that names the file and what is wrong."""
+
+import json
 
 import numpy as np
 import pytest
+from conftest import pinbore
 
 from pinbore.core.errors import InputError
 from pinbore.fem import curve
@@ -92,3 +95,14 @@ def test_a_bad_curve_is_one_line_naming_file_and_fault(tmp_path, edit, message):
     text = str(caught.value)
     assert text.startswith(f"{path}: ") and message in text and "\n" not in text
 
+
+def test_a_summary_of_another_version_is_one_line_exit_2(tmp_path):
+    """The report reads summary.json through its model: a file without its keys is refused."""
+    folder = tmp_path / "build" / "reduced" / "old_run"
+    folder.mkdir(parents=True)
+    (folder / "summary.json").write_text(json.dumps({"status": "complete"}))
+    done = pinbore("report", "--build", tmp_path / "build", "--out", tmp_path / "report")
+    assert done.returncode == 2, done.stderr
+    line = done.stderr.strip()
+    assert len(line.splitlines()) == 1 and str(folder / "summary.json") in line
+    assert "stop: required key is missing" in line and "run pinbore reduced again" in line
