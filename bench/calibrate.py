@@ -10,7 +10,8 @@ import time
 from pathlib import Path
 
 from pinbore.calibration.curves import read_curve
-from pinbore.calibration.run import LAWS, evaluate, ranking
+from pinbore.calibration.lawsfile import LAWS
+from pinbore.calibration.run import evaluate, ranking
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -29,6 +29,7 @@ import numpy as np
 import tomli_w
 
 from pinbore.core.figures import plt, save_png
+from pinbore.fem import curve as fe_curve
 from pinbore.fem.scene import FemScene
 from pinbore.laws.elastic import persson_half_angles, persson_load
 
@@ -41,7 +42,7 @@ METHODS = ["penalty", "augmented-lagrangian"]
 
 def run(scene: dict, workdir: Path, name: str, ranks: int = 1) -> dict:
     """`pinbore fem` on `scene` (on `ranks` MPI ranks): its wall time, result.json, and the
-    force (2D: per length) and half-angle of every step."""
+    force (2D: per unit length, N/m; 3D: of the whole pin, N) and half-angle of every step."""
     path = workdir / f"{name}.toml"
     path.write_text(tomli_w.dumps(scene))
     out = workdir / name
@@ -51,12 +52,9 @@ def run(scene: dict, workdir: Path, name: str, ranks: int = 1) -> dict:
     start = time.perf_counter()
     subprocess.run(command, check=True, capture_output=True)
     wall = time.perf_counter() - start
-    rows = list(csv.DictReader(open(out / "curve.csv")))
+    curve = fe_curve.read(out / "curve.csv")
     result = json.loads((out / "result.json").read_text())
-    force = "force_N" if "force_N" in rows[0] else "force_per_length_N_per_m"   # 3D or 2D
-    return {"wall": wall, "result": result,
-            "force": np.array([float(r[force]) for r in rows]),
-            "angle": np.array([float(r["half_angle_deg"]) for r in rows])}
+    return {"wall": wall, "result": result, "force": curve.force, "angle": curve.half_angle}
 
 
 def persson_errors(scene: dict, force, angle) -> tuple[float, float]:

@@ -4,7 +4,7 @@ import numpy as np
 
 from pinbore.core.figures import plt, save_png
 
-from pinbore.calibration.fit import law_force  # noqa: E402
+from pinbore.calibration.lawsfile import law_force
 
 COLOURS = dict(zip(["hertz", "johnson", "liu", "bai_zhao", "pereira", "radzimovsky",
                     "dubowsky_freudenstein", "esdu_78035", "linear"], plt.cm.tab10.colors))

@@ -12,56 +12,27 @@ geometric mean of the approaches):
 For a power law K d^n this fits K and n. In logarithms the model is linear,
 ln(P_FE / P_law) = ln s + q ln(d / d_ref), so the fit is ordinary least squares on the
 relative error, in closed form, with 95 % confidence intervals from Student's t. The linear
-spring has no published stiffness: it is fitted as P = s E* d (s alone).
+spring has no published stiffness: it is fitted as P = s E* d (s alone). The fitted law is a
+`Fit` of laws.json (calibration/lawsfile.py); its force is `Fit.force`.
 """
-
-from dataclasses import dataclass
 
 import numpy as np
 from scipy import stats
 
-from pinbore.laws import elastic
-
-
-@dataclass(frozen=True)
-class Errors:
-    max_rel: float   # largest |P_law / P_FE - 1|
-    rms_rel: float   # root mean square of P_law / P_FE - 1
-    points: int      # approaches where the law has a solution
+from pinbore.calibration.lawsfile import MODEL, Errors, Fit, law_force
 
 
 def errors(predicted, measured) -> Errors:
     ok = np.isfinite(predicted)
     rel = predicted[ok] / measured[ok] - 1
     if not ok.any():
-        return Errors(float("inf"), float("inf"), 0)
-    return Errors(float(np.max(np.abs(rel))), float(np.sqrt(np.mean(rel**2))), int(ok.sum()))
-
-
-def law_force(name: str, d, joint):
-    """The published force per length of law `name` (the linear spring: E* d)."""
-    if name == "linear":
-        return elastic.linear(d, joint.e_star)
-    return elastic.PUBLISHED[name](d, joint)
+        return Errors(max_rel=float("inf"), rms_rel=float("inf"), points=0)
+    return Errors(max_rel=float(np.max(np.abs(rel))), rms_rel=float(np.sqrt(np.mean(rel**2))),
+                  points=int(ok.sum()))
 
 
 class NotFitted(Exception):
     """The law has too few approaches with a solution to fix its parameters."""
-
-
-@dataclass(frozen=True)
-class Fit:
-    scale: float
-    scale_ci95: tuple[float, float]
-    exponent_correction: float
-    exponent_correction_ci95: tuple[float, float]
-    reference_approach: float
-    points: int
-
-    def force(self, name, d, joint):
-        d = np.asarray(d, float)
-        return (self.scale * law_force(name, d, joint)
-                * (d / self.reference_approach) ** self.exponent_correction)
 
 
 def fit(name: str, curves) -> Fit:
@@ -82,5 +53,7 @@ def fit(name: str, curves) -> Fit:
     sigma2 = float(np.sum((y - design @ coef) ** 2)) / dof
     half = stats.t.ppf(0.975, dof) * np.sqrt(np.diag(sigma2 * np.linalg.inv(design.T @ design)))
     q, q_half = (float(coef[1]), float(half[1])) if with_exponent else (0.0, 0.0)
-    return Fit(float(np.exp(coef[0])), (float(np.exp(coef[0] - half[0])), float(np.exp(coef[0] + half[0]))),
-               q, (q - q_half, q + q_half), reference, int(x.size))
+    return Fit(model=MODEL, scale=float(np.exp(coef[0])),
+               scale_ci95=[float(np.exp(coef[0] - half[0])), float(np.exp(coef[0] + half[0]))],
+               exponent_correction=q, exponent_correction_ci95=[q - q_half, q + q_half],
+               reference_approach_m=reference, points=int(x.size))

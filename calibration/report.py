@@ -1,11 +1,11 @@
 """The report's calibration section: which contact law to use where."""
 
 import csv
-import json
 from pathlib import Path
 
 import numpy as np
 
+from pinbore.calibration import lawsfile
 from pinbore.core.html import figure, png_data, table
 
 
@@ -13,12 +13,12 @@ def _pct(value) -> str:
     return "–" if value is None or not np.isfinite(value) else f"{100 * value:.1f} %"
 
 
-def _pooled(errors: dict, points: dict) -> str:
+def _pooled(errors: dict[str, lawsfile.Errors], points: dict) -> str:
     """RMS over the curves, or where the law has no solution on some curve, which ones."""
-    short = [name for name, e in errors.items() if e["points"] < points[name]]
+    short = [name for name, e in errors.items() if e.points < points[name]]
     if short:
         return f"no solution at some approaches of {len(short)} curve(s)"
-    return _pct(np.sqrt(np.mean([e["rms_rel"] ** 2 for e in errors.values()])))
+    return _pct(np.sqrt(np.mean([e.rms_rel ** 2 for e in errors.values()])))
 
 
 def section(build_dir: Path, bench_dir: Path) -> str:
@@ -27,21 +27,21 @@ def section(build_dir: Path, bench_dir: Path) -> str:
     if not (folder / "laws.json").exists():
         return "".join(parts) + ("<p class='note'>No calibration under build/calibration: run "
                                  "<code>make calibration</code>.</p>")
-    data = json.loads((folder / "laws.json").read_text())
-    curves, laws = data["curves"], data["laws"]
-    clear = [c["clearance_m"] / c["bore_radius_m"] for c in curves]
+    data = lawsfile.read(folder / "laws.json")
+    curves, laws = data.curves, data.laws
+    clear = [c.clearance_m / c.bore_radius_m for c in curves]
     parts.append(
         f"<p>{len(curves)} FE curves (scenes <code>study_*</code>): clearance ratios c/R from "
         f"{min(clear):.3g} to {max(clear):.3g}, steel pin in steel and in aluminium housings, "
-        f"approaches to {max(c['approach_m'][1] for c in curves) * 1e6:.0f} um. Each law is "
+        f"approaches to {max(c.approach_m[1] for c in curves) * 1e6:.0f} um. Each law is "
         "compared as published (parameters from geometry and materials only) and fitted: "
         "P = s P<sub>law</sub>(d) (d / d<sub>ref</sub>)<sup>q</sup>, one (s, q) per law for all "
         "curves, the form a multibody model uses as <code>calibrated:&lt;law&gt;</code>. "
-        f"Laws that need an axial length get {'the bore diameter' if data['length_m'] is None else data['length_m']} "
+        f"Laws that need an axial length get {'the bore diameter' if data.length_m is None else data.length_m} "
         "(Hertz: F/L).</p>"
         "<p class='note'>In plane strain the approach is only defined against reference points: "
         "the FE approach is the displacement of the rigid hub (0.2 R) relative to the clamped "
-        f"housing edge ({curves[0]['housing_ratio']:g} R), so it includes the bulk compliance of "
+        f"housing edge ({curves[0].housing_ratio:g} R), so it includes the bulk compliance of "
         "pin and housing, which grows with the housing's size. Laws that define the approach "
         "between points about one radius deep (Johnson, ESDU) come out stiffer. The fitted "
         "parameters hold for this definition and the housing ratio in <code>laws.json</code>.</p>")
@@ -51,19 +51,18 @@ def section(build_dir: Path, bench_dir: Path) -> str:
     parts.append(figure(png_data(folder / "errors.png"),
                         "RMS relative force error of every law on every curve, as published (left) "
                         "and fitted (right); numbers in percent (build/calibration/errors.png)."))
-    points = {c["name"]: c["points"] for c in curves}
+    points = {c.name: c.points for c in curves}
     rows = []
     for name, law in laws.items():
-        published = law["published_errors"]
-        fitted, f = law["fitted_errors"], law["fitted"]
+        published, fitted, f = law.published_errors, law.fitted_errors, law.fitted
         if f is None:
-            rows.append([name, _pooled(published, points), "not fitted", law["not_fitted"], "–", "–"])
+            rows.append([name, _pooled(published, points), "not fitted", law.not_fitted, "–", "–"])
             continue
         rows.append([name, _pooled(published, points) if published else "fit only",
-                     f"{f['scale']:.3g} [{f['scale_ci95'][0]:.3g}, {f['scale_ci95'][1]:.3g}]",
-                     f"{f['exponent_correction']:+.3f} [{f['exponent_correction_ci95'][0]:+.3f}, "
-                     f"{f['exponent_correction_ci95'][1]:+.3f}]",
-                     _pooled(fitted, points), _pct(max(e["max_rel"] for e in fitted.values()))])
+                     f"{f.scale:.3g} [{f.scale_ci95[0]:.3g}, {f.scale_ci95[1]:.3g}]",
+                     f"{f.exponent_correction:+.3f} [{f.exponent_correction_ci95[0]:+.3f}, "
+                     f"{f.exponent_correction_ci95[1]:+.3f}]",
+                     _pooled(fitted, points), _pct(max(e.max_rel for e in fitted.values()))])
     parts.append("<h3>Laws: errors over all curves and fitted parameters (95 % intervals)</h3>")
     parts.append(table(["law", "RMS error, published", "scale s", "exponent correction q",
                         "RMS error, fitted", "max error, fitted"], rows))
@@ -83,6 +82,6 @@ def section(build_dir: Path, bench_dir: Path) -> str:
         with open(bench, newline="") as f:
             rows = list(csv.reader(f))
         parts.append("<h3>Benchmark: fit and ranking time (make bench)</h3>" + table(rows[0], rows[1:]))
-    if data["warnings"]:
-        parts.append("<p class='note'>Validity warnings: " + "; ".join(data["warnings"]) + "</p>")
+    if data.warnings:
+        parts.append("<p class='note'>Validity warnings: " + "; ".join(data.warnings) + "</p>")
     return "".join(parts)

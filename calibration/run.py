@@ -5,20 +5,18 @@ Writes DIR/laws.json (every law: published-form errors per curve, fitted paramet
 (the best laws per curve and load range) and the figures DIR/curves.png, DIR/errors.png.
 """
 
-import json
 import math
 import time
 import warnings
 
 import numpy as np
 
-from pinbore.calibration import figures
+from pinbore.calibration import figures, lawsfile
 from pinbore.calibration.curves import read_curve
-from pinbore.calibration.fit import NotFitted, errors, fit, law_force
+from pinbore.calibration.fit import NotFitted, errors, fit
+from pinbore.calibration.lawsfile import LAWS, law_force
 from pinbore.laws import elastic
 from pinbore.core.output import atomic_directory
-
-LAWS = list(elastic.PUBLISHED) + ["linear"]
 
 
 def evaluate(curves):
@@ -67,50 +65,40 @@ def ranking(curves, table):
     return rows
 
 
-def laws_json(curves, table, length, caught, seconds):
+def laws_json(curves, table, length, caught, seconds) -> lawsfile.LawsFile:
+    """The contents of laws.json (calibration/lawsfile.py)."""
     clearance = [c.joint.clearance for c in curves]
-    validity = {
-        "clearance_m": [min(clearance), max(clearance)],
-        "clearance_ratio": [min(c.joint.clearance / c.joint.r_bore for c in curves),
-                            max(c.joint.clearance / c.joint.r_bore for c in curves)],
-        "approach_m": [float(min(c.approach.min() for c in curves)),
-                       float(max(c.approach.max() for c in curves))],
-        "housing_ratio": [min(c.housing_ratio for c in curves), max(c.housing_ratio for c in curves)],
-    }
+    validity = lawsfile.Validity(
+        clearance_m=[min(clearance), max(clearance)],
+        clearance_ratio=[min(c.joint.clearance / c.joint.r_bore for c in curves),
+                         max(c.joint.clearance / c.joint.r_bore for c in curves)],
+        approach_m=[float(min(c.approach.min() for c in curves)),
+                    float(max(c.approach.max() for c in curves))],
+        housing_ratio=[min(c.housing_ratio for c in curves), max(c.housing_ratio for c in curves)])
     laws = {}
     for name in LAWS:
-        entry, f = table[name], table[name]["fit"]
+        entry = table[name]
         doc = (law_force.__doc__ if name == "linear" else elastic.PUBLISHED[name].__doc__)
-        laws[name] = {
-            "formula": " ".join(doc.split()),
-            "published_errors": None if entry["published"] is None else
-            {k: vars(v) for k, v in entry["published"].items()},
-            "fitted": None if f is None else
-            {"model": "P = scale * P_law(d) * (d / reference_approach_m)^exponent_correction",
-             "scale": f.scale, "scale_ci95": list(f.scale_ci95),
-             "exponent_correction": f.exponent_correction,
-             "exponent_correction_ci95": list(f.exponent_correction_ci95),
-             "reference_approach_m": f.reference_approach, "points": f.points},
-            "not_fitted": entry["not_fitted"],
-            "fitted_errors": None if f is None else {k: vars(v) for k, v in entry["fitted"].items()},
-            "validity": validity,
-            "fitted_to": [c.name for c in curves],
-        }
-    return {
-        "units": {"approach": "m", "force": "N/m (per unit length, plane strain)"},
-        "length_m": length,
-        "length_note": "axial length given to the laws that need one (hertz: F/L; "
-                       "dubowsky_freudenstein); null: each curve's bore diameter",
-        "curves": [{"name": c.name, "points": int(c.approach.size),
-                    "clearance_m": c.joint.clearance, "bore_radius_m": c.joint.r_bore,
-                    "effective_modulus_Pa": c.joint.e_star, "housing_ratio": c.housing_ratio,
-                    "similar_materials": c.similar_materials,
-                    "approach_m": [float(c.approach.min()), float(c.approach.max())],
-                    "persson_half_angle_error_deg": persson_error(c)} for c in curves],
-        "laws": laws,
-        "warnings": sorted({str(w.message) for w in caught}),
-        "fit_seconds": seconds,
-    }
+        laws[name] = lawsfile.Law(formula=" ".join(doc.split()), published_errors=entry["published"],
+                                  fitted=entry["fit"], not_fitted=entry["not_fitted"],
+                                  fitted_errors=entry["fitted"], validity=validity,
+                                  fitted_to=[c.name for c in curves])
+    return lawsfile.LawsFile(
+        units=lawsfile.UNITS,
+        length_m=length,
+        length_note="axial length given to the laws that need one (hertz: F/L; "
+                    "dubowsky_freudenstein); null: each curve's bore diameter",
+        curves=[lawsfile.CurveEntry(name=c.name, points=int(c.approach.size),
+                                    clearance_m=c.joint.clearance, bore_radius_m=c.joint.r_bore,
+                                    effective_modulus_Pa=c.joint.e_star,
+                                    housing_ratio=c.housing_ratio,
+                                    similar_materials=c.similar_materials,
+                                    approach_m=[float(c.approach.min()), float(c.approach.max())],
+                                    persson_half_angle_error_deg=persson_error(c))
+                for c in curves],
+        laws=laws,
+        warnings=sorted({str(w.message) for w in caught}),
+        fit_seconds=seconds)
 
 
 def persson_error(curve):
@@ -130,8 +118,7 @@ def run(paths, out, length=None) -> int:
         rows = ranking(curves, table)
     seconds = time.perf_counter() - start
     with atomic_directory(out) as tmp:
-        (tmp / "laws.json").write_text(json.dumps(laws_json(curves, table, length, caught, seconds),
-                                                  indent=2) + "\n")
+        lawsfile.write(tmp / "laws.json", laws_json(curves, table, length, caught, seconds))
         header = list(rows[0])
         lines = [",".join(header)] + [",".join(_cell(r[h]) for h in header) for r in rows]
         (tmp / "ranking.csv").write_text("\n".join(lines) + "\n")

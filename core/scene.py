@@ -1,15 +1,20 @@
-"""Reading scene files: TOML in SI units, validated into typed models.
+"""Reading scene files: TOML in SI units, validated into typed models; and the JSON files
+one stage writes for the next, read back through the same kind of model.
 
 Every scene model derives from `Strict`: unknown keys are errors, missing keys are errors,
 and a broken rule is reported as one line `<file>: <key>: <rule>`.
 """
 
+import json
 import tomllib
 from pathlib import Path
 
 import pydantic
 
 from pinbore.core.errors import InputError
+
+# What a stage's file that does not read as its model most likely is, and the remedy.
+RUN_AGAIN = "written by another version of pinbore? run pinbore {command} again"
 
 
 class Strict(pydantic.BaseModel):
@@ -59,3 +64,21 @@ def _rule(error: dict) -> str:
 def load(model: type[pydantic.BaseModel], path: str | Path) -> pydantic.BaseModel:
     """Read and validate a scene file."""
     return validate(model, read_toml(path), str(path))
+
+
+def read_json(model: type[pydantic.BaseModel], path: str | Path, command: str,
+              source: str | None = None) -> pydantic.BaseModel:
+    """A JSON file that `pinbore <command>` wrote, validated into `model`. A file that cannot
+    be read, parsed or validated is one InputError line: `<source>: <key>: <rule>`, the rule
+    followed by RUN_AGAIN; `source` names the file (default: its path)."""
+    source = str(path) if source is None else source
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError) as err:
+        raise InputError(f"{source}: cannot read ({getattr(err, 'strerror', None) or err})") from None
+    if not isinstance(data, dict):
+        raise InputError(f"{source}: not a JSON object ({RUN_AGAIN.format(command=command)})")
+    try:
+        return validate(model, data, source)
+    except InputError as err:
+        raise InputError(f"{err} ({RUN_AGAIN.format(command=command)})") from None

@@ -2,9 +2,9 @@
 (2D: contact.png; 3D: pressure_map.png and axial_profile.png).
 
 Forces, torques and work are per unit length in 2D and of the whole pin in 3D (a half model
-counts twice); 3D half-angles are those of the section at the pin's middle."""
+counts twice); 3D half-angles are those of the section at the pin's middle. The columns of
+curve.csv and pressure.csv, their units and formats are those of pinbore.fem.curve."""
 
-import csv
 import json
 from pathlib import Path
 
@@ -13,71 +13,58 @@ import dolfinx
 import dolfinx.io
 import numpy as np
 
+from pinbore.fem import curve
 from pinbore.fem.contact import OPEN, SLIP, STATE_NAMES, STICK, tributary_lengths
 from pinbore.fem.post import angle_from, half_angle
 from pinbore.core.figures import offscreen_pyvista, plt, save_image, save_png
 
-RESULTANTS = {2: ["force_per_length_N_per_m", "tangential_force_per_length_N_per_m",
-                  "friction_torque_per_length_N", "dissipated_work_J_per_m"],
-              3: ["force_N", "tangential_force_N", "friction_torque_N_m", "dissipated_work_J"]}
-
-
-def curve_columns(dim: int) -> list[str]:
-    force, tangential, torque, work = RESULTANTS[dim]
-    return ["step", "stage", "approach_m", "rotation_deg", "tangential_push_m", force,
-            tangential, torque, "half_angle_deg", "stick_fraction", work, "newton_iterations",
-            "uzawa_iterations", "gap_violation_m"]
-
-
-def stage_of(step) -> str:
-    """push (radial approach), rotate (hub turned) or slide (hub pushed across)."""
-    return "rotate" if step.point[1] else ("slide" if step.point[2] else "push")
-
 
 def curve_rows(run, direction_deg, section):
+    """The rows of curve.csv (fields of pinbore.fem.curve.Curve), one per converged step."""
     dissipated = 0.0
     for i, step in enumerate(run.steps, start=1):
         alpha = angle_from(direction_deg, step.contact.angle[section])
         touching = step.contact.status != OPEN
         stuck = np.count_nonzero(step.contact.status == STICK) / max(np.count_nonzero(touching), 1)
         dissipated += step.dissipated
-        yield [i, stage_of(step), step.point[0], np.degrees(step.point[1]), step.point[2],
-               step.force[0], step.force[1], step.torque,
-               np.degrees(half_angle(alpha, step.contact.pressure[section])), stuck, dissipated,
-               step.newton_iterations, step.uzawa_iterations, step.gap_violation]
+        yield {"step": i, "stage": curve.stage(step.point), "approach": step.point[0],
+               "rotation": np.degrees(step.point[1]), "tangential_push": step.point[2],
+               "force": step.force[0], "tangential_force": step.force[1],
+               "friction_torque": step.torque,
+               "half_angle": np.degrees(half_angle(alpha, step.contact.pressure[section])),
+               "stick_fraction": stuck, "dissipated_work": dissipated,
+               "newton_iterations": step.newton_iterations,
+               "uzawa_iterations": step.uzawa_iterations, "gap_violation": step.gap_violation}
 
 
 def write_curve(path: Path, run, direction_deg, contact) -> None:
     """One row per converged step (see the module docstring for the units)."""
-    with open(path, "w", newline="") as f:
-        out = csv.writer(f)
-        out.writerow(curve_columns(contact.dim))
-        for row in curve_rows(run, direction_deg, contact.mid_section()):
-            out.writerow(row[:2] + [f"{v:.9e}" for v in row[2:8]]
-                         + [f"{row[8]:.6f}", f"{row[9]:.4f}", f"{row[10]:.9e}",
-                            row[11], row[12], f"{row[13]:.3e}"])
+    curve.write(path, contact.dim, curve_rows(run, direction_deg, contact.mid_section()))
+
+
+def pressure_rows(run, direction_deg, arc_half_angle, contact):
+    """The rows of pressure.csv (fields of pinbore.fem.curve.Pressure): every step, the nodes
+    of the refined arc by angle from the load (3D: by z, then angle)."""
+    three_d = contact.dim == 3
+    for i, step in enumerate(run.steps, start=1):
+        c = step.contact
+        alpha = angle_from(direction_deg, c.angle)
+        keep = np.flatnonzero(np.abs(alpha) <= arc_half_angle)
+        level = contact.pin_reference[keep, 2] if three_d else np.zeros(keep.size)
+        for j in keep[np.lexsort((alpha[keep], level))]:
+            row = {"step": i, "angle": np.degrees(alpha[j]), "pressure": c.pressure[j],
+                   "shear": c.shear[j, 0], "state": STATE_NAMES[c.status[j]]}
+            if three_d:
+                row |= {"z": contact.pin_reference[j, 2], "shear_axial": c.shear[j, 1]}
+            yield row
 
 
 def write_pressure(path: Path, run, direction_deg, arc_half_angle, contact) -> None:
     """Nodal pressure, shear on the bore (along +theta; 3D: and +z) and stick/slip/open
     state on the refined arc (where contact can be), by angle from the load (3D: and by the
     axial position z of the node on the untilted pin, over the modelled length)."""
-    three_d = contact.dim == 3
-    with open(path, "w", newline="") as f:
-        out = csv.writer(f)
-        out.writerow(["step", "angle_deg"] + ["z_m"] * three_d + ["pressure_Pa", "shear_Pa"]
-                     + ["shear_axial_Pa"] * three_d + ["state"])
-        for i, step in enumerate(run.steps, start=1):
-            c = step.contact
-            alpha = angle_from(direction_deg, c.angle)
-            keep = np.flatnonzero(np.abs(alpha) <= arc_half_angle)
-            level = contact.pin_reference[keep, 2] if three_d else np.zeros(keep.size)
-            for j in keep[np.lexsort((alpha[keep], level))]:
-                where = [f"{np.degrees(alpha[j]):.6f}"]
-                if three_d:
-                    where.append(f"{contact.pin_reference[j, 2]:.9e}")
-                out.writerow([i] + where + [f"{c.pressure[j]:.9e}"]
-                             + [f"{v:.9e}" for v in c.shear[j]] + [STATE_NAMES[c.status[j]]])
+    curve.write_pressure(path, contact.dim,
+                         pressure_rows(run, direction_deg, arc_half_angle, contact))
 
 
 def write_result(path: Path, result: dict) -> None:

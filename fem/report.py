@@ -7,17 +7,11 @@ from pathlib import Path
 
 import numpy as np
 
+from pinbore.fem import curve as fe_curve
 from pinbore.fem.scene import FemScene
 from pinbore.laws.elastic import persson_half_angle, persson_half_angles
 from pinbore.core.figures import plt
 from pinbore.core.html import figure, figure_data, png_data, table
-
-
-def read_csv(path: Path, stage: str = "push") -> dict[str, np.ndarray]:
-    """The numeric columns of the rows of one stage of a curve.csv (push, rotate, slide)."""
-    with open(path, newline="") as f:
-        rows = [r for r in csv.DictReader(f) if r["stage"] == stage]
-    return {k: np.array([float(r[k]) for r in rows]) for k in rows[0] if k != "stage"} if rows else {}
 
 
 def joint_of(result):
@@ -30,11 +24,12 @@ def similar(scene) -> bool:
 
 
 def load_runs(build_dir: Path):
+    """(scene name, result.json, curve.csv (pinbore.fem.curve.Curve), folder) of every FE run."""
     runs = []
     for result in sorted((build_dir / "fem").glob("*/result.json")):
         folder = result.parent
-        runs.append((folder.name, json.loads(result.read_text()), read_csv(folder / "curve.csv"),
-                     folder))
+        runs.append((folder.name, json.loads(result.read_text()),
+                     fe_curve.read(folder / "curve.csv"), folder))
     return runs
 
 
@@ -42,7 +37,8 @@ def curves_figure(runs) -> str:
     fig, ax = plt.subplots(figsize=(9, 6))
     ax.set_prop_cycle(color=plt.cm.tab20.colors)
     for name, result, curve, _ in runs:
-        ax.plot(curve["approach_m"] * 1e6, curve["force_per_length_N_per_m"] / 1e3, "o-", ms=3,
+        push = curve.only("push")
+        ax.plot(push.approach * 1e6, push.force / 1e3, "o-", ms=3,
                 label=f"{name} (c = {joint_of(result).clearance * 1e6:.0f} um)")
     ax.set_xlabel("approach beyond first touch (um)")
     ax.set_ylabel("force per length (kN/m)")
@@ -59,15 +55,16 @@ def persson_figure(runs) -> tuple[str, list]:
     ax.plot(load, [np.degrees(persson_half_angle(x)) for x in load], "k-", lw=1,
             label="Persson / Ciavarella-Decuzzi (infinite plate)")
     for name, result, curve, _ in runs:
-        if not similar(result["scene"]):
+        push = curve.only("push")
+        if not similar(result["scene"]) or not push.points:
             continue
         joint = joint_of(result)
-        force = curve["force_per_length_N_per_m"]
-        ax.plot(force / (joint.e_star * joint.clearance), curve["half_angle_deg"], "o", ms=4,
+        angle = push.half_angle
+        ax.plot(push.force / (joint.e_star * joint.clearance), angle, "o", ms=4,
                 label=f"FE {name}")
-        closed = np.degrees(persson_half_angles(force, joint))
-        rows.append([name, f"{curve['half_angle_deg'].min():.1f}-{curve['half_angle_deg'].max():.1f}",
-                     f"{np.max(np.abs(curve['half_angle_deg'] - closed)):.2f}"])
+        closed = np.degrees(persson_half_angles(push.force, joint))
+        rows.append([name, f"{angle.min():.1f}-{angle.max():.1f}",
+                     f"{np.max(np.abs(angle - closed)):.2f}"])
     ax.set_xscale("log")
     ax.set_xlabel("P / (E* c)")
     ax.set_ylabel("contact half-angle (deg)")
@@ -79,8 +76,7 @@ def persson_figure(runs) -> tuple[str, list]:
 def friction_figure(runs) -> str | None:
     """Friction torque (or tangential force) and stick fraction after the push, per scene."""
     programmes = {"rotate": "rotation_deg", "slide": "tangential_push"}
-    slides = [(name, result, read_csv(folder / "curve.csv", stage), stage)
-              for name, result, _, folder in runs
+    slides = [(name, result, curve.only(stage), stage) for name, result, curve, _ in runs
               for stage, key in programmes.items() if result["scene"]["load"].get(key)]
     if not slides:
         return None
@@ -88,16 +84,16 @@ def friction_figure(runs) -> str | None:
     for ax, (name, result, curve, stage) in zip(axes[0], slides):
         mu = result["scene"]["contact"]["friction"]
         if stage == "rotate":
-            x, y = curve["rotation_deg"], curve["friction_torque_per_length_N"]
+            x, y = curve.rotation, curve.friction_torque
             ax.set_xlabel("rotation of the hub (deg)")
             ax.set_ylabel("friction torque (N m/m)")
         else:
-            x, y = curve["tangential_push_m"] * 1e6, curve["tangential_force_per_length_N_per_m"]
+            x, y = curve.tangential_push * 1e6, curve.tangential_force
             ax.set_xlabel("tangential push of the hub (um)")
             ax.set_ylabel("tangential force (N/m)")
         ax.plot(x, y, "o-", ms=3, color="C0")
         twin = ax.twinx()
-        twin.plot(x, curve["stick_fraction"], "s--", ms=3, color="C1")
+        twin.plot(x, curve.stick_fraction, "s--", ms=3, color="C1")
         twin.set_ylabel("fraction of the contact arc stuck", color="C1")
         twin.set_ylim(-0.05, 1.05)
         ax.set_title(f"{name} (mu = {mu:g})")
@@ -125,7 +121,7 @@ def run_pictures(runs) -> list[str]:
 
 def section(build_dir: Path, bench_dir: Path) -> str:
     runs = load_runs(build_dir)
-    plane = [run for run in runs if run[1]["scene"]["geometry"]["dim"] == 2]
+    plane = [run for run in runs if run[2].dim == 2]   # forces per unit length (N/m)
     parts = ["<h2>Finite-element contact</h2>",
              "<p>Plane strain (2D) or 3D, P1 elements, both bodies elastic. Contact: "
              "node-to-surface gap between the pin nodes and the curved bore, penalty or "

@@ -259,6 +259,19 @@ def hertz_per_length(d, joint: Joint):
     return hertz_point(d, joint) / joint.length
 
 
+def calibrated(d, published, scale, exponent_correction, reference_approach):
+    """A law calibrated on FE curves (`pinbore calibrate`, calibration/fit.py), P (N/m):
+
+    P(d) = s P_law(d) (d / d_ref)^q,
+    P_law(d) = `published`, the law's force per length at the same approaches d (N/m);
+    s = `scale` and q = `exponent_correction` fitted by least squares on ln(P_FE / P_law)
+    about d_ref = `reference_approach` (m), the geometric mean of the fitted approaches.
+    For a power law K d^n this refits K and n; q = 0 keeps the law's own shape.
+    """
+    d = np.asarray(d, float)
+    return scale * published * (d / reference_approach) ** exponent_correction
+
+
 # The laws that predict a force per unit length from geometry and materials alone.
 PUBLISHED = {"hertz": hertz_per_length, "johnson": johnson, "liu": liu, "bai_zhao": bai_zhao,
              "pereira": pereira, "radzimovsky": radzimovsky,

@@ -1,7 +1,6 @@
 """From a reduced scene to the arrays of the compiled kernel, with consistent initial
 conditions (clearance joints start centred, velocities from the constraints)."""
 
-import json
 import math
 import warnings
 from dataclasses import dataclass
@@ -9,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pinbore.calibration import lawsfile
 from pinbore.laws import dissipative, elastic
 from pinbore.core.errors import InputError
 from pinbore.reduced import kernel
@@ -150,34 +150,30 @@ def friction_block(f):
 
 
 def normal_force(c, deltas, laws_data, source) -> np.ndarray:
-    """Elastic normal force (N) of a clearance joint at the penetrations `deltas`."""
+    """Elastic normal force (N) of a clearance joint at the penetrations `deltas`; a
+    calibrated law is that of the laws file (`laws_data`, calibration/lawsfile.py) times
+    the joint's length."""
     joint = elastic.Joint(c.bearing_radius, c.journal_radius, c.E, c.nu, c.E, c.nu, c.length)
     if c.normal_law == "hertz_point":
         return elastic.hertz_point(deltas, joint)
     if c.normal_law.startswith("calibrated:"):
         name = c.normal_law.split(":", 1)[1]
-        entry = laws_data["laws"].get(name)
-        if entry is None or entry["fitted"] is None:
-            valid = [k for k, v in laws_data["laws"].items() if v["fitted"] is not None]
+        fitted = laws_data.fitted()
+        if name not in fitted:
             raise InputError(f"{source}: clearance_joints.normal_law: {c.normal_law!r} is not a "
-                             f"fitted law of the laws file; valid: calibrated:{', calibrated:'.join(valid)}")
-        fit = entry["fitted"]
-        base = elastic.linear(deltas, joint.e_star) if name == "linear" else elastic.PUBLISHED[name](deltas, joint)
-        per_length = fit["scale"] * base * (deltas / fit["reference_approach_m"]) ** fit["exponent_correction"]
-        return per_length * c.length
+                             f"fitted law of the laws file; valid: calibrated:{', calibrated:'.join(fitted)}")
+        return fitted[name].force(name, deltas, joint) * c.length
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the range is enforced by the table (NaN beyond it)
         return elastic.PUBLISHED[c.normal_law](deltas, joint) * c.length
 
 
-def _laws_file(scene, base: Path, source: str):
+def _laws_file(scene, base: Path, source: str) -> lawsfile.LawsFile | None:
+    """The scene's laws file (a path relative to the scene's folder), validated."""
     if scene.laws_file is None:
         return None
     path = (base / scene.laws_file) if not Path(scene.laws_file).is_absolute() else Path(scene.laws_file)
-    try:
-        return json.loads(path.read_text())
-    except (OSError, ValueError) as err:
-        raise InputError(f"{source}: laws_file: cannot read {path} ({err})") from None
+    return lawsfile.read(path, f"{source}: laws_file: {path}")
 
 
 def _check_connected(scene, names) -> None:

@@ -8,6 +8,7 @@ import numpy as np
 
 from pinbore.core.figures import plt, save_png
 from pinbore.reduced import kernel
+from pinbore.reduced.summary import Summary
 
 
 def per_step(model, run):
@@ -107,8 +108,8 @@ def write_timeseries(path, series) -> None:
             out.writerow([f"{v:.9e}" for v in row])
 
 
-def summary(model, series, run, status_text):
-    """The run's summary from its series (`sample`) and the Trajectory."""
+def summary(model, series, run, status_text, scene_file) -> Summary:
+    """The run's summary (reduced/summary.py) from its series (`sample`) and the Trajectory."""
     counters, status = run.counters, run.status
     e = series["energy"]
     total = e["kinetic"] + e["potential"] + e["elastic"] + e["dissipated"] - e["work_in"]
@@ -128,7 +129,7 @@ def summary(model, series, run, status_text):
                           "peak_penetration_m": float(np.max(series["steps"][f"{c.name}_penetration_m"], initial=0.0)),
                           "peak_friction_force_N": float(np.max(np.abs(series["steps"][f"{c.name}_friction_force_N"]), initial=0.0)),
                           "clearance_m": c.bearing_radius - c.journal_radius}
-    return {
+    return Summary.model_validate({
         "status": "complete" if status == kernel.OK else "incomplete",
         "stop": None if status == kernel.OK else {"time_s": run.t_end, "reason": status_text},
         "duration_s": model.scene.duration, "time_reached_s": run.t_end,
@@ -143,7 +144,8 @@ def summary(model, series, run, status_text):
                            "work_in_J": float(e["work_in"][-1])},
         "constraint_drift_max": float(np.max(series["drift"])),
         "warnings": validity_warnings(model, joints),
-    }
+        "scene_file": scene_file,
+    })
 
 
 def validity_warnings(model, joints) -> list[str]:
@@ -151,7 +153,7 @@ def validity_warnings(model, joints) -> list[str]:
     out = []
     for c in model.scene.clearance_joints:
         if (c.normal_law or "").startswith("calibrated:") and model.calibration is not None:
-            low, high = model.calibration["laws"][c.normal_law.split(":", 1)[1]]["validity"]["approach_m"]
+            low, high = model.calibration.laws[c.normal_law.split(":", 1)[1]].validity.approach_m
             peak = joints[c.name]["peak_penetration_m"]
             if peak > high:
                 out.append(f"{c.name}: peak penetration {peak:.3g} m beyond the calibrated range "

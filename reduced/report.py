@@ -4,6 +4,7 @@ import json
 from pathlib import Path
 
 from pinbore.core.html import figure, png_data, table
+from pinbore.reduced import summary
 
 
 def section(build_dir: Path) -> str:
@@ -17,20 +18,16 @@ def section(build_dir: Path) -> str:
              "on a step boundary (a stiff Rosenbrock 2(3) is the alternative).</p>"]
     if not runs:
         return "".join(parts) + "<p class='note'>No runs under build/reduced: run <code>make reduced</code>.</p>"
-    rows = []
-    for path in runs:
-        s = json.loads(path.read_text())
-        peak = max((j["peak_normal_force_N"] for j in s["clearance_joints"].values()), default=0.0)
-        rows.append([path.parent.name, s["status"], s["impacts"], f"{peak:.4g}", s["steps"],
-                     s["rhs_evaluations"], f"{s['wall_time_s']:.3f}",
-                     f"{s['energy_balance']['relative_to_peak_kinetic']:.1e}",
-                     f"{s['constraint_drift_max']:.1e}"])
+    summaries = {path.parent: summary.read(path) for path in runs}
+    rows = [[folder.name, s.status, s.impacts, f"{s.peak_normal_force_N:.4g}", s.steps,
+             s.rhs_evaluations, f"{s.wall_time_s:.3f}",
+             f"{s.energy_balance.relative_to_peak_kinetic:.1e}", f"{s.constraint_drift_max:.1e}"]
+            for folder, s in summaries.items()]
     parts.append(table(["scene", "status", "impacts", "peak contact force (N)", "steps",
                         "RHS evaluations", "integration wall time (s)",
                         "energy residual / peak kinetic", "constraint drift (m)"], rows))
-    for path in runs:
-        folder, s = path.parent, json.loads(path.read_text())
-        if (folder / "acceleration.png").exists() and s["clearance_joints"]:
+    for folder, s in summaries.items():
+        if (folder / "acceleration.png").exists() and s.clearance_joints:
             parts.append(figure(png_data(folder / "acceleration.png"),
                                 f"Scene {folder.name}: slider acceleration against crank angle, "
                                 "with the ideal joint (dashed)."))
@@ -38,12 +35,12 @@ def section(build_dir: Path) -> str:
             parts.append(figure(png_data(folder / "attitude.png"),
                                 f"Scene {folder.name}: attitude rate of the free-floating body "
                                 "during deployment, with the ideal hinge (dashed)."))
-        for name in s["clearance_joints"]:
+        for name in s.clearance_joints:
             if (folder / f"{name}.png").exists():
                 parts.append(figure(png_data(folder / f"{name}.png"),
                                     f"Scene {folder.name}, joint {name}: the journal centre inside "
                                     "the clearance circle, and the normal contact force."))
-        for warning in s.get("warnings", []):
+        for warning in s.warnings:
             parts.append(f"<p class='note'>{folder.name}: {warning}</p>")
     return "".join(parts)
 

@@ -5,7 +5,6 @@ penetration beyond a tenth of the journal radius or beyond the normal law's rang
 it computed, marks summary.json "incomplete" and exits with 1.
 """
 
-import json
 import math
 import sys
 import time
@@ -16,7 +15,7 @@ import numpy as np
 
 from pinbore.core import scene as scenes
 from pinbore.core.output import atomic_directory
-from pinbore.reduced import kernel, outputs
+from pinbore.reduced import kernel, outputs, summary
 from pinbore.reduced.model import SPEED_FLOOR, Model, build
 from pinbore.reduced.scene import ReducedScene
 
@@ -92,9 +91,8 @@ def run(scene_path, out) -> int:
     with atomic_directory(out) as tmp:
         series = outputs.sample(model, trajectory)
         outputs.write_timeseries(tmp / "timeseries.csv", series)
-        summary = outputs.summary(model, series, trajectory, STATUS[trajectory.status])
-        summary["scene_file"] = str(scene_path)
-        (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+        summary.write(tmp / "summary.json", outputs.summary(
+            model, series, trajectory, STATUS[trajectory.status], str(scene_path)))
         if scene.output.plots:
             outputs.plots(tmp, model, series, twin)
     if trajectory.status != kernel.OK:

@@ -1,16 +1,23 @@
 """Calibration against known truths: synthetic curves made from a law with known parameters
-(exact and with noise), and the rules for bad curve files."""
+(exact and with noise), the multibody model applying the calibrated law, and the rules for
+bad curve and laws files."""
 
 import csv
 import json
+import tomllib
 
 import numpy as np
 import pytest
-from conftest import pinbore, scene_dict
+from conftest import ROOT, pinbore, scene_dict
 
+from pinbore.calibration import lawsfile
 from pinbore.calibration.curves import Curve
-from pinbore.calibration.fit import errors, fit, law_force
+from pinbore.calibration.fit import errors, fit
+from pinbore.calibration.lawsfile import law_force
+from pinbore.calibration.run import evaluate, laws_json
 from pinbore.laws.elastic import Joint
+from pinbore.reduced.model import build
+from pinbore.reduced.scene import ReducedScene
 
 JOINT = Joint(10e-3, 9.95e-3, 210e9, 0.3, 210e9, 0.3, 0.02)
 APPROACH = np.linspace(1e-6, 1e-5, 10)
@@ -101,6 +108,9 @@ def _edited(fe_run, tmp_path, edit):
     (lambda r: [r[0]] + [r[2], r[1]] + r[3:], "approach_m: must be positive and increase"),
     (lambda r: r[:2] + [r[2][:2] + ["nan"] + r[2][3:]] + r[3:], "row 2: nan is not finite"),
     (lambda r: r[:3], "2 points; a fit of 2 parameters needs at least 3"),
+    (lambda r: r[:1], "0 points; a fit of 2 parameters needs at least 3"),
+    (lambda r: [row[:-1] for row in r], "gap_violation_m: required column is missing (written "
+                                        "by another version of pinbore? run pinbore fem again)"),
     (lambda r: [[h.replace("force_per_length_N_per_m", "force_N") for h in r[0]]] + r[1:],
      "force_N: units do not match"),
     (lambda r: [[h.replace("approach_m", "approach_mm") for h in r[0]]] + r[1:],
@@ -119,3 +129,57 @@ def test_curve_without_its_scene(fe_run, tmp_path):
     (path.parent / "result.json").unlink()
     done = pinbore("calibrate", path, "--out", tmp_path / "out")
     assert done.returncode == 2 and "needs the FE run's result.json" in done.stderr
+
+
+def synthetic_laws_file(folder):
+    """laws.json of the laws calibrated on one synthetic curve: Liu's law with s = 1.37,
+    q = -0.12."""
+    curves = [synthetic("liu", 1.37, -0.12)]
+    path = folder / "laws.json"
+    lawsfile.write(path, laws_json(curves, evaluate(curves), None, [], 0.0))
+    return path
+
+
+def calibrated_scene(laws_file, law="liu") -> dict:
+    """The calibrated slider-crank, its joint that of JOINT, its normal law calibrated."""
+    data = tomllib.loads((ROOT / "scenes/reduced/slider_crank_flores2004_calibrated.toml").read_text())
+    data["laws_file"] = str(laws_file)
+    data["clearance_joints"][0] |= {"bearing_radius": JOINT.r_bore, "journal_radius": JOINT.r_pin,
+                                    "E": JOINT.E_pin, "nu": JOINT.nu_pin, "length": JOINT.length,
+                                    "normal_law": f"calibrated:{law}"}
+    return data
+
+
+def test_laws_file_reads_back_what_was_written(tmp_path):
+    path = synthetic_laws_file(tmp_path)
+    curves = [synthetic("liu", 1.37, -0.12)]
+    assert lawsfile.read(path) == laws_json(curves, evaluate(curves), None, [], 0.0)
+
+
+def test_multibody_model_applies_the_law_the_calibration_fitted(tmp_path):
+    """The joint's tabulated force is F = P L, P the calibrated law: here the synthetic truth."""
+    model = build(ReducedScene.model_validate(calibrated_scene(synthetic_laws_file(tmp_path))),
+                  "test", tmp_path)
+    d = np.exp(model.grid_log0 + model.grid_step * np.arange(model.tables.shape[1]))
+    inside = np.isfinite(model.tables[0])
+    reference = float(np.exp(np.mean(np.log(APPROACH))))
+    truth = 1.37 * law_force("liu", d, JOINT) * (d / reference) ** -0.12 * JOINT.length
+    np.testing.assert_allclose(np.exp(model.tables[0][inside]), truth[inside], rtol=1e-8)
+
+
+@pytest.mark.parametrize("edit, message", [
+    (lambda d: d.pop("laws"), "laws: required key is missing"),
+    (lambda d: d["laws"]["liu"].pop("fitted"), "laws.liu.fitted: required key is missing"),
+    (lambda d: d["laws"]["liu"]["fitted"].update(scale="1.37"), "laws.liu.fitted.scale:"),
+])
+def test_a_laws_file_of_another_version_is_one_line_exit_2(write_scene, tmp_path, edit, message):
+    path = synthetic_laws_file(tmp_path)
+    data = json.loads(path.read_text())
+    edit(data)
+    path.write_text(json.dumps(data))
+    done = pinbore("reduced", write_scene(calibrated_scene(path)), "--out", tmp_path / "out")
+    assert done.returncode == 2, done.stderr
+    line = done.stderr.strip()
+    assert len(line.splitlines()) == 1 and f"laws_file: {path}: {message}" in line
+    assert line.endswith("(written by another version of pinbore? run pinbore calibrate again)")
+    assert not (tmp_path / "out").exists()

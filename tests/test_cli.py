@@ -1,12 +1,12 @@
 """The command line: outputs of `pinbore mesh` and `pinbore fem`, bad input, early stops."""
 
-import csv
 import json
 
 import gmsh
 import pytest
 from conftest import ROOT, pinbore, scene_dict
 
+from pinbore.fem import curve as fe_curve
 from pinbore.meshes.model import (BORE_SURFACE, HOUSING, HOUSING_EDGE, HOUSING_ENDS, HUB, PIN, PIN_ENDS,
                           PIN_SURFACE, SYMMETRY)
 
@@ -19,20 +19,17 @@ def test_fem_writes_curve_pressure_result_fields_picture(write_scene, tmp_path):
     names = {p.name for p in out.iterdir()}
     assert {"curve.csv", "pressure.csv", "result.json", "fields.xdmf", "fields.h5",
             "contact.png"} <= names
-    rows = list(csv.DictReader(open(out / "curve.csv")))
-    assert len(rows) == data["load"]["steps"]
-    for column in ("step", "approach_m", "force_per_length_N_per_m", "half_angle_deg",
-                   "newton_iterations"):
-        assert column in rows[0]
-    forces = [float(r["force_per_length_N_per_m"]) for r in rows]
-    assert all(f > 0 for f in forces) and forces == sorted(forces)
-    pressure = list(csv.DictReader(open(out / "pressure.csv")))
-    assert set(pressure[0]) == {"step", "angle_deg", "pressure_Pa", "shear_Pa", "state"}
-    assert {r["state"] for r in pressure} <= {"open", "slip"}  # frictionless: no stick
+    curve = fe_curve.read(out / "curve.csv")   # a 2D curve: forces per unit length
+    assert curve.dim == 2 and curve.points == data["load"]["steps"]
+    assert "force_per_length_N_per_m" in (out / "curve.csv").read_text().splitlines()[0]
+    assert all(curve.force > 0) and list(curve.force) == sorted(curve.force)
+    pressure = fe_curve.read_pressure(out / "pressure.csv")
+    assert pressure.dim == 2 and pressure.z is None and pressure.shear_axial is None
+    assert set(pressure.state) <= {"open", "slip"}  # frictionless: no stick
     result = json.loads((out / "result.json").read_text())
     assert result["status"] == "complete" and result["dofs"] > 0
     assert result["scene"]["geometry"]["pin_radius"] == data["geometry"]["pin_radius"]
-    assert len(result["snes_reasons"]) == len(rows)
+    assert len(result["snes_reasons"]) == curve.points
     assert not list(tmp_path.glob(".run.*"))  # no temporary directory left
 
 
@@ -153,7 +150,7 @@ def test_a_run_that_cannot_converge_keeps_what_converged_and_says_so(write_scene
     result = json.loads((out / "result.json").read_text())
     assert result["status"] == "incomplete" and result["cutbacks"] == 3
     assert "gave up after 2 cutbacks" in result["stop"]["message"]
-    assert len(list(csv.reader(open(out / "curve.csv")))) == 1 + result["steps_converged"]
+    assert fe_curve.read(out / "curve.csv").points == result["steps_converged"]
 
 
 def test_help_lists_every_command():

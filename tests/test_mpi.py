@@ -1,6 +1,5 @@
 """`mpiexec -n 2 pinbore fem` gives the same curve as one process, 2D with friction and 3D."""
 
-import csv
 import subprocess
 import sys
 from pathlib import Path
@@ -9,14 +8,15 @@ import numpy as np
 import pytest
 from conftest import pinbore, scene_dict
 
+from pinbore.fem import curve as fe_curve
+
 MPIEXEC = Path(sys.executable).parent / "mpiexec"
 
 
 def curve(path):
-    rows = list(csv.DictReader(open(path)))
-    force = "force_N" if "force_N" in rows[0] else "force_per_length_N_per_m"
-    return np.array([[float(r[force]), float(r["half_angle_deg"]), float(r["stick_fraction"])]
-                     for r in rows])
+    """Force (2D: N/m, 3D: N), half-angle and stick fraction of every step."""
+    c = fe_curve.read(path)
+    return np.column_stack([c.force, c.half_angle, c.stick_fraction])
 
 
 SCENES = {

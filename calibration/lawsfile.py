@@ -1,0 +1,126 @@
+"""laws.json, the file `pinbore calibrate` writes for the multibody model, defined once as a
+validated model: the calibration builds a LawsFile and writes it (`write`); the multibody
+model, its summary and the report read it back through `read`.
+
+Units are SI; forces are per unit length (N/m, plane strain): a multibody joint of axial
+length L takes F = P L. Every law is kept as published (errors only) and, where the curves
+fix its parameters, calibrated: P = s P_law(d) (d / d_ref)^q (`Fit.force`, the one
+implementation of that law, `pinbore.laws.elastic.calibrated`).
+
+A file that does not validate, e.g. one written by an older version of pinbore, is one
+InputError line naming the file and the key, e.g.
+`<file>: laws.liu.fitted: required key is missing (written by another version of pinbore?
+run pinbore calibrate again)`. The file holds no version number: the model is the version.
+"""
+
+import json
+from pathlib import Path
+from typing import Annotated, Literal
+
+import numpy as np
+import pydantic
+
+from pinbore.core.scene import Strict, read_json
+from pinbore.laws import elastic
+
+Range = Annotated[list[float], pydantic.Field(min_length=2, max_length=2)]   # [low, high]
+MODEL = "P = scale * P_law(d) * (d / reference_approach_m)^exponent_correction"
+LAWS = list(elastic.PUBLISHED) + ["linear"]   # the laws a laws file holds, by name
+
+
+def law_force(name: str, d, joint):
+    """The published force per length of law `name` (the linear spring: E* d)."""
+    if name == "linear":
+        return elastic.linear(d, joint.e_star)
+    return elastic.PUBLISHED[name](d, joint)
+
+
+class Errors(Strict):
+    """How far a law's force is from the FE force over one curve's approaches."""
+
+    max_rel: float   # largest |P_law / P_FE - 1|
+    rms_rel: float   # root mean square of P_law / P_FE - 1
+    points: int      # approaches where the law has a solution
+
+
+class Fit(Strict):
+    """A law calibrated on FE curves: its stiffness factor s and exponent correction q about
+    the reference approach d_ref, with 95 % confidence intervals."""
+
+    model: Literal[MODEL]
+    scale: float
+    scale_ci95: Range
+    exponent_correction: float
+    exponent_correction_ci95: Range
+    reference_approach_m: float
+    points: int   # approaches the fit used
+
+    def force(self, name: str, d, joint) -> np.ndarray:
+        """P(d) (N/m) of law `name` calibrated, at the approaches d (m), for `joint`."""
+        d = np.asarray(d, float)
+        return elastic.calibrated(d, law_force(name, d, joint), self.scale,
+                                  self.exponent_correction, self.reference_approach_m)
+
+
+class Validity(Strict):
+    """The ranges the curves covered: a calibrated law is used beyond them by extrapolation."""
+
+    clearance_m: Range
+    clearance_ratio: Range
+    approach_m: Range
+    housing_ratio: Range
+
+
+class Law(Strict):
+    formula: str                                 # the law's docstring, on one line
+    published_errors: dict[str, Errors] | None   # per curve; None: no published form (linear)
+    fitted: Fit | None                           # None: the curves cannot fix s and q
+    not_fitted: str | None                       # why not
+    fitted_errors: dict[str, Errors] | None      # per curve, of the calibrated law
+    validity: Validity
+    fitted_to: list[str]                         # the curves' names
+
+
+class CurveEntry(Strict):
+    """One FE curve the laws were calibrated on."""
+
+    name: str
+    points: int
+    clearance_m: float
+    bore_radius_m: float
+    effective_modulus_Pa: float
+    housing_ratio: float   # housing radius / bore radius
+    similar_materials: bool
+    approach_m: Range
+    persson_half_angle_error_deg: float | None   # None: dissimilar materials
+
+
+class Units(Strict):
+    approach: str
+    force: str
+
+
+UNITS = Units(approach="m", force="N/m (per unit length, plane strain)")
+
+
+class LawsFile(Strict):
+    units: Units
+    length_m: float | None   # axial length given to the laws that need one
+    length_note: str
+    curves: list[CurveEntry]
+    laws: dict[str, Law]
+    warnings: list[str]
+    fit_seconds: float
+
+    def fitted(self) -> dict[str, Fit]:
+        """The calibrated laws by name (those the curves could fit)."""
+        return {name: law.fitted for name, law in self.laws.items() if law.fitted is not None}
+
+
+def write(path: Path, laws: LawsFile) -> None:
+    path.write_text(json.dumps(laws.model_dump(), indent=2) + "\n")
+
+
+def read(path, source: str | None = None) -> LawsFile:
+    """laws.json validated; `source` names it in errors (default: its path)."""
+    return read_json(LawsFile, path, "calibrate", source)
