@@ -26,7 +26,7 @@ STAGE_CODE := $(wildcard pinbore/cli.py core/*.py laws/*.py meshes/*.py fem/*.py
 MPIEXEC := $(if $(filter-out 1,$(NP)),$(VENV)/bin/mpiexec -n $(NP))
 DYNAMICS_SCENE := scenes/reduced/slider_crank_flores2004.toml
 DYNAMICS := $(addprefix build/dynamics/,poincare/summary.json bifurcation/summary.json design/summary.json)
-DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(wildcard pinbore/cli.py core/*.py laws/*.py reduced/*.py) $(STAMP)
+DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(wildcard pinbore/cli.py core/*.py laws/*.py calibration/lawsfile.py reduced/*.py) $(STAMP)
 
 .PHONY: all venv mesh fem calibration reduced dynamics report bench test test-slow clean help
 .DELETE_ON_ERROR:
@@ -58,13 +58,13 @@ build/fem/%/curve.csv: scenes/fem/%.toml $(STAGE_CODE) $(STAMP)
 
 calibration: build/calibration/laws.json ## fit and rank the contact laws on the study curves
 
-build/calibration/laws.json: $(STUDY_CURVES) fem/scene.py $(wildcard laws/*.py calibration/*.py) $(STAMP)
+build/calibration/laws.json: $(STUDY_CURVES) fem/scene.py fem/curve.py $(wildcard core/*.py laws/*.py meshes/*.py calibration/*.py) $(STAMP)
 	$(PINBORE) calibrate $(STUDY_CURVES) --out build/calibration
 
 reduced: $(REDUCED_RUNS) ## run the mechanisms with clearance joints (build/reduced/<scene>/)
 
 build/reduced/%/summary.json: scenes/reduced/%.toml build/calibration/laws.json \
-                              $(wildcard core/*.py laws/*.py reduced/*.py) $(STAMP)
+                              $(wildcard core/*.py laws/*.py calibration/lawsfile.py reduced/*.py) $(STAMP)
 	$(PINBORE) reduced $< --out build/reduced/$*
 
 dynamics: $(DYNAMICS) ## Poincare map, bifurcation diagram and design map of the slider-crank (build/dynamics/)

@@ -1,16 +1,15 @@
 """FE load-approach curves as the calibration reads them, checked before any fit."""
 
-import json
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
+from pinbore.core.errors import InputError
+from pinbore.core.scene import RUN_AGAIN, load_json, validate
 from pinbore.fem import curve as fe_curve
 from pinbore.fem.scene import FemScene
 from pinbore.laws.elastic import Joint
-from pinbore.core.errors import InputError
-from pinbore.core.scene import validate
 
 STAGE = "push"   # the calibration reads the radial push
 
@@ -60,9 +59,11 @@ def read_curve(path, length: float | None, min_points: int = 3) -> Curve:
 def _scene(path: Path) -> FemScene:
     """The scene the FE run recorded in the result.json beside the curve."""
     result = path.parent / "result.json"
-    try:
-        data = json.loads(result.read_text())["scene"]
-    except (OSError, ValueError, KeyError):
+    if not result.is_file():
         raise InputError(f"{path}: needs the FE run's result.json beside it (the scene's "
-                         "geometry and materials)") from None
-    return validate(FemScene, data, str(result))
+                         "geometry and materials)")
+    data = load_json(result, "fem")
+    if "scene" not in data:
+        raise InputError(f"{result}: scene: required key is missing "
+                         f"({RUN_AGAIN.format(command='fem')})")
+    return validate(FemScene, data["scene"], f"{result}: scene")

@@ -20,7 +20,7 @@ from typing import Annotated, Literal
 import numpy as np
 import pydantic
 
-from pinbore.core.scene import Strict, read_json
+from pinbore.core.scene import Record, read_json
 from pinbore.laws import elastic
 
 Range = Annotated[list[float], pydantic.Field(min_length=2, max_length=2)]   # [low, high]
@@ -35,7 +35,7 @@ def law_force(name: str, d, joint):
     return elastic.PUBLISHED[name](d, joint)
 
 
-class Errors(Strict):
+class Errors(Record):
     """How far a law's force is from the FE force over one curve's approaches."""
 
     max_rel: float   # largest |P_law / P_FE - 1|
@@ -43,7 +43,7 @@ class Errors(Strict):
     points: int      # approaches where the law has a solution
 
 
-class Fit(Strict):
+class Fit(Record):
     """A law calibrated on FE curves: its stiffness factor s and exponent correction q about
     the reference approach d_ref, with 95 % confidence intervals."""
 
@@ -62,7 +62,7 @@ class Fit(Strict):
                                   self.exponent_correction, self.reference_approach_m)
 
 
-class Validity(Strict):
+class Validity(Record):
     """The ranges the curves covered: a calibrated law is used beyond them by extrapolation."""
 
     clearance_m: Range
@@ -71,7 +71,7 @@ class Validity(Strict):
     housing_ratio: Range
 
 
-class Law(Strict):
+class Law(Record):
     formula: str                                 # the law's docstring, on one line
     published_errors: dict[str, Errors] | None   # per curve; None: no published form (linear)
     fitted: Fit | None                           # None: the curves cannot fix s and q
@@ -81,7 +81,7 @@ class Law(Strict):
     fitted_to: list[str]                         # the curves' names
 
 
-class CurveEntry(Strict):
+class CurveEntry(Record):
     """One FE curve the laws were calibrated on."""
 
     name: str
@@ -95,7 +95,7 @@ class CurveEntry(Strict):
     persson_half_angle_error_deg: float | None   # None: dissimilar materials
 
 
-class Units(Strict):
+class Units(Record):
     approach: str
     force: str
 
@@ -103,7 +103,7 @@ class Units(Strict):
 UNITS = Units(approach="m", force="N/m (per unit length, plane strain)")
 
 
-class LawsFile(Strict):
+class LawsFile(Record):
     units: Units
     length_m: float | None   # axial length given to the laws that need one
     length_note: str

@@ -15,8 +15,8 @@ from pinbore.calibration import figures, lawsfile
 from pinbore.calibration.curves import read_curve
 from pinbore.calibration.fit import NotFitted, errors, fit
 from pinbore.calibration.lawsfile import LAWS, law_force
-from pinbore.laws import elastic
 from pinbore.core.output import atomic_directory
+from pinbore.laws import elastic
 
 
 def evaluate(curves):

@@ -25,6 +25,14 @@ class Strict(pydantic.BaseModel):
                                        allow_inf_nan=False)
 
 
+class Record(Strict):
+    """Base of the files pinbore writes between stages (laws.json, summary.json): strict keys
+    like a scene, but a number may be inf or nan, which is what a run that blew up or a law
+    without a solution honestly records."""
+
+    model_config = pydantic.ConfigDict(allow_inf_nan=True)
+
+
 def read_toml(path: str | Path) -> dict:
     """The parsed TOML file, or an InputError naming the file and the problem."""
     path = Path(path)
@@ -66,11 +74,10 @@ def load(model: type[pydantic.BaseModel], path: str | Path) -> pydantic.BaseMode
     return validate(model, read_toml(path), str(path))
 
 
-def read_json(model: type[pydantic.BaseModel], path: str | Path, command: str,
-              source: str | None = None) -> pydantic.BaseModel:
-    """A JSON file that `pinbore <command>` wrote, validated into `model`. A file that cannot
-    be read, parsed or validated is one InputError line: `<source>: <key>: <rule>`, the rule
-    followed by RUN_AGAIN; `source` names the file (default: its path)."""
+def load_json(path: str | Path, command: str, source: str | None = None) -> dict:
+    """The JSON object of a file that `pinbore <command>` wrote. A file that cannot be read or
+    parsed, or holds no object, is one InputError line naming it (`source`, default: its
+    path)."""
     source = str(path) if source is None else source
     try:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
@@ -78,6 +85,16 @@ def read_json(model: type[pydantic.BaseModel], path: str | Path, command: str,
         raise InputError(f"{source}: cannot read ({getattr(err, 'strerror', None) or err})") from None
     if not isinstance(data, dict):
         raise InputError(f"{source}: not a JSON object ({RUN_AGAIN.format(command=command)})")
+    return data
+
+
+def read_json(model: type[pydantic.BaseModel], path: str | Path, command: str,
+              source: str | None = None) -> pydantic.BaseModel:
+    """A JSON file that `pinbore <command>` wrote, validated into `model`. A file that cannot
+    be read, parsed or validated is one InputError line: `<source>: <key>: <rule>`, the rule
+    followed by RUN_AGAIN; `source` names the file (default: its path)."""
+    source = str(path) if source is None else source
+    data = load_json(path, command, source)
     try:
         return validate(model, data, source)
     except InputError as err:

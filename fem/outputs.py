@@ -13,10 +13,10 @@ import dolfinx
 import dolfinx.io
 import numpy as np
 
+from pinbore.core.figures import offscreen_pyvista, plt, save_image, save_png
 from pinbore.fem import curve
 from pinbore.fem.contact import OPEN, SLIP, STATE_NAMES, STICK, tributary_lengths
 from pinbore.fem.post import angle_from, half_angle
-from pinbore.core.figures import offscreen_pyvista, plt, save_image, save_png
 
 
 def curve_rows(run, direction_deg, section):

@@ -2,16 +2,16 @@
 
 import csv
 import html
-import json
 from pathlib import Path
 
 import numpy as np
 
+from pinbore.core.figures import plt
+from pinbore.core.html import figure, figure_data, png_data, table
+from pinbore.core.scene import load_json
 from pinbore.fem import curve as fe_curve
 from pinbore.fem.scene import FemScene
 from pinbore.laws.elastic import persson_half_angle, persson_half_angles
-from pinbore.core.figures import plt
-from pinbore.core.html import figure, figure_data, png_data, table
 
 
 def joint_of(result):
@@ -28,7 +28,7 @@ def load_runs(build_dir: Path):
     runs = []
     for result in sorted((build_dir / "fem").glob("*/result.json")):
         folder = result.parent
-        runs.append((folder.name, json.loads(result.read_text()),
+        runs.append((folder.name, load_json(result, "fem"),
                      fe_curve.read(folder / "curve.csv"), folder))
     return runs
 

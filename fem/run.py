@@ -10,10 +10,10 @@ import dolfinx_solver  # noqa: F401  (must precede dolfinx)
 from mpi4py import MPI
 from tqdm import tqdm
 
-from pinbore.fem import model, outputs
-from pinbore.fem.scene import FemScene
 from pinbore.core import scene as scenes
 from pinbore.core.output import atomic_directory
+from pinbore.fem import model, outputs
+from pinbore.fem.scene import FemScene
 
 
 def run(scene_path, out, comm=MPI.COMM_WORLD) -> int:

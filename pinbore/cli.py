@@ -68,8 +68,10 @@ def _options_given(args) -> dict:
 def _report(args) -> int:
     from pinbore import report
 
-    report.build(args.build, args.out)
-    return 0
+    _, problems = report.build(args.build, args.out)
+    for line in problems:
+        print(f"pinbore report: {line}", file=sys.stderr)
+    return 1 if problems else 0
 
 
 def _scene_command(sub, name, func, summary, description):

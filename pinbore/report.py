@@ -5,20 +5,44 @@ benchmarks under bench/); a section whose results are absent says so. The page i
 function of the files it reads: built again from the same files it is the same.
 """
 
+import html
 from pathlib import Path
 
 from pinbore.calibration import report as calibration_report
+from pinbore.core.errors import InputError
 from pinbore.core.html import STYLE
 from pinbore.core.output import write_text_atomic
 from pinbore.fem import report as fem_report
 from pinbore.reduced import report as reduced_report
 
 
-def build(build_dir, out) -> Path:
+# (heading, section): each a function of what its stage wrote under build/ (and of bench/)
+SECTIONS = [
+    ("FE contact", lambda build, bench: fem_report.section(build, bench)),
+    ("calibration", lambda build, bench: calibration_report.section(build, bench)),
+    ("reduced models", lambda build, bench: reduced_report.section(build)),
+    ("nonlinear dynamics", lambda build, bench: reduced_report.dynamics_section(build)),
+]
+
+
+def build(build_dir, out) -> tuple[Path, list[str]]:
+    """Write OUT/index.html; (its path, one line per section that could not be built).
+
+    A section whose files are missing says so on the page; one whose files do not read (an
+    InputError of the stage's seam module: corrupt, truncated, of another version) is left
+    out with a note, and the others are built."""
     build_dir = Path(build_dir)
+    if not build_dir.is_dir():
+        raise InputError(f"--build {build_dir}: not a directory of results (run make first)")
     bench = Path("bench")
-    sections = [fem_report.section(build_dir, bench), calibration_report.section(build_dir, bench),
-                reduced_report.section(build_dir), reduced_report.dynamics_section(build_dir)]
+    sections, problems = [], []
+    for heading, section in SECTIONS:
+        try:
+            sections.append(section(build_dir, bench))
+        except InputError as err:
+            problems.append(f"{heading} section left out: {err}")
+            sections.append(f"<h2>{html.escape(heading)}</h2><p class='note'>Not built: "
+                            f"{html.escape(str(err))}</p>")
     page = ("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
             f"<title>pinbore report</title><style>{STYLE}</style></head><body>"
             "<h1>pinbore: contact in pin-in-bore (revolute clearance) joints</h1>"
@@ -27,4 +51,4 @@ def build(build_dir, out) -> Path:
             "(N/m).</p>" + "".join(sections) + "</body></html>\n")
     index = Path(out) / "index.html"
     write_text_atomic(index, page)
-    return index
+    return index, problems

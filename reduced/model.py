@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 
 from pinbore.calibration import lawsfile
-from pinbore.laws import dissipative, elastic
 from pinbore.core.errors import InputError
+from pinbore.laws import dissipative, elastic
 from pinbore.reduced import kernel
 from pinbore.reduced.scene import GROUND, ReducedScene
 

@@ -1,9 +1,9 @@
 """The report's section on the reduced (multibody) models."""
 
-import json
 from pathlib import Path
 
 from pinbore.core.html import figure, png_data, table
+from pinbore.core.scene import load_json
 from pinbore.reduced import summary
 
 
@@ -62,7 +62,7 @@ def dynamics_section(build_dir: Path) -> str:
         path = folder / name / "summary.json"
         if not path.exists():
             continue
-        s = json.loads(path.read_text())
+        s = load_json(path, "dynamics")
         facts = {"poincare": lambda: f"{s['kind']}" + (f", period {s['period']}" if s["period"] else "")
                  + (f", largest Lyapunov exponent {s['lyapunov_per_s']:.4g} 1/s" if s["lyapunov_per_s"] else ""),
                  "bifurcation": lambda: ", ".join(f"{k}: {v} points" for k, v in s["counts"].items()),

@@ -10,9 +10,9 @@ from typing import Annotated, Literal
 
 import pydantic
 
+from pinbore.core.scene import Strict
 from pinbore.laws.dissipative import HYSTERESIS
 from pinbore.laws.elastic import PUBLISHED
-from pinbore.core.scene import Strict
 
 GROUND = "ground"
 ELASTIC_LAWS = ["hertz_point"] + sorted(PUBLISHED)

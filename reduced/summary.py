@@ -12,10 +12,10 @@ import json
 from pathlib import Path
 from typing import Literal
 
-from pinbore.core.scene import Strict, read_json
+from pinbore.core.scene import Record, read_json
 
 
-class JointPeaks(Strict):
+class JointPeaks(Record):
     """One clearance joint over the run: its peaks and impacts."""
 
     peak_normal_force_N: float   # refined between the steps (continuous contact)
@@ -28,14 +28,14 @@ class JointPeaks(Strict):
     clearance_m: float
 
 
-class Stop(Strict):
+class Stop(Record):
     """Where and why a run that did not complete stopped."""
 
     time_s: float
     reason: str
 
 
-class EnergyBalance(Strict):
+class EnergyBalance(Record):
     """Kinetic + potential + elastic + dissipated - work in, which a run keeps constant."""
 
     max_residual_J: float
@@ -44,7 +44,7 @@ class EnergyBalance(Strict):
     work_in_J: float
 
 
-class Summary(Strict):
+class Summary(Record):
     status: Literal["complete", "incomplete"]
     stop: Stop | None           # None: complete
     duration_s: float           # asked by the scene

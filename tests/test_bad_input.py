@@ -120,3 +120,31 @@ def test_the_cell_estimate_matches_gmsh(name):
         kind = 2 if scene.geometry.dim == 2 else 4   # triangles, tetrahedra
         cells = len(gmsh.model.mesh.getElementsByType(kind)[0])
     assert expected_cells(scene.geometry, scene.sizing, scene.mesh) == pytest.approx(cells, rel=0.25)
+
+
+def test_report_needs_a_build_directory(tmp_path):
+    (tmp_path / "a_file").write_text("x")
+    for build in (tmp_path / "absent", tmp_path / "a_file"):
+        done = pinbore("report", "--build", build, "--out", tmp_path / "report")
+        assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
+        assert "not a directory of results" in done.stderr
+        assert not (tmp_path / "report").exists()
+
+
+@pytest.mark.parametrize("broken, text, section", [
+    ("fem/run/result.json", "{}", "FE contact"),                       # its curve.csv is missing
+    ("fem/run/result.json", "[1, 2]", "FE contact"),
+    ("reduced/run/summary.json", "{}", "reduced models"),
+    ("reduced/run/summary.json", "garbage", "reduced models"),
+    ("calibration/laws.json", '{"laws": {}}', "calibration"),
+])
+def test_report_builds_what_it_can_and_names_what_it_cannot(tmp_path, broken, text, section):
+    build = tmp_path / "build"
+    (build / broken).parent.mkdir(parents=True)
+    (build / broken).write_text(text)
+    done = pinbore("report", "--build", build, "--out", tmp_path / "report")
+    assert done.returncode == 1 and "Traceback" not in done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"pinbore report: {section} section left out: ")
+    page = (tmp_path / "report" / "index.html").read_text()
+    assert "Not built:" in page and "<h2>" in page
