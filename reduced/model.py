@@ -168,12 +168,17 @@ def normal_force(c, deltas, laws_data, source) -> np.ndarray:
         return elastic.PUBLISHED[c.normal_law](deltas, joint) * c.length
 
 
-def _laws_file(scene, base: Path, source: str) -> lawsfile.LawsFile | None:
-    """The scene's laws file (a path relative to the scene's folder), validated."""
+def laws_path(scene, base: Path) -> Path | None:
+    """Where the scene's laws file is (relative to the scene's folder `base`), if it has one."""
     if scene.laws_file is None:
         return None
-    path = (base / scene.laws_file) if not Path(scene.laws_file).is_absolute() else Path(scene.laws_file)
-    return lawsfile.read(path, f"{source}: laws_file: {path}")
+    return (base / scene.laws_file) if not Path(scene.laws_file).is_absolute() else Path(scene.laws_file)
+
+
+def _laws_file(scene, base: Path, source: str) -> lawsfile.LawsFile | None:
+    """The scene's laws file, validated."""
+    path = laws_path(scene, base)
+    return None if path is None else lawsfile.read(path, f"{source}: laws_file: {path}")
 
 
 def _check_connected(scene, names) -> None:

@@ -1,5 +1,6 @@
 """The report's section on the reduced (multibody) models."""
 
+import html
 from pathlib import Path
 
 from pinbore.core.html import figure, png_data, table
@@ -26,6 +27,10 @@ def section(build_dir: Path) -> str:
     parts.append(table(["scene", "status", "impacts", "peak contact force (N)", "steps",
                         "RHS evaluations", "integration wall time (s)",
                         "energy residual / peak kinetic", "constraint drift (m)"], rows))
+    for folder, s in summaries.items():
+        if s.verdict:
+            parts.append(f"<p class='note'><b>{html.escape(folder.name)} is suspect</b>: "
+                         f"{html.escape('; '.join(s.verdict))}.</p>")
     for folder, s in summaries.items():
         if (folder / "acceleration.png").exists() and s.clearance_joints:
             parts.append(figure(png_data(folder / "acceleration.png"),

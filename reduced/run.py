@@ -15,8 +15,8 @@ import numpy as np
 
 from pinbore.core import scene as scenes
 from pinbore.core.output import atomic_directory
-from pinbore.reduced import kernel, outputs, summary
-from pinbore.reduced.model import SPEED_FLOOR, Model, build
+from pinbore.reduced import kernel, outputs, summary, verdict
+from pinbore.reduced.model import SPEED_FLOOR, Model, build, laws_path
 from pinbore.reduced.scene import ReducedScene
 
 MAX_STEPS = 5_000_000
@@ -88,15 +88,28 @@ def run(scene_path, out) -> int:
     if scene.clearance_joints and scene.output.plots:
         twin_model = build(ideal_twin(scene), str(scene_path), scene_path.parent)
         twin = (twin_model, simulate(twin_model))
-    with atomic_directory(out) as tmp:
+    with atomic_directory(out, inputs=[laws_path(scene, scene_path.parent)]) as tmp:
         series = outputs.sample(model, trajectory)
         outputs.write_timeseries(tmp / "timeseries.csv", series)
-        summary.write(tmp / "summary.json", outputs.summary(
-            model, series, trajectory, STATUS[trajectory.status], str(scene_path)))
+        result = judged(outputs.summary(model, series, trajectory, STATUS[trajectory.status],
+                                        str(scene_path)), scene)
+        summary.write(tmp / "summary.json", result)
         if scene.output.plots:
             outputs.plots(tmp, model, series, twin)
     if trajectory.status != kernel.OK:
         print(f"pinbore reduced: {scene_path}: stopped at t = {trajectory.t_end:.6g} s: {STATUS[trajectory.status]}; "
               f"kept the time series up to there in {out} (marked incomplete)", file=sys.stderr)
         return 1
+    if result.status == "suspect":
+        print(f"pinbore reduced: {scene_path}: suspect: {'; '.join(result.verdict)} "
+              f"(written to {out}, marked suspect)", file=sys.stderr)
+        return 1
     return 0
+
+
+def judged(result: summary.Summary, scene: ReducedScene) -> summary.Summary:
+    """The summary with its quality verdict (reduced/verdict.py): a complete run that breaks a
+    rule becomes `suspect`."""
+    found = verdict.reasons(result, scene)
+    status = "suspect" if found and result.status == "complete" else result.status
+    return result.model_copy(update={"verdict": found, "status": status})

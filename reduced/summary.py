@@ -45,7 +45,7 @@ class EnergyBalance(Record):
 
 
 class Summary(Record):
-    status: Literal["complete", "incomplete"]
+    status: Literal["complete", "incomplete", "suspect"]   # suspect: see `verdict`
     stop: Stop | None           # None: complete
     duration_s: float           # asked by the scene
     time_reached_s: float
@@ -59,6 +59,7 @@ class Summary(Record):
     energy_balance: EnergyBalance
     constraint_drift_max: float   # m, the largest gap of the ideal joints
     warnings: list[str]         # e.g. a calibrated law used beyond its calibrated range
+    verdict: list[str] = []     # why the run is suspect (reduced/verdict.py); empty: nothing
     scene_file: str
 
     @property
