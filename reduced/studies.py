@@ -59,9 +59,13 @@ def with_parameter(data: dict, parameter: str, value: float, source: str) -> dic
 
 
 def require_drive(scene: ReducedScene, source: str) -> None:
+    """A drive that turns: the Poincare section is taken once per drive revolution."""
     if scene.drive is None:
         raise InputError(f"{source}: drive: nonlinear-dynamics analyses need a driven mechanism "
                          "(the Poincare section is taken once per drive revolution)")
+    if scene.drive.speed_rpm == 0:
+        raise InputError(f"{source}: drive.speed_rpm: must not be 0 for nonlinear-dynamics "
+                         "analyses (a drive that stands still has no revolution to sample)")
 
 
 def mechanism_flow(data: dict, base: Path, source: str) -> dynamics.MechanismFlow:

@@ -97,12 +97,16 @@ def test_a_broken_rule_is_one_line_exit_2_and_nothing_written(tmp_path, capsys, 
     assert (tmp_path / "a_file").read_text() == "not a folder"
 
 
-def test_a_scene_without_a_drive_is_one_line_exit_2(tmp_path, capsys, write_scene):
+@pytest.mark.parametrize("edit, rule", [
+    (lambda d: d.pop("drive"), "drive: nonlinear-dynamics analyses need a driven mechanism"),
+    (lambda d: d["drive"].update(speed_rpm=0.0), "drive.speed_rpm: must not be 0"),
+])
+def test_a_scene_without_a_turning_drive_is_one_line_exit_2(tmp_path, capsys, write_scene, edit, rule):
     data = tomllib.loads(FLORES.read_text())
-    del data["drive"]
+    edit(data)
     code, err = run_cli(["--analysis", "poincare"], tmp_path, capsys, scene=write_scene(data))
     assert code == 2 and len(err.strip().splitlines()) == 1
-    assert "drive: nonlinear-dynamics analyses need a driven mechanism" in err
+    assert rule in err
     assert nothing_written(tmp_path)
 
 
