@@ -55,12 +55,12 @@ class Load(Strict):
     """
 
     max_approach: float = pydantic.Field(ge=0, description="hub displacement beyond first touch (m)")
-    steps: int = pydantic.Field(ge=1)
+    steps: int = pydantic.Field(ge=1, le=10_000)
     direction_deg: float = pydantic.Field(ge=-360, le=360)
     first_approach: float | None = pydantic.Field(default=None, gt=0)
     rotation_deg: float | None = None
     tangential_push: float | None = None
-    slide_steps: int = pydantic.Field(default=10, ge=1)
+    slide_steps: int = pydantic.Field(default=10, ge=1, le=10_000)
 
     @pydantic.model_validator(mode="after")
     def _steps(self):

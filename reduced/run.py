@@ -17,9 +17,8 @@ from pinbore.core import scene as scenes
 from pinbore.core.output import atomic_directory
 from pinbore.reduced import kernel, outputs, summary, verdict
 from pinbore.reduced.model import SPEED_FLOOR, Model, build, laws_path
-from pinbore.reduced.scene import ReducedScene
+from pinbore.reduced.scene import MAX_STEPS, ReducedScene
 
-MAX_STEPS = 5_000_000
 STATUS = {kernel.OK: "complete", kernel.BLOWN_UP: "blown up (NaN, or a penetration beyond a "
           "tenth of the journal radius or beyond the normal law's range)", kernel.TOO_MANY_STEPS:
           f"more than {MAX_STEPS} steps", kernel.STEP_TOO_SMALL: "step size underflow"}

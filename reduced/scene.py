@@ -15,6 +15,11 @@ from pinbore.laws.dissipative import HYSTERESIS
 from pinbore.laws.elastic import PUBLISHED
 
 GROUND = "ground"
+# What a run may ask for, refused at validation when exceeded: it could not finish (the
+# integrator stops at MAX_STEPS; a fixed step needs duration / max_step of them) or would not
+# fit in memory (every sample is a row of timeseries.csv).
+MAX_STEPS = 5_000_000
+MAX_SAMPLES = 2_000_000
 ELASTIC_LAWS = ["hertz_point"] + sorted(PUBLISHED)
 DAMPING_LAWS = ["none"] + sorted(HYSTERESIS)
 
@@ -233,6 +238,18 @@ class ReducedScene(Strict):
     torsion: list[TorsionSpring] = []
     integrator: Integrator = Integrator()
     output: Output = Output()
+
+    @pydantic.model_validator(mode="after")
+    def _bounded(self):
+        samples = self.duration / self.output.sample_time
+        if samples > MAX_SAMPLES:
+            raise ValueError(f"output.sample_time: {samples:.3g} samples over the duration, more "
+                             f"than {MAX_SAMPLES:.0e}: sample less often or shorten the duration")
+        steps = self.duration / self.integrator.max_step
+        if self.integrator.method == "dopri5_fixed" and steps > MAX_STEPS:
+            raise ValueError(f"integrator.max_step: the fixed step needs {steps:.3g} steps, more "
+                             f"than {MAX_STEPS:.0e}: a longer step or a shorter duration")
+        return self
 
     @pydantic.model_validator(mode="after")
     def _names(self):

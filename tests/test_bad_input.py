@@ -148,3 +148,18 @@ def test_report_builds_what_it_can_and_names_what_it_cannot(tmp_path, broken, te
     assert len(lines) == 1 and lines[0].startswith(f"pinbore report: {section} section left out: ")
     page = (tmp_path / "report" / "index.html").read_text()
     assert "Not built:" in page and "<h2>" in page
+
+
+# work that could not finish: refused at validation
+UNBOUNDED = [
+    ("reduced", reduced_with(lambda d: d.update(duration=1e4)), "output.sample_time: 5e+08 samples"),
+    ("reduced", reduced_with(lambda d: d["integrator"].update(method="dopri5_fixed", max_step=1e-9)),
+     "integrator.max_step: the fixed step needs 4.8e+07 steps"),
+    ("fem", fem_with(load={"steps": 10**9}), "load.steps: Input should be less than or equal to 10000"),
+]
+
+
+@pytest.mark.parametrize("command, scene, message", UNBOUNDED, ids=[u[2].split(":")[0] for u in UNBOUNDED])
+def test_work_that_cannot_finish_is_refused(write_scene, tmp_path, command, scene, message):
+    out = tmp_path / "out"
+    expect_one_line(pinbore(command, write_scene(scene), "--out", out), message, out)
