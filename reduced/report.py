@@ -21,11 +21,11 @@ def section(build_dir: Path) -> str:
         return "".join(parts) + "<p class='note'>No runs under build/reduced: run <code>make reduced</code>.</p>"
     summaries = {path.parent: summary.read(path) for path in runs}
     rows = [[folder.name, s.status, s.impacts, f"{s.peak_normal_force_N:.4g}", s.steps,
-             s.rhs_evaluations, f"{s.wall_time_s:.3f}",
+             s.rhs_evaluations, f"{s.wall_time_s:.3f}", f"{s.compile_time_s:.2f}",
              f"{s.energy_balance.relative_to_peak_kinetic:.1e}", f"{s.constraint_drift_max:.1e}"]
             for folder, s in summaries.items()]
     parts.append(table(["scene", "status", "impacts", "peak contact force (N)", "steps",
-                        "RHS evaluations", "integration wall time (s)",
+                        "RHS evaluations", "integration wall time (s)", "compilation before it (s)",
                         "energy residual / peak kinetic", "constraint drift (m)"], rows))
     for folder, s in summaries.items():
         if s.verdict:

@@ -45,7 +45,8 @@ class Trajectory:
     counters: np.ndarray
     status: int
     t_end: float
-    seconds: float
+    seconds: float               # of the integration
+    compile_seconds: float = 0.0   # of numba's compilation (or cache load) before it, if any
 
 
 def onset_tolerance(model: Model) -> float:
@@ -58,13 +59,18 @@ def simulate(model: Model, y0=None, duration=None, args=None) -> Trajectory:
     (default: the scene's), with the kernel arguments `args` (default: model.kernel_args(),
     a fresh start; the integrator updates their speeds, latches and modes in place)."""
     s = model.scene.integrator
+    y0 = model.y0 if y0 is None else y0
+    args = model.kernel_args() if args is None else args
+    fixed = (METHODS[s.method], s.rtol, s.atol, s.max_step, onset_tolerance(model), SPEED_FLOOR,
+             MAX_STEPS)
     start = time.perf_counter()
-    result = kernel.integrate(model.y0 if y0 is None else y0,
-                              model.scene.duration if duration is None else duration,
-                              model.kernel_args() if args is None else args, METHODS[s.method],
-                              s.rtol, s.atol, s.max_step, onset_tolerance(model), SPEED_FLOOR,
-                              MAX_STEPS)
-    return Trajectory(*result[:7], int(result[7]), float(result[8]), time.perf_counter() - start)
+    if not kernel.integrate.signatures:   # the first run of this process compiles (or loads)
+        kernel.integrate(y0, 0.0, model.kernel_args(), *fixed)
+    compiled = time.perf_counter()
+    result = kernel.integrate(y0, model.scene.duration if duration is None else duration, args,
+                              *fixed)
+    return Trajectory(*result[:7], int(result[7]), float(result[8]),
+                      time.perf_counter() - compiled, compiled - start)
 
 
 def ideal_twin(scene: ReducedScene) -> ReducedScene:
