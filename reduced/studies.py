@@ -131,17 +131,17 @@ class BifurcationPoint:
 
 
 def sweep(task, values, cache: Path, workers: int, scheduler: str | None, key: str) -> list[dict]:
-    """task(value) for every value, in parallel, each result cached in `cache` (resumable)."""
-    cache.mkdir(parents=True, exist_ok=True)
+    """task(value) for every value, in parallel, each result cached in `cache` (resumable; a
+    cached point that does not read is computed again)."""
     results, todo = {}, []
     for value in values:
-        path = cache / f"{key}_{value!r}.json"
-        if path.exists():
-            results[value] = json.loads(path.read_text())
-        else:
+        try:
+            results[value] = json.loads((cache / f"{key}_{value!r}.json").read_text())
+        except (OSError, ValueError):
             todo.append(value)
     if todo:
-        executor = _executor(workers, scheduler)
+        executor = _executor(workers, scheduler)   # before the cache exists: a scheduler
+        cache.mkdir(parents=True, exist_ok=True)   # that cannot be reached leaves nothing
         with executor:
             futures = {executor.submit(task, v): v for v in todo}
             for future in tqdm(concurrent.futures.as_completed(futures), total=len(futures),
@@ -155,13 +155,20 @@ def sweep(task, values, cache: Path, workers: int, scheduler: str | None, key: s
     return [results[v] for v in values]
 
 
+SCHEDULER_TIMEOUT = 10   # s to connect to a Dask scheduler
+
+
 def _executor(workers: int, scheduler: str | None):
     if scheduler is None:
         # spawned, not forked: the parent runs threads (numba, tqdm) that fork would copy mid-state
         return concurrent.futures.ProcessPoolExecutor(max_workers=workers,
                                                       mp_context=multiprocessing.get_context("spawn"))
     from distributed import Client   # noqa: PLC0415 (optional: the --scheduler rule checks it is there)
-    return Client(scheduler).get_executor()
+    try:
+        return Client(scheduler, timeout=SCHEDULER_TIMEOUT).get_executor()
+    except (OSError, TimeoutError) as err:
+        raise InputError(f"--scheduler {scheduler}: cannot reach the Dask scheduler within "
+                         f"{SCHEDULER_TIMEOUT} s ({type(err).__name__})") from None
 
 
 def sweep_key(data: dict, analysis: str, parameter: str, transient: int, periods: int) -> str:

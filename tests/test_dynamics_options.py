@@ -157,3 +157,15 @@ def test_the_table_of_analyses_matches_the_parser():
     assert fields == set(actions)
     assert all(issubclass(model, analyses.Analysis) and callable(function)
                for model, function in studies.ANALYSES.values())
+
+
+def test_an_unreachable_scheduler_is_one_line_and_leaves_nothing(tmp_path, capsys):
+    """Nothing listens on the discard port of the loopback: the sweep cannot start, and says so
+    before its cache folder exists."""
+    pytest.importorskip("distributed")
+    code, err = run_cli(["--analysis", "bifurcation", "--parameter", "clearance", "--range", "1e-4",
+                         "2e-4", "--points", "2", "--transient", "1", "--periods", "1",
+                         "--scheduler", "tcp://127.0.0.1:9"], tmp_path, capsys)
+    assert code == 2 and len(err.strip().splitlines()) == 1
+    assert "--scheduler tcp://127.0.0.1:9: cannot reach the Dask scheduler" in err
+    assert nothing_written(tmp_path)
