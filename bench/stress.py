@@ -187,6 +187,19 @@ def run_point(point: dict) -> dict:
     return point | {"exit_code": code, "wall_s": wall, "stderr": stderr, "files": files}
 
 
+def where(stderr: str) -> str:
+    """The innermost frame of the traceback file an internal error (exit 3) names."""
+    marker = "traceback in "
+    if marker not in stderr:
+        return ""
+    try:
+        trace = Path(stderr.split(marker, 1)[1].split()[0]).read_text()
+    except OSError:
+        return ""
+    frames = [line.strip() for line in trace.splitlines() if line.strip().startswith("File ")]
+    return f" (at {frames[-1]})" if frames else ""
+
+
 def first_line(text: str) -> str:
     lines = [line.strip() for line in text.splitlines() if line.strip()]
     return lines[-1][:300] if lines else ""
@@ -297,7 +310,7 @@ def reduced_row(done: dict) -> dict:
     if outcome == "hang":
         failure.append(f"no result within {TIMEOUT['reduced']:g} s")
     if outcome == "crash":
-        failure.append(f"exit {done['exit_code']}: {first_line(done['stderr'])}")
+        failure.append(f"exit {done['exit_code']}: {first_line(done['stderr'])}{where(done['stderr'])}")
     if broken:
         failure.append("complete but " + ", ".join(broken))
     if outcome == "refused":
@@ -368,7 +381,7 @@ def fem_row(done: dict) -> dict:
     if outcome == "hang":
         failure.append(f"no result within {TIMEOUT['fem']:g} s")
     if outcome == "crash":
-        failure.append(f"exit {done['exit_code']}: {first_line(done['stderr'])}")
+        failure.append(f"exit {done['exit_code']}: {first_line(done['stderr'])}{where(done['stderr'])}")
     if broken:
         failure.append("complete but " + ", ".join(broken))
     row["ok"] = not failure
