@@ -18,7 +18,8 @@ def section(build_dir: Path, bench_dir: Path) -> str:
              "adaptive Dormand-Prince 5(4), compiled with numba, that lands every contact onset "
              "on a step boundary (a stiff Rosenbrock 2(3) is the alternative).</p>"]
     if not runs:
-        return "".join(parts) + "<p class='note'>No runs under build/reduced: run <code>make reduced</code>.</p>"
+        return "".join(parts + ["<p class='note'>No runs under build/reduced: run <code>make reduced</code>.</p>"]
+                       + stress_part(bench_dir))
     summaries = {path.parent: summary.read(path) for path in runs}
     rows = [[folder.name, s.status, s.impacts, f"{s.peak_normal_force_N:.4g}", s.steps,
              s.rhs_evaluations, f"{s.wall_time_s:.3f}",
