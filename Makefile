@@ -28,7 +28,7 @@ DYNAMICS_SCENE := scenes/reduced/slider_crank_flores2004.toml
 DYNAMICS := $(addprefix build/dynamics/,poincare/summary.json bifurcation/summary.json design/summary.json)
 DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(wildcard pinbore/cli.py core/*.py laws/*.py calibration/lawsfile.py reduced/*.py) $(STAMP)
 
-.PHONY: all venv mesh fem calibration reduced dynamics report bench test test-slow clean help
+.PHONY: all venv mesh fem calibration reduced dynamics report bench stress test test-slow clean help
 .DELETE_ON_ERROR:
 
 all: report ## set up .venv, run the default scenes, build the report (the main job)
@@ -96,6 +96,9 @@ bench: $(STUDY_CURVES) $(STAMP) ## run the benchmarks: bench/*.csv and plots (a 
 	$(PY) bench/calibrate.py --out bench
 	$(PY) bench/multibody.py --out bench
 	$(PY) bench/sweep.py --out bench
+
+stress: $(STAMP) ## the stress matrix: bench/stress_*.csv, bench/stress.png (10-15 min)
+	$(PY) bench/stress.py --out bench
 
 test: $(STAMP) ## run the test suite (what CI runs)
 	$(PY) -m pytest -n 2 -m "not slow" tests

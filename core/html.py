@@ -5,6 +5,7 @@ from what the stage wrote under build/; the page itself is put together by `pinb
 """
 
 import base64
+import csv
 import html
 import io
 from pathlib import Path
@@ -46,3 +47,18 @@ def table(header: list[str], rows: list[list]) -> str:
     body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in row) + "</tr>"
                    for row in rows)
     return f"<table><tr>{head}</tr>{body}</table>"
+
+
+def outcome_counts(path: Path, outcomes: list[str]) -> str:
+    """A table of a stress CSV (bench/stress_*.csv, columns sweep, outcome, ok): per sweep,
+    how many points ended in each outcome, and how many failed the criterion."""
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    sweeps = list(dict.fromkeys(row["sweep"] for row in rows))
+    body = [[sweep] + [sum(r["sweep"] == sweep and r["outcome"] == o for r in rows) or ""
+                       for o in outcomes]
+            + [sum(r["sweep"] == sweep and r["ok"] != "True" for r in rows) or ""]
+            for sweep in sweeps]
+    body.append(["all"] + [sum(r["outcome"] == o for r in rows) for o in outcomes]
+                + [sum(r["ok"] != "True" for r in rows)])
+    return table(["sweep"] + outcomes + ["failed the criterion"], body)

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from pinbore.core.figures import plt
-from pinbore.core.html import figure, figure_data, png_data, table
+from pinbore.core.html import figure, figure_data, outcome_counts, png_data, table
 from pinbore.core.scene import load_json
 from pinbore.fem import curve as fe_curve
 from pinbore.fem.scene import FemScene
@@ -130,7 +130,8 @@ def section(build_dir: Path, bench_dir: Path) -> str:
              "the hub displacement beyond first touch; the force is the hub reaction along "
              "the load, per unit length in 2D, of the whole pin in 3D.</p>"]
     if not runs:
-        return "".join(parts) + "<p class='note'>No FE results under build/fem: run <code>make fem</code>.</p>"
+        return "".join(parts + ["<p class='note'>No FE results under build/fem: run <code>make fem</code>.</p>"]
+                       + stress_part(bench_dir))
     parts.append(table(
         ["scene", "method", "c (um)", "dofs", "steps", "Newton its/step (median)",
          "max gap violation (m)", "wall time (s)", "status"],
@@ -173,4 +174,18 @@ def section(build_dir: Path, bench_dir: Path) -> str:
             parts.append(table(rows[0], rows[1:]))
             if (bench_dir / f"{name}.png").exists():
                 parts.append(figure(png_data(bench_dir / f"{name}.png"), caption))
+    parts += stress_part(bench_dir)
     return "".join(parts)
+
+
+def stress_part(bench_dir: Path) -> list[str]:
+    """The FE stress matrix (make stress): outcomes per sweep."""
+    stress = bench_dir / "stress_fem.csv"
+    if not stress.exists():
+        return []
+    return ["<h3>Stress matrix: 2D FE (make stress)</h3><p>The default scene with 4 load steps, "
+            "one parameter swept at a time (c/R, modulus ratio, Poisson's ratio, approach, "
+            "penalty factor with both methods, mu 0.8 with a rotation); each point a "
+            "<code>pinbore fem</code> run under a wall-clock limit (bench/stress_fem.csv; heat "
+            "map in the reduced-model section).</p>",
+            outcome_counts(stress, ["complete", "incomplete", "refused", "hang", "crash"])]

@@ -20,7 +20,7 @@ from pinbore.reduced import report as reduced_report
 SECTIONS = [
     ("FE contact", lambda build, bench: fem_report.section(build, bench)),
     ("calibration", lambda build, bench: calibration_report.section(build, bench)),
-    ("reduced models", lambda build, bench: reduced_report.section(build)),
+    ("reduced models", lambda build, bench: reduced_report.section(build, bench)),
     ("nonlinear dynamics", lambda build, bench: reduced_report.dynamics_section(build)),
 ]
 

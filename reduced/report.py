@@ -3,12 +3,12 @@
 import html
 from pathlib import Path
 
-from pinbore.core.html import figure, png_data, table
+from pinbore.core.html import figure, outcome_counts, png_data, table
 from pinbore.core.scene import load_json
 from pinbore.reduced import summary
 
 
-def section(build_dir: Path) -> str:
+def section(build_dir: Path, bench_dir: Path) -> str:
     runs = sorted((build_dir / "reduced").glob("*/summary.json"))
     parts = ["<h2>Mechanisms with clearance joints (reduced model)</h2>",
              "<p>Planar rigid bodies, ideal joints as constraints with Lagrange multipliers "
@@ -18,7 +18,8 @@ def section(build_dir: Path) -> str:
              "adaptive Dormand-Prince 5(4), compiled with numba, that lands every contact onset "
              "on a step boundary (a stiff Rosenbrock 2(3) is the alternative).</p>"]
     if not runs:
-        return "".join(parts) + "<p class='note'>No runs under build/reduced: run <code>make reduced</code>.</p>"
+        return "".join(parts + ["<p class='note'>No runs under build/reduced: run <code>make reduced</code>.</p>"]
+                       + stress_part(bench_dir))
     summaries = {path.parent: summary.read(path) for path in runs}
     rows = [[folder.name, s.status, s.impacts, f"{s.peak_normal_force_N:.4g}", s.steps,
              s.rhs_evaluations, f"{s.wall_time_s:.3f}", f"{s.compile_time_s:.2f}",
@@ -47,7 +48,31 @@ def section(build_dir: Path) -> str:
                                     "the clearance circle, and the normal contact force."))
         for warning in s.warnings:
             parts.append(f"<p class='note'>{folder.name}: {warning}</p>")
+    parts += stress_part(bench_dir)
     return "".join(parts)
+
+
+STRESS_OUTCOMES = ["complete", "suspect", "incomplete", "refused", "hang", "crash"]
+
+
+def stress_part(bench_dir: Path) -> list[str]:
+    """The multibody stress matrix (make stress): outcomes per sweep and the heat map."""
+    path = bench_dir / "stress_reduced.csv"
+    if not path.exists():
+        return []
+    parts = ["<h3>Stress matrix: multibody (make stress)</h3>",
+             "<p>The Flores slider-crank over one crank revolution, one parameter swept at a "
+             "time (contact modulus, clearance, restitution, drive speed), every friction law at "
+             "mu 0, 0.2, 0.8, every damping law, every integrator at its defaults; each point a "
+             "<code>pinbore reduced</code> run under a wall-clock limit. Criterion: no NaN, no "
+             "hang, no crash, no complete run whose numbers break the verdict's thresholds "
+             "(bench/stress_reduced.csv).</p>",
+             outcome_counts(path, STRESS_OUTCOMES)]
+    if (bench_dir / "stress.png").exists():
+        parts.append(figure(png_data(bench_dir / "stress.png"),
+                            "Stress matrix: one strip per sweep, a cell per point coloured by "
+                            "outcome; a crossed cell failed the criterion (bench/stress.png)."))
+    return parts
 
 
 def dynamics_section(build_dir: Path) -> str:

@@ -1,0 +1,496 @@
+"""Stress matrix of numerical stability: the reduced model and the 2D FE solver driven far
+from their shipped scenes, one parameter at a time.
+
+Every point is one `pinbore reduced` or `pinbore fem` subprocess in a temporary directory,
+with a wall-clock limit (a point past it is killed and recorded as `hang`), so that a hang
+or crash of one point cannot take the matrix down; its row is built from the files it wrote.
+Two points run at a time.
+
+Multibody (around scenes/reduced/slider_crank_flores2004.toml, one crank revolution at
+5000 rpm, 0.012 s, no plots): contact modulus, clearance (journal radius changed, bearing
+radius kept), restitution and drive speed swept alone; every friction law at mu 0, 0.2, 0.8;
+every damping law; every integrator at its defaults.
+
+FE (around scenes/fem/steel_c10um.toml, 2D, 4 load steps, no pictures): c/R, modulus ratio
+pin/bore, Poisson's ratio, max_approach, penalty factor (penalty and augmented Lagrangian),
+mu = 0.8 with a rotation after the push.
+
+Outcome of a point: complete / suspect / incomplete (from the file it wrote), refused (exit
+2, bad input), hang (wall-clock limit), crash (exit 3, another exit code or signal, or no
+readable file). The criterion (column `ok`): no NaN, no hang, no crash, and no `complete`
+run whose numbers break the verdict's thresholds (recomputed here from summary.json, not
+taken from its status; FE: a run marked complete must have converged every load step of
+its programme and, with the augmented Lagrangian, meet its gap tolerance). The script exits 0 whatever the points do (it is
+a measurement) and prints `stress: N points, M failed the criterion` and the failures.
+
+Writes OUT/stress_reduced.csv, OUT/stress_fem.csv and OUT/stress.png.
+"""
+
+import argparse
+import copy
+import csv
+import json
+import math
+import os
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import tomllib
+from concurrent.futures import ThreadPoolExecutor, as_completed
+from pathlib import Path
+
+import matplotlib.lines
+import matplotlib.patches
+import tomli_w
+from tqdm import tqdm
+
+from pinbore.core.figures import plt, save_png
+from pinbore.laws.dissipative import HYSTERESIS
+from pinbore.reduced import verdict
+
+ROOT = Path(__file__).resolve().parent.parent
+REDUCED_SCENE = ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml"
+FEM_SCENE = ROOT / "scenes" / "fem" / "steel_c10um.toml"
+TIMEOUT = {"reduced": 120.0, "fem": 300.0}
+WORKERS = 2
+OUTCOMES = ["complete", "suspect", "incomplete", "refused", "hang", "crash"]
+COLOURS = {"complete": "#4caf50", "suspect": "#ffc107", "incomplete": "#ff7f0e",
+           "refused": "#9e9e9e", "hang": "#7b1fa2", "crash": "#d32f2f"}
+
+
+# ---------------------------------------------------------------- the points
+
+def friction_table(law: str, mu: float) -> dict:
+    """A friction table of `law` at coefficient mu, its other parameters plausible for a
+    steel journal (regularisation 0.1-1 mm/s, Stribeck speed 10 mm/s, bristle/micro-slip
+    lengths about a micrometre)."""
+    return {"coulomb_ambrosio": {"law": law, "mu": mu},
+            "stribeck": {"law": law, "mu_static": mu, "mu_min": 0.6 * mu, "v_min": 0.01},
+            "linear": {"law": law, "mu_static": mu, "alpha": 0.1},
+            "lugre": {"law": law, "mu_coulomb": mu, "mu_static": 1.25 * mu,
+                      "stribeck_speed": 0.01, "sigma0": 1e5, "sigma1": 0.0, "sigma2": 0.0},
+            "dahl": {"law": law, "mu": mu, "sigma": 1e5},
+            "iwan_bilinear": {"law": law, "mu": mu, "k1": 1e8}}[law]
+
+
+FRICTION_LAWS = ["coulomb_ambrosio", "stribeck", "linear", "lugre", "dahl", "iwan_bilinear"]
+
+
+def reduced_points() -> list[dict]:
+    """(sweep, label, parameter, value, scene) of every multibody point."""
+    base = tomllib.loads(REDUCED_SCENE.read_text())
+    base["duration"] = 0.012
+    base["output"] = {"plots": False}
+    points = []
+
+    def add(sweep, label, parameter, value, edit):
+        scene = copy.deepcopy(base)
+        edit(scene, scene["clearance_joints"][0])
+        points.append({"kind": "reduced", "sweep": sweep, "label": label, "parameter": parameter,
+                       "value": value, "scene": scene})
+
+    for E in (1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13):
+        add("contact modulus E (Pa)", f"{E:.0e}", "E", E, lambda s, j, E=E: j.update(E=E))
+    for c in (1e-6, 1e-5, 1e-4, 3e-4, 1e-3):
+        add("clearance (m)", f"{c:.0e}", "clearance", c,
+            lambda s, j, c=c: j.update(journal_radius=j["bearing_radius"] - c))
+    for e in (0.1, 0.3, 0.5, 0.7, 0.9, 1.0):
+        add("restitution", f"{e:g}", "restitution", e, lambda s, j, e=e: j.update(restitution=e))
+    for rpm in (100, 300, 1000, 3000, 10000):
+        add("drive speed (rpm)", f"{rpm:g}", "speed_rpm", rpm,
+            lambda s, j, rpm=rpm: s["drive"].update(speed_rpm=float(rpm)))
+    for law in FRICTION_LAWS:
+        for mu in (0.0, 0.2, 0.8):
+            add(f"friction {law} (mu)", f"{mu:g}", f"friction {law} mu", mu,
+                lambda s, j, law=law, mu=mu: j.update(friction=friction_table(law, mu)))
+    for law in ["none"] + sorted(HYSTERESIS):
+        add("damping law", law, "damping_law", law, lambda s, j, law=law: j.update(damping_law=law))
+    for method in ("dopri5", "rosenbrock23", "dopri5_fixed"):
+        add("integrator (defaults)", method, "integrator", method,
+            lambda s, j, method=method: s.update(integrator={"method": method}))
+    return points
+
+
+def fem_points() -> list[dict]:
+    """(sweep, label, parameter, value, scene) of every FE point."""
+    base = tomllib.loads(FEM_SCENE.read_text())
+    base["load"]["steps"] = 4
+    base["output"] = {"fields": False, "picture": False}
+    points = []
+
+    def add(sweep, label, parameter, value, edit):
+        scene = copy.deepcopy(base)
+        edit(scene)
+        points.append({"kind": "fem", "sweep": sweep, "label": label, "parameter": parameter,
+                       "value": value, "scene": scene})
+
+    for ratio in (1e-5, 1e-4, 1e-3, 1e-2, 5e-2, 0.2):
+        add("c/R", f"{ratio:g}", "c/R", ratio, lambda s, ratio=ratio: s["geometry"].update(
+            pin_radius=s["geometry"]["bore_radius"] * (1 - ratio)))
+    for ratio in (1e-3, 1e-2, 1e-1, 1.0, 1e1, 1e2, 1e3):
+        add("E pin / E bore", f"{ratio:g}", "E_pin/E_bore", ratio, lambda s, ratio=ratio:
+            s["materials"]["pin"].update(E=ratio * s["materials"]["bore"]["E"]))
+    for nu in (0.0, 0.3, 0.45, 0.49):
+        add("nu (both)", f"{nu:g}", "nu", nu, lambda s, nu=nu: (
+            s["materials"]["pin"].update(nu=nu), s["materials"]["bore"].update(nu=nu)))
+    for approach in (1e-9, 1e-8, 1e-7, 1e-6, 1e-5, 3e-5, 1e-4):
+        add("max_approach (m)", f"{approach:.0e}", "max_approach", approach,
+            lambda s, a=approach: s["load"].update(max_approach=a))
+    for method in ("penalty", "augmented-lagrangian"):
+        short = "AL" if method == "augmented-lagrangian" else "penalty"
+        for factor in (1.0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6):
+            add(f"penalty_factor, {short}", f"{factor:.0e}", "penalty_factor", factor,
+                lambda s, f=factor, m=method: s["contact"].update(method=m, penalty_factor=f))
+    # small-strain rule R phi^2 / 2 <= 1 % of max_approach: 0.256 deg at 10 um on R = 9.99 mm
+    for rotation in (0.01, 0.05, 0.1, 0.25):
+        add("mu 0.8, rotation_deg (AL)", f"{rotation:g}", "rotation_deg", rotation,
+            lambda s, r=rotation: (s["contact"].update(friction=0.8),
+                                   s["load"].update(rotation_deg=r, slide_steps=4)))
+    add("mu 0.8, rotation_deg (penalty)", "0.1", "rotation_deg", 0.1,
+        lambda s: (s["contact"].update(method="penalty", friction=0.8),
+                   s["load"].update(rotation_deg=0.1, slide_steps=4)))
+    return points
+
+
+# ---------------------------------------------------------------- running one point
+
+def run_point(point: dict) -> dict:
+    """Run one point's CLI command in a temporary directory under its wall-clock limit;
+    (exit code or None on timeout, wall time, stderr, what it wrote as parsed JSON/text)."""
+    kind = point["kind"]
+    with tempfile.TemporaryDirectory(prefix=f"stress-{kind}-") as tmp:
+        tmp = Path(tmp)
+        scene_path = tmp / "scene.toml"
+        scene_path.write_text(tomli_w.dumps(point["scene"]))
+        out = tmp / "out"
+        command = [sys.executable, "-m", "pinbore.cli", kind, str(scene_path), "--out", str(out)]
+        env = os.environ | {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
+        start = time.perf_counter()
+        process = subprocess.Popen(command, cwd=tmp, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                   text=True, env=env, start_new_session=True)
+        try:
+            _, stderr = process.communicate(timeout=TIMEOUT[kind])
+            code = process.returncode
+        except subprocess.TimeoutExpired:
+            os.killpg(process.pid, signal.SIGKILL)   # its own session: the point and its children
+            _, stderr = process.communicate()
+            code = None
+        wall = time.perf_counter() - start
+        files = {}
+        for name in ("summary.json", "result.json", "curve.csv"):
+            path = out / name
+            if path.exists():
+                files[name] = path.read_text()
+    return point | {"exit_code": code, "wall_s": wall, "stderr": stderr, "files": files}
+
+
+def where(stderr: str) -> str:
+    """The innermost frame of the traceback file an internal error (exit 3) names."""
+    marker = "traceback in "
+    if marker not in stderr:
+        return ""
+    try:
+        trace = Path(stderr.split(marker, 1)[1].split()[0]).read_text()
+    except OSError:
+        return ""
+    frames = [line.strip() for line in trace.splitlines() if line.strip().startswith("File ")]
+    return f" (at {frames[-1]})" if frames else ""
+
+
+def first_line(text: str) -> str:
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    return lines[-1][:300] if lines else ""
+
+
+def any_nan(value) -> bool:
+    if isinstance(value, float):
+        return math.isnan(value)
+    if isinstance(value, dict):
+        return any(any_nan(v) for v in value.values())
+    if isinstance(value, list):
+        return any(any_nan(v) for v in value)
+    return False
+
+
+def outcome_of(done: dict, file: str) -> tuple[str, dict | None]:
+    """The outcome from the exit code and the file, and the file parsed (None if absent)."""
+    code = done["exit_code"]
+    if code is None:
+        return "hang", None
+    if code == 2:
+        return "refused", None
+    data = None
+    if file in done["files"]:
+        try:
+            data = json.loads(done["files"][file])   # NaN and Infinity read as floats
+        except ValueError:
+            data = None
+    if code not in (0, 1) or data is None or data.get("status") not in ("complete", "incomplete", "suspect"):
+        return "crash", data
+    return data["status"], data
+
+
+# ---------------------------------------------------------------- multibody rows
+
+def reduced_bound(friction: dict | None) -> float:
+    """The largest F_t / F_n the friction table allows, computed here from its parameters
+    (inf: the law sets no bound)."""
+    if friction is None:
+        return 0.0
+    law = friction["law"]
+    if law in ("coulomb_ambrosio", "dahl"):
+        return friction["mu"]
+    if law == "stribeck":
+        return max(friction["mu_static"], friction["mu_min"])
+    if law == "iwan_bilinear" and friction.get("k2", 0.0) == 0:
+        return friction["mu"]
+    return math.inf
+
+
+def reduced_breaks(s: dict, scene: dict) -> list[str]:
+    """The verdict's thresholds recomputed from summary.json, whatever its status says."""
+    broken = []
+    energy = s["energy_balance"]
+    if not energy["relative_to_peak_kinetic"] <= verdict.ENERGY_RESIDUAL:
+        broken.append(f"energy residual {energy['relative_to_peak_kinetic']:.3g}")
+    if energy["dissipated_J"] < -max(energy["max_residual_J"], 1e-12):
+        broken.append(f"dissipated {energy['dissipated_J']:.3g} J")
+    clearances = []
+    for joint in scene["clearance_joints"]:
+        clearances.append(joint["bearing_radius"] - joint["journal_radius"])
+        peaks = s["clearance_joints"].get(joint["name"])
+        if peaks is None:
+            continue
+        if not peaks["peak_penetration_m"] <= verdict.PENETRATION * peaks["clearance_m"]:
+            broken.append(f"penetration {peaks['peak_penetration_m'] / peaks['clearance_m']:.3g} c")
+        bound = reduced_bound(joint.get("friction"))
+        if peaks["peak_normal_force_N"] > 0 and math.isfinite(bound):
+            ratio = peaks["peak_friction_force_N"] / peaks["peak_normal_force_N"]
+            if ratio > verdict.FRICTION_MARGIN * bound:
+                broken.append(f"friction ratio {ratio:.3g} > bound {bound:g}")
+    limit = verdict.DRIFT * (min(clearances) if clearances else 1e-3)
+    if not s["constraint_drift_max"] <= limit:
+        broken.append(f"drift {s['constraint_drift_max']:.3g} m")
+    return broken
+
+
+def reduced_row(done: dict) -> dict:
+    outcome, s = outcome_of(done, "summary.json")
+    row = {"sweep": done["sweep"], "parameter": done["parameter"], "value": done["value"],
+           "outcome": outcome, "status": (s or {}).get("status", ""),
+           "exit_code": "" if done["exit_code"] is None else done["exit_code"],
+           "wall_time_s": f"{done['wall_s']:.2f}"}
+    nan = s is not None and any_nan(s)
+    broken = []
+    if s is not None and outcome != "crash":
+        joint = next(iter(s["clearance_joints"].values()))
+        scene_joint = done["scene"]["clearance_joints"][0]
+        ratio = (joint["peak_friction_force_N"] / joint["peak_normal_force_N"]
+                 if joint["peak_normal_force_N"] > 0 else 0.0)
+        row |= {"energy_residual_rel": f"{s['energy_balance']['relative_to_peak_kinetic']:.3g}",
+                "dissipated_J": f"{s['energy_balance']['dissipated_J']:.4g}",
+                "drift_m": f"{s['constraint_drift_max']:.3g}",
+                "penetration_over_clearance": f"{joint['peak_penetration_m'] / joint['clearance_m']:.3g}",
+                "peak_normal_force_N": f"{joint['peak_normal_force_N']:.4g}",
+                "friction_ratio": f"{ratio:.3g}",
+                "friction_bound": f"{reduced_bound(scene_joint.get('friction')):g}",
+                "steps": s["steps"], "rejected_steps": s["rejected_steps"], "impacts": s["impacts"],
+                "time_reached_s": f"{s['time_reached_s']:.4g}",
+                "verdict": "; ".join(s.get("verdict", [])
+                                     + ([f"stopped: {s['stop']['reason']}"] if s.get("stop") else []))}
+        if s["status"] == "complete":
+            broken = reduced_breaks(s, done["scene"])
+    row["nan_in_summary"] = nan
+    failure = []
+    if nan:
+        failure.append("NaN in summary.json")
+    if outcome == "hang":
+        failure.append(f"no result within {TIMEOUT['reduced']:g} s")
+    if outcome == "crash":
+        failure.append(f"exit {done['exit_code']}: {first_line(done['stderr'])}{where(done['stderr'])}")
+    if broken:
+        failure.append("complete but " + ", ".join(broken))
+    if outcome == "refused":
+        row["verdict"] = first_line(done["stderr"])
+    row["ok"] = not failure
+    row["failure"] = "; ".join(failure)
+    return row
+
+
+REDUCED_COLUMNS = ["sweep", "parameter", "value", "outcome", "status", "exit_code", "wall_time_s",
+                   "energy_residual_rel", "dissipated_J", "drift_m", "nan_in_summary",
+                   "penetration_over_clearance", "peak_normal_force_N", "friction_ratio",
+                   "friction_bound", "steps", "rejected_steps", "impacts", "time_reached_s",
+                   "verdict", "ok", "failure"]
+
+
+# ---------------------------------------------------------------- FE rows
+
+def curve_nan(text: str) -> bool:
+    """Any cell of curve.csv that reads as NaN (read raw: the curve reader refuses them)."""
+    rows = list(csv.reader(text.splitlines()))
+    for row in rows[1:]:
+        for cell in row:
+            try:
+                if math.isnan(float(cell)):
+                    return True
+            except ValueError:
+                if cell.strip().lower() in ("nan", "-nan"):
+                    return True
+    return False
+
+
+def fem_row(done: dict) -> dict:
+    outcome, r = outcome_of(done, "result.json")
+    scene = done["scene"]
+    row = {"sweep": done["sweep"], "parameter": done["parameter"], "value": done["value"],
+           "method": scene["contact"]["method"], "outcome": outcome,
+           "status": (r or {}).get("status", ""),
+           "exit_code": "" if done["exit_code"] is None else done["exit_code"],
+           "wall_time_s": f"{done['wall_s']:.2f}"}
+    nan = (r is not None and any_nan(r)) or ("curve.csv" in done["files"] and curve_nan(done["files"]["curve.csv"]))
+    broken = []
+    if r is not None and outcome != "crash":
+        newton = r.get("newton_iterations", [])
+        expected = scene["load"]["steps"] + (scene["load"].get("slide_steps", 10)
+                                             if scene["load"].get("rotation_deg") else 0)
+        tolerance = r["contact"].get("gap_tolerance_m")
+        row |= {"newton_median": statistics.median(newton) if newton else "",
+                "newton_max": max(newton) if newton else "",
+                "cutbacks": r.get("cutbacks", ""), "steps_converged": r.get("steps_converged", ""),
+                "steps_expected": expected, "dofs": r.get("dofs", ""),
+                "max_gap_violation_m": f"{r.get('max_gap_violation_m', float('nan')):.3g}",
+                "gap_tolerance_m": "" if tolerance is None else f"{tolerance:.3g}",
+                "message": (r.get("stop") or {}).get("reason", "") if isinstance(r.get("stop"), dict)
+                           else str(r.get("stop") or "")}
+        if r["status"] == "complete":
+            # a cutback splits a step: complete runs converge at least the programme's steps
+            if not r.get("steps_converged", 0) >= expected:
+                broken.append(f"{r.get('steps_converged')} of {expected} steps")
+            if (scene["contact"]["method"] == "augmented-lagrangian" and tolerance is not None
+                    and not r["max_gap_violation_m"] <= 1.01 * tolerance):
+                broken.append(f"gap violation {r['max_gap_violation_m']:.3g} m > tolerance {tolerance:.3g} m")
+    if outcome in ("refused", "crash") or (outcome == "incomplete" and not row.get("message")):
+        row["message"] = first_line(done["stderr"])
+    row["nan"] = nan
+    failure = []
+    if nan:
+        failure.append("NaN in result.json or curve.csv")
+    if outcome == "hang":
+        failure.append(f"no result within {TIMEOUT['fem']:g} s")
+    if outcome == "crash":
+        failure.append(f"exit {done['exit_code']}: {first_line(done['stderr'])}{where(done['stderr'])}")
+    if broken:
+        failure.append("complete but " + ", ".join(broken))
+    row["ok"] = not failure
+    row["failure"] = "; ".join(failure)
+    return row
+
+
+FEM_COLUMNS = ["sweep", "parameter", "value", "method", "outcome", "status", "exit_code",
+               "wall_time_s", "newton_median", "newton_max", "cutbacks", "steps_converged",
+               "steps_expected", "dofs", "nan", "max_gap_violation_m", "gap_tolerance_m",
+               "message", "ok", "failure"]
+
+
+# ---------------------------------------------------------------- outputs
+
+def write_csv(path: Path, columns, rows) -> None:
+    with path.open("w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=columns, extrasaction="ignore", lineterminator="\n")
+        writer.writeheader()
+        for row in rows:
+            writer.writerow({c: row.get(c, "") for c in columns})
+
+
+def sweeps_of(rows) -> dict[str, list[dict]]:
+    sweeps = {}
+    for row in rows:
+        sweeps.setdefault(row["sweep"], []).append(row)
+    return sweeps
+
+
+def heat_map(path: Path, reduced_rows, fem_rows) -> None:
+    """One strip per sweep, a cell per point coloured by outcome and labelled by its value
+    (a cell that failed the criterion is crossed)."""
+    panels = [("multibody (slider-crank, 1 revolution)", sweeps_of(reduced_rows)),
+              ("FE 2D (steel_c10um, 4 steps)", sweeps_of(fem_rows))]
+    width = max(len(cells) for _, sweeps in panels for cells in sweeps.values())
+    heights = [len(sweeps) for _, sweeps in panels]
+    fig, axes = plt.subplots(2, 1, figsize=(2.6 + 1.05 * width, 0.42 * sum(heights) + 2.2),
+                             gridspec_kw={"height_ratios": heights})
+    for ax, (title, sweeps) in zip(axes, panels):
+        for i, (sweep, cells) in enumerate(sweeps.items()):
+            for j, row in enumerate(cells):
+                ax.add_patch(matplotlib.patches.Rectangle((j, -i - 1), 0.96, 0.9,
+                                                          color=COLOURS[row["outcome"]]))
+                label = str(row["value"])
+                if isinstance(row["value"], float):
+                    label = f"{row['value']:g}"
+                ax.text(j + 0.48, -i - 0.55, label.replace("_", " "), ha="center", va="center",
+                        fontsize=6.5 if len(label) < 12 else 5.5)
+                if not row["ok"]:
+                    ax.plot([j + 0.05, j + 0.91], [-i - 0.95, -i - 0.15], color="k", lw=1.2)
+        ax.set_yticks([-i - 0.55 for i in range(len(sweeps))], list(sweeps))
+        ax.tick_params(axis="y", labelsize=7, length=0)
+        ax.set_xticks([])
+        ax.set_xlim(0, width)
+        ax.set_ylim(-len(sweeps) - 0.1, 0)
+        for side in ax.spines.values():
+            side.set_visible(False)
+        ax.set_title(title, fontsize=9)
+    handles = [matplotlib.patches.Patch(color=COLOURS[o], label=o) for o in OUTCOMES]
+    handles.append(matplotlib.lines.Line2D([], [], color="k", lw=1.2, label="failed the criterion"))
+    fig.legend(handles=handles, loc="lower center", ncol=len(handles), fontsize=7, frameon=False)
+    save_png(fig, path, layout=True, bbox_inches="tight")
+
+
+def main(out: Path, only: str | None, sweep: str | None, limit: int | None) -> int:
+    points = []
+    if only in (None, "reduced"):
+        points += reduced_points()
+    if only in (None, "fem"):
+        points += fem_points()
+    if sweep:
+        points = [p for p in points if sweep in p["sweep"]]
+    if limit:
+        points = points[:limit]
+    out.mkdir(parents=True, exist_ok=True)
+    start = time.perf_counter()
+    done = [None] * len(points)
+    with ThreadPoolExecutor(WORKERS) as pool:
+        futures = {pool.submit(run_point, p): k for k, p in enumerate(points)}
+        for future in tqdm(as_completed(futures), total=len(points), desc="stress", unit="point"):
+            done[futures[future]] = future.result()
+    reduced_rows = [reduced_row(d) for d in done if d["kind"] == "reduced"]
+    fem_rows = [fem_row(d) for d in done if d["kind"] == "fem"]
+    if reduced_rows:
+        write_csv(out / "stress_reduced.csv", REDUCED_COLUMNS, reduced_rows)
+    if fem_rows:
+        write_csv(out / "stress_fem.csv", FEM_COLUMNS, fem_rows)
+    if reduced_rows and fem_rows:
+        heat_map(out / "stress.png", reduced_rows, fem_rows)
+    rows = reduced_rows + fem_rows
+    for name, part in (("multibody", reduced_rows), ("FE", fem_rows)):
+        if part:
+            counts = {o: sum(r["outcome"] == o for r in part) for o in OUTCOMES}
+            print(f"{name}: " + ", ".join(f"{n} {o}" for o, n in counts.items() if n))
+    failed = [r for r in rows if not r["ok"]]
+    print(f"wall time of the matrix: {time.perf_counter() - start:.0f} s")
+    print(f"stress: {len(rows)} points, {len(failed)} failed the criterion")
+    for r in failed:
+        print(f"  {r['sweep']} = {r['value']}: {r['outcome']}: {r['failure']}")
+    return 0
+
+
+if __name__ == "__main__":
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=ROOT / "bench")
+    parser.add_argument("--only", choices=["reduced", "fem"], help="run one of the two matrices")
+    parser.add_argument("--sweep", help="run the sweeps whose name holds this text only (trials)")
+    parser.add_argument("--limit", type=int, help="run the first N points only (trials)")
+    args = parser.parse_args()
+    sys.exit(main(args.out, args.only, args.sweep, args.limit))
