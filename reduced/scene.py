@@ -106,11 +106,13 @@ class LinearFriction(Regularised):
 
 class LuGreFriction(Strict):
     """LuGre normalised by the normal force: F_t = F_n (sigma0 z + sigma1 z' + sigma2 v),
-    z' = v - sigma0 |v| z / g(v), g = mu_coulomb + (mu_static - mu_coulomb) exp(-(v/v_s)^2)."""
+    z' = v - sigma0 |v| z / g(v), g = mu_coulomb + (mu_static - mu_coulomb) exp(-(v/v_s)^2).
+    Both coefficients > 0 (g divides the bristle rate); a joint without friction has no
+    friction table."""
 
     law: Literal["lugre"]
-    mu_coulomb: float = pydantic.Field(ge=0)
-    mu_static: float = pydantic.Field(ge=0)
+    mu_coulomb: float = pydantic.Field(gt=0)
+    mu_static: float = pydantic.Field(gt=0)
     stribeck_speed: float = pydantic.Field(gt=0, description="m/s")
     sigma0: float = pydantic.Field(gt=0, description="1/m")
     sigma1: float = pydantic.Field(default=0.0, ge=0, description="s/m")

@@ -51,6 +51,9 @@ MISPLACED = [
     ("mesh", fem_with(mesh={"layers": 8}), "mesh.layers applies to dim = 3 only"),
     ("fem", fem_with(mesh={"symmetry": True}), "mesh.symmetry applies to dim = 3 only"),
     ("reduced", reduced_with(lambda d: d["drive"].update(body="ground")), "drive.body: must be a moving body"),
+    ("reduced", reduced_with(lambda d: d["clearance_joints"][0].update(friction={
+        "law": "lugre", "mu_coulomb": 0.0, "mu_static": 0.0, "stribeck_speed": 0.01, "sigma0": 1e5})),
+     "clearance_joints.0.friction.lugre.mu_coulomb: Input should be greater than 0"),
 ]
 
 
