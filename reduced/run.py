@@ -17,6 +17,7 @@ import numpy as np
 from pinbore.core import scene as scenes
 from pinbore.core.output import atomic_directory
 from pinbore.reduced import kernel, outputs
+from pinbore.reduced.layout import JOINT_CLEARANCE
 from pinbore.reduced.model import SPEED_FLOOR, Model, build
 from pinbore.reduced.scene import ReducedScene
 
@@ -52,7 +53,8 @@ class Trajectory:
 
 def onset_tolerance(model: Model) -> float:
     """Penetration (m) within which a contact onset counts as located."""
-    return 1e-3 * min((j[6] for j in model.joints), default=1.0) * model.scene.integrator.rtol ** 0.5
+    return (1e-3 * min(model.joints[:, JOINT_CLEARANCE], default=1.0)
+            * model.scene.integrator.rtol ** 0.5)
 
 
 def simulate(model: Model, y0=None, duration=None, args=None) -> Trajectory:
@@ -66,7 +68,7 @@ def simulate(model: Model, y0=None, duration=None, args=None) -> Trajectory:
                               model.kernel_args() if args is None else args, METHODS[s.method],
                               s.rtol, s.atol, s.max_step, onset_tolerance(model), SPEED_FLOOR,
                               MAX_STEPS)
-    return Trajectory(*result[:7], int(result[7]), float(result[8]), time.perf_counter() - start)
+    return Trajectory(**result._asdict(), seconds=time.perf_counter() - start)
 
 
 def ideal_twin(scene: ReducedScene) -> ReducedScene:
