@@ -20,10 +20,11 @@ factor of the damping law, v0 the approach rate at the onset of this impact; the
 force opposes the tangential slip v_t: Ambrosio's regularised Coulomb, polynomial Stribeck or
 a linear velocity law (static, regularised near zero slip), LuGre or Dahl normalised by F_n,
 or the bilinear Iwan element, whose states are integrated with the motion (and rest while
-the joint is open). While delta <= 0 no law is evaluated. Impulse contact (Newton or
-Poisson): rigid impacts between steps (apply_impulse) and, below a rest speed, held contact:
-the constraint delta = 0 joins the ideal ones until its multiplier (the normal force) would
-pull.
+the joint is open). The normal force and every friction law are the functions of
+pinbore.laws.dissipative and pinbore.laws.friction, compiled into the right-hand side. While
+delta <= 0 no law is evaluated. Impulse contact (Newton or Poisson): rigid impacts between
+steps (apply_impulse) and, below a rest speed, held contact: the constraint delta = 0 joins
+the ideal ones until its multiplier (the normal force) would pull.
 
 Extra states integrate the energy dissipated in the joints and the work of the constraint
 forces (the drive), so the energy balance can be checked.
@@ -51,6 +52,7 @@ from pathlib import Path
 import numba
 import numpy as np
 
+from pinbore.laws import dissipative, friction
 from pinbore.reduced import layout
 from pinbore.reduced.layout import (
     CONTINUOUS, COULOMB, COULOMB_MU, DAHL_MU, DAHL_SIGMA, DISSIPATED, DRIVE_ANGLE, DRIVE_BODY,
@@ -272,54 +274,29 @@ def joint_kinematics(q, qd, joint):
 
 
 @numba.njit(cache=True)
-def friction(joint, f_n, slip, state):
-    """Friction force (N, positive along the slip: it acts against it) and the rate of the
-    law's state, for every law but the two-state Iwan element (iwan_friction). The law is
-    joint[JOINT_FRICTION_LAW], its parameters the columns named in reduced.layout."""
+def joint_friction(joint, f_n, slip, state):
+    """Friction force (N, along the slip: it acts against it) and the rate of the law's state,
+    for every law of a clearance joint but the two-state Iwan element: the laws of
+    pinbore.laws.friction with the joint's parameters, LuGre and Dahl normalised by F_n."""
     law = int(joint[JOINT_FRICTION_LAW])
-    speed = abs(slip)
-    sign = 1.0 if slip > 0 else -1.0
     if law == NO_FRICTION:
         return 0.0, 0.0
-    if law <= LINEAR:   # static laws, regularised (Ambrosio) between v0 and v1
-        v0, v1 = joint[REGULARISATION_V0], joint[REGULARISATION_V1]
-        cd = 0.0 if speed <= v0 else (speed - v0) / (v1 - v0) if speed <= v1 else 1.0
+    if law <= LINEAR:   # static laws, regularised (Ambrosio)
         if law == COULOMB:
             mu = joint[COULOMB_MU]
-        elif law == STRIBECK:   # mu_s - k1 v + k3 v^3, minimum mu_m at v_m
-            mu_s, v_m = joint[STRIBECK_MU_STATIC], joint[STRIBECK_V_MIN]
-            k = mu_s - joint[STRIBECK_MU_MIN]
-            mu = mu_s - 1.5 * k / v_m * speed + 0.5 * k / v_m ** 3 * speed**3
+        elif law == STRIBECK:
+            mu = friction.stribeck_polynomial(slip, joint[STRIBECK_MU_STATIC], joint[STRIBECK_MU_MIN],
+                                              joint[STRIBECK_V_MIN])
         else:
-            mu = joint[LINEAR_MU_STATIC] + joint[LINEAR_ALPHA] * speed
-        return mu * cd * f_n * sign, 0.0
+            mu = friction.linear_velocity(slip, joint[LINEAR_MU_STATIC], joint[LINEAR_ALPHA])
+        return friction.ambrosio(slip, f_n, mu, joint[REGULARISATION_V0], joint[REGULARISATION_V1]), 0.0
     if law == LUGRE:
-        mu_c, sigma0 = joint[LUGRE_MU_COULOMB], joint[LUGRE_SIGMA0]
-        g = mu_c + (joint[LUGRE_MU_STATIC] - mu_c) * math.exp(-(slip / joint[LUGRE_STRIBECK_SPEED]) ** 2)
-        rate = slip - sigma0 * speed * state / g
-        return f_n * (sigma0 * state + joint[LUGRE_SIGMA1] * rate + joint[LUGRE_SIGMA2] * slip), rate
-    rate = joint[DAHL_SIGMA] * (1.0 - state / joint[DAHL_MU] * sign) * slip   # Dahl, normalised
-    return f_n * state, rate
-
-
-@numba.njit(cache=True)
-def iwan_friction(joint, f_n, slip, travel, stretch):
-    """Bilinear Iwan element (Cao et al. 2013, eq. 13) along the contact: a Jenkins element
-    (spring k1 in series with a Coulomb slider of strength mu F_n) in parallel with a spring
-    k2. States: the tangential travel x since the onset of this contact and the Jenkins
-    spring's stretch z. F_t = k1 z + k2 x; x' = v_t; z' = v_t while the slider sticks, 0 while
-    it slides (|k1 z| = mu F_n, z v_t > 0). Returns (F_t, x', z')."""
-    k1, k2, mu = joint[IWAN_K1], joint[IWAN_K2], joint[IWAN_MU]
-    limit = mu * f_n / k1
-    z = min(max(stretch, -limit), limit)
-    sliding = abs(stretch) >= limit and stretch * slip > 0
-    return k1 * z + k2 * travel, slip, 0.0 if sliding else slip
-
-
-@numba.njit(cache=True)
-def damped_normal_force(f_el, rate, chi, impact_speed):
-    """F_n = F_el (1 + chi delta' / v0), never pulling."""
-    return max(f_el * (1.0 + chi * rate / impact_speed), 0.0)
+        g = friction.lugre_g(slip, joint[LUGRE_MU_COULOMB], joint[LUGRE_MU_STATIC],
+                             joint[LUGRE_STRIBECK_SPEED])
+        rate = friction.lugre_rate(state, slip, joint[LUGRE_SIGMA0], g)
+        return f_n * friction.lugre_force(state, rate, slip, joint[LUGRE_SIGMA0], joint[LUGRE_SIGMA1],
+                                          joint[LUGRE_SIGMA2]), rate
+    return f_n * state, friction.dahl_rate(state, slip, joint[DAHL_SIGMA], joint[DAHL_MU])
 
 
 @numba.njit(cache=True)
@@ -332,13 +309,14 @@ def joint_forces(q, qd, joint, impact_speed, grid_log0, grid_step, table, y):
     if kin.delta <= 0.0:
         return JointForces(kin.delta, 0.0, 0.0, 0.0, 0.0, kin.nx, kin.ny, kin.cx, kin.cy, 0.0, 0.0)
     f_el = elastic_force(kin.delta, grid_log0, grid_step, table)
-    f_n = damped_normal_force(f_el, kin.rate, joint[JOINT_CHI], impact_speed)
+    f_n = dissipative.hysteresis_force(f_el, kin.rate, impact_speed, joint[JOINT_CHI])
     index = int(joint[JOINT_STATE])
     if int(joint[JOINT_FRICTION_LAW]) == IWAN:
-        f_t, rate0, rate1 = iwan_friction(joint, f_n, kin.slip, y[index + STATE_TRAVEL],
-                                          y[index + STATE_STRETCH])
+        f_t, rate0, rate1 = friction.iwan_bilinear(y[index + STATE_TRAVEL], y[index + STATE_STRETCH],
+                                                   kin.slip, joint[IWAN_K1], joint[IWAN_K2],
+                                                   joint[IWAN_MU] * f_n)
     else:
-        f_t, rate0 = friction(joint, f_n, kin.slip, y[index] if index >= 0 else 0.0)
+        f_t, rate0 = joint_friction(joint, f_n, kin.slip, y[index] if index >= 0 else 0.0)
         rate1 = 0.0
     return JointForces(kin.delta, f_n, f_t, f_el, (f_n - f_el) * kin.rate + f_t * kin.slip,
                        kin.nx, kin.ny, kin.cx, kin.cy, rate0, rate1)
@@ -782,9 +760,10 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
                 f_n = joint_forces(y[:nq], y[nq:2 * nq], joints[j], speeds[j], args.grid_log0,
                                    args.grid_step, args.tables[j], y).f_n
                 stretch = int(joints[j, JOINT_STATE]) + STATE_STRETCH
-                limit = joints[j, IWAN_MU] * f_n / joints[j, IWAN_K1]
-                if abs(y[stretch]) > limit:
-                    y[stretch] = math.copysign(limit, y[stretch])
+                held = friction.iwan_return_map(y[stretch], joints[j, IWAN_K1],
+                                                joints[j, IWAN_MU] * f_n)
+                if held != y[stretch]:
+                    y[stretch] = held
                     changed = True
         for r in range(torsion.shape[0]):
             if latched[r] == 0.0 and int(torsion[r, TORSION_KIND]) == LATCH and \
@@ -817,13 +796,13 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
                        latched_out[:count], log[:impacts], counters, status, t)
 
 
-# ---- the compiled code follows the layout
+# ---- the compiled code follows the laws and the layout
 # numba's cache checks only the file a compiled function is defined in ("Notes on caching"
-# in numba's documentation): the kernel compiles in the constants of reduced.layout, so an
-# edit there alone would leave the kernel's cached code stale. A digest of that file, kept
-# beside the cache, drops the kernel's cache index when it changes, and the kernel compiles
-# afresh once.
-COMPILED_IN = (layout.__file__,)
+# in numba's documentation): the kernel compiles in the laws of pinbore.laws.friction and
+# .dissipative and the constants of reduced.layout, so an edit there alone would leave the
+# kernel's cached code stale. A digest of those files, kept beside the cache, drops the
+# kernel's cache index when they change, and the kernel compiles afresh once.
+COMPILED_IN = (friction.__file__, dissipative.__file__, layout.__file__)
 
 
 def _follow_compiled_in() -> None:

@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from pinbore.core.figures import plt, save_png
+from pinbore.laws.dissipative import hysteresis_force
 from pinbore.reduced import kernel
 from pinbore.reduced.layout import (
     CONTINUOUS, DISSIPATED, JOINT_BEARING_BODY, JOINT_BEARING_X, JOINT_BEARING_Y, JOINT_CHI,
@@ -88,7 +89,7 @@ def refined_peak(model, j, run, k):
         rate = ((6 * x**2 - 6 * x) * d0 + (3 * x**2 - 4 * x + 1) * r0 + (-6 * x**2 + 6 * x) * d1 + (3 * x**2 - 2 * x) * r1) / h
         for i in np.flatnonzero(delta > 0):
             f_el = kernel.elastic_force(delta[i], model.grid_log0, model.grid_step, model.tables[j])
-            force = kernel.damped_normal_force(f_el, rate[i], chi, speeds[a + 1, j])
+            force = hysteresis_force(f_el, rate[i], speeds[a + 1, j], chi)
             if force > best[0]:
                 best = (force, float(times[a] + x[i] * h))
     return best
