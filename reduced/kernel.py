@@ -31,18 +31,25 @@ forces (the drive), so the energy balance can be checked.
 
 Integrators: Dormand-Prince 5(4) (explicit) or Rosenbrock 2(3) (linearly implicit, for stiff
 problems), both with a PI step-size controller on (q, q') and the friction states, or DOPRI5
-at a fixed step for comparison. A trial step with a stage beyond the tabulated law (NaN) is
-retried ten times shorter; only if the step size collapses that way has the run blown up. A
-step that would carry a joint from free flight into contact deeper than `onset_tol` is
-shortened (secant on delta) until it ends at the onset; there v0 is recorded. So every
-impact starts on a step boundary with a known impact speed. Latches engage the same way, at
-their angle, so their spring starts unloaded, and held contacts release at the zero of their
-force. After an accepted step whose drift exceeds the onset tolerance, positions and then
-velocities are projected back onto the constraints (one mass-weighted Gauss-Newton step
-each), so drift cannot accumulate where Baumgarte alone is too slow. The row arrays and
-argument bundles are laid out in reduced.layout. The right-hand side works in preallocated
-buffers and solves the Schur system by Cholesky: about 1.2 us per evaluation for the
-slider-crank.
+at a fixed step for comparison. `integrate` takes a step in four phases, each in compiled
+functions of its own:
+- the trial step (trial_step): a stage beyond the tabulated law (NaN) has the step retried
+  ten times shorter; only if the step size collapses that way has the run blown up;
+- event location (onset_fraction, release_fraction, latch_fraction; adaptive methods only):
+  a step that would carry a joint from free flight into contact deeper than `onset_tol` is
+  shortened (secant on delta) until it ends at the onset, where v0 is recorded, so every
+  impact starts on a step boundary with a known impact speed; latches engage the same way,
+  at their angle, so their spring starts unloaded, and held contacts release at the zero of
+  their force;
+- the updates of the accepted step (release_held_contacts, onsets_and_impacts with the
+  impact log, iwan_slider_return, engage_latches), then, where the drift exceeds the onset
+  tolerance, the projection of positions and velocities back onto the constraints
+  (project_onto_constraints: one mass-weighted Gauss-Newton step each), so drift cannot
+  accumulate where Baumgarte alone is too slow;
+- the record of the accepted step (recorded), in buffers that double when full.
+The row arrays and argument bundles are laid out in reduced.layout. The right-hand side
+works in preallocated buffers and solves the Schur system by Cholesky: about 1.2 us per
+evaluation for the slider-crank.
 """
 
 import hashlib
@@ -67,8 +74,8 @@ from pinbore.reduced.layout import (
     REGULARISATION_V0, REGULARISATION_V1, REVOLUTE_BODY_I, REVOLUTE_BODY_J, REVOLUTE_X_I,
     REVOLUTE_X_J, REVOLUTE_Y_I, REVOLUTE_Y_J, STATE_STRETCH, STATE_TRAVEL, STOP, STRIBECK,
     STRIBECK_MU_MIN, STRIBECK_MU_STATIC, STRIBECK_V_MIN, TORSION_BODY_I, TORSION_BODY_J,
-    TORSION_DAMPING, TORSION_FREE_ANGLE, TORSION_KIND, TORSION_STIFFNESS, WORK_IN, Impulse,
-    Integration, JointForces, Kinematics, RelativeAngle, Workspace)
+    TORSION_DAMPING, TORSION_FREE_ANGLE, TORSION_KIND, TORSION_STIFFNESS, WORK_IN, Contacts,
+    Impulse, Integration, JointForces, Kinematics, Record, RelativeAngle, Workspace)
 
 # status codes
 OK, BLOWN_UP, TOO_MANY_STEPS, STEP_TOO_SMALL = 0, 1, 2, 3
@@ -615,6 +622,210 @@ def rosenbrock23_step(t, y, h, k, y_new, err_vec, args, work):
     return n + 4
 
 
+# ---- the phases of integrate
+# The helpers that run at every step take the arrays they use rather than whole bundles
+# where they can: numba counts the references of every array a compiled function receives
+# (an atomic increment and decrement each, per call), and passing the bundles to a dozen
+# helpers a step made the slider-crank's run a fifth slower. Helpers that only some
+# mechanisms need (held contacts, Iwan elements, latches) run only for those.
+
+@numba.njit(cache=True)
+def trial_step(method, t, y, h, k, y_new, err_vec, args, work, rtol, atol):
+    """A trial step from (t, y) over h into y_new: Rosenbrock 2(3), or DOPRI5 (adaptive or at
+    a fixed step alike). Returns (rhs calls, error norm: NaN if a stage left the law's table)."""
+    if method == ROSENBROCK23:
+        calls = rosenbrock23_step(t, y, h, k, y_new, err_vec, args, work)
+    else:
+        calls = dopri5_step(t, y, h, k, y_new, err_vec, args, work)
+    return calls, error_norm(err_vec, y, y_new, args.nq, rtol, atol)
+
+
+@numba.njit(cache=True)
+def onset_fraction(y_new, nq, joints, mode, contacts, onset_tol):
+    """Event location: the fraction of a trial step that ends it at the first contact onset
+    of a free joint. One that would end the step deeper than onset_tol is shortened by a
+    secant on delta, one that went in and out within the step (deeper at its end than at its
+    start) by half. 1: no onset."""
+    depth = contacts.depth
+    shorten = 1.0
+    for j in range(joints.shape[0]):
+        if not contacts.in_contact[j] and mode[j] == 0:
+            d_new = joint_kinematics(y_new[:nq], y_new[nq:2 * nq], joints[j]).delta
+            if d_new > onset_tol and depth[j] < -onset_tol:
+                shorten = min(shorten, 0.99 * (-depth[j]) / (d_new - depth[j]))
+            elif d_new > max(depth[j], 0.0) + onset_tol:   # back within the step: bisect
+                shorten = min(shorten, 0.5)
+    return shorten
+
+
+@numba.njit(cache=True)
+def release_fraction(mode, normal, contacts, rtol):
+    """Event location: the fraction of a trial step that ends it where a held contact's force
+    (normal: at the step's end, the last rhs evaluation's multipliers) turns pulling, by a
+    secant on the force. 1: no release."""
+    held_force, held_peak = contacts.held_force, contacts.held_peak
+    shorten = 1.0
+    for j in range(mode.size):
+        if mode[j] == 1:
+            f_new = normal[j]
+            if held_force[j] > 0.0 and f_new < -1e-3 * math.sqrt(rtol) * held_peak[j]:
+                shorten = min(shorten, 0.99 * held_force[j] / (held_force[j] - f_new))
+    return shorten
+
+
+@numba.njit(cache=True)
+def latch_fraction(y, y_new, nq, torsion, latched):
+    """Event location: the fraction of a trial step that ends it where a latch reaches its
+    angle (secant on the angle). 1: no latch."""
+    shorten = 1.0
+    for r in range(torsion.shape[0]):
+        if latched[r] == 0.0 and int(torsion[r, TORSION_KIND]) == LATCH:
+            a_new = relative_angle(y_new[:nq], y_new[nq:2 * nq], torsion[r]).angle
+            if a_new > LATCH_TOL:
+                a_old = relative_angle(y[:nq], y[nq:2 * nq], torsion[r]).angle
+                shorten = min(shorten, 0.99 * (-a_old) / (a_new - a_old))
+    return shorten
+
+
+@numba.njit(cache=True)
+def release_held_contacts(t, y, args, work, contacts):
+    """Accepted step: the held contacts' forces (the multipliers at the step's end); one that
+    pulls releases, and an approach rate left by drift is removed (an impulse with e = 0).
+    Returns whether a contact was released."""
+    nq, mode, held_force, held_peak = args.nq, args.mode, contacts.held_force, contacts.held_peak
+    changed = False
+    for j in range(args.joints.shape[0]):
+        if mode[j] == 1:
+            held_force[j] = work.normal[j]
+            held_peak[j] = max(held_peak[j], held_force[j])
+            if held_force[j] < 0.0:   # released; an approach rate left by drift is removed
+                if joint_kinematics(y[:nq], y[nq:2 * nq], args.joints[j]).rate > 0.0:
+                    impulse_energy(y, nq, apply_impulse(t, y, args, work, j, 0.0))
+                mode[j] = 0
+                changed = True
+    return changed
+
+
+@numba.njit(cache=True)
+def doubled(a):
+    """a in the first rows of a zeroed array of twice its rows (a buffer that is full)."""
+    out = np.zeros((2 * a.shape[0],) + a.shape[1:], a.dtype)
+    out[:a.shape[0]] = a
+    return out
+
+
+@numba.njit(cache=True)
+def log_impact(log, impacts, t, j, rate, impulse):
+    """The impacts-th row of the impact log (layout.LOG_*), the log doubled when full; returns
+    the log."""
+    if impacts > log.shape[0]:
+        log = doubled(log)
+    row = impacts - 1
+    log[row, LOG_TIME], log[row, LOG_JOINT] = t, j
+    log[row, LOG_RATE], log[row, LOG_IMPULSE] = rate, impulse
+    return log
+
+
+@numba.njit(cache=True)
+def onsets_and_impacts(t, y, args, work, contacts, onset_tol, speed_floor, log, impacts):
+    """Accepted step, per clearance joint: the penetration; an impulse joint arriving
+    (approaching within onset_tol) takes its impact, and one too slow to rebound is held in
+    contact; a continuous joint arriving records its impact speed v0 (at least speed_floor)
+    and restarts its Iwan element unloaded; one that left contact is marked free. Every
+    impact and onset goes into the log. Returns (whether anything happened, impacts, log)."""
+    nq, joints, mode, speeds = args.nq, args.joints, args.mode, args.speeds
+    changed = False
+    for j in range(joints.shape[0]):
+        kin = joint_kinematics(y[:nq], y[nq:2 * nq], joints[j])
+        delta, rate = kin.delta, kin.rate
+        contacts.depth[j] = delta
+        onset, impulse = False, 0.0
+        if int(joints[j, JOINT_IMPACT]) != CONTINUOUS:
+            if mode[j] == 0 and delta > -onset_tol and rate > 0.0:
+                restitution = joints[j, JOINT_RESTITUTION]
+                e = restitution if restitution * rate >= joints[j, JOINT_REST_SPEED] else 0.0
+                impulse = impulse_energy(y, nq, apply_impulse(t, y, args, work, j, e))
+                if e == 0.0:   # too slow to rebound: held contact (the third state)
+                    mode[j] = 1
+                    contacts.held_force[j] = contacts.held_peak[j] = 0.0
+                speeds[j] = rate
+                onset = True
+        elif not contacts.in_contact[j] and delta > -onset_tol:
+            contacts.in_contact[j] = True
+            speeds[j] = max(rate, speed_floor)
+            if int(joints[j, JOINT_FRICTION_LAW]) == IWAN:   # a new contact point: unloaded
+                index = int(joints[j, JOINT_STATE])
+                y[index + STATE_TRAVEL] = y[index + STATE_STRETCH] = 0.0
+            onset = True
+        elif contacts.in_contact[j] and delta < -onset_tol:
+            contacts.in_contact[j] = False
+        if onset:
+            changed = True
+            impacts += 1
+            log = log_impact(log, impacts, t, j, rate, impulse)
+    return changed, impacts, log
+
+
+@numba.njit(cache=True)
+def iwan_slider_return(y, args, contacts):
+    """Accepted step: the Iwan slider of every joint in contact held to |k1 z| <= mu F_n
+    (laws.friction.iwan_return_map at the accepted state). Returns whether a slider moved."""
+    nq, joints = args.nq, args.joints
+    changed = False
+    for j in range(joints.shape[0]):
+        if int(joints[j, JOINT_FRICTION_LAW]) == IWAN and contacts.in_contact[j]:
+            f_n = joint_forces(y[:nq], y[nq:2 * nq], joints[j], args.speeds[j], args.grid_log0,
+                               args.grid_step, args.tables[j], y).f_n
+            stretch = int(joints[j, JOINT_STATE]) + STATE_STRETCH
+            held = friction.iwan_return_map(y[stretch], joints[j, IWAN_K1], joints[j, IWAN_MU] * f_n)
+            if held != y[stretch]:
+                y[stretch] = held
+                changed = True
+    return changed
+
+
+@numba.njit(cache=True)
+def engage_latches(y, nq, torsion, latched):
+    """Latch every latch that has reached its angle (to within LATCH_TOL). Returns whether
+    one engaged."""
+    changed = False
+    for r in range(torsion.shape[0]):
+        if latched[r] == 0.0 and int(torsion[r, TORSION_KIND]) == LATCH and \
+                relative_angle(y[:nq], y[nq:2 * nq], torsion[r]).angle > -LATCH_TOL:
+            latched[r] = 1.0
+            changed = True
+    return changed
+
+
+@numba.njit(cache=True)
+def new_record(capacity, ny, nj, nt):
+    """Buffers for `capacity` accepted steps (layout.Record; a column for absent clearance
+    joints or torsion elements keeps the shapes)."""
+    return Record(np.empty(capacity), np.empty((capacity, ny)), np.empty((capacity, max(nj, 1))),
+                  np.zeros((capacity, max(nj, 1)), np.int64), np.zeros((capacity, max(nt, 1))))
+
+
+@numba.njit(cache=True)
+def recorded(record, count, t, y, speeds, mode, latched):
+    """Accepted step `count` (time, state, impact speeds, contact modes, latch flags) stored
+    in the record, its buffers doubled when full; returns the record."""
+    if count == record.times.size:
+        record = Record(doubled(record.times), doubled(record.states), doubled(record.speeds),
+                        doubled(record.modes), doubled(record.latched))
+    record.times[count], record.states[count] = t, y
+    record.speeds[count, :speeds.size], record.modes[count, :mode.size] = speeds, mode
+    record.latched[count, :latched.size] = latched
+    return record
+
+
+@numba.njit(cache=True)
+def next_step_size(h, err, err_prev, exponent):
+    """PI step-size control after an accepted step: h 0.9 err^(-0.7 k) err_prev^(0.4 k), within
+    0.2 h to 5 h. Returns (the next h, the error to remember)."""
+    factor = 0.9 * err ** (-0.7 * exponent) * err_prev ** (0.4 * exponent) if err > 0 else 5.0
+    return h * min(5.0, max(0.2, factor)), max(err, 1e-4)
+
+
 @numba.njit(cache=True)
 def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_floor, max_steps):
     """Integrate from t = 0, continuing from the impact speeds, latches and contact modes in
@@ -625,43 +836,37 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
     (accepted, rejected, rhs calls, impacts), a status code and the time reached."""
     nq, joints, torsion = args.nq, args.joints, args.torsion
     speeds, latched, mode = args.speeds, args.latched, args.mode
-    ny = y0.size
-    nj = joints.shape[0]
+    ny, nj = y0.size, joints.shape[0]
+    impulse_joints = iwan_joints = latches = False   # what this mechanism needs checked
+    for j in range(nj):
+        impulse_joints |= int(joints[j, JOINT_IMPACT]) != CONTINUOUS
+        iwan_joints |= int(joints[j, JOINT_FRICTION_LAW]) == IWAN
+    for r in range(torsion.shape[0]):
+        latches |= int(torsion[r, TORSION_KIND]) == LATCH
     adaptive = method != DOPRI5_FIXED
     event_dt = 1e-8 * max_step   # a release is located to within this time
     exponent = 1.0 / 3.0 if method == ROSENBROCK23 else 0.2
-    capacity = 4096
-    times = np.empty(capacity)
-    states = np.empty((capacity, ny))
-    speeds_out = np.empty((capacity, max(nj, 1)))
-    modes_out = np.zeros((capacity, max(nj, 1)), np.int64)
-    latched_out = np.zeros((capacity, max(torsion.shape[0], 1)))
-    log = np.empty((256, LOG_COLUMNS))
-    for r in range(torsion.shape[0]):   # a latch given as engaged stays so
-        angle = relative_angle(y0[:nq], y0[nq:2 * nq], torsion[r]).angle
-        if int(torsion[r, TORSION_KIND]) == LATCH and angle > -LATCH_TOL:
-            latched[r] = 1.0
+    engage_latches(y0, nq, torsion, latched)   # a latch given as engaged stays so
     t, y = 0.0, y0.copy()
     k = np.empty((7, ny))
     y_new = np.empty(ny)
     err_vec = np.empty(ny)
     work = workspace(args)
+    normal = work.normal
     rhs(t, y, k[0], args, work)
     calls, accepted, rejected, impacts = 1, 0, 0, 0
     h = max_step if not adaptive else min(max_step, 1e-6)
     err_prev = 1e-4
-    times[0], states[0], speeds_out[0, :nj], modes_out[0, :nj] = t, y, speeds, mode
-    latched_out[0, :torsion.shape[0]] = latched
+    record = recorded(new_record(4096, ny, nj, torsion.shape[0]), 0, t, y, speeds, mode, latched)
     count = 1
+    log = np.empty((256, LOG_COLUMNS))
     status = OK
     last_nan = False
-    depth = np.zeros(nj)                  # penetration at the last accepted state
-    in_contact = np.zeros(nj, np.bool_)   # between an onset and the next separation
-    held_force = np.zeros(nj)             # normal force of a held contact (impulse joints)
-    held_peak = np.zeros(nj)
+    contacts = Contacts(np.zeros(nj), np.zeros(nj, np.bool_), np.zeros(nj), np.zeros(nj))
     for j in range(nj):
-        depth[j] = joint_kinematics(y[:nq], y[nq:2 * nq], joints[j]).delta
-        in_contact[j] = depth[j] > -onset_tol and int(joints[j, JOINT_IMPACT]) == CONTINUOUS
+        contacts.depth[j] = joint_kinematics(y[:nq], y[nq:2 * nq], joints[j]).delta
+        contacts.in_contact[j] = (contacts.depth[j] > -onset_tol
+                                  and int(joints[j, JOINT_IMPACT]) == CONTINUOUS)
     while t < t_end:
         if accepted + rejected >= max_steps:
             status = TOO_MANY_STEPS
@@ -670,11 +875,8 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
         if h < 1e-15 * max(t, 1e-3):
             status = BLOWN_UP if last_nan else STEP_TOO_SMALL
             break
-        if method == ROSENBROCK23:
-            calls += rosenbrock23_step(t, y, h, k, y_new, err_vec, args, work)
-        else:
-            calls += dopri5_step(t, y, h, k, y_new, err_vec, args, work)
-        err = error_norm(err_vec, y, y_new, nq, rtol, atol)
+        step_calls, err = trial_step(method, t, y, h, k, y_new, err_vec, args, work, rtol, atol)
+        calls += step_calls
         last_nan = not math.isfinite(err)
         if last_nan:   # a stage went beyond the tabulated law: much smaller step
             rejected += 1
@@ -684,116 +886,38 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
             rejected += 1
             h *= max(0.2, 0.9 * err ** -exponent)
             continue
-        shorten = 1.0
-        if adaptive:
-            # a free joint would end the step in contact: shorten the step to end at the onset
-            for j in range(nj):
-                if not in_contact[j] and mode[j] == 0:
-                    d_new = joint_kinematics(y_new[:nq], y_new[nq:2 * nq], joints[j]).delta
-                    if d_new > onset_tol and depth[j] < -onset_tol:
-                        shorten = min(shorten, 0.99 * (-depth[j]) / (d_new - depth[j]))
-                    elif d_new > max(depth[j], 0.0) + onset_tol:   # back within the step: bisect
-                        shorten = min(shorten, 0.5)
-                elif mode[j] == 1 and h > event_dt:   # a held contact would pull: end at the release
-                    f_new = work.normal[j]
-                    if held_force[j] > 0.0 and f_new < -1e-3 * math.sqrt(rtol) * held_peak[j]:
-                        shorten = min(shorten, 0.99 * held_force[j] / (held_force[j] - f_new))
-            for r in range(torsion.shape[0]):
-                if latched[r] == 0.0 and int(torsion[r, TORSION_KIND]) == LATCH:
-                    a_new = relative_angle(y_new[:nq], y_new[nq:2 * nq], torsion[r]).angle
-                    if a_new > LATCH_TOL:
-                        a_old = relative_angle(y[:nq], y[nq:2 * nq], torsion[r]).angle
-                        shorten = min(shorten, 0.99 * (-a_old) / (a_new - a_old))
-        if shorten < 1.0:
-            rejected += 1
-            h *= max(shorten, 1e-3)
-            continue
+        if adaptive:   # event location: the step ends at its first event
+            shorten = onset_fraction(y_new, nq, joints, mode, contacts, onset_tol)
+            if impulse_joints and h > event_dt:
+                shorten = min(shorten, release_fraction(mode, normal, contacts, rtol))
+            if latches:
+                shorten = min(shorten, latch_fraction(y, y_new, nq, torsion, latched))
+            if shorten < 1.0:
+                rejected += 1
+                h *= max(shorten, 1e-3)
+                continue
         t += h
         y[:] = y_new
         accepted += 1
         k[0, :] = k[6]  # first same as last
-        changed = False
-        for j in range(nj):
-            if mode[j] == 1:
-                held_force[j] = work.normal[j]
-                held_peak[j] = max(held_peak[j], held_force[j])
-                if held_force[j] < 0.0:   # released; an approach rate left by drift is removed
-                    if joint_kinematics(y[:nq], y[nq:2 * nq], joints[j]).rate > 0.0:
-                        impulse_energy(y, nq, apply_impulse(t, y, args, work, j, 0.0))
-                    mode[j] = 0
-                    changed = True
-        for j in range(nj):
-            kin = joint_kinematics(y[:nq], y[nq:2 * nq], joints[j])
-            delta, rate = kin.delta, kin.rate
-            depth[j] = delta
-            onset, impulse = False, 0.0
-            if int(joints[j, JOINT_IMPACT]) != CONTINUOUS:
-                if mode[j] == 0 and delta > -onset_tol and rate > 0.0:
-                    restitution = joints[j, JOINT_RESTITUTION]
-                    e = restitution if restitution * rate >= joints[j, JOINT_REST_SPEED] else 0.0
-                    impulse = impulse_energy(y, nq, apply_impulse(t, y, args, work, j, e))
-                    if e == 0.0:   # too slow to rebound: held contact (the third state)
-                        mode[j] = 1
-                        held_force[j] = held_peak[j] = 0.0
-                    speeds[j] = rate
-                    onset = True
-            elif not in_contact[j] and delta > -onset_tol:
-                in_contact[j] = True
-                speeds[j] = max(rate, speed_floor)
-                index = int(joints[j, JOINT_STATE])
-                if int(joints[j, JOINT_FRICTION_LAW]) == IWAN:   # a new contact point: unloaded
-                    y[index + STATE_TRAVEL] = y[index + STATE_STRETCH] = 0.0
-                onset = True
-            elif in_contact[j] and delta < -onset_tol:
-                in_contact[j] = False
-            if onset:
-                changed = True
-                impacts += 1
-                if impacts > log.shape[0]:
-                    log2 = np.empty((2 * log.shape[0], LOG_COLUMNS))
-                    log2[:log.shape[0]] = log
-                    log = log2
-                log[impacts - 1, LOG_TIME], log[impacts - 1, LOG_JOINT] = t, j
-                log[impacts - 1, LOG_RATE], log[impacts - 1, LOG_IMPULSE] = rate, impulse
-        for j in range(nj):   # the Iwan slider's return map: |k1 z| <= mu F_n
-            if int(joints[j, JOINT_FRICTION_LAW]) == IWAN and in_contact[j]:
-                f_n = joint_forces(y[:nq], y[nq:2 * nq], joints[j], speeds[j], args.grid_log0,
-                                   args.grid_step, args.tables[j], y).f_n
-                stretch = int(joints[j, JOINT_STATE]) + STATE_STRETCH
-                held = friction.iwan_return_map(y[stretch], joints[j, IWAN_K1],
-                                                joints[j, IWAN_MU] * f_n)
-                if held != y[stretch]:
-                    y[stretch] = held
-                    changed = True
-        for r in range(torsion.shape[0]):
-            if latched[r] == 0.0 and int(torsion[r, TORSION_KIND]) == LATCH and \
-                    relative_angle(y[:nq], y[nq:2 * nq], torsion[r]).angle > -LATCH_TOL:
-                latched[r] = 1.0
-                changed = True
-        if project_onto_constraints(t, y, args, work, onset_tol, onset_tol / max_step) or changed:
+        # the accepted step's updates, in order; any of them means f(t, y) is evaluated again
+        changed = impulse_joints and release_held_contacts(t, y, args, work, contacts)
+        arrived, impacts, log = onsets_and_impacts(t, y, args, work, contacts, onset_tol,
+                                                   speed_floor, log, impacts)
+        slid = iwan_joints and iwan_slider_return(y, args, contacts)
+        engaged = latches and engage_latches(y, nq, torsion, latched)
+        if project_onto_constraints(t, y, args, work, onset_tol, onset_tol / max_step) or \
+                changed or arrived or slid or engaged:
             rhs(t, y, k[0], args, work)
             calls += 1
-        if count == capacity:
-            capacity *= 2
-            times2 = np.empty(capacity)
-            states2 = np.empty((capacity, ny))
-            speeds2 = np.empty((capacity, max(nj, 1)))
-            modes2 = np.zeros((capacity, max(nj, 1)), np.int64)
-            latched2 = np.zeros((capacity, max(torsion.shape[0], 1)))
-            times2[:count], states2[:count], speeds2[:count], modes2[:count] = \
-                times, states, speeds_out, modes_out
-            latched2[:count] = latched_out
-            times, states, speeds_out, modes_out, latched_out = times2, states2, speeds2, modes2, latched2
-        times[count], states[count], speeds_out[count, :nj], modes_out[count, :nj] = t, y, speeds, mode
-        latched_out[count, :torsion.shape[0]] = latched
+        record = recorded(record, count, t, y, speeds, mode, latched)
         count += 1
         if adaptive:
-            factor = 0.9 * err ** (-0.7 * exponent) * err_prev ** (0.4 * exponent) if err > 0 else 5.0
-            h *= min(5.0, max(0.2, factor))
-            err_prev = max(err, 1e-4)
+            h, err_prev = next_step_size(h, err, err_prev, exponent)
     counters = np.array([accepted, rejected, calls, impacts])
-    return Integration(times[:count], states[:count], speeds_out[:count], modes_out[:count],
-                       latched_out[:count], log[:impacts], counters, status, t)
+    return Integration(record.times[:count], record.states[:count], record.speeds[:count],
+                       record.modes[:count], record.latched[:count], log[:impacts], counters,
+                       status, t)
 
 
 # ---- the compiled code follows the laws and the layout

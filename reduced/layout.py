@@ -110,9 +110,17 @@ JointForces = namedtuple("JointForces", [
 # drive's impulse (J).
 Impulse = namedtuple("Impulse", ["impulse", "dissipated", "work_in"])
 
-# What kernel.integrate returns: per accepted step the time, state, impact speeds, contact
-# modes and latch flags; the impact log, counters (accepted, rejected, rhs calls, impacts),
-# status code, time reached.
+# What the integrator tracks of the clearance joints between accepted steps: the penetration
+# at the last accepted state, whether a continuous joint is in contact (between an onset and
+# the next separation), and the normal force of a held contact and its peak.
+Contacts = namedtuple("Contacts", ["depth", "in_contact", "held_force", "held_peak"])
+
+# The accepted steps recorded by the integrator: time, state, impact speeds, contact modes,
+# latch flags.
+Record = namedtuple("Record", ["times", "states", "speeds", "modes", "latched"])
+
+# What kernel.integrate returns: the record cut to the accepted steps, the impact log,
+# counters (accepted, rejected, rhs calls, impacts), status code, time reached.
 Integration = namedtuple("Integration", [
     "times", "states", "speeds", "modes", "latched", "impacts", "counters", "status", "t_end"])
 
