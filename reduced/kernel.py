@@ -47,9 +47,13 @@ functions of its own:
   (project_onto_constraints: one mass-weighted Gauss-Newton step each), so drift cannot
   accumulate where Baumgarte alone is too slow;
 - the record of the accepted step (recorded), in buffers that double when full.
-The row arrays and argument bundles are laid out in reduced.layout. The right-hand side
-works in preallocated buffers and solves the Schur system by Cholesky: about 1.2 us per
-evaluation for the slider-crank.
+The row arrays and argument bundles are laid out in reduced.layout. numba counts the
+references of every array a compiled function receives or reads out of a bundle (an atomic
+increment and decrement each), about half the run time of the slider-crank: so a
+function reads the fields it uses once, at its top, and the helpers that run at every step
+take the arrays they use rather than whole bundles. The right-hand side works in
+preallocated buffers and solves the Schur system by Cholesky: about 1.2 us per evaluation
+for the slider-crank.
 """
 
 import hashlib
@@ -385,7 +389,10 @@ def rhs(t, y, dy, args, work):
     """dy = f(t, y): velocities, accelerations, dissipated power, power of the constraints,
     rates of the friction states. args: layout.KernelArgs; work: layout.Workspace."""
     nq, minv, joints, torsion = args.nq, args.minv, args.joints, args.torsion
-    force, normal, rhs_c = work.force, work.normal, work.rhs_c
+    speeds, tables, latched, mode = args.speeds, args.tables, args.latched, args.mode
+    revolute, prismatic, drive = args.revolute, args.prismatic, args.drive
+    jac, phi, phi_t, rhs_c, schur, force, normal = (work.jac, work.phi, work.phi_t, work.rhs_c,
+                                                    work.schur, work.force, work.normal)
     q, qd = y[:nq], y[nq:2 * nq]
     for b in range(nq // 3):
         force[3 * b] = args.gravity_x / minv[3 * b]
@@ -398,8 +405,8 @@ def rhs(t, y, dy, args, work):
     for k in range(joints.shape[0]):
         if int(joints[k, JOINT_IMPACT]) != CONTINUOUS:
             continue   # impulse joints: impacts between steps, held contact as a constraint
-        c = joint_forces(q, qd, joints[k], args.speeds[k], args.grid_log0, args.grid_step,
-                         args.tables[k], y)
+        c = joint_forces(q, qd, joints[k], speeds[k], args.grid_log0, args.grid_step,
+                         tables[k], y)
         if c.delta <= 0.0:
             continue
         if not math.isfinite(c.f_n):
@@ -420,7 +427,7 @@ def rhs(t, y, dy, args, work):
                 force[3 * b + 2] += sign * ((c.cx - q[3 * b]) * fy - (c.cy - q[3 * b + 1]) * fx)
         dissipation += c.power
     for k in range(torsion.shape[0]):
-        torque, power = torsion_torque(q, qd, torsion[k], args.latched[k] > 0)
+        torque, power = torsion_torque(q, qd, torsion[k], latched[k] > 0)
         bi, bj = int(torsion[k, TORSION_BODY_I]), int(torsion[k, TORSION_BODY_J])
         if bj >= 0:
             force[3 * bj + 2] += torque
@@ -428,21 +435,21 @@ def rhs(t, y, dy, args, work):
             force[3 * bi + 2] -= torque
         dissipation += power
     dy[:nq] = qd
-    m = fill_constraints(t, q, qd, args.revolute, args.prismatic, args.drive, joints, args.mode,
-                         args.baumgarte, work.jac, work.phi, work.phi_t, rhs_c)
+    m = fill_constraints(t, q, qd, revolute, prismatic, drive, joints, mode,
+                         args.baumgarte, jac, phi, phi_t, rhs_c)
     work_in = 0.0
     if m > 0:
-        solve_multipliers(minv, force, work.jac, rhs_c, work.schur, m, nq)
+        solve_multipliers(minv, force, jac, rhs_c, schur, m, nq)
         for j in range(nq):
             v = force[j]
             for i in range(m):
-                v -= work.jac[i, j] * rhs_c[i]
+                v -= jac[i, j] * rhs_c[i]
             dy[nq + j] = minv[j] * v
         for i in range(m):
-            work_in += rhs_c[i] * work.phi_t[i]
-        row = constraint_count(args.revolute, args.prismatic, args.drive)
+            work_in += rhs_c[i] * phi_t[i]
+        row = constraint_count(revolute, prismatic, drive)
         for k in range(joints.shape[0]):
-            if args.mode[k] == 1:
+            if mode[k] == 1:
                 normal[k] = rhs_c[row]   # the multiplier of |e| - c = 0 is the normal force
                 row += 1
     else:
@@ -509,12 +516,14 @@ def project_onto_constraints(t, y, args, work, tolerance, rate_tolerance):
     exceeds its tolerance (m, m/s). Keeps the drift of accepted steps from accumulating where
     Baumgarte alone is too slow (loose tolerances, fast drives). Returns whether y changed."""
     nq, minv = args.nq, args.minv
-    jac, phi, phi_t, rhs_c = work.jac, work.phi, work.phi_t, work.rhs_c
+    revolute, prismatic, drive = args.revolute, args.prismatic, args.drive
+    joints, mode = args.joints, args.mode
+    jac, phi, phi_t, rhs_c, schur = work.jac, work.phi, work.phi_t, work.rhs_c, work.schur
     changed = False
     for level in range(2):
         q, qd = y[:nq], y[nq:2 * nq]
-        m = fill_constraints(t, q, qd, args.revolute, args.prismatic, args.drive, args.joints,
-                             args.mode, 0.0, jac, phi, phi_t, rhs_c)
+        m = fill_constraints(t, q, qd, revolute, prismatic, drive, joints, mode, 0.0, jac, phi,
+                             phi_t, rhs_c)
         largest = 0.0
         for i in range(m):
             if level == 0:
@@ -528,7 +537,7 @@ def project_onto_constraints(t, y, args, work, tolerance, rate_tolerance):
         if largest <= (tolerance if level == 0 else rate_tolerance):
             continue
         changed = True
-        schur_solve(jac, minv, work.schur, rhs_c, m, nq)
+        schur_solve(jac, minv, schur, rhs_c, m, nq)
         mass_weighted_step(y[:nq] if level == 0 else y[nq:2 * nq], jac, minv, rhs_c, m, nq, 1.0)
     return changed
 
@@ -623,11 +632,10 @@ def rosenbrock23_step(t, y, h, k, y_new, err_vec, args, work):
 
 
 # ---- the phases of integrate
-# The helpers that run at every step take the arrays they use rather than whole bundles
-# where they can: numba counts the references of every array a compiled function receives
-# (an atomic increment and decrement each, per call), and passing the bundles to a dozen
-# helpers a step made the slider-crank's run a fifth slower. Helpers that only some
-# mechanisms need (held contacts, Iwan elements, latches) run only for those.
+# Passing the bundles to every helper (a dozen calls a step) made the slider-crank's run a
+# fifth slower than the monolithic loop; the helpers that run every step take the arrays they
+# use, and those for held contacts, Iwan elements and latches run only for mechanisms that
+# have them.
 
 @numba.njit(cache=True)
 def trial_step(method, t, y, h, k, y_new, err_vec, args, work, rtol, atol):
@@ -646,10 +654,10 @@ def onset_fraction(y_new, nq, joints, mode, contacts, onset_tol):
     of a free joint. One that would end the step deeper than onset_tol is shortened by a
     secant on delta, one that went in and out within the step (deeper at its end than at its
     start) by half. 1: no onset."""
-    depth = contacts.depth
+    depth, in_contact = contacts.depth, contacts.in_contact
     shorten = 1.0
     for j in range(joints.shape[0]):
-        if not contacts.in_contact[j] and mode[j] == 0:
+        if not in_contact[j] and mode[j] == 0:
             d_new = joint_kinematics(y_new[:nq], y_new[nq:2 * nq], joints[j]).delta
             if d_new > onset_tol and depth[j] < -onset_tol:
                 shorten = min(shorten, 0.99 * (-depth[j]) / (d_new - depth[j]))
@@ -692,14 +700,15 @@ def release_held_contacts(t, y, args, work, contacts):
     """Accepted step: the held contacts' forces (the multipliers at the step's end); one that
     pulls releases, and an approach rate left by drift is removed (an impulse with e = 0).
     Returns whether a contact was released."""
-    nq, mode, held_force, held_peak = args.nq, args.mode, contacts.held_force, contacts.held_peak
+    nq, joints, mode, normal = args.nq, args.joints, args.mode, work.normal
+    held_force, held_peak = contacts.held_force, contacts.held_peak
     changed = False
-    for j in range(args.joints.shape[0]):
+    for j in range(joints.shape[0]):
         if mode[j] == 1:
-            held_force[j] = work.normal[j]
+            held_force[j] = normal[j]
             held_peak[j] = max(held_peak[j], held_force[j])
             if held_force[j] < 0.0:   # released; an approach rate left by drift is removed
-                if joint_kinematics(y[:nq], y[nq:2 * nq], args.joints[j]).rate > 0.0:
+                if joint_kinematics(y[:nq], y[nq:2 * nq], joints[j]).rate > 0.0:
                     impulse_energy(y, nq, apply_impulse(t, y, args, work, j, 0.0))
                 mode[j] = 0
                 changed = True
@@ -734,11 +743,12 @@ def onsets_and_impacts(t, y, args, work, contacts, onset_tol, speed_floor, log, 
     and restarts its Iwan element unloaded; one that left contact is marked free. Every
     impact and onset goes into the log. Returns (whether anything happened, impacts, log)."""
     nq, joints, mode, speeds = args.nq, args.joints, args.mode, args.speeds
+    depth, in_contact = contacts.depth, contacts.in_contact
     changed = False
     for j in range(joints.shape[0]):
         kin = joint_kinematics(y[:nq], y[nq:2 * nq], joints[j])
         delta, rate = kin.delta, kin.rate
-        contacts.depth[j] = delta
+        depth[j] = delta
         onset, impulse = False, 0.0
         if int(joints[j, JOINT_IMPACT]) != CONTINUOUS:
             if mode[j] == 0 and delta > -onset_tol and rate > 0.0:
@@ -750,15 +760,15 @@ def onsets_and_impacts(t, y, args, work, contacts, onset_tol, speed_floor, log, 
                     contacts.held_force[j] = contacts.held_peak[j] = 0.0
                 speeds[j] = rate
                 onset = True
-        elif not contacts.in_contact[j] and delta > -onset_tol:
-            contacts.in_contact[j] = True
+        elif not in_contact[j] and delta > -onset_tol:
+            in_contact[j] = True
             speeds[j] = max(rate, speed_floor)
             if int(joints[j, JOINT_FRICTION_LAW]) == IWAN:   # a new contact point: unloaded
                 index = int(joints[j, JOINT_STATE])
                 y[index + STATE_TRAVEL] = y[index + STATE_STRETCH] = 0.0
             onset = True
-        elif contacts.in_contact[j] and delta < -onset_tol:
-            contacts.in_contact[j] = False
+        elif in_contact[j] and delta < -onset_tol:
+            in_contact[j] = False
         if onset:
             changed = True
             impacts += 1
@@ -770,12 +780,13 @@ def onsets_and_impacts(t, y, args, work, contacts, onset_tol, speed_floor, log, 
 def iwan_slider_return(y, args, contacts):
     """Accepted step: the Iwan slider of every joint in contact held to |k1 z| <= mu F_n
     (laws.friction.iwan_return_map at the accepted state). Returns whether a slider moved."""
-    nq, joints = args.nq, args.joints
+    nq, joints, speeds, tables = args.nq, args.joints, args.speeds, args.tables
+    in_contact = contacts.in_contact
     changed = False
     for j in range(joints.shape[0]):
-        if int(joints[j, JOINT_FRICTION_LAW]) == IWAN and contacts.in_contact[j]:
-            f_n = joint_forces(y[:nq], y[nq:2 * nq], joints[j], args.speeds[j], args.grid_log0,
-                               args.grid_step, args.tables[j], y).f_n
+        if int(joints[j, JOINT_FRICTION_LAW]) == IWAN and in_contact[j]:
+            f_n = joint_forces(y[:nq], y[nq:2 * nq], joints[j], speeds[j], args.grid_log0,
+                               args.grid_step, tables[j], y).f_n
             stretch = int(joints[j, JOINT_STATE]) + STATE_STRETCH
             held = friction.iwan_return_map(y[stretch], joints[j, IWAN_K1], joints[j, IWAN_MU] * f_n)
             if held != y[stretch]:
