@@ -9,6 +9,7 @@ named after their authors return chi(e). None of them reproduces its target e ex
 
 import math
 
+import numba
 import numpy as np
 from scipy.integrate import solve_ivp
 
@@ -75,9 +76,12 @@ HYSTERESIS = {f.__name__: f for f in (hunt_crossley, lankarani_nikravesh, lee_wa
                                        hu_guo)}
 
 
+@numba.njit(cache=True)
 def hysteresis_force(elastic, rate, impact_speed, chi):
-    """F = F_el (1 + chi d' / v0): the Hunt-Crossley family (N, or N/m with F_el per length)."""
-    return elastic * (1 + chi * np.asarray(rate, float) / impact_speed)
+    """F = max(F_el (1 + chi d' / v0), 0): the Hunt-Crossley family (N, or N/m with F_el per
+    length), never pulling (the bracket turns negative when the bodies separate faster than
+    v0 / chi). The normal force of the multibody kernel's continuous contact."""
+    return max(elastic * (1.0 + chi * rate / impact_speed), 0.0)
 
 
 def kelvin_voigt(d, rate, stiffness, damping):

@@ -30,6 +30,9 @@ import numpy as np
 from tqdm import tqdm
 
 from pinbore.reduced import kernel
+from pinbore.reduced.layout import (
+    DRIVE_ANGLE, DRIVE_BODY, DRIVE_SPEED, JOINT_BEARING_BODY, JOINT_BEARING_X, JOINT_BEARING_Y,
+    JOINT_CLEARANCE, JOINT_JOURNAL_BODY, JOINT_JOURNAL_X, JOINT_JOURNAL_Y)
 from pinbore.reduced.model import Model, project
 from pinbore.reduced.run import simulate
 
@@ -52,22 +55,21 @@ class MechanismFlow:
 
     def __init__(self, model: Model):
         self.model = model
-        self.omega = model.drive[1]
+        self.omega = model.drive[DRIVE_SPEED]
         self.period = 2 * math.pi / abs(self.omega)
-        self.length = min((j[6] for j in model.joints), default=1e-3)
+        self.length = min(model.joints[:, JOINT_CLEARANCE], default=1e-3)
         nq = model.nq
         self.scale = np.concatenate([np.full(nq, self.length), np.full(nq, self.length * abs(self.omega))])
-        self.driven = int(model.drive[0])
+        self.driven = int(model.drive[DRIVE_BODY])
         self.last = None   # the Trajectory of the last advance (for the design study)
 
     def start(self) -> MechanismState:
         args = self.model.kernel_args()
-        return MechanismState(self.model.y0.copy(), args[kernel.ARG_SPEEDS], args[kernel.ARG_MODE],
-                              args[kernel.ARG_LATCHED], 0)
+        return MechanismState(self.model.y0.copy(), args.speeds, args.mode, args.latched, 0)
 
     def _drive(self, period: int) -> np.ndarray:
         drive = self.model.drive.copy()
-        drive[2] += 2 * math.pi * period * math.copysign(1.0, self.omega)
+        drive[DRIVE_ANGLE] += 2 * math.pi * period * math.copysign(1.0, self.omega)
         return drive
 
     def advance(self, state: MechanismState, periods: int = 1) -> MechanismState:
@@ -77,14 +79,14 @@ class MechanismFlow:
         if self.last.status != kernel.OK:
             raise FloatingPointError(f"the integration stopped at t = {self.last.t_end:.6g} s "
                                      f"of period {state.period} (status {self.last.status})")
-        return MechanismState(self.last.states[-1].copy(), args[kernel.ARG_SPEEDS],
-                              args[kernel.ARG_MODE], args[kernel.ARG_LATCHED], state.period + periods)
+        return MechanismState(self.last.states[-1].copy(), args.speeds, args.mode, args.latched,
+                              state.period + periods)
 
     def coordinates(self, state: MechanismState) -> np.ndarray:
         nq = self.model.nq
         x = state.y[:2 * nq].copy()
         if self.driven >= 0:
-            x[3 * self.driven + 2] -= self._drive(state.period)[2]
+            x[3 * self.driven + 2] -= self._drive(state.period)[DRIVE_ANGLE]
         return x / self.scale
 
     def observed(self, state: MechanismState) -> np.ndarray:
@@ -95,7 +97,8 @@ class MechanismFlow:
         q, qd = state.y[:nq], state.y[nq:2 * nq]
         if self.model.joints.shape[0]:
             row = self.model.joints[0]
-            points = ((int(row[3]), row[4], row[5], 1.0), (int(row[0]), row[1], row[2], -1.0))
+            points = ((int(row[JOINT_JOURNAL_BODY]), row[JOINT_JOURNAL_X], row[JOINT_JOURNAL_Y], 1.0),
+                      (int(row[JOINT_BEARING_BODY]), row[JOINT_BEARING_X], row[JOINT_BEARING_Y], -1.0))
         else:
             body = next(b for b in range(nq // 3) if b != self.driven)
             points = ((body, 0.0, 0.0, 1.0),)

@@ -2,7 +2,7 @@ r"""The compiled core of the reduced model: equations of motion and the integrat
 
 Planar rigid bodies with coordinates q = (x_k, y_k, phi_k) of their centres of mass,
 M = diag(m_k, m_k, J_k). Ideal joints and the drive are constraints Phi(q, t) = 0 with
-Lagrange multipliers (review eq. 21):
+Lagrange multipliers (Cao et al. 2013, eq. 21):
 
     M q'' + Phi_q^T lambda = Q(q, q', t),
     Phi_q q''  = gamma - 2 a Phi' - a^2 Phi          (Baumgarte, a the stabilisation rate).
@@ -20,43 +20,72 @@ factor of the damping law, v0 the approach rate at the onset of this impact; the
 force opposes the tangential slip v_t: Ambrosio's regularised Coulomb, polynomial Stribeck or
 a linear velocity law (static, regularised near zero slip), LuGre or Dahl normalised by F_n,
 or the bilinear Iwan element, whose states are integrated with the motion (and rest while
-the joint is open). While delta <= 0 no law is evaluated. Impulse contact (Newton or
-Poisson): rigid impacts between steps (apply_impulse) and, below a rest speed, held contact:
-the constraint delta = 0 joins the ideal ones until its multiplier (the normal force) would
-pull.
+the joint is open). The normal force and every friction law are the functions of
+pinbore.laws.dissipative and pinbore.laws.friction, compiled into the right-hand side. While
+delta <= 0 no law is evaluated. Impulse contact (Newton or Poisson): rigid impacts between
+steps (apply_impulse) and, below a rest speed, held contact: the constraint delta = 0 joins
+the ideal ones until its multiplier (the normal force) would pull.
 
 Extra states integrate the energy dissipated in the joints and the work of the constraint
 forces (the drive), so the energy balance can be checked.
 
 Integrators: Dormand-Prince 5(4) (explicit) or Rosenbrock 2(3) (linearly implicit, for stiff
 problems), both with a PI step-size controller on (q, q') and the friction states, or DOPRI5
-at a fixed step for comparison. A trial step with a stage beyond the tabulated law (NaN) is
-retried ten times shorter; only if the step size collapses that way has the run blown up. A
-step that would carry a joint from free flight into contact deeper than `onset_tol` is
-shortened (secant on delta) until it ends at the onset; there v0 is recorded. So every
-impact starts on a step boundary with a known impact speed. Latches engage the same way, at
-their angle, so their spring starts unloaded, and held contacts release at the zero of their
-force. After an accepted step whose drift exceeds the onset tolerance, positions and then
-velocities are projected back onto the constraints (one mass-weighted Gauss-Newton step
-each), so drift cannot accumulate where Baumgarte alone is too slow. The right-hand side
-works in preallocated buffers and solves the Schur system by Cholesky: about 1.2 us per
-evaluation for the slider-crank.
+at a fixed step for comparison. `integrate` takes a step in four phases, each in compiled
+functions of its own:
+- the trial step (trial_step): a stage beyond the tabulated law (NaN) has the step retried
+  ten times shorter; only if the step size collapses that way has the run blown up;
+- event location (onset_fraction, release_fraction, latch_fraction; adaptive methods only):
+  a step that would carry a joint from free flight into contact deeper than `onset_tol` is
+  shortened (secant on delta) until it ends at the onset, where v0 is recorded, so every
+  impact starts on a step boundary with a known impact speed; latches engage the same way,
+  at their angle, so their spring starts unloaded, and held contacts release at the zero of
+  their force;
+- the updates of the accepted step (release_held_contacts, onsets_and_impacts with the
+  impact log, iwan_slider_return, engage_latches), then, where the drift exceeds the onset
+  tolerance, the projection of positions and velocities back onto the constraints
+  (project_onto_constraints: one mass-weighted Gauss-Newton step each), so drift cannot
+  accumulate where Baumgarte alone is too slow;
+- the record of the accepted step (recorded), in buffers that double when full.
+The row arrays and argument bundles are laid out in reduced.layout. numba counts the
+references of every array a compiled function receives or reads out of a bundle (an atomic
+increment and decrement each), about half the run time of the slider-crank: so a
+function reads the fields it uses once, at its top, and the helpers that run at every step
+take the arrays they use rather than whole bundles. The right-hand side works in
+preallocated buffers and solves the Schur system by Cholesky: about 1.2 us per evaluation
+for the slider-crank.
 """
 
+import hashlib
 import math
+from pathlib import Path
 
 import numba
 import numpy as np
 
+from pinbore.laws import dissipative, friction
+from pinbore.reduced import layout
+from pinbore.reduced.layout import (
+    CONTINUOUS, COULOMB, COULOMB_MU, DAHL_MU, DAHL_SIGMA, DISSIPATED, DRIVE_ANGLE, DRIVE_BODY,
+    DRIVE_SPEED, ENERGY_STATES, IWAN, IWAN_K1, IWAN_K2, IWAN_MU, JOINT_BEARING_BODY,
+    JOINT_BEARING_RADIUS, JOINT_BEARING_X, JOINT_BEARING_Y, JOINT_CHI, JOINT_CLEARANCE,
+    JOINT_COLUMNS, JOINT_FRICTION_LAW, JOINT_IMPACT, JOINT_JOURNAL_BODY, JOINT_JOURNAL_X,
+    JOINT_JOURNAL_Y, JOINT_RESTITUTION, JOINT_REST_SPEED, JOINT_STATE, LATCH, LINEAR, LINEAR_ALPHA,
+    LINEAR_MU_STATIC, LOG_COLUMNS, LOG_IMPULSE, LOG_JOINT, LOG_RATE, LOG_TIME, LUGRE,
+    LUGRE_MU_COULOMB, LUGRE_MU_STATIC, LUGRE_SIGMA0, LUGRE_SIGMA1, LUGRE_SIGMA2,
+    LUGRE_STRIBECK_SPEED, NO_FRICTION, POISSON, PRISMATIC_ANGLE, PRISMATIC_AXIS_ANGLE,
+    PRISMATIC_AXIS_X, PRISMATIC_AXIS_Y, PRISMATIC_BODY, PRISMATIC_X, PRISMATIC_Y,
+    REGULARISATION_V0, REGULARISATION_V1, REVOLUTE_BODY_I, REVOLUTE_BODY_J, REVOLUTE_X_I,
+    REVOLUTE_X_J, REVOLUTE_Y_I, REVOLUTE_Y_J, STATE_STRETCH, STATE_TRAVEL, STOP, STRIBECK,
+    STRIBECK_MU_MIN, STRIBECK_MU_STATIC, STRIBECK_V_MIN, TORSION_BODY_I, TORSION_BODY_J,
+    TORSION_DAMPING, TORSION_FREE_ANGLE, TORSION_KIND, TORSION_STIFFNESS, WORK_IN, Contacts,
+    Impulse, Integration, JointForces, Kinematics, Record, RelativeAngle, Workspace)
+
 # status codes
 OK, BLOWN_UP, TOO_MANY_STEPS, STEP_TOO_SMALL = 0, 1, 2, 3
-# friction laws of a clearance joint (column 9 of its row)
-NO_FRICTION, COULOMB, STRIBECK, LINEAR, LUGRE, DAHL, IWAN = 0, 1, 2, 3, 4, 5, 6
-# contact models of a clearance joint (column 18)
-CONTINUOUS, NEWTON, POISSON = 0, 1, 2
 # integration methods
 DOPRI5, DOPRI5_FIXED, ROSENBROCK23 = 0, 1, 2
-JOINT_COLUMNS = 21   # see joint_forces
+LATCH_TOL = 1e-8   # rad: a latch engages within this of its angle (the step is shortened to it)
 
 
 @numba.njit(cache=True)
@@ -77,7 +106,7 @@ def point(q, body, sx, sy):
 @numba.njit(cache=True)
 def constraint_count(revolute, prismatic, drive):
     """Rows of the ideal joints and the drive (active contacts of impulse joints come on top)."""
-    return 2 * revolute.shape[0] + 2 * prismatic.shape[0] + (1 if drive[0] >= 0 else 0)
+    return 2 * revolute.shape[0] + 2 * prismatic.shape[0] + (1 if drive[DRIVE_BODY] >= 0 else 0)
 
 
 @numba.njit(cache=True)
@@ -92,9 +121,10 @@ def fill_constraints(t, q, qd, revolute, prismatic, drive, joints, mode, alpha, 
     rhs_c[:] = 0.0  # gamma first
     row = 0
     for k in range(revolute.shape[0]):
-        for side, sign in ((0, 1.0), (3, -1.0)):
-            b = int(revolute[k, side])
-            sx, sy = revolute[k, side + 1], revolute[k, side + 2]
+        for body, x, y, sign in ((REVOLUTE_BODY_I, REVOLUTE_X_I, REVOLUTE_Y_I, 1.0),    # columns
+                                 (REVOLUTE_BODY_J, REVOLUTE_X_J, REVOLUTE_Y_J, -1.0)):
+            b = int(revolute[k, body])
+            sx, sy = revolute[k, x], revolute[k, y]
             if b < 0:
                 phi[row] += sign * sx
                 phi[row + 1] += sign * sy
@@ -111,44 +141,47 @@ def fill_constraints(t, q, qd, revolute, prismatic, drive, joints, mode, alpha, 
             rhs_c[row + 1] += sign * ay * w2
         row += 2
     for k in range(prismatic.shape[0]):
-        b = int(prismatic[k, 0])
-        ax, ay = rot(q[3 * b + 2], prismatic[k, 1], prismatic[k, 2])
-        nx, ny = -math.sin(prismatic[k, 5]), math.cos(prismatic[k, 5])
-        phi[row] = nx * (q[3 * b] + ax - prismatic[k, 3]) + ny * (q[3 * b + 1] + ay - prismatic[k, 4])
+        b = int(prismatic[k, PRISMATIC_BODY])
+        ax, ay = rot(q[3 * b + 2], prismatic[k, PRISMATIC_X], prismatic[k, PRISMATIC_Y])
+        axis = prismatic[k, PRISMATIC_AXIS_ANGLE]
+        nx, ny = -math.sin(axis), math.cos(axis)
+        phi[row] = (nx * (q[3 * b] + ax - prismatic[k, PRISMATIC_AXIS_X])
+                    + ny * (q[3 * b + 1] + ay - prismatic[k, PRISMATIC_AXIS_Y]))
         jac[row, 3 * b] = nx
         jac[row, 3 * b + 1] = ny
         jac[row, 3 * b + 2] = -nx * ay + ny * ax
         rhs_c[row] = (nx * ax + ny * ay) * qd[3 * b + 2] ** 2
-        phi[row + 1] = q[3 * b + 2] - prismatic[k, 6]
+        phi[row + 1] = q[3 * b + 2] - prismatic[k, PRISMATIC_ANGLE]
         jac[row + 1, 3 * b + 2] = 1.0
         row += 2
-    if drive[0] >= 0:
-        b = int(drive[0])
-        phi[row] = q[3 * b + 2] - drive[2] - drive[1] * t
-        phi_t[row] = -drive[1]
+    if drive[DRIVE_BODY] >= 0:
+        b = int(drive[DRIVE_BODY])
+        phi[row] = q[3 * b + 2] - drive[DRIVE_ANGLE] - drive[DRIVE_SPEED] * t
+        phi_t[row] = -drive[DRIVE_SPEED]
         jac[row, 3 * b + 2] = 1.0
         row += 1
     for k in range(joints.shape[0]):
         if mode[k] == 0:
             continue
         # phi = |e| - c, e = P_j - P_b; phi'' = n.e'' + (|e'|^2 - (n.e')^2)/|e|
-        delta, nx, ny, _, _, rate, _ = joint_kinematics(q, qd, joints[k])
-        e = delta + joints[k, 6]
+        kin = joint_kinematics(q, qd, joints[k])
+        e = kin.delta + joints[k, JOINT_CLEARANCE]
         ex_dot = ey_dot = 0.0
-        for side, sign in ((3, 1.0), (0, -1.0)):
-            b = int(joints[k, side])
+        for body, x, y, sign in ((JOINT_JOURNAL_BODY, JOINT_JOURNAL_X, JOINT_JOURNAL_Y, 1.0),    # columns
+                                 (JOINT_BEARING_BODY, JOINT_BEARING_X, JOINT_BEARING_Y, -1.0)):
+            b = int(joints[k, body])
             if b < 0:
                 continue
-            ax, ay = rot(q[3 * b + 2], joints[k, side + 1], joints[k, side + 2])
+            ax, ay = rot(q[3 * b + 2], joints[k, x], joints[k, y])
             w = qd[3 * b + 2]
-            jac[row, 3 * b] += sign * nx
-            jac[row, 3 * b + 1] += sign * ny
-            jac[row, 3 * b + 2] += sign * (-nx * ay + ny * ax)
+            jac[row, 3 * b] += sign * kin.nx
+            jac[row, 3 * b + 1] += sign * kin.ny
+            jac[row, 3 * b + 2] += sign * (-kin.nx * ay + kin.ny * ax)
             ex_dot += sign * (qd[3 * b] - w * ay)
             ey_dot += sign * (qd[3 * b + 1] + w * ax)
-            rhs_c[row] += sign * w * w * (nx * ax + ny * ay)
-        rhs_c[row] -= (ex_dot**2 + ey_dot**2 - rate**2) / e
-        phi[row] = delta
+            rhs_c[row] += sign * w * w * (kin.nx * ax + kin.ny * ay)
+        rhs_c[row] -= (ex_dot**2 + ey_dot**2 - kin.rate**2) / e
+        phi[row] = kin.delta
         row += 1
     for i in range(row):
         rate = phi_t[i]
@@ -232,138 +265,112 @@ def elastic_force(delta, grid_log0, grid_step, table):
 @numba.njit(cache=True)
 def joint_kinematics(q, qd, joint):
     """Penetration, normal, contact point, approach rate and slip of a clearance joint."""
-    bi, bj = int(joint[0]), int(joint[3])
-    pbx, pby = point(q, bi, joint[1], joint[2])
-    pjx, pjy = point(q, bj, joint[4], joint[5])
+    bi, bj = int(joint[JOINT_BEARING_BODY]), int(joint[JOINT_JOURNAL_BODY])
+    pbx, pby = point(q, bi, joint[JOINT_BEARING_X], joint[JOINT_BEARING_Y])
+    pjx, pjy = point(q, bj, joint[JOINT_JOURNAL_X], joint[JOINT_JOURNAL_Y])
     ex, ey = pjx - pbx, pjy - pby
     e = math.hypot(ex, ey)
-    delta = e - joint[6]
+    delta = e - joint[JOINT_CLEARANCE]
     if e == 0.0:
-        return delta, 1.0, 0.0, pbx, pby, 0.0, 0.0
+        return Kinematics(delta, 1.0, 0.0, pbx, pby, 0.0, 0.0)
     nx, ny = ex / e, ey / e
-    cx, cy = pbx + joint[7] * nx, pby + joint[7] * ny
+    cx, cy = pbx + joint[JOINT_BEARING_RADIUS] * nx, pby + joint[JOINT_BEARING_RADIUS] * ny
     vx = vy = 0.0
     for b, sign in ((bj, 1.0), (bi, -1.0)):
         if b >= 0:
             w = qd[3 * b + 2]
             vx += sign * (qd[3 * b] - w * (cy - q[3 * b + 1]))
             vy += sign * (qd[3 * b + 1] + w * (cx - q[3 * b]))
-    return delta, nx, ny, cx, cy, vx * nx + vy * ny, -vx * ny + vy * nx
+    return Kinematics(delta, nx, ny, cx, cy, vx * nx + vy * ny, -vx * ny + vy * nx)
 
 
 @numba.njit(cache=True)
-def friction(joint, f_n, slip, state):
-    """Friction force (N, positive along the slip: it acts against it) and the rate of the
-    law's state, for every law but the two-state Iwan element (iwan_friction). joint[9] is
-    the law, joint[10:17] its parameters; see reduced.scene."""
-    law, p = int(joint[9]), joint[10:17]
-    speed = abs(slip)
-    sign = 1.0 if slip > 0 else -1.0
+def joint_friction(joint, f_n, slip, state):
+    """Friction force (N, along the slip: it acts against it) and the rate of the law's state,
+    for every law of a clearance joint but the two-state Iwan element: the laws of
+    pinbore.laws.friction with the joint's parameters, LuGre and Dahl normalised by F_n."""
+    law = int(joint[JOINT_FRICTION_LAW])
     if law == NO_FRICTION:
         return 0.0, 0.0
-    if law <= LINEAR:   # static laws, regularised (Ambrosio) between p[5] and p[6]
-        cd = 0.0 if speed <= p[5] else (speed - p[5]) / (p[6] - p[5]) if speed <= p[6] else 1.0
+    if law <= LINEAR:   # static laws, regularised (Ambrosio)
         if law == COULOMB:
-            mu = p[0]
-        elif law == STRIBECK:   # mu_s - k1 v + k3 v^3, minimum mu_m at v_m
-            k = p[0] - p[1]
-            mu = p[0] - 1.5 * k / p[2] * speed + 0.5 * k / p[2] ** 3 * speed**3
+            mu = joint[COULOMB_MU]
+        elif law == STRIBECK:
+            mu = friction.stribeck_polynomial(slip, joint[STRIBECK_MU_STATIC], joint[STRIBECK_MU_MIN],
+                                              joint[STRIBECK_V_MIN])
         else:
-            mu = p[0] + p[1] * speed
-        return mu * cd * f_n * sign, 0.0
+            mu = friction.linear_velocity(slip, joint[LINEAR_MU_STATIC], joint[LINEAR_ALPHA])
+        return friction.ambrosio(slip, f_n, mu, joint[REGULARISATION_V0], joint[REGULARISATION_V1]), 0.0
     if law == LUGRE:
-        g = p[0] + (p[1] - p[0]) * math.exp(-(slip / p[2]) ** 2)
-        rate = slip - p[3] * speed * state / g
-        return f_n * (p[3] * state + p[4] * rate + p[5] * slip), rate
-    rate = p[1] * (1.0 - state / p[0] * sign) * slip   # Dahl, normalised (Iwan: iwan_friction)
-    return f_n * state, rate
-
-
-@numba.njit(cache=True)
-def iwan_friction(joint, f_n, slip, travel, stretch):
-    """Bilinear Iwan element (review eq. 13) along the contact: a Jenkins element (spring k1
-    in series with a Coulomb slider of strength mu F_n) in parallel with a spring k2. States:
-    the tangential travel x since the onset of this contact and the Jenkins spring's
-    stretch z. F_t = k1 z + k2 x; x' = v_t; z' = v_t while the slider sticks, 0 while it
-    slides (|k1 z| = mu F_n, z v_t > 0). Returns (F_t, x', z')."""
-    k1, k2, mu = joint[10], joint[11], joint[12]
-    limit = mu * f_n / k1
-    z = min(max(stretch, -limit), limit)
-    sliding = abs(stretch) >= limit and stretch * slip > 0
-    return k1 * z + k2 * travel, slip, 0.0 if sliding else slip
-
-
-@numba.njit(cache=True)
-def damped_normal_force(f_el, rate, chi, impact_speed):
-    """F_n = F_el (1 + chi delta' / v0), never pulling."""
-    return max(f_el * (1.0 + chi * rate / impact_speed), 0.0)
+        g = friction.lugre_g(slip, joint[LUGRE_MU_COULOMB], joint[LUGRE_MU_STATIC],
+                             joint[LUGRE_STRIBECK_SPEED])
+        rate = friction.lugre_rate(state, slip, joint[LUGRE_SIGMA0], g)
+        return f_n * friction.lugre_force(state, rate, slip, joint[LUGRE_SIGMA0], joint[LUGRE_SIGMA1],
+                                          joint[LUGRE_SIGMA2]), rate
+    return f_n * state, friction.dahl_rate(state, slip, joint[DAHL_SIGMA], joint[DAHL_MU])
 
 
 @numba.njit(cache=True)
 def joint_forces(q, qd, joint, impact_speed, grid_log0, grid_step, table, y):
-    """(delta, F_n, F_t, F_el, power into damping and friction, n_x, n_y, c_x, c_y, rates of
-    the friction states) of a clearance joint with a continuous contact law. Row: bearing body
-    and point, journal body and point, clearance, bearing radius, hysteresis factor chi,
-    friction law and its 7 parameters, index of its first state in y (-1: none), contact
-    model, restitution, rest speed. The power includes what the friction element stores in
-    its springs (LuGre, Dahl, Iwan) and may give back."""
-    delta, nx, ny, cx, cy, rate, slip = joint_kinematics(q, qd, joint)
-    if delta <= 0.0:
-        return delta, 0.0, 0.0, 0.0, 0.0, nx, ny, cx, cy, 0.0, 0.0
-    f_el = elastic_force(delta, grid_log0, grid_step, table)
-    f_n = damped_normal_force(f_el, rate, joint[8], impact_speed)
-    index = int(joint[17])
-    if int(joint[9]) == IWAN:
-        f_t, rate0, rate1 = iwan_friction(joint, f_n, slip, y[index], y[index + 1])
+    """The forces of a clearance joint with a continuous contact law (layout.JointForces):
+    penetration, F_n, F_t, F_el, the power into damping and friction, the normal, the contact
+    point and the rates of the friction states. The power includes what the friction element
+    stores in its springs (LuGre, Dahl, Iwan) and may give back."""
+    kin = joint_kinematics(q, qd, joint)
+    if kin.delta <= 0.0:
+        return JointForces(kin.delta, 0.0, 0.0, 0.0, 0.0, kin.nx, kin.ny, kin.cx, kin.cy, 0.0, 0.0)
+    f_el = elastic_force(kin.delta, grid_log0, grid_step, table)
+    f_n = dissipative.hysteresis_force(f_el, kin.rate, impact_speed, joint[JOINT_CHI])
+    index = int(joint[JOINT_STATE])
+    if int(joint[JOINT_FRICTION_LAW]) == IWAN:
+        f_t, rate0, rate1 = friction.iwan_bilinear(y[index + STATE_TRAVEL], y[index + STATE_STRETCH],
+                                                   kin.slip, joint[IWAN_K1], joint[IWAN_K2],
+                                                   joint[IWAN_MU] * f_n)
     else:
-        f_t, rate0 = friction(joint, f_n, slip, y[index] if index >= 0 else 0.0)
+        f_t, rate0 = joint_friction(joint, f_n, kin.slip, y[index] if index >= 0 else 0.0)
         rate1 = 0.0
-    return delta, f_n, f_t, f_el, (f_n - f_el) * rate + f_t * slip, nx, ny, cx, cy, rate0, rate1
+    return JointForces(kin.delta, f_n, f_t, f_el, (f_n - f_el) * kin.rate + f_t * kin.slip,
+                       kin.nx, kin.ny, kin.cx, kin.cy, rate0, rate1)
 
 
 @numba.njit(cache=True)
 def relative_angle(q, qd, row):
     """Relative angle phi_j - phi_i beyond the element's free angle, and its rate."""
-    bi, bj = int(row[0]), int(row[1])
-    angle = (q[3 * bj + 2] if bj >= 0 else 0.0) - (q[3 * bi + 2] if bi >= 0 else 0.0) - row[4]
+    bi, bj = int(row[TORSION_BODY_I]), int(row[TORSION_BODY_J])
+    angle = ((q[3 * bj + 2] if bj >= 0 else 0.0) - (q[3 * bi + 2] if bi >= 0 else 0.0)
+             - row[TORSION_FREE_ANGLE])
     rate = (qd[3 * bj + 2] if bj >= 0 else 0.0) - (qd[3 * bi + 2] if bi >= 0 else 0.0)
-    return angle, rate
-
-
-SPRING, STOP, LATCH = 0, 1, 2
-LATCH_TOL = 1e-8   # rad: a latch engages within this of its angle (the step is shortened to it)
+    return RelativeAngle(angle, rate)
 
 
 @numba.njit(cache=True)
 def torsion_torque(q, qd, row, latched):
     """Torque on body j (N m) of a torsion spring, stop or latch, and the power its damper
-    dissipates. Row: body i, body j, stiffness, damping, free angle (rad), kind. A stop acts
-    beyond its angle and only pushes; a latch, once reached (`latched`), holds both ways."""
+    dissipates. A stop acts beyond its angle and only pushes; a latch, once reached
+    (`latched`), holds both ways."""
     angle, rate = relative_angle(q, qd, row)
-    kind = int(row[5])
+    kind = int(row[TORSION_KIND])
+    stiffness, damping = row[TORSION_STIFFNESS], row[TORSION_DAMPING]
     if kind == LATCH:
         if latched:
-            return -row[2] * angle - row[3] * rate, row[3] * rate * rate
+            return -stiffness * angle - damping * rate, damping * rate * rate
         return 0.0, 0.0
     if kind == STOP and angle <= 0.0:
         return 0.0, 0.0
-    torque = -row[2] * angle - row[3] * rate
+    torque = -stiffness * angle - damping * rate
     if kind == STOP and torque > 0.0:   # a stop pushes, never pulls: its stored energy is lost
-        return 0.0, -row[2] * angle * rate
-    return torque, row[3] * rate * rate
-
-
-# positions in the argument tuple of rhs (see reduced.model.Model.kernel_args)
-ARG_SPEEDS, ARG_LATCHED, ARG_MODE = 8, 13, 14
+        return 0.0, -stiffness * angle * rate
+    return torque, damping * rate * rate
 
 
 @numba.njit(cache=True)
-def workspace(nq, revolute, prismatic, drive, nj):
-    """Buffers of the right-hand side: Phi_q, Phi, Phi_t, rhs_c, the Schur matrix, forces,
-    and per clearance joint its normal force (the law's, or the multiplier of a held contact)."""
-    m = constraint_count(revolute, prismatic, drive) + nj
-    return (np.zeros((m, nq)), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros((m, m)),
-            np.zeros(nq), np.zeros(max(nj, 1)))
+def workspace(args):
+    """The buffers of the right-hand side (layout.Workspace), sized for every constraint row:
+    the ideal joints, the drive and a held contact per clearance joint."""
+    nq, nj = args.nq, args.joints.shape[0]
+    m = constraint_count(args.revolute, args.prismatic, args.drive) + nj
+    return Workspace(np.zeros((m, nq)), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros((m, m)),
+                     np.zeros(nq), np.zeros(max(nj, 1)))
 
 
 @numba.njit(cache=True)
@@ -378,54 +385,58 @@ def solve_multipliers(minv, force, jac, rhs_c, schur, m, nq):
 
 
 @numba.njit(cache=True)
-def rhs(t, y, dy, nq, minv, gravity, revolute, prismatic, drive, alpha, joints, speeds,
-        grid_log0, grid_step, tables, torsion, latched, mode, work):
+def rhs(t, y, dy, args, work):
     """dy = f(t, y): velocities, accelerations, dissipated power, power of the constraints,
-    rates of the friction states."""
-    jac, phi, phi_t, rhs_c, schur, force, normal = work
+    rates of the friction states. args: layout.KernelArgs; work: layout.Workspace."""
+    nq, minv, joints, torsion = args.nq, args.minv, args.joints, args.torsion
+    speeds, tables, latched, mode = args.speeds, args.tables, args.latched, args.mode
+    revolute, prismatic, drive = args.revolute, args.prismatic, args.drive
+    jac, phi, phi_t, rhs_c, schur, force, normal = (work.jac, work.phi, work.phi_t, work.rhs_c,
+                                                    work.schur, work.force, work.normal)
     q, qd = y[:nq], y[nq:2 * nq]
     for b in range(nq // 3):
-        force[3 * b] = gravity[0] / minv[3 * b]
-        force[3 * b + 1] = gravity[1] / minv[3 * b + 1]
+        force[3 * b] = args.gravity_x / minv[3 * b]
+        force[3 * b + 1] = args.gravity_y / minv[3 * b + 1]
         force[3 * b + 2] = 0.0
     dissipation = 0.0
-    for i in range(2 * nq + 2, y.size):
+    for i in range(2 * nq + ENERGY_STATES, y.size):
         dy[i] = 0.0   # friction states rest out of contact
     normal[:] = 0.0
     for k in range(joints.shape[0]):
-        if int(joints[k, 18]) != CONTINUOUS:
+        if int(joints[k, JOINT_IMPACT]) != CONTINUOUS:
             continue   # impulse joints: impacts between steps, held contact as a constraint
-        delta, f_n, f_t, f_el, power, nx, ny, cx, cy, rate0, rate1 = joint_forces(
-            q, qd, joints[k], speeds[k], grid_log0, grid_step, tables[k], y)
-        if delta <= 0.0:
+        c = joint_forces(q, qd, joints[k], speeds[k], args.grid_log0, args.grid_step,
+                         tables[k], y)
+        if c.delta <= 0.0:
             continue
-        if not math.isfinite(f_n):
+        if not math.isfinite(c.f_n):
             dy[:] = math.nan   # penetration beyond the tabulated law: the integrator stops
             return
-        index = int(joints[k, 17])
+        index = int(joints[k, JOINT_STATE])
         if index >= 0:
-            dy[index] = rate0
-            if int(joints[k, 9]) == IWAN:
-                dy[index + 1] = rate1
-        normal[k] = f_n
-        fx, fy = -f_n * nx + f_t * ny, -f_n * ny - f_t * nx   # on the journal
-        for b, sign in ((int(joints[k, 3]), 1.0), (int(joints[k, 0]), -1.0)):
+            dy[index] = c.state_rate
+            if int(joints[k, JOINT_FRICTION_LAW]) == IWAN:
+                dy[index + STATE_STRETCH] = c.second_state_rate
+        normal[k] = c.f_n
+        fx, fy = -c.f_n * c.nx + c.f_t * c.ny, -c.f_n * c.ny - c.f_t * c.nx   # on the journal
+        for b, sign in ((int(joints[k, JOINT_JOURNAL_BODY]), 1.0),
+                        (int(joints[k, JOINT_BEARING_BODY]), -1.0)):
             if b >= 0:
                 force[3 * b] += sign * fx
                 force[3 * b + 1] += sign * fy
-                force[3 * b + 2] += sign * ((cx - q[3 * b]) * fy - (cy - q[3 * b + 1]) * fx)
-        dissipation += power
+                force[3 * b + 2] += sign * ((c.cx - q[3 * b]) * fy - (c.cy - q[3 * b + 1]) * fx)
+        dissipation += c.power
     for k in range(torsion.shape[0]):
         torque, power = torsion_torque(q, qd, torsion[k], latched[k] > 0)
-        bi, bj = int(torsion[k, 0]), int(torsion[k, 1])
+        bi, bj = int(torsion[k, TORSION_BODY_I]), int(torsion[k, TORSION_BODY_J])
         if bj >= 0:
             force[3 * bj + 2] += torque
         if bi >= 0:
             force[3 * bi + 2] -= torque
         dissipation += power
     dy[:nq] = qd
-    m = fill_constraints(t, q, qd, revolute, prismatic, drive, joints, mode, alpha, jac, phi,
-                         phi_t, rhs_c)
+    m = fill_constraints(t, q, qd, revolute, prismatic, drive, joints, mode,
+                         args.baumgarte, jac, phi, phi_t, rhs_c)
     work_in = 0.0
     if m > 0:
         solve_multipliers(minv, force, jac, rhs_c, schur, m, nq)
@@ -444,16 +455,16 @@ def rhs(t, y, dy, nq, minv, gravity, revolute, prismatic, drive, alpha, joints, 
     else:
         for j in range(nq):
             dy[nq + j] = minv[j] * force[j]
-    dy[2 * nq] = dissipation
-    dy[2 * nq + 1] = work_in
+    dy[2 * nq + DISSIPATED] = dissipation
+    dy[2 * nq + WORK_IN] = work_in
 
 
 def rhs_value(t, y, args):
     """(f(t, y), normal force per clearance joint) as new arrays (Python-side convenience)."""
     dy = np.empty_like(y)
-    work = workspace(args[0], args[3], args[4], args[5], args[7].shape[0])
-    rhs(t, y, dy, *args, work)
-    return dy, work[6][:args[7].shape[0]].copy()
+    work = workspace(args)
+    rhs(t, y, dy, args, work)
+    return dy, work.normal[:args.joints.shape[0]].copy()
 
 
 @numba.njit(cache=True)
@@ -464,29 +475,28 @@ def apply_impulse(t, y, args, work, j, target_restitution):
     the constraint rows plus the joint's normal. Newton's hypothesis sets e on velocities
     directly; Poisson's applies the compression impulse P_c (rate to 0) and then e P_c. For a
     frictionless impact the two coincide (the normal rate is linear in the impulse).
-    Returns (normal impulse on the journal, N s; energy dissipated, J; work of the drive's
-    impulse, J)."""
-    nq, minv, revolute, prismatic, drive, joints, mode = args[0], args[1], args[3], args[4], \
-        args[5], args[7], args[14]
-    jac, phi, phi_t, rhs_c, schur, _, _ = work
+    Returns the layout.Impulse: normal impulse on the journal (N s), energy dissipated (J),
+    work of the drive's impulse (J)."""
+    nq, minv, joints, mode = args.nq, args.minv, args.joints, args.mode
+    jac, phi_t, rhs_c = work.jac, work.phi_t, work.rhs_c
     q, qd = y[:nq], y[nq:2 * nq]
-    rate = joint_kinematics(q, qd, joints[j])[5]
+    rate = joint_kinematics(q, qd, joints[j]).rate
     before = 0.0
     for i in range(nq):
         before += 0.5 * qd[i] ** 2 / minv[i]
     held = mode[j]
     mode[j] = 1
-    m = fill_constraints(t, q, qd, revolute, prismatic, drive, joints, mode, 0.0, jac, phi, phi_t,
-                         rhs_c)
+    m = fill_constraints(t, q, qd, args.revolute, args.prismatic, args.drive, joints, mode, 0.0, jac,
+                         work.phi, phi_t, rhs_c)
     mode[j] = held
-    row = constraint_count(revolute, prismatic, drive)
+    row = constraint_count(args.revolute, args.prismatic, args.drive)
     for k in range(j):
         row += mode[k]
-    poisson = int(joints[j, 18]) == POISSON
+    poisson = int(joints[j, JOINT_IMPACT]) == POISSON
     e = target_restitution
     rhs_c[:m] = 0.0
     rhs_c[row] = rate if poisson else (1.0 + e) * rate
-    schur_solve(jac, minv, schur, rhs_c, m, nq)
+    schur_solve(jac, minv, work.schur, rhs_c, m, nq)
     scale = (1.0 + e) if poisson else 1.0
     mass_weighted_step(qd, jac, minv, rhs_c, m, nq, scale)
     after = 0.0
@@ -495,7 +505,7 @@ def apply_impulse(t, y, args, work, j, target_restitution):
     work_in = 0.0   # the drive's impulse works on its prescribed speed
     for i in range(m):
         work_in += scale * rhs_c[i] * phi_t[i]
-    return scale * rhs_c[row], before - after + work_in, work_in
+    return Impulse(scale * rhs_c[row], before - after + work_in, work_in)
 
 
 @numba.njit(cache=True)
@@ -505,13 +515,15 @@ def project_onto_constraints(t, y, args, work, tolerance, rate_tolerance):
     metric: dq = -M^-1 Phi_q^T (Phi_q M^-1 Phi_q^T)^-1 Phi, each only where the residual
     exceeds its tolerance (m, m/s). Keeps the drift of accepted steps from accumulating where
     Baumgarte alone is too slow (loose tolerances, fast drives). Returns whether y changed."""
-    nq, minv = args[0], args[1]
-    jac, phi, phi_t, rhs_c, schur, _, _ = work
+    nq, minv = args.nq, args.minv
+    revolute, prismatic, drive = args.revolute, args.prismatic, args.drive
+    joints, mode = args.joints, args.mode
+    jac, phi, phi_t, rhs_c, schur = work.jac, work.phi, work.phi_t, work.rhs_c, work.schur
     changed = False
     for level in range(2):
         q, qd = y[:nq], y[nq:2 * nq]
-        m = fill_constraints(t, q, qd, args[3], args[4], args[5], args[7], args[14], 0.0, jac,
-                             phi, phi_t, rhs_c)
+        m = fill_constraints(t, q, qd, revolute, prismatic, drive, joints, mode, 0.0, jac, phi,
+                             phi_t, rhs_c)
         largest = 0.0
         for i in range(m):
             if level == 0:
@@ -531,11 +543,11 @@ def project_onto_constraints(t, y, args, work, tolerance, rate_tolerance):
 
 
 @numba.njit(cache=True)
-def impulse_energy(y, nq, result):
+def impulse_energy(y, nq, impulse):
     """Book an impulse's dissipation and drive work in the energy states; the impulse."""
-    y[2 * nq] += result[1]
-    y[2 * nq + 1] += result[2]
-    return result[0]
+    y[2 * nq + DISSIPATED] += impulse.dissipated
+    y[2 * nq + WORK_IN] += impulse.work_in
+    return impulse.impulse
 
 
 # Dormand-Prince 5(4) tableau
@@ -554,11 +566,11 @@ def error_norm(err_vec, y, y_new, nq, rtol, atol):
     """RMS of the local error scaled by atol + rtol |y|; the energy integrals are outputs."""
     err = 0.0
     for i in range(y.size):
-        if i == 2 * nq or i == 2 * nq + 1:
+        if 2 * nq <= i < 2 * nq + ENERGY_STATES:
             continue
         scale = atol + rtol * max(abs(y[i]), abs(y_new[i]))
         err += (err_vec[i] / scale) ** 2
-    return math.sqrt(err / (y.size - 2))
+    return math.sqrt(err / (y.size - ENERGY_STATES))
 
 
 @numba.njit(cache=True)
@@ -570,7 +582,7 @@ def dopri5_step(t, y, h, k, y_new, err_vec, args, work):
             for r in range(s):
                 v += h * A[s, r] * k[r, i]
             y_new[i] = v
-        rhs(t + C[s] * h, y_new, k[s], *args, work)
+        rhs(t + C[s] * h, y_new, k[s], args, work)
     for i in range(y.size):
         e = 0.0
         for r in range(7):
@@ -598,74 +610,274 @@ def rosenbrock23_step(t, y, h, k, y_new, err_vec, args, work):
     for c in range(n):
         step = 1e-7 * max(abs(y[c]), 1e-6)
         ys[c] = y[c] + step
-        rhs(t, ys, col, *args, work)
+        rhs(t, ys, col, args, work)
         for r in range(n):
             jacobian[r, c] = (col[r] - f0[r]) / step
         ys[c] = y[c]
     dt = 1e-7 * max(t, h)
-    rhs(t + dt, y, col, *args, work)
+    rhs(t + dt, y, col, args, work)
     tdot = (col - f0) / dt
     w = -h * ROS_D * jacobian
     for i in range(n):
         w[i, i] += 1.0
     winv = np.linalg.inv(w)
     k1 = winv @ (f0 + h * ROS_D * tdot)
-    rhs(t + 0.5 * h, y + 0.5 * h * k1, f1, *args, work)
+    rhs(t + 0.5 * h, y + 0.5 * h * k1, f1, args, work)
     k2 = winv @ (f1 - k1) + k1
     y_new[:] = y + h * k2
-    rhs(t + h, y_new, k[6], *args, work)
+    rhs(t + h, y_new, k[6], args, work)
     k3 = winv @ (k[6] - ROS_E32 * (k2 - f1) - 2.0 * (k1 - f0) + h * ROS_D * tdot)
     err_vec[:] = h / 6.0 * (k1 - 2.0 * k2 + k3)
     return n + 4
 
 
+# ---- the phases of integrate
+# Passing the bundles to every helper (a dozen calls a step) made the slider-crank's run a
+# fifth slower than the monolithic loop; the helpers that run every step take the arrays they
+# use, and those for held contacts, Iwan elements and latches run only for mechanisms that
+# have them.
+
+@numba.njit(cache=True)
+def trial_step(method, t, y, h, k, y_new, err_vec, args, work, rtol, atol):
+    """A trial step from (t, y) over h into y_new: Rosenbrock 2(3), or DOPRI5 (adaptive or at
+    a fixed step alike). Returns (rhs calls, error norm: NaN if a stage left the law's table)."""
+    if method == ROSENBROCK23:
+        calls = rosenbrock23_step(t, y, h, k, y_new, err_vec, args, work)
+    else:
+        calls = dopri5_step(t, y, h, k, y_new, err_vec, args, work)
+    return calls, error_norm(err_vec, y, y_new, args.nq, rtol, atol)
+
+
+@numba.njit(cache=True)
+def onset_fraction(y_new, nq, joints, mode, contacts, onset_tol):
+    """Event location: the fraction of a trial step that ends it at the first contact onset
+    of a free joint. One that would end the step deeper than onset_tol is shortened by a
+    secant on delta, one that went in and out within the step (deeper at its end than at its
+    start) by half. 1: no onset."""
+    depth, in_contact = contacts.depth, contacts.in_contact
+    shorten = 1.0
+    for j in range(joints.shape[0]):
+        if not in_contact[j] and mode[j] == 0:
+            d_new = joint_kinematics(y_new[:nq], y_new[nq:2 * nq], joints[j]).delta
+            if d_new > onset_tol and depth[j] < -onset_tol:
+                shorten = min(shorten, 0.99 * (-depth[j]) / (d_new - depth[j]))
+            elif d_new > max(depth[j], 0.0) + onset_tol:   # back within the step: bisect
+                shorten = min(shorten, 0.5)
+    return shorten
+
+
+@numba.njit(cache=True)
+def release_fraction(mode, normal, contacts, rtol):
+    """Event location: the fraction of a trial step that ends it where a held contact's force
+    (normal: at the step's end, the last rhs evaluation's multipliers) turns pulling, by a
+    secant on the force. 1: no release."""
+    held_force, held_peak = contacts.held_force, contacts.held_peak
+    shorten = 1.0
+    for j in range(mode.size):
+        if mode[j] == 1:
+            f_new = normal[j]
+            if held_force[j] > 0.0 and f_new < -1e-3 * math.sqrt(rtol) * held_peak[j]:
+                shorten = min(shorten, 0.99 * held_force[j] / (held_force[j] - f_new))
+    return shorten
+
+
+@numba.njit(cache=True)
+def latch_fraction(y, y_new, nq, torsion, latched):
+    """Event location: the fraction of a trial step that ends it where a latch reaches its
+    angle (secant on the angle). 1: no latch."""
+    shorten = 1.0
+    for r in range(torsion.shape[0]):
+        if latched[r] == 0.0 and int(torsion[r, TORSION_KIND]) == LATCH:
+            a_new = relative_angle(y_new[:nq], y_new[nq:2 * nq], torsion[r]).angle
+            if a_new > LATCH_TOL:
+                a_old = relative_angle(y[:nq], y[nq:2 * nq], torsion[r]).angle
+                shorten = min(shorten, 0.99 * (-a_old) / (a_new - a_old))
+    return shorten
+
+
+@numba.njit(cache=True)
+def release_held_contacts(t, y, args, work, contacts):
+    """Accepted step: the held contacts' forces (the multipliers at the step's end); one that
+    pulls releases, and an approach rate left by drift is removed (an impulse with e = 0).
+    Returns whether a contact was released."""
+    nq, joints, mode, normal = args.nq, args.joints, args.mode, work.normal
+    held_force, held_peak = contacts.held_force, contacts.held_peak
+    changed = False
+    for j in range(joints.shape[0]):
+        if mode[j] == 1:
+            held_force[j] = normal[j]
+            held_peak[j] = max(held_peak[j], held_force[j])
+            if held_force[j] < 0.0:   # released; an approach rate left by drift is removed
+                if joint_kinematics(y[:nq], y[nq:2 * nq], joints[j]).rate > 0.0:
+                    impulse_energy(y, nq, apply_impulse(t, y, args, work, j, 0.0))
+                mode[j] = 0
+                changed = True
+    return changed
+
+
+@numba.njit(cache=True)
+def doubled(a):
+    """a in the first rows of a zeroed array of twice its rows (a buffer that is full)."""
+    out = np.zeros((2 * a.shape[0],) + a.shape[1:], a.dtype)
+    out[:a.shape[0]] = a
+    return out
+
+
+@numba.njit(cache=True)
+def log_impact(log, impacts, t, j, rate, impulse):
+    """The impacts-th row of the impact log (layout.LOG_*), the log doubled when full; returns
+    the log."""
+    if impacts > log.shape[0]:
+        log = doubled(log)
+    row = impacts - 1
+    log[row, LOG_TIME], log[row, LOG_JOINT] = t, j
+    log[row, LOG_RATE], log[row, LOG_IMPULSE] = rate, impulse
+    return log
+
+
+@numba.njit(cache=True)
+def onsets_and_impacts(t, y, args, work, contacts, onset_tol, speed_floor, log, impacts):
+    """Accepted step, per clearance joint: the penetration; an impulse joint arriving
+    (approaching within onset_tol) takes its impact, and one too slow to rebound is held in
+    contact; a continuous joint arriving records its impact speed v0 (at least speed_floor)
+    and restarts its Iwan element unloaded; one that left contact is marked free. Every
+    impact and onset goes into the log. Returns (whether anything happened, impacts, log)."""
+    nq, joints, mode, speeds = args.nq, args.joints, args.mode, args.speeds
+    depth, in_contact = contacts.depth, contacts.in_contact
+    changed = False
+    for j in range(joints.shape[0]):
+        kin = joint_kinematics(y[:nq], y[nq:2 * nq], joints[j])
+        delta, rate = kin.delta, kin.rate
+        depth[j] = delta
+        onset, impulse = False, 0.0
+        if int(joints[j, JOINT_IMPACT]) != CONTINUOUS:
+            if mode[j] == 0 and delta > -onset_tol and rate > 0.0:
+                restitution = joints[j, JOINT_RESTITUTION]
+                e = restitution if restitution * rate >= joints[j, JOINT_REST_SPEED] else 0.0
+                impulse = impulse_energy(y, nq, apply_impulse(t, y, args, work, j, e))
+                if e == 0.0:   # too slow to rebound: held contact (the third state)
+                    mode[j] = 1
+                    contacts.held_force[j] = contacts.held_peak[j] = 0.0
+                speeds[j] = rate
+                onset = True
+        elif not in_contact[j] and delta > -onset_tol:
+            in_contact[j] = True
+            speeds[j] = max(rate, speed_floor)
+            if int(joints[j, JOINT_FRICTION_LAW]) == IWAN:   # a new contact point: unloaded
+                index = int(joints[j, JOINT_STATE])
+                y[index + STATE_TRAVEL] = y[index + STATE_STRETCH] = 0.0
+            onset = True
+        elif in_contact[j] and delta < -onset_tol:
+            in_contact[j] = False
+        if onset:
+            changed = True
+            impacts += 1
+            log = log_impact(log, impacts, t, j, rate, impulse)
+    return changed, impacts, log
+
+
+@numba.njit(cache=True)
+def iwan_slider_return(y, args, contacts):
+    """Accepted step: the Iwan slider of every joint in contact held to |k1 z| <= mu F_n
+    (laws.friction.iwan_return_map at the accepted state). Returns whether a slider moved."""
+    nq, joints, speeds, tables = args.nq, args.joints, args.speeds, args.tables
+    in_contact = contacts.in_contact
+    changed = False
+    for j in range(joints.shape[0]):
+        if int(joints[j, JOINT_FRICTION_LAW]) == IWAN and in_contact[j]:
+            f_n = joint_forces(y[:nq], y[nq:2 * nq], joints[j], speeds[j], args.grid_log0,
+                               args.grid_step, tables[j], y).f_n
+            stretch = int(joints[j, JOINT_STATE]) + STATE_STRETCH
+            held = friction.iwan_return_map(y[stretch], joints[j, IWAN_K1], joints[j, IWAN_MU] * f_n)
+            if held != y[stretch]:
+                y[stretch] = held
+                changed = True
+    return changed
+
+
+@numba.njit(cache=True)
+def engage_latches(y, nq, torsion, latched):
+    """Latch every latch that has reached its angle (to within LATCH_TOL). Returns whether
+    one engaged."""
+    changed = False
+    for r in range(torsion.shape[0]):
+        if latched[r] == 0.0 and int(torsion[r, TORSION_KIND]) == LATCH and \
+                relative_angle(y[:nq], y[nq:2 * nq], torsion[r]).angle > -LATCH_TOL:
+            latched[r] = 1.0
+            changed = True
+    return changed
+
+
+@numba.njit(cache=True)
+def new_record(capacity, ny, nj, nt):
+    """Buffers for `capacity` accepted steps (layout.Record; a column for absent clearance
+    joints or torsion elements keeps the shapes)."""
+    return Record(np.empty(capacity), np.empty((capacity, ny)), np.empty((capacity, max(nj, 1))),
+                  np.zeros((capacity, max(nj, 1)), np.int64), np.zeros((capacity, max(nt, 1))))
+
+
+@numba.njit(cache=True)
+def recorded(record, count, t, y, speeds, mode, latched):
+    """Accepted step `count` (time, state, impact speeds, contact modes, latch flags) stored
+    in the record, its buffers doubled when full; returns the record."""
+    if count == record.times.size:
+        record = Record(doubled(record.times), doubled(record.states), doubled(record.speeds),
+                        doubled(record.modes), doubled(record.latched))
+    record.times[count], record.states[count] = t, y
+    record.speeds[count, :speeds.size], record.modes[count, :mode.size] = speeds, mode
+    record.latched[count, :latched.size] = latched
+    return record
+
+
+@numba.njit(cache=True)
+def next_step_size(h, err, err_prev, exponent):
+    """PI step-size control after an accepted step: h 0.9 err^(-0.7 k) err_prev^(0.4 k), within
+    0.2 h to 5 h. Returns (the next h, the error to remember)."""
+    factor = 0.9 * err ** (-0.7 * exponent) * err_prev ** (0.4 * exponent) if err > 0 else 5.0
+    return h * min(5.0, max(0.2, factor)), max(err, 1e-4)
+
+
 @numba.njit(cache=True)
 def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_floor, max_steps):
     """Integrate from t = 0, continuing from the impact speeds, latches and contact modes in
-    args, with DOPRI5 (adaptive), DOPRI5 at the fixed step max_step (no error control, no
-    event location: for comparison) or Rosenbrock 2(3) (adaptive, for stiff contact). Returns
-    times, states, impact speeds, contact modes and latch flags of every accepted step, the
-    impact log (time, joint, approach rate, impulse), counters (accepted, rejected, rhs
-    calls, impacts) and a status code."""
-    nq, joints, torsion = args[0], args[7], args[12]
-    speeds, latched, mode = args[ARG_SPEEDS], args[ARG_LATCHED], args[ARG_MODE]
-    ny = y0.size
-    nj = joints.shape[0]
+    args (layout.KernelArgs), with DOPRI5 (adaptive), DOPRI5 at the fixed step max_step (no
+    error control, no event location: for comparison) or Rosenbrock 2(3) (adaptive, for
+    stiff contact). Returns the layout.Integration: times, states, impact speeds, contact
+    modes and latch flags of every accepted step, the impact log (layout.LOG_*), counters
+    (accepted, rejected, rhs calls, impacts), a status code and the time reached."""
+    nq, joints, torsion = args.nq, args.joints, args.torsion
+    speeds, latched, mode = args.speeds, args.latched, args.mode
+    ny, nj = y0.size, joints.shape[0]
+    impulse_joints = iwan_joints = latches = False   # what this mechanism needs checked
+    for j in range(nj):
+        impulse_joints |= int(joints[j, JOINT_IMPACT]) != CONTINUOUS
+        iwan_joints |= int(joints[j, JOINT_FRICTION_LAW]) == IWAN
+    for r in range(torsion.shape[0]):
+        latches |= int(torsion[r, TORSION_KIND]) == LATCH
     adaptive = method != DOPRI5_FIXED
     event_dt = 1e-8 * max_step   # a release is located to within this time
     exponent = 1.0 / 3.0 if method == ROSENBROCK23 else 0.2
-    capacity = 4096
-    times = np.empty(capacity)
-    states = np.empty((capacity, ny))
-    speeds_out = np.empty((capacity, max(nj, 1)))
-    modes_out = np.zeros((capacity, max(nj, 1)), np.int64)
-    latched_out = np.zeros((capacity, max(torsion.shape[0], 1)))
-    log = np.empty((256, 4))
-    for r in range(torsion.shape[0]):   # a latch given as engaged stays so
-        angle = relative_angle(y0[:nq], y0[nq:2 * nq], torsion[r])[0]
-        if int(torsion[r, 5]) == LATCH and angle > -LATCH_TOL:
-            latched[r] = 1.0
+    engage_latches(y0, nq, torsion, latched)   # a latch given as engaged stays so
     t, y = 0.0, y0.copy()
     k = np.empty((7, ny))
     y_new = np.empty(ny)
     err_vec = np.empty(ny)
-    work = workspace(nq, args[3], args[4], args[5], nj)
-    rhs(t, y, k[0], *args, work)
+    work = workspace(args)
+    normal = work.normal
+    rhs(t, y, k[0], args, work)
     calls, accepted, rejected, impacts = 1, 0, 0, 0
     h = max_step if not adaptive else min(max_step, 1e-6)
     err_prev = 1e-4
-    times[0], states[0], speeds_out[0, :nj], modes_out[0, :nj] = t, y, speeds, mode
-    latched_out[0, :torsion.shape[0]] = latched
+    record = recorded(new_record(4096, ny, nj, torsion.shape[0]), 0, t, y, speeds, mode, latched)
     count = 1
+    log = np.empty((256, LOG_COLUMNS))
     status = OK
     last_nan = False
-    depth = np.zeros(nj)                  # penetration at the last accepted state
-    in_contact = np.zeros(nj, np.bool_)   # between an onset and the next separation
-    held_force = np.zeros(nj)             # normal force of a held contact (impulse joints)
-    held_peak = np.zeros(nj)
+    contacts = Contacts(np.zeros(nj), np.zeros(nj, np.bool_), np.zeros(nj), np.zeros(nj))
     for j in range(nj):
-        depth[j] = joint_kinematics(y[:nq], y[nq:2 * nq], joints[j])[0]
-        in_contact[j] = depth[j] > -onset_tol and int(joints[j, 18]) == CONTINUOUS
+        contacts.depth[j] = joint_kinematics(y[:nq], y[nq:2 * nq], joints[j]).delta
+        contacts.in_contact[j] = (contacts.depth[j] > -onset_tol
+                                  and int(joints[j, JOINT_IMPACT]) == CONTINUOUS)
     while t < t_end:
         if accepted + rejected >= max_steps:
             status = TOO_MANY_STEPS
@@ -674,11 +886,8 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
         if h < 1e-15 * max(t, 1e-3):
             status = BLOWN_UP if last_nan else STEP_TOO_SMALL
             break
-        if method == ROSENBROCK23:
-            calls += rosenbrock23_step(t, y, h, k, y_new, err_vec, args, work)
-        else:
-            calls += dopri5_step(t, y, h, k, y_new, err_vec, args, work)
-        err = error_norm(err_vec, y, y_new, nq, rtol, atol)
+        step_calls, err = trial_step(method, t, y, h, k, y_new, err_vec, args, work, rtol, atol)
+        calls += step_calls
         last_nan = not math.isfinite(err)
         if last_nan:   # a stage went beyond the tabulated law: much smaller step
             rejected += 1
@@ -688,110 +897,61 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
             rejected += 1
             h *= max(0.2, 0.9 * err ** -exponent)
             continue
-        shorten = 1.0
-        if adaptive:
-            # a free joint would end the step in contact: shorten the step to end at the onset
-            for j in range(nj):
-                if not in_contact[j] and mode[j] == 0:
-                    d_new = joint_kinematics(y_new[:nq], y_new[nq:2 * nq], joints[j])[0]
-                    if d_new > onset_tol and depth[j] < -onset_tol:
-                        shorten = min(shorten, 0.99 * (-depth[j]) / (d_new - depth[j]))
-                    elif d_new > max(depth[j], 0.0) + onset_tol:   # back within the step: bisect
-                        shorten = min(shorten, 0.5)
-                elif mode[j] == 1 and h > event_dt:   # a held contact would pull: end at the release
-                    f_new = work[6][j]
-                    if held_force[j] > 0.0 and f_new < -1e-3 * math.sqrt(rtol) * held_peak[j]:
-                        shorten = min(shorten, 0.99 * held_force[j] / (held_force[j] - f_new))
-            for r in range(torsion.shape[0]):
-                if latched[r] == 0.0 and int(torsion[r, 5]) == LATCH:
-                    a_new = relative_angle(y_new[:nq], y_new[nq:2 * nq], torsion[r])[0]
-                    if a_new > LATCH_TOL:
-                        a_old = relative_angle(y[:nq], y[nq:2 * nq], torsion[r])[0]
-                        shorten = min(shorten, 0.99 * (-a_old) / (a_new - a_old))
-        if shorten < 1.0:
-            rejected += 1
-            h *= max(shorten, 1e-3)
-            continue
+        if adaptive:   # event location: the step ends at its first event
+            shorten = onset_fraction(y_new, nq, joints, mode, contacts, onset_tol)
+            if impulse_joints and h > event_dt:
+                shorten = min(shorten, release_fraction(mode, normal, contacts, rtol))
+            if latches:
+                shorten = min(shorten, latch_fraction(y, y_new, nq, torsion, latched))
+            if shorten < 1.0:
+                rejected += 1
+                h *= max(shorten, 1e-3)
+                continue
         t += h
         y[:] = y_new
         accepted += 1
         k[0, :] = k[6]  # first same as last
-        changed = False
-        for j in range(nj):
-            if mode[j] == 1:
-                held_force[j] = work[6][j]
-                held_peak[j] = max(held_peak[j], held_force[j])
-                if held_force[j] < 0.0:   # released; an approach rate left by drift is removed
-                    if joint_kinematics(y[:nq], y[nq:2 * nq], joints[j])[5] > 0.0:
-                        impulse_energy(y, nq, apply_impulse(t, y, args, work, j, 0.0))
-                    mode[j] = 0
-                    changed = True
-        for j in range(nj):
-            delta, _, _, _, _, rate, _ = joint_kinematics(y[:nq], y[nq:2 * nq], joints[j])
-            depth[j] = delta
-            onset, impulse = False, 0.0
-            if int(joints[j, 18]) != CONTINUOUS:
-                if mode[j] == 0 and delta > -onset_tol and rate > 0.0:
-                    e = joints[j, 19] if joints[j, 19] * rate >= joints[j, 20] else 0.0
-                    impulse = impulse_energy(y, nq, apply_impulse(t, y, args, work, j, e))
-                    if e == 0.0:   # too slow to rebound: held contact (the third state)
-                        mode[j] = 1
-                        held_force[j] = held_peak[j] = 0.0
-                    speeds[j] = rate
-                    onset = True
-            elif not in_contact[j] and delta > -onset_tol:
-                in_contact[j] = True
-                speeds[j] = max(rate, speed_floor)
-                index = int(joints[j, 17])
-                if int(joints[j, 9]) == IWAN:   # a new contact point: the element starts unloaded
-                    y[index] = y[index + 1] = 0.0
-                onset = True
-            elif in_contact[j] and delta < -onset_tol:
-                in_contact[j] = False
-            if onset:
-                changed = True
-                impacts += 1
-                if impacts > log.shape[0]:
-                    log2 = np.empty((2 * log.shape[0], 4))
-                    log2[:log.shape[0]] = log
-                    log = log2
-                log[impacts - 1, 0], log[impacts - 1, 1] = t, j
-                log[impacts - 1, 2], log[impacts - 1, 3] = rate, impulse
-        for j in range(nj):   # the Iwan slider's return map: |k1 z| <= mu F_n
-            if int(joints[j, 9]) == IWAN and in_contact[j]:
-                _, f_n, _, _, _, _, _, _, _, _, _ = joint_forces(
-                    y[:nq], y[nq:2 * nq], joints[j], speeds[j], args[9], args[10], args[11][j], y)
-                index = int(joints[j, 17])
-                limit = joints[j, 12] * f_n / joints[j, 10]
-                if abs(y[index + 1]) > limit:
-                    y[index + 1] = math.copysign(limit, y[index + 1])
-                    changed = True
-        for r in range(torsion.shape[0]):
-            if latched[r] == 0.0 and int(torsion[r, 5]) == LATCH and \
-                    relative_angle(y[:nq], y[nq:2 * nq], torsion[r])[0] > -LATCH_TOL:
-                latched[r] = 1.0
-                changed = True
-        if project_onto_constraints(t, y, args, work, onset_tol, onset_tol / max_step) or changed:
-            rhs(t, y, k[0], *args, work)
+        # the accepted step's updates, in order; any of them means f(t, y) is evaluated again
+        changed = impulse_joints and release_held_contacts(t, y, args, work, contacts)
+        arrived, impacts, log = onsets_and_impacts(t, y, args, work, contacts, onset_tol,
+                                                   speed_floor, log, impacts)
+        slid = iwan_joints and iwan_slider_return(y, args, contacts)
+        engaged = latches and engage_latches(y, nq, torsion, latched)
+        if project_onto_constraints(t, y, args, work, onset_tol, onset_tol / max_step) or \
+                changed or arrived or slid or engaged:
+            rhs(t, y, k[0], args, work)
             calls += 1
-        if count == capacity:
-            capacity *= 2
-            times2 = np.empty(capacity)
-            states2 = np.empty((capacity, ny))
-            speeds2 = np.empty((capacity, max(nj, 1)))
-            modes2 = np.zeros((capacity, max(nj, 1)), np.int64)
-            latched2 = np.zeros((capacity, max(torsion.shape[0], 1)))
-            times2[:count], states2[:count], speeds2[:count], modes2[:count] = \
-                times, states, speeds_out, modes_out
-            latched2[:count] = latched_out
-            times, states, speeds_out, modes_out, latched_out = times2, states2, speeds2, modes2, latched2
-        times[count], states[count], speeds_out[count, :nj], modes_out[count, :nj] = t, y, speeds, mode
-        latched_out[count, :torsion.shape[0]] = latched
+        record = recorded(record, count, t, y, speeds, mode, latched)
         count += 1
         if adaptive:
-            factor = 0.9 * err ** (-0.7 * exponent) * err_prev ** (0.4 * exponent) if err > 0 else 5.0
-            h *= min(5.0, max(0.2, factor))
-            err_prev = max(err, 1e-4)
+            h, err_prev = next_step_size(h, err, err_prev, exponent)
     counters = np.array([accepted, rejected, calls, impacts])
-    return (times[:count], states[:count], speeds_out[:count], modes_out[:count],
-            latched_out[:count], log[:impacts], counters, status, t)
+    return Integration(record.times[:count], record.states[:count], record.speeds[:count],
+                       record.modes[:count], record.latched[:count], log[:impacts], counters,
+                       status, t)
+
+
+# ---- the compiled code follows the laws and the layout
+# numba's cache checks only the file a compiled function is defined in ("Notes on caching"
+# in numba's documentation): the kernel compiles in the laws of pinbore.laws.friction and
+# .dissipative and the constants of reduced.layout, so an edit there alone would leave the
+# kernel's cached code stale. A digest of those files, kept beside the cache, drops the
+# kernel's cache index when they change, and the kernel compiles afresh once.
+COMPILED_IN = (friction.__file__, dissipative.__file__, layout.__file__)
+
+
+def _follow_compiled_in() -> None:
+    digest = hashlib.sha256(b"".join(Path(f).read_bytes() for f in COMPILED_IN)).hexdigest()
+    compiled = [f for f in globals().values() if isinstance(f, numba.core.registry.CPUDispatcher)]
+    stamp = Path(compiled[0].stats.cache_path) / "kernel.compiled_in.sha256"
+    try:
+        if stamp.exists() and stamp.read_text() == digest:
+            return
+        for function in compiled:
+            function._cache.flush()
+        stamp.write_text(digest)
+    except OSError:
+        pass   # no writable cache: numba compiles afresh anyway
+
+
+_follow_compiled_in()

@@ -12,6 +12,19 @@ from pinbore.calibration import lawsfile
 from pinbore.core.errors import InputError
 from pinbore.laws import dissipative, elastic
 from pinbore.reduced import kernel
+from pinbore.reduced.layout import (
+    CONTINUOUS, COULOMB, COULOMB_MU, DAHL, DAHL_MU, DAHL_SIGMA, DRIVE_ANGLE, DRIVE_BODY, DRIVE_COLUMNS,
+    DRIVE_SPEED, ENERGY_STATES, IWAN, IWAN_K1, IWAN_K2, IWAN_MU, JOINT_BEARING_BODY,
+    JOINT_BEARING_RADIUS, JOINT_BEARING_X, JOINT_BEARING_Y, JOINT_CHI, JOINT_CLEARANCE, JOINT_COLUMNS,
+    JOINT_FRICTION_LAW, JOINT_IMPACT, JOINT_JOURNAL_BODY, JOINT_JOURNAL_X, JOINT_JOURNAL_Y,
+    JOINT_REST_SPEED, JOINT_RESTITUTION, JOINT_STATE, LATCH, LINEAR, LINEAR_ALPHA, LINEAR_MU_STATIC,
+    LUGRE, LUGRE_MU_COULOMB, LUGRE_MU_STATIC, LUGRE_SIGMA0, LUGRE_SIGMA1, LUGRE_SIGMA2,
+    LUGRE_STRIBECK_SPEED, NEWTON, NO_FRICTION, POISSON, PRISMATIC_ANGLE, PRISMATIC_AXIS_ANGLE,
+    PRISMATIC_AXIS_X, PRISMATIC_AXIS_Y, PRISMATIC_BODY, PRISMATIC_COLUMNS, PRISMATIC_X, PRISMATIC_Y,
+    REGULARISATION_V0, REGULARISATION_V1, REVOLUTE_BODY_I, REVOLUTE_BODY_J, REVOLUTE_COLUMNS,
+    REVOLUTE_X_I, REVOLUTE_X_J, REVOLUTE_Y_I, REVOLUTE_Y_J, SPRING, STOP, STRIBECK, STRIBECK_MU_MIN,
+    STRIBECK_MU_STATIC, STRIBECK_V_MIN, TORSION_BODY_I, TORSION_BODY_J, TORSION_COLUMNS,
+    TORSION_DAMPING, TORSION_FREE_ANGLE, TORSION_KIND, TORSION_STIFFNESS, KernelArgs, row)
 from pinbore.reduced.scene import GROUND, ReducedScene
 
 GRID_POINTS = 600
@@ -34,7 +47,7 @@ class Model:
     grid_step: float
     tables: np.ndarray
     calibration: dict | None      # the laws file, when a calibrated law is used
-    torsion: np.ndarray           # (k, 6): body i, body j, stiffness, damping, free angle, kind
+    torsion: np.ndarray           # (k, TORSION_COLUMNS): see reduced.layout
     friction_states: int          # integrator states of LuGre, Dahl (1) and Iwan (2) joints
     y0: np.ndarray
 
@@ -42,18 +55,21 @@ class Model:
     def nq(self) -> int:
         return self.minv.size
 
-    def kernel_args(self, speeds=None, latched=None, mode=None, drive=None) -> tuple:
-        """The argument tuple of kernel.rhs and kernel.integrate: impact speeds (default: the
+    def kernel_args(self, speeds=None, latched=None, mode=None, drive=None) -> KernelArgs:
+        """The arguments of kernel.rhs and kernel.integrate: impact speeds (default: the
         floor), latch flags and contact modes (the integrator's, given here to evaluate a
         recorded step or to continue a run; copied, as the integrator updates them in place),
         and the drive row (default: the scene's)."""
         nj, nt = self.joints.shape[0], self.torsion.shape[0]
-        return (self.nq, self.minv, self.gravity, self.revolute, self.prismatic,
-                self.drive if drive is None else drive, self.scene.integrator.baumgarte, self.joints,
-                np.full(nj, SPEED_FLOOR) if speeds is None else np.array(speeds, float),
-                self.grid_log0, self.grid_step, self.tables, self.torsion,
-                np.zeros(nt) if latched is None else np.array(latched, float),
-                np.zeros(nj, np.int64) if mode is None else np.array(mode, np.int64))
+        gravity_x, gravity_y = self.gravity
+        return KernelArgs(
+            nq=self.nq, minv=self.minv, gravity_x=gravity_x, gravity_y=gravity_y, revolute=self.revolute,
+            prismatic=self.prismatic, drive=self.drive if drive is None else drive,
+            baumgarte=self.scene.integrator.baumgarte, joints=self.joints,
+            speeds=np.full(nj, SPEED_FLOOR) if speeds is None else np.array(speeds, float),
+            grid_log0=self.grid_log0, grid_step=self.grid_step, tables=self.tables, torsion=self.torsion,
+            latched=np.zeros(nt) if latched is None else np.array(latched, float),
+            mode=np.zeros(nj, np.int64) if mode is None else np.array(mode, np.int64))
 
     def elastic_energy(self, joint: int, delta: float) -> float:
         """U(delta) = int_0^delta F_el, exact for the log-log interpolant the dynamics use:
@@ -80,14 +96,14 @@ def build(scene: ReducedScene, source: str, base: Path) -> Model:
     index = {name: i for i, name in enumerate(names)} | {GROUND: -1}
     _check_connected(scene, names)
     minv = np.array([[1 / b.mass, 1 / b.mass, 1 / b.inertia] for b in scene.bodies]).ravel()
-    revolute = np.array([[index[j.body_i], *j.point_i, index[j.body_j], *j.point_j]
-                         for j in scene.joints if j.type == "revolute"], float).reshape(-1, 6)
-    prismatic = np.array([[index[j.body], *j.point, *j.axis_point, math.radians(j.axis_deg),
-                           math.radians(scene.bodies[index[j.body]].angle_deg)]
-                          for j in scene.joints if j.type == "prismatic"], float).reshape(-1, 7)
-    drive = (np.array([index[scene.drive.body], scene.drive.speed_rpm * 2 * math.pi / 60,
-                       math.radians(scene.drive.angle0_deg)]) if scene.drive
-             else np.array([-1.0, 0.0, 0.0]))
+    revolute = np.array([revolute_row(j, index) for j in scene.joints if j.type == "revolute"],
+                        float).reshape(-1, REVOLUTE_COLUMNS)
+    prismatic = np.array([prismatic_row(j, index, scene) for j in scene.joints if j.type == "prismatic"],
+                         float).reshape(-1, PRISMATIC_COLUMNS)
+    drive = np.array(row(DRIVE_COLUMNS, {DRIVE_BODY: index[scene.drive.body],
+                                         DRIVE_SPEED: scene.drive.speed_rpm * 2 * math.pi / 60,
+                                         DRIVE_ANGLE: math.radians(scene.drive.angle0_deg)})
+                     if scene.drive else row(DRIVE_COLUMNS, {DRIVE_BODY: -1.0}))
     laws_data = _laws_file(scene, base, source)
     joints, tables, friction_states = [], [], 0
     # penetrations up to a tenth of the journal radius are tabulated; beyond, the run has blown up
@@ -97,13 +113,20 @@ def build(scene: ReducedScene, source: str, base: Path) -> Model:
     deltas = np.exp(grid_log0 + grid_step * np.arange(GRID_POINTS))
     for c in scene.clearance_joints:
         chi = 0.0 if c.damping_law == "none" else dissipative.HYSTERESIS[c.damping_law](c.restitution)
-        code, params, states = friction_block(c.friction)
+        code, parameters, states = friction_block(c.friction)
         state = -1
         if states:
-            state, friction_states = 2 * len(minv) + 2 + friction_states, friction_states + states
-        joints.append([index[c.bearing_body], *c.bearing_point, index[c.journal_body],
-                       *c.journal_point, c.bearing_radius - c.journal_radius, c.bearing_radius,
-                       chi, code, *params, state, IMPACT[c.impact], c.restitution, c.rest_speed])
+            state = 2 * len(minv) + ENERGY_STATES + friction_states
+            friction_states += states
+        (bearing_x, bearing_y), (journal_x, journal_y) = c.bearing_point, c.journal_point
+        joints.append(row(JOINT_COLUMNS, {
+            JOINT_BEARING_BODY: index[c.bearing_body], JOINT_BEARING_X: bearing_x,
+            JOINT_BEARING_Y: bearing_y, JOINT_JOURNAL_BODY: index[c.journal_body],
+            JOINT_JOURNAL_X: journal_x, JOINT_JOURNAL_Y: journal_y,
+            JOINT_CLEARANCE: c.bearing_radius - c.journal_radius,
+            JOINT_BEARING_RADIUS: c.bearing_radius, JOINT_CHI: chi, JOINT_FRICTION_LAW: code,
+            JOINT_STATE: state, JOINT_IMPACT: IMPACT[c.impact], JOINT_RESTITUTION: c.restitution,
+            JOINT_REST_SPEED: c.rest_speed} | parameters))
         if c.impact == "continuous":
             force = normal_force(c, deltas, laws_data, source)
             force[deltas > BLOW_UP_FRACTION * c.journal_radius] = np.nan
@@ -111,42 +134,63 @@ def build(scene: ReducedScene, source: str, base: Path) -> Model:
             force = np.full(GRID_POINTS, np.nan)   # rigid: no law, never evaluated
         tables.append(np.log(force))
     model = Model(scene, names, minv, np.asarray(scene.gravity, float), revolute, prismatic, drive,
-                  np.array(joints, float).reshape(-1, kernel.JOINT_COLUMNS), grid_log0, grid_step,
+                  np.array(joints, float).reshape(-1, JOINT_COLUMNS), grid_log0, grid_step,
                   np.array(tables).reshape(len(joints), GRID_POINTS), laws_data,
                   torsion_rows(scene, index), friction_states, np.empty(0))
     model.y0 = initial_state(model)
     return model
 
 
-IMPACT = {"continuous": kernel.CONTINUOUS, "newton": kernel.NEWTON, "poisson": kernel.POISSON}
+IMPACT = {"continuous": CONTINUOUS, "newton": NEWTON, "poisson": POISSON}
+TORSION_KINDS = {"spring": SPRING, "stop": STOP, "latch": LATCH}
+
+
+def revolute_row(j, index) -> list:
+    (x_i, y_i), (x_j, y_j) = j.point_i, j.point_j
+    return row(REVOLUTE_COLUMNS, {
+        REVOLUTE_BODY_I: index[j.body_i], REVOLUTE_X_I: x_i, REVOLUTE_Y_I: y_i,
+        REVOLUTE_BODY_J: index[j.body_j], REVOLUTE_X_J: x_j, REVOLUTE_Y_J: y_j})
+
+
+def prismatic_row(j, index, scene) -> list:
+    (x, y), (axis_x, axis_y) = j.point, j.axis_point
+    return row(PRISMATIC_COLUMNS, {
+        PRISMATIC_BODY: index[j.body], PRISMATIC_X: x, PRISMATIC_Y: y, PRISMATIC_AXIS_X: axis_x,
+        PRISMATIC_AXIS_Y: axis_y, PRISMATIC_AXIS_ANGLE: math.radians(j.axis_deg),
+        PRISMATIC_ANGLE: math.radians(scene.bodies[index[j.body]].angle_deg)})
 
 
 def torsion_rows(scene, index) -> np.ndarray:
     """Torsion springs, stops and latches; angles relative to the bodies' initial relative angle."""
     angle = {b.name: math.radians(b.angle_deg) for b in scene.bodies} | {GROUND: 0.0}
-    return np.array([[index[t.body_i], index[t.body_j], t.stiffness, t.damping,
-                      angle[t.body_j] - angle[t.body_i] + math.radians(t.free_angle_deg),
-                      {"spring": kernel.SPRING, "stop": kernel.STOP, "latch": kernel.LATCH}[t.type]]
-                     for t in scene.torsion], float).reshape(-1, 6)
+    return np.array([row(TORSION_COLUMNS, {
+        TORSION_BODY_I: index[t.body_i], TORSION_BODY_J: index[t.body_j],
+        TORSION_STIFFNESS: t.stiffness, TORSION_DAMPING: t.damping,
+        TORSION_FREE_ANGLE: angle[t.body_j] - angle[t.body_i] + math.radians(t.free_angle_deg),
+        TORSION_KIND: TORSION_KINDS[t.type]})
+        for t in scene.torsion], float).reshape(-1, TORSION_COLUMNS)
 
 
 def friction_block(f):
-    """(kernel law code, 7 parameters, number of integrator states) of a friction table.
-    Static laws put their regularisation speeds v0, v1 in the last two parameters."""
+    """(law code, {joint column: parameter}, number of integrator states) of a friction table
+    (the columns: reduced.layout). The static laws carry their regularisation speeds v0, v1."""
     if f is None:
-        return kernel.NO_FRICTION, [0.0] * 7, 0
+        return NO_FRICTION, {}, 0
     if f.law == "coulomb_ambrosio":
-        return kernel.COULOMB, [f.mu, 0, 0, 0, 0, f.v0, f.v1], 0
+        return COULOMB, {COULOMB_MU: f.mu, REGULARISATION_V0: f.v0, REGULARISATION_V1: f.v1}, 0
     if f.law == "stribeck":
-        return kernel.STRIBECK, [f.mu_static, f.mu_min, f.v_min, 0, 0, f.v0, f.v1], 0
+        return STRIBECK, {STRIBECK_MU_STATIC: f.mu_static, STRIBECK_MU_MIN: f.mu_min,
+                          STRIBECK_V_MIN: f.v_min, REGULARISATION_V0: f.v0, REGULARISATION_V1: f.v1}, 0
     if f.law == "linear":
-        return kernel.LINEAR, [f.mu_static, f.alpha, 0, 0, 0, f.v0, f.v1], 0
+        return LINEAR, {LINEAR_MU_STATIC: f.mu_static, LINEAR_ALPHA: f.alpha,
+                        REGULARISATION_V0: f.v0, REGULARISATION_V1: f.v1}, 0
     if f.law == "lugre":
-        return kernel.LUGRE, [f.mu_coulomb, f.mu_static, f.stribeck_speed, f.sigma0, f.sigma1,
-                              f.sigma2, 0], 1
+        return LUGRE, {LUGRE_MU_COULOMB: f.mu_coulomb, LUGRE_MU_STATIC: f.mu_static,
+                       LUGRE_STRIBECK_SPEED: f.stribeck_speed, LUGRE_SIGMA0: f.sigma0,
+                       LUGRE_SIGMA1: f.sigma1, LUGRE_SIGMA2: f.sigma2}, 1
     if f.law == "dahl":
-        return kernel.DAHL, [f.mu, f.sigma, 0, 0, 0, 0, 0], 1
-    return kernel.IWAN, [f.k1, f.k2, f.mu, 0, 0, 0, 0], 2
+        return DAHL, {DAHL_MU: f.mu, DAHL_SIGMA: f.sigma}, 1
+    return IWAN, {IWAN_K1: f.k1, IWAN_K2: f.k2, IWAN_MU: f.mu}, 2
 
 
 def normal_force(c, deltas, laws_data, source) -> np.ndarray:
@@ -204,10 +248,18 @@ def _check_connected(scene, names) -> None:
                          "(disconnected mechanism)")
 
 
+# a clearance joint closed: the revolute joint of its bearing and journal centres
+CLOSED = ((REVOLUTE_BODY_I, JOINT_BEARING_BODY), (REVOLUTE_X_I, JOINT_BEARING_X),
+          (REVOLUTE_Y_I, JOINT_BEARING_Y), (REVOLUTE_BODY_J, JOINT_JOURNAL_BODY),
+          (REVOLUTE_X_J, JOINT_JOURNAL_X), (REVOLUTE_Y_J, JOINT_JOURNAL_Y))
+
+
 def _as_revolutes(model: Model, starts=("ideal", "free")) -> np.ndarray:
     """Ideal revolutes plus the clearance joints whose start is in `starts`, closed."""
     keep = [j for j, c in enumerate(model.scene.clearance_joints) if c.start in starts]
-    closed = model.joints[keep][:, [0, 1, 2, 3, 4, 5]]
+    closed = np.zeros((len(keep), REVOLUTE_COLUMNS))
+    for revolute_column, joint_column in CLOSED:
+        closed[:, revolute_column] = model.joints[keep, joint_column]
     return np.vstack([model.revolute, closed]) if closed.size else model.revolute
 
 
@@ -244,4 +296,4 @@ def initial_state(model: Model) -> np.ndarray:
                          f"(largest gap {gap:.3g} m)")
     _, qd, _ = project(q, qd, _as_revolutes(model, ("ideal",)), model.prismatic, model.drive,
                        model.minv)
-    return np.concatenate([q, qd, [0.0, 0.0], np.zeros(model.friction_states)])
+    return np.concatenate([q, qd, np.zeros(ENERGY_STATES), np.zeros(model.friction_states)])

@@ -7,7 +7,12 @@ import math
 import numpy as np
 
 from pinbore.core.figures import plt, save_png
+from pinbore.laws.dissipative import hysteresis_force
 from pinbore.reduced import kernel
+from pinbore.reduced.layout import (
+    CONTINUOUS, DISSIPATED, JOINT_BEARING_BODY, JOINT_BEARING_X, JOINT_BEARING_Y, JOINT_CHI,
+    JOINT_IMPACT, JOINT_JOURNAL_BODY, JOINT_JOURNAL_X, JOINT_JOURNAL_Y, LATCH, LOG_IMPULSE, LOG_JOINT,
+    LOG_RATE, SPRING, STOP, TORSION_KIND, TORSION_STIFFNESS, WORK_IN)
 from pinbore.reduced.summary import Summary
 
 
@@ -32,15 +37,16 @@ def per_step(model, run):
         drift[k] = np.max(np.abs(phi), initial=0.0)
         for j in range(nj):
             row = model.joints[j]
-            bx, by = kernel.point(y[:nq], int(row[0]), row[1], row[2])
-            jx, jy = kernel.point(y[:nq], int(row[3]), row[4], row[5])
-            if int(row[18]) == kernel.CONTINUOUS:
-                delta, f_n, f_t, *_ = kernel.joint_forces(y[:nq], y[nq:2 * nq], row, run.speeds[k, j],
-                                                          model.grid_log0, model.grid_step,
-                                                          model.tables[j], y)
-                joint[k, j] = (jx - bx, jy - by, delta, f_n, f_t, model.elastic_energy(j, delta))
+            bx, by = kernel.point(y[:nq], int(row[JOINT_BEARING_BODY]), row[JOINT_BEARING_X],
+                                  row[JOINT_BEARING_Y])
+            jx, jy = kernel.point(y[:nq], int(row[JOINT_JOURNAL_BODY]), row[JOINT_JOURNAL_X],
+                                  row[JOINT_JOURNAL_Y])
+            if int(row[JOINT_IMPACT]) == CONTINUOUS:
+                c = kernel.joint_forces(y[:nq], y[nq:2 * nq], row, run.speeds[k, j], model.grid_log0,
+                                        model.grid_step, model.tables[j], y)
+                joint[k, j] = (jx - bx, jy - by, c.delta, c.f_n, c.f_t, model.elastic_energy(j, c.delta))
             else:   # rigid impacts: the force of a held contact is its multiplier
-                delta = kernel.joint_kinematics(y[:nq], y[nq:2 * nq], row)[0]
+                delta = kernel.joint_kinematics(y[:nq], y[nq:2 * nq], row).delta
                 joint[k, j] = (jx - bx, jy - by, delta, normal[j], 0.0, 0.0)
     for b, body in enumerate(s.bodies):
         for i, (what, unit) in enumerate((("x", "m"), ("y", "m"), ("angle", "rad"))):
@@ -59,12 +65,12 @@ def per_step(model, run):
     m_body = masses[0::3]
     potential = -np.sum(m_body * (model.gravity[0] * states[:, 0:nq:3] + model.gravity[1] * states[:, 1:nq:3]), axis=1)
     for r, row in enumerate(model.torsion):   # springs, engaged stops and latches: 1/2 k angle^2
-        angle = np.array([kernel.relative_angle(y[:nq], y[nq:2 * nq], row)[0] for y in states])
-        engaged = {kernel.SPRING: np.ones_like(angle, bool), kernel.STOP: angle > 0,
-                   kernel.LATCH: latched[:, r] > 0}[int(row[5])]
-        potential = potential + np.where(engaged, 0.5 * row[2] * angle**2, 0.0)
+        angle = np.array([kernel.relative_angle(y[:nq], y[nq:2 * nq], row).angle for y in states])
+        engaged = {SPRING: np.ones_like(angle, bool), STOP: angle > 0,
+                   LATCH: latched[:, r] > 0}[int(row[TORSION_KIND])]
+        potential = potential + np.where(engaged, 0.5 * row[TORSION_STIFFNESS] * angle**2, 0.0)
     energy = {"kinetic": kinetic, "potential": potential, "elastic": joint[:, :, 5].sum(axis=1),
-              "dissipated": states[:, 2 * nq], "work_in": states[:, 2 * nq + 1]}
+              "dissipated": states[:, 2 * nq + DISSIPATED], "work_in": states[:, 2 * nq + WORK_IN]}
     return cols, energy, drift
 
 
@@ -74,17 +80,17 @@ def refined_peak(model, j, run, k):
     of each step): (peak force N, its time s)."""
     times, states, speeds = run.times, run.states, run.speeds
     nq, row = model.nq, model.joints[j]
-    chi, best = row[8], (0.0, float(times[k]))
+    chi, best = row[JOINT_CHI], (0.0, float(times[k]))
     for a in range(max(k - 1, 0), min(k + 1, times.size - 1)):
         h = times[a + 1] - times[a]
         ends = [kernel.joint_kinematics(states[i, :nq], states[i, nq:2 * nq], row) for i in (a, a + 1)]
-        d0, r0, d1, r1 = ends[0][0], ends[0][5] * h, ends[1][0], ends[1][5] * h
+        d0, r0, d1, r1 = ends[0].delta, ends[0].rate * h, ends[1].delta, ends[1].rate * h
         x = np.linspace(0, 1, 201)
         delta = (2 * x**3 - 3 * x**2 + 1) * d0 + (x**3 - 2 * x**2 + x) * r0 + (-2 * x**3 + 3 * x**2) * d1 + (x**3 - x**2) * r1
         rate = ((6 * x**2 - 6 * x) * d0 + (3 * x**2 - 4 * x + 1) * r0 + (-6 * x**2 + 6 * x) * d1 + (3 * x**2 - 2 * x) * r1) / h
         for i in np.flatnonzero(delta > 0):
             f_el = kernel.elastic_force(delta[i], model.grid_log0, model.grid_step, model.tables[j])
-            force = kernel.damped_normal_force(f_el, rate[i], chi, speeds[a + 1, j])
+            force = hysteresis_force(f_el, rate[i], speeds[a + 1, j], chi)
             if force > best[0]:
                 best = (force, float(times[a] + x[i] * h))
     return best
@@ -121,11 +127,11 @@ def summary(model, series, run, status_text, scene_file) -> Summary:
             peak, when = refined_peak(model, j, run, int(np.argmax(force)))
         else:
             peak, when = float(np.max(force)), float(run.times[np.argmax(force)])
-        mine = run.impacts[run.impacts[:, 1] == j]
+        mine = run.impacts[run.impacts[:, LOG_JOINT] == j]
         joints[c.name] = {"peak_normal_force_N": peak, "time_of_peak_s": when,
                           "impacts": int(mine.shape[0]),
-                          "peak_impact_speed_m_per_s": float(np.max(mine[:, 2], initial=0.0)),
-                          "peak_impulse_N_s": float(np.max(mine[:, 3], initial=0.0)),
+                          "peak_impact_speed_m_per_s": float(np.max(mine[:, LOG_RATE], initial=0.0)),
+                          "peak_impulse_N_s": float(np.max(mine[:, LOG_IMPULSE], initial=0.0)),
                           "peak_penetration_m": float(np.max(series["steps"][f"{c.name}_penetration_m"], initial=0.0)),
                           "peak_friction_force_N": float(np.max(np.abs(series["steps"][f"{c.name}_friction_force_N"]), initial=0.0)),
                           "clearance_m": c.bearing_radius - c.journal_radius}

@@ -16,6 +16,7 @@ import numpy as np
 from pinbore.core import scene as scenes
 from pinbore.core.output import atomic_directory
 from pinbore.reduced import kernel, outputs, summary, verdict
+from pinbore.reduced.layout import JOINT_CLEARANCE
 from pinbore.reduced.model import SPEED_FLOOR, Model, build, laws_path
 from pinbore.reduced.scene import MAX_STEPS, ReducedScene
 
@@ -51,7 +52,8 @@ class Trajectory:
 
 def onset_tolerance(model: Model) -> float:
     """Penetration (m) within which a contact onset counts as located."""
-    return 1e-3 * min((j[6] for j in model.joints), default=1.0) * model.scene.integrator.rtol ** 0.5
+    return (1e-3 * min(model.joints[:, JOINT_CLEARANCE], default=1.0)
+            * model.scene.integrator.rtol ** 0.5)
 
 
 def simulate(model: Model, y0=None, duration=None, args=None) -> Trajectory:
@@ -69,8 +71,8 @@ def simulate(model: Model, y0=None, duration=None, args=None) -> Trajectory:
     compiled = time.perf_counter()
     result = kernel.integrate(y0, model.scene.duration if duration is None else duration, args,
                               *fixed)
-    return Trajectory(*result[:7], int(result[7]), float(result[8]),
-                      time.perf_counter() - compiled, compiled - start)
+    return Trajectory(**result._asdict(), seconds=time.perf_counter() - compiled,
+                      compile_seconds=compiled - start)
 
 
 def ideal_twin(scene: ReducedScene) -> ReducedScene:

@@ -14,6 +14,7 @@ from conftest import ROOT, pinbore
 from pinbore.laws import dissipative
 from pinbore.laws import friction as friction_laws
 from pinbore.laws.elastic import Joint, hertz_point
+from pinbore.reduced import layout
 from pinbore.reduced import summary as reduced_summary
 from pinbore.reduced.model import build
 from pinbore.reduced.outputs import per_step
@@ -127,6 +128,28 @@ def test_single_impact_restitution_equals_the_laws(law, e):
         lambda d, r: dissipative.hysteresis_force(hertz_point(max(d, 0), joint), r, speed, chi),
         mass, speed)
     assert rebound / speed == pytest.approx(reference, rel=1e-4)
+
+
+@pytest.mark.parametrize("prefix, columns", [
+    ("JOINT_", layout.JOINT_COLUMNS), ("REVOLUTE_", layout.REVOLUTE_COLUMNS),
+    ("PRISMATIC_", layout.PRISMATIC_COLUMNS), ("DRIVE_", layout.DRIVE_COLUMNS),
+    ("TORSION_", layout.TORSION_COLUMNS), ("LOG_", layout.LOG_COLUMNS)])
+def test_a_row_layout_names_every_column_once(prefix, columns):
+    """The named columns of a row are 0 .. columns - 1, each once (the friction law's
+    parameters take the block JOINT_FRICTION .. + FRICTION_PARAMETERS)."""
+    named = [v for k, v in vars(layout).items() if k.startswith(prefix) and k != f"{prefix}COLUMNS"]
+    if prefix == "JOINT_":
+        named += range(layout.JOINT_FRICTION + 1, layout.JOINT_FRICTION + layout.FRICTION_PARAMETERS)
+    assert sorted(named) == list(range(columns))
+
+
+@pytest.mark.parametrize("law", ["COULOMB", "STRIBECK", "LINEAR", "LUGRE", "DAHL", "IWAN"])
+def test_a_friction_law_keeps_its_parameters_in_the_friction_block(law):
+    params = [v for k, v in vars(layout).items() if k.startswith(f"{law}_")]
+    if law in ("COULOMB", "STRIBECK", "LINEAR"):
+        params += [layout.REGULARISATION_V0, layout.REGULARISATION_V1]
+    block = range(layout.JOINT_FRICTION, layout.JOINT_FRICTION + layout.FRICTION_PARAMETERS)
+    assert params and len(set(params)) == len(params) and set(params) <= set(block)
 
 
 def _scene_with(edit):
