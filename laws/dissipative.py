@@ -2,7 +2,7 @@
 
 Hunt-Crossley type: F = F_el(d) (1 + chi d'/v0), d' the approach rate, v0 the impact speed
 (the approach rate at first contact), chi a function of the coefficient of restitution e;
-equivalently a damping eta = chi K / v0 on F_el = K d^n (review eqs. 4-8). The functions
+equivalently a damping eta = chi K / v0 on F_el = K d^n ([Cao2013] eqs. 4-8). The functions
 named after their authors return chi(e). None of them reproduces its target e exactly:
 `restitution` measures the effective e of any force law by integrating one impact.
 """
@@ -22,13 +22,13 @@ def _check(e: float) -> None:
 
 
 def hunt_crossley(e):
-    """Hunt & Crossley 1975: chi = 3 (1 - e) / 2."""
+    """Hunt & Crossley 1975 [HuntCrossley1975]: chi = 3 (1 - e) / 2."""
     _check(e)
     return 1.5 * (1 - e)
 
 
 def lankarani_nikravesh(e):
-    """Lankarani & Nikravesh 1990: chi = 3 (1 - e^2) / 4 (review eq. 7; derived for e near 1)."""
+    """Lankarani & Nikravesh 1990 [LankaraniNikravesh1990]: chi = 3 (1 - e^2) / 4 ([Cao2013] eq. 7; derived for e near 1)."""
     _check(e)
     if e < 0.7:
         warn_once("lankarani_nikravesh", f"e = {e} is far from 1, where the law was derived")
@@ -36,37 +36,37 @@ def lankarani_nikravesh(e):
 
 
 def lee_wang(e):
-    """Lee & Wang 1983: chi = 3 (1 - e) / 4."""
+    """Lee & Wang 1983 [LeeWang1983]: chi = 3 (1 - e) / 4."""
     _check(e)
     return 0.75 * (1 - e)
 
 
 def herbert_mcwhannell(e):
-    """Herbert & McWhannell 1977: chi = 6 (1 - e) / ((2e - 1)^2 + 3)."""
+    """Herbert & McWhannell 1977 [HerbertMcWhannell1977]: chi = 6 (1 - e) / ((2e - 1)^2 + 3)."""
     _check(e)
     return 6 * (1 - e) / ((2 * e - 1) ** 2 + 3)
 
 
 def zhiying_qishao(e):
-    """Zhiying & Qishao 2006 (review eq. 8): chi = 3 (1 - e^2) exp(2 (1 - e)) / 4."""
+    """Zhiying & Qishao 2006 [ZhiyingQishao2006] ([Cao2013] eq. 8): chi = 3 (1 - e^2) exp(2 (1 - e)) / 4."""
     _check(e)
     return 0.75 * (1 - e**2) * math.exp(2 * (1 - e))
 
 
 def gonthier(e):
-    """Gonthier et al. 2004: chi = (1 - e^2) / e."""
+    """Gonthier et al. 2004 [Gonthier2004]: chi = (1 - e^2) / e."""
     _check(e)
     return (1 - e**2) / e
 
 
 def flores(e):
-    """Flores et al. 2011: chi = 8 (1 - e) / (5 e)."""
+    """Flores et al. 2011 [FloresMachado2011]: chi = 8 (1 - e) / (5 e)."""
     _check(e)
     return 1.6 * (1 - e) / e
 
 
 def hu_guo(e):
-    """Hu & Guo 2015: chi = 3 (1 - e) / (2 e)."""
+    """Hu & Guo 2015 [HuGuo2015]: chi = 3 (1 - e) / (2 e)."""
     _check(e)
     return 1.5 * (1 - e) / e
 
@@ -85,7 +85,7 @@ def hysteresis_force(elastic, rate, impact_speed, chi):
 
 
 def kelvin_voigt(d, rate, stiffness, damping):
-    """Kelvin-Voigt (review eq. 2): F = K d + D d' (linear spring and dashpot; may pull)."""
+    """Kelvin-Voigt ([Cao2013] eq. 2): F = K d + D d' (linear spring and dashpot; may pull)."""
     return stiffness * np.asarray(d, float) + damping * np.asarray(rate, float)
 
 
@@ -98,7 +98,7 @@ def kelvin_voigt_damping(e, stiffness, mass):
 
 
 def yigit(d, rate, stiffness, exponent, coefficient):
-    """Yigit, Ulsoy & Scott 1990 (review eq. 9): F = K d^n + 0.75 C K d d', n >= 1."""
+    """Yigit, Ulsoy & Scott 1990 [Yigit1990] ([Cao2013] eq. 9): F = K d^n + 0.75 C K d d', n >= 1."""
     d = np.asarray(d, float)
     return stiffness * d**exponent + 0.75 * coefficient * stiffness * d * np.asarray(rate, float)
 

@@ -64,7 +64,7 @@ class Joint:
 def hertz_point(d, joint: Joint):
     """Hertz point-contact form used for revolute joints, F = K d^1.5 (N).
 
-    K = (4/3) E* sqrt(R*)  [LankaraniNikravesh1990; FloresAmbrosio2004]. Written with
+    K = (4/3) E* sqrt(R*)  [LankaraniNikravesh1990], [FloresAmbrosio2004]. Written with
     h_k = (1 - nu_k^2)/(pi E_k) it reads K = 4/(3 pi (h_i + h_j)) sqrt(R*) ([Cao2013] eq. 3).
     A sphere law: it has no length; per unit length it is F / L.
     """
@@ -221,7 +221,7 @@ def linear(d, stiffness):
 
 
 def persson_load(b):
-    """Persson 1964 / Ciavarella & Decuzzi 2001 [Persson1964; CiavarellaDecuzzi2001]: conformal
+    """Persson 1964 / Ciavarella & Decuzzi 2001 [Persson1964], [CiavarellaDecuzzi2001]: conformal
     contact of elastically similar pin and infinite plate, plane strain,
 
     P / (E* c) = 2 pi b^2 (1 + b^2) / (2 - ln(1 + b^2) - 2 b^4),  b = tan(eps / 2),

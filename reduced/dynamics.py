@@ -13,7 +13,7 @@ published behaviour.
 - Classification of the samples x_0..x_(N-1): periodic with period p (the smallest p <= 16
   with |x_(i+p) - x_i| <= tol * max |x| for every i); otherwise chaotic if the largest
   Lyapunov exponent is positive, quasi-periodic if not.
-- Largest Lyapunov exponent (Benettin et al. 1980): a neighbour at distance d0 is advanced
+- Largest Lyapunov exponent (Benettin et al. 1980 [Benettin1980]): a neighbour at distance d0 is advanced
   with the reference one period at a time, its separation d measured and renormalised back
   to d0; lambda = sum log(d / d0) / (N T). Each trajectory locates its own impacts, so an
   impact that one meets and the other misses shows up as the (finite) jump it is; d0 = 1e-7

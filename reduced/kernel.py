@@ -2,7 +2,7 @@ r"""The compiled core of the reduced model: equations of motion and the integrat
 
 Planar rigid bodies with coordinates q = (x_k, y_k, phi_k) of their centres of mass,
 M = diag(m_k, m_k, J_k). Ideal joints and the drive are constraints Phi(q, t) = 0 with
-Lagrange multipliers (Cao et al. 2013, eq. 21):
+Lagrange multipliers ([Cao2013] eq. 21; stabilised after [Baumgarte1972]):
 
     M q'' + Phi_q^T lambda = Q(q, q', t),
     Phi_q q''  = gamma - 2 a Phi' - a^2 Phi          (Baumgarte, a the stabilisation rate).
@@ -29,7 +29,7 @@ the ideal ones until its multiplier (the normal force) would pull.
 Extra states integrate the energy dissipated in the joints and the work of the constraint
 forces (the drive), so the energy balance can be checked.
 
-Integrators: Dormand-Prince 5(4) (explicit) or Rosenbrock 2(3) (linearly implicit, for stiff
+Integrators: Dormand-Prince 5(4) [DormandPrince1980] (explicit) or Rosenbrock 2(3) (linearly implicit, for stiff
 problems), both with a PI step-size controller on (q, q') and the friction states, or DOPRI5
 at a fixed step for comparison. `integrate` takes a step in four phases, each in compiled
 functions of its own:
@@ -597,7 +597,7 @@ ROS_E32 = 6.0 + math.sqrt(2.0)
 
 @numba.njit(cache=True)
 def rosenbrock23_step(t, y, h, k, y_new, err_vec, args, work):
-    """One linearly implicit Rosenbrock 2(3) step (Shampine & Reichelt 1997, MATLAB's ode23s),
+    """One linearly implicit Rosenbrock 2(3) step (Shampine & Reichelt 1997 [ShampineReichelt1997], MATLAB's ode23s),
     L-stable, with W = I - h d J and J, df/dt by finite differences:
         k1 = W^-1 (F0 + h d T),  F1 = f(t + h/2, y + h k1 / 2),  k2 = W^-1 (F1 - k1) + k1,
         y1 = y + h k2,  F2 = f(t + h, y1),

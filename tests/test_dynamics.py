@@ -1,6 +1,6 @@
 """The nonlinear-dynamics analyses against systems with known behaviour: the forced
 double-well Duffing oscillator x'' + 0.3 x' - x + x^3 = gamma cos 1.2 t (the parameter set of
-Jordan & Smith, Nonlinear Ordinary Differential Equations, whose attractors are period 1 at
+Jordan & Smith, Nonlinear Ordinary Differential Equations [JordanSmith2007], whose attractors are period 1 at
 gamma = 0.20, period 2 at 0.28, period 4 at 0.29, chaotic at 0.50), Liouville's formula for
 its Floquet multipliers, and the ideal slider-crank (one Poincare point); the CLI's sweeps,
 cache and bad input."""

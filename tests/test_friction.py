@@ -76,3 +76,29 @@ def test_iwan_element_dissipates_the_masing_loop():
     half = x.size // 2  # second cycle (the first starts from the virgin state)
     work = np.trapezoid(forces[half:], x[half:])
     assert work == pytest.approx(4 * f_cr * (a - f_cr / k1), rel=1e-3)
+
+
+def test_stribeck_holds_the_kinetic_coefficient_beyond_its_fitted_range():
+    """Beyond v_m the polynomial would rise as v^3 (back to mu_s at sqrt(3) v_m, then without
+    bound); the law holds mu_m there, continuous with zero slope at v_m."""
+    mu_s, mu_m, v_m = 0.15, 0.10, 0.05
+    assert fr.stribeck_polynomial(1e3 * v_m, mu_s, mu_m, v_m) == mu_m
+    assert fr.stribeck_polynomial(-math.sqrt(3) * v_m, mu_s, mu_m, v_m) == mu_m
+    h = 1e-7
+    below = fr.stribeck_polynomial(v_m - h, mu_s, mu_m, v_m)
+    assert below == pytest.approx(mu_m, abs=1e-12)                   # continuous
+    assert (mu_m - below) / h == pytest.approx(0.0, abs=1e-5)        # zero slope from below
+    speeds = np.linspace(0.0, 10 * v_m, 2001)
+    assert max(fr.stribeck_polynomial(v, mu_s, mu_m, v_m) for v in speeds) <= mu_s
+
+
+@pytest.mark.parametrize("alpha", [0.5, 1.0, 2.0])
+def test_dahl_beyond_the_coulomb_force_is_finite_and_pulls_back(alpha):
+    """|F| > F_c (a normal force that dropped): the rate is finite for every alpha and drives F
+    back towards F_c; alpha = 1 is the linear form exactly."""
+    sigma, f_c, v = 2e4, 3.0, 0.01
+    for force in (1.5 * f_c, -1.5 * f_c):
+        rate = fr.dahl_rate(force, v, sigma, f_c, alpha)
+        assert math.isfinite(rate)
+        assert (rate < 0) == (force > f_c)   # above F_c it falls; far below -F_c it rises
+    assert fr.dahl_rate(1.5 * f_c, v, sigma, f_c, 1.0) == pytest.approx(sigma * (1 - 1.5) * v)
