@@ -157,6 +157,19 @@ def fem_points() -> list[dict]:
 
 # ---------------------------------------------------------------- running one point
 
+def failures(done: dict, outcome: str, nan: str | bool, broken: list, timeout: float) -> list[str]:
+    """Why a point fails the criterion: NaN, a hang, a crash, or a complete run whose numbers
+    break the thresholds (`broken`); empty if it passes."""
+    found = [nan] if nan else []
+    if outcome == "hang":
+        found.append(f"no result within {timeout:g} s")
+    if outcome == "crash":
+        found.append(f"exit {done['exit_code']}: {first_line(done['stderr'])}{where(done['stderr'])}")
+    if broken:
+        found.append("complete but " + ", ".join(broken))
+    return found
+
+
 def run_point(point: dict) -> dict:
     """Run one point's CLI command in a temporary directory under its wall-clock limit;
     (exit code or None on timeout, wall time, stderr, what it wrote as parsed JSON/text)."""
@@ -304,15 +317,7 @@ def reduced_row(done: dict) -> dict:
         if s["status"] == "complete":
             broken = reduced_breaks(s, done["scene"])
     row["nan_in_summary"] = nan
-    failure = []
-    if nan:
-        failure.append("NaN in summary.json")
-    if outcome == "hang":
-        failure.append(f"no result within {TIMEOUT['reduced']:g} s")
-    if outcome == "crash":
-        failure.append(f"exit {done['exit_code']}: {first_line(done['stderr'])}{where(done['stderr'])}")
-    if broken:
-        failure.append("complete but " + ", ".join(broken))
+    failure = failures(done, outcome, nan and "NaN in summary.json", broken, TIMEOUT["reduced"])
     if outcome == "refused":
         row["verdict"] = first_line(done["stderr"])
     row["ok"] = not failure
@@ -376,15 +381,8 @@ def fem_row(done: dict) -> dict:
     if outcome in ("refused", "crash") or (outcome == "incomplete" and not row.get("message")):
         row["message"] = first_line(done["stderr"])
     row["nan"] = nan
-    failure = []
-    if nan:
-        failure.append("NaN in result.json or curve.csv")
-    if outcome == "hang":
-        failure.append(f"no result within {TIMEOUT['fem']:g} s")
-    if outcome == "crash":
-        failure.append(f"exit {done['exit_code']}: {first_line(done['stderr'])}{where(done['stderr'])}")
-    if broken:
-        failure.append("complete but " + ", ".join(broken))
+    failure = failures(done, outcome, nan and "NaN in result.json or curve.csv", broken,
+                       TIMEOUT["fem"])
     row["ok"] = not failure
     row["failure"] = "; ".join(failure)
     return row

@@ -42,6 +42,11 @@ def figure(data: str, caption: str) -> str:
             f"<figcaption>{caption}</figcaption></figure>")
 
 
+def note(text: str) -> str:
+    """A highlighted remark (HTML already escaped by the caller)."""
+    return f"<p class='note'>{text}</p>"
+
+
 def table(header: list[str], rows: list[list]) -> str:
     head = "".join(f"<th>{html.escape(str(h))}</th>" for h in header)
     body = "".join("<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in row) + "</tr>"

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from pinbore.core.figures import plt
-from pinbore.core.html import figure, figure_data, outcome_counts, png_data, table
+from pinbore.core.html import figure, figure_data, note, outcome_counts, png_data, table
 from pinbore.core.scene import load_json
 from pinbore.fem import curve as fe_curve
 from pinbore.fem.scene import FemScene
@@ -119,18 +119,20 @@ def run_pictures(runs) -> list[str]:
             if (folder / picture).exists()]
 
 
+METHOD = ("Plane strain (2D) or 3D, P1 elements, both bodies elastic. Contact: node-to-surface "
+          "gap between the pin nodes and the curved bore, penalty or augmented Lagrangian "
+          "(Uzawa), Coulomb friction with a return map and an active-set Newton (PETSc SNES, "
+          "MUMPS) with load-step cutbacks. The approach is the hub displacement beyond first "
+          "touch; the force is the hub reaction along the load, per unit length in 2D, of the "
+          "whole pin in 3D.")
+
+
 def section(build_dir: Path, bench_dir: Path) -> str:
     runs = load_runs(build_dir)
     plane = [run for run in runs if run[2].dim == 2]   # forces per unit length (N/m)
-    parts = ["<h2>Finite-element contact</h2>",
-             "<p>Plane strain (2D) or 3D, P1 elements, both bodies elastic. Contact: "
-             "node-to-surface gap between the pin nodes and the curved bore, penalty or "
-             "augmented Lagrangian (Uzawa), Coulomb friction with a return map and an "
-             "active-set Newton (PETSc SNES, MUMPS) with load-step cutbacks. The approach is "
-             "the hub displacement beyond first touch; the force is the hub reaction along "
-             "the load, per unit length in 2D, of the whole pin in 3D.</p>"]
+    parts = ["<h2>Finite-element contact</h2>", f"<p>{METHOD}</p>"]
     if not runs:
-        return "".join(parts + ["<p class='note'>No FE results under build/fem: run <code>make fem</code>.</p>"]
+        return "".join(parts + [note("No FE results under build/fem: run <code>make fem</code>.")]
                        + stress_part(bench_dir))
     parts.append(table(
         ["scene", "method", "c (um)", "dofs", "steps", "Newton its/step (median)",

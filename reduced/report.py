@@ -3,7 +3,7 @@
 import html
 from pathlib import Path
 
-from pinbore.core.html import figure, outcome_counts, png_data, table
+from pinbore.core.html import figure, note, outcome_counts, png_data, table
 from pinbore.core.scene import load_json
 from pinbore.reduced import summary
 
@@ -18,7 +18,7 @@ def section(build_dir: Path, bench_dir: Path) -> str:
              "adaptive Dormand-Prince 5(4), compiled with numba, that lands every contact onset "
              "on a step boundary (a stiff Rosenbrock 2(3) is the alternative).</p>"]
     if not runs:
-        return "".join(parts + ["<p class='note'>No runs under build/reduced: run <code>make reduced</code>.</p>"]
+        return "".join(parts + [note("No runs under build/reduced: run <code>make reduced</code>.")]
                        + stress_part(bench_dir))
     summaries = {path.parent: summary.read(path) for path in runs}
     rows = [[folder.name, s.status, s.impacts, f"{s.peak_normal_force_N:.4g}", s.steps,
