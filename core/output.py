@@ -229,7 +229,10 @@ def atomic_directory(out: str | Path, comm=MPI.COMM_WORLD, inputs=()):
 def write_text_atomic(path: str | Path, text: str) -> None:
     """Write a single file through a temporary name and a rename."""
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
     tmp = path.with_name(f".{path.name}.tmp")
-    tmp.write_text(text, encoding="utf-8")
-    tmp.rename(path)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp.write_text(text, encoding="utf-8")
+        tmp.rename(path)
+    except OSError as err:
+        raise InputError(f"{path}: cannot write ({err.strerror or err})") from None

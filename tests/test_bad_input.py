@@ -166,3 +166,11 @@ UNBOUNDED = [
 def test_work_that_cannot_finish_is_refused(write_scene, tmp_path, command, scene, message):
     out = tmp_path / "out"
     expect_one_line(pinbore(command, write_scene(scene), "--out", out), message, out)
+
+
+def test_report_out_that_cannot_be_written_is_one_line(tmp_path):
+    (tmp_path / "a_file").write_text("x")
+    (tmp_path / "build").mkdir()
+    done = pinbore("report", "--build", tmp_path / "build", "--out", tmp_path / "a_file" / "report")
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
+    assert "cannot write" in done.stderr and (tmp_path / "a_file").read_text() == "x"
