@@ -57,6 +57,11 @@ def _raise_if_stopped() -> None:
         _stop(_stopped.pop(), None)
 
 
+def clear_stop_signal() -> None:
+    """Forget a stop of an earlier command in this process."""
+    _stopped.clear()
+
+
 def stop_signal() -> int | None:
     """SIGINT or SIGTERM if one stopped an output under way. The exception it raised may have
     been swallowed by a library's callback (Gmsh's size field, PETSc's residual), which then
@@ -206,24 +211,45 @@ def atomic_directory(out: str | Path, comm=MPI.COMM_WORLD, inputs=()):
         if error:
             raise InputError(error)
         tmp = Path(tmp)
+        failed = None
         try:
             yield tmp
             _raise_if_stopped()
-        except BaseException:
+        except BaseException as err:
+            failed = err
+        # every rank gets here, so a rank that failed cannot leave the others waiting
+        if not comm.allreduce(failed is None, op=MPI.LAND):
             if comm.rank == 0:
                 shutil.rmtree(tmp, ignore_errors=True)
-            raise
-        comm.barrier()
+            if failed is not None:
+                raise failed
+            raise RuntimeError("another MPI rank failed; nothing written")
         if comm.rank == 0:
-            (tmp / MARKER).write_text(MARKER_TEXT)
-            if out.exists():
-                old = out.with_name(f"{_temporary_prefix(out, os.getpid())}old.tmp")
-                out.rename(old)
-                tmp.rename(out)
-                shutil.rmtree(old, ignore_errors=True)
-            else:
-                tmp.rename(out)
+            _commit(tmp, out)
         comm.barrier()
+
+
+def _commit(tmp: Path, out: Path) -> None:
+    """Mark `tmp` as pinbore's and put it in place of `out`, with SIGINT and SIGTERM held off
+    (a signal between the two renames would leave the old output under a temporary name)."""
+    signals = {signal.SIGINT, signal.SIGTERM}
+    held = threading.current_thread() is threading.main_thread()
+    if held:
+        signal.pthread_sigmask(signal.SIG_BLOCK, signals)
+    try:
+        (tmp / MARKER).write_text(MARKER_TEXT)
+        if out.exists():
+            old = out.with_name(f"{_temporary_prefix(out, os.getpid())}old.tmp")
+            out.rename(old)
+            tmp.rename(out)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            tmp.rename(out)
+    finally:
+        if held:   # a stop that came meanwhile is dropped: the output is complete, and the
+            for s in signals:   # run ends by itself (the caller restores the handlers)
+                signal.signal(s, signal.SIG_IGN)
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, signals)
 
 
 def write_text_atomic(path: str | Path, text: str) -> None:

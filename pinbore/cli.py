@@ -13,7 +13,7 @@ import traceback
 from pathlib import Path
 
 from pinbore.core.errors import InputError
-from pinbore.core.output import Terminated, check_output, stop_signal
+from pinbore.core.output import Terminated, check_output, clear_stop_signal, stop_signal
 
 
 def _mesh(args) -> int:
@@ -198,6 +198,7 @@ def main(argv=None) -> int:
     while writing 143 (outputs under way are removed, nothing half written); anything
     unexpected prints one line with where its traceback was written, and exits 3."""
     args = parser().parse_args(argv)
+    clear_stop_signal()
     try:
         if args.command != "report":
             check_output(args.out, _inputs(args))
