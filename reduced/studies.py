@@ -12,6 +12,7 @@ resumes where it stopped.
 """
 
 import concurrent.futures
+import contextlib
 import copy
 import hashlib
 import json
@@ -140,9 +141,8 @@ def sweep(task, values, cache: Path, workers: int, scheduler: str | None, key: s
         except (OSError, ValueError):
             todo.append(value)
     if todo:
-        executor = _executor(workers, scheduler)   # before the cache exists: a scheduler
-        cache.mkdir(parents=True, exist_ok=True)   # that cannot be reached leaves nothing
-        with executor:
+        with _executor(workers, scheduler) as executor:   # before the cache exists: a scheduler
+            cache.mkdir(parents=True, exist_ok=True)       # that cannot be reached leaves nothing
             futures = {executor.submit(task, v): v for v in todo}
             for future in tqdm(concurrent.futures.as_completed(futures), total=len(futures),
                                desc="sweep", unit="point", initial=len(values) - len(todo)):
@@ -158,17 +158,32 @@ def sweep(task, values, cache: Path, workers: int, scheduler: str | None, key: s
 SCHEDULER_TIMEOUT = 10   # s to connect to a Dask scheduler
 
 
+@contextlib.contextmanager
 def _executor(workers: int, scheduler: str | None):
+    """An executor of local processes or of a Dask cluster for the block. A stop (Ctrl-C,
+    SIGTERM, an error) cancels the points not yet started instead of waiting for them; the
+    Dask client is closed."""
     if scheduler is None:
         # spawned, not forked: the parent runs threads (numba, tqdm) that fork would copy mid-state
-        return concurrent.futures.ProcessPoolExecutor(max_workers=workers,
-                                                      mp_context=multiprocessing.get_context("spawn"))
+        executor = concurrent.futures.ProcessPoolExecutor(
+            max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+        try:
+            yield executor
+        except BaseException:
+            executor.shutdown(wait=False, cancel_futures=True)
+            raise
+        executor.shutdown()
+        return
     from distributed import Client   # noqa: PLC0415 (optional: the --scheduler rule checks it is there)
     try:
-        return Client(scheduler, timeout=SCHEDULER_TIMEOUT).get_executor()
+        client = Client(scheduler, timeout=SCHEDULER_TIMEOUT)
     except (OSError, TimeoutError) as err:
         raise InputError(f"--scheduler {scheduler}: cannot reach the Dask scheduler within "
                          f"{SCHEDULER_TIMEOUT} s ({type(err).__name__})") from None
+    try:
+        yield client.get_executor()
+    finally:
+        client.close()
 
 
 def sweep_key(data: dict, analysis: str, parameter: str, transient: int, periods: int) -> str:
