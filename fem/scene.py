@@ -1,5 +1,6 @@
 """The FE scene (`kind = "fem"`): geometry, materials, contact, load, mesh, solver, output."""
 
+import functools
 import math
 from typing import Literal
 
@@ -152,7 +153,7 @@ class FemScene(Strict):
         g, pin, bore = self.geometry, self.materials.pin, self.materials.bore
         return Joint(g.bore_radius, g.pin_radius, bore.E, bore.nu, pin.E, pin.nu, g.length or 1.0)
 
-    @property
+    @functools.cached_property
     def sizing(self) -> Sizing:
         """Where the mesh is refined and how finely (meshes.sizing), for this scene's joint and load."""
         return estimate_sizing(self.joint, self.load.max_approach, self.mesh.contact_size,
