@@ -5,7 +5,6 @@ penetration beyond a tenth of the journal radius or beyond the normal law's rang
 it computed, marks summary.json "incomplete" and exits with 1.
 """
 
-import math
 import sys
 import time
 from dataclasses import dataclass

@@ -5,7 +5,6 @@ restitution of a single journal impact; bad scenes."""
 import copy
 import math
 import tomllib
-from pathlib import Path
 
 import numpy as np
 import pytest
