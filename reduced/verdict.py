@@ -69,7 +69,7 @@ def reasons(summary, scene) -> list[str]:
             if ratio > FRICTION_MARGIN * bound:
                 found.append(f"{joint.name}: friction force {ratio:.3g} times the normal force, "
                              f"above the law's largest coefficient {bound:g}")
-    clearances = [j.bearing_radius - j.journal_radius for j in scene.clearance_joints]
+    clearances = [peaks.clearance_m for peaks in summary.clearance_joints.values()]
     drift_limit = DRIFT * (min(clearances) if clearances else 1e-3)
     if not summary.constraint_drift_max <= drift_limit:
         found.append(f"constraint drift {summary.constraint_drift_max:.3g} m (above {drift_limit:.3g} m)")
