@@ -255,10 +255,16 @@ def _commit(tmp: Path, out: Path) -> None:
 def write_text_atomic(path: str | Path, text: str) -> None:
     """Write a single file through a temporary name and a rename."""
     path = Path(path)
-    tmp = path.with_name(f".{path.name}.tmp")
+    tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        tmp.write_text(text, encoding="utf-8")
-        tmp.rename(path)
+        handle, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        with os.fdopen(handle, "w", encoding="utf-8") as f:
+            f.write(text)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
     except OSError as err:
+        if tmp is not None:   # a temporary name of its own: two writers never share one
+            with contextlib.suppress(OSError):
+                os.unlink(tmp)
         raise InputError(f"{path}: cannot write ({err.strerror or err})") from None
