@@ -16,7 +16,7 @@ from pinbore.core import scene as scenes
 from pinbore.core.output import atomic_directory
 from pinbore.reduced import kernel, outputs, summary, verdict
 from pinbore.reduced.layout import JOINT_CLEARANCE
-from pinbore.reduced.model import SPEED_FLOOR, Model, build, laws_path
+from pinbore.reduced.model import SPEED_FLOOR, Model, build, fixed_step, laws_path
 from pinbore.reduced.scene import MAX_STEPS, ReducedScene
 
 STATUS = {kernel.OK: "complete", kernel.BLOWN_UP: "blown up (NaN, or a penetration beyond a "
@@ -62,8 +62,8 @@ def simulate(model: Model, y0=None, duration=None, args=None) -> Trajectory:
     s = model.scene.integrator
     y0 = model.y0 if y0 is None else y0
     args = model.kernel_args() if args is None else args
-    fixed = (METHODS[s.method], s.rtol, s.atol, s.max_step, onset_tolerance(model), SPEED_FLOOR,
-             MAX_STEPS)
+    step = fixed_step(model) if s.method == "dopri5_fixed" else s.max_step
+    fixed = (METHODS[s.method], s.rtol, s.atol, step, onset_tolerance(model), SPEED_FLOOR, MAX_STEPS)
     start = time.perf_counter()
     if not kernel.integrate.signatures:   # the first run of this process compiles (or loads)
         kernel.integrate(y0, 0.0, model.kernel_args(), *fixed)

@@ -210,17 +210,33 @@ class TorsionSpring(Strict):
     free_angle_deg: float = 0.0
 
 
+def check_fixed_steps(duration: float, step: float) -> None:
+    """Refuse a fixed step that needs more than MAX_STEPS steps over the duration."""
+    steps = duration / step
+    if steps > MAX_STEPS:
+        raise ValueError(f"integrator.fixed_step: a fixed step of {step:.3g} s needs {steps:.3g} "
+                         f"steps, more than {MAX_STEPS:.0e}: a longer step or a shorter duration")
+
+
 class Integrator(Strict):
     """dopri5: explicit, adaptive, contact onsets located (the default); rosenbrock23: linearly
     implicit and L-stable (Shampine-Reichelt), for stiff contact laws or springs;
-    dopri5_fixed: the step max_step throughout, no error control or event location (only for
-    comparing against)."""
+    dopri5_fixed: the step fixed_step throughout, no error control or event location (only for
+    comparing against); without fixed_step, 1/300 of the shortest contact or torsion period
+    of the scene (reduced.model.fixed_step)."""
 
     method: Literal["dopri5", "rosenbrock23", "dopri5_fixed"] = "dopri5"
     rtol: float = pydantic.Field(default=1e-6, gt=0, lt=1)
     atol: float = pydantic.Field(default=1e-9, gt=0)
-    max_step: float = pydantic.Field(default=1e-4, gt=0)
+    max_step: float = pydantic.Field(default=1e-4, gt=0, description="s, the adaptive methods' bound")
+    fixed_step: float | None = pydantic.Field(default=None, gt=0, description="s, dopri5_fixed only")
     baumgarte: float = pydantic.Field(default=50.0, gt=0, description="1/s")
+
+    @pydantic.model_validator(mode="after")
+    def _fixed_step(self):
+        if self.fixed_step is not None and self.method != "dopri5_fixed":
+            raise ValueError(f"fixed_step is used by method = 'dopri5_fixed' only, not {self.method!r}")
+        return self
 
 
 class Output(Strict):
@@ -247,10 +263,8 @@ class ReducedScene(Strict):
         if samples > MAX_SAMPLES:
             raise ValueError(f"output.sample_time: {samples:.3g} samples over the duration, more "
                              f"than {MAX_SAMPLES:.0e}: sample less often or shorten the duration")
-        steps = self.duration / self.integrator.max_step
-        if self.integrator.method == "dopri5_fixed" and steps > MAX_STEPS:
-            raise ValueError(f"integrator.max_step: the fixed step needs {steps:.3g} steps, more "
-                             f"than {MAX_STEPS:.0e}: a longer step or a shorter duration")
+        if self.integrator.fixed_step is not None:
+            check_fixed_steps(self.duration, self.integrator.fixed_step)
         return self
 
     @pydantic.model_validator(mode="after")

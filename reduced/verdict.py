@@ -50,7 +50,7 @@ def reasons(summary, scene) -> list[str]:
     found = []
     energy = summary.energy_balance
     if not energy.relative_to_peak_kinetic <= ENERGY_RESIDUAL:   # NaN fails too
-        remedy = ("shorten integrator.max_step" if scene.integrator.method == "dopri5_fixed"
+        remedy = ("shorten integrator.fixed_step" if scene.integrator.method == "dopri5_fixed"
                   else "tighten integrator.rtol")
         found.append(f"energy residual {energy.relative_to_peak_kinetic:.3g} of the peak kinetic "
                      f"energy (above {ENERGY_RESIDUAL:g}): {remedy}")

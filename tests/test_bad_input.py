@@ -54,6 +54,13 @@ MISPLACED = [
     ("reduced", reduced_with(lambda d: d["clearance_joints"][0].update(friction={
         "law": "lugre", "mu_coulomb": 0.0, "mu_static": 0.0, "stribeck_speed": 0.01, "sigma0": 1e5})),
      "clearance_joints.0.friction.lugre.mu_coulomb: Input should be greater than 0"),
+    ("reduced", reduced_with(lambda d: d["integrator"].update(fixed_step=1e-6)),
+     "integrator: fixed_step is used by method = 'dopri5_fixed' only"),
+    ("reduced", reduced_with(lambda d: (d["integrator"].update(method="dopri5_fixed"),
+                                        d["clearance_joints"][0].update(impact="newton"),
+                                        d["clearance_joints"][0].pop("normal_law"),
+                                        d["clearance_joints"][0].pop("damping_law"))),
+     "integrator.fixed_step: required by method = 'dopri5_fixed' with rigid impacts (rod_slider)"),
 ]
 
 
@@ -156,8 +163,11 @@ def test_report_builds_what_it_can_and_names_what_it_cannot(tmp_path, broken, te
 # work that could not finish: refused at validation
 UNBOUNDED = [
     ("reduced", reduced_with(lambda d: d.update(duration=1e4)), "output.sample_time: 5e+08 samples"),
-    ("reduced", reduced_with(lambda d: d["integrator"].update(method="dopri5_fixed", max_step=1e-9)),
-     "integrator.max_step: the fixed step needs 4.8e+07 steps"),
+    ("reduced", reduced_with(lambda d: d["integrator"].update(method="dopri5_fixed", fixed_step=1e-9)),
+     "integrator.fixed_step: a fixed step of 1e-09 s needs 4.8e+07 steps"),
+    ("reduced", reduced_with(lambda d: (d.update(duration=100.0, output={"sample_time": 1e-3}),
+                                        d["integrator"].update(method="dopri5_fixed"))),
+     "integrator.fixed_step: the default fixed step 1.58e-07 s"),
     ("fem", fem_with(load={"steps": 10**9}), "load.steps: Input should be less than or equal to 10000"),
 ]
 

@@ -142,7 +142,7 @@ def test_fixed_step_dopri5_converges_with_fifth_order():
     errors = []
     for step in (2e-4, 1e-4):
         data = torsional_oscillator("dopri5_fixed", 0.0)
-        data["integrator"]["max_step"] = step
+        data["integrator"]["fixed_step"] = step
         cols, _, _, _ = solve(data)
         exact = np.sin(w * cols["time_s"]) / w
         errors.append(np.max(np.abs(cols["disc_angle_rad"] - exact)))
