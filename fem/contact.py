@@ -423,6 +423,7 @@ class ContactState:
     shear: np.ndarray      # Pa, (n, p) on the bore along +theta (and +z) (0 without friction)
     status: np.ndarray     # OPEN, STICK or SLIP
     slip: np.ndarray       # m, (n, p) plastic slip of this step, (sigma_trial - sigma) / eps_T
+    normal: np.ndarray     # (n, d) outward unit normal of the bore at the closest point
 
     def dissipated(self, weights) -> float:
         """Work dissipated by friction over the step (J/m in 2D, J in 3D): sum w sigma . slip
@@ -553,11 +554,13 @@ class PinBoreContact:
         f = self.friction
         if f is None:
             zero = np.zeros((len(g), self.dim - 1))
-            return ContactState(g, p, angle, zero, zero, np.where(p > 0, SLIP, OPEN), zero)
+            return ContactState(g, p, angle, zero, zero, np.where(p > 0, SLIP, OPEN), zero,
+                                kin.normal)
         s = self._position(kin, f.s_n)
         trial = f.trial(s)
         shear, status = active_set(trial, f.mu * p, p, f.status, f.direction)
-        return ContactState(g, p, angle, s, shear, status, (trial - shear) / f.penalty)
+        return ContactState(g, p, angle, s, shear, status, (trial - shear) / f.penalty,
+                            kin.normal)
 
     def commit(self, state: ContactState) -> None:
         """Make a converged state the start of the next step."""

@@ -9,8 +9,13 @@ resultant columns only:
 - 2D (plane strain): forces, torque and work per unit length of the pin, force in N/m
   (force_per_length_N_per_m), torque in N m/m (friction_torque_per_length_N), work in J/m;
 - 3D: those of the whole pin (a half model counts twice), force in N (force_N), torque in
-  N m, work in J; the half-angle is that of the section at the pin's middle, and
-  pressure.csv adds the axial position z_m and the axial shear.
+  N m, work in J; the half-angle is that of the section at the pin's middle; four more
+  columns: the hub's tilt (tilt_deg), the hub's moment on the pin about the tilt axis
+  through the bore's mid-plane centre (tilt_moment_N_m, positive along a positive tilt: the
+  end z = length turned towards the load; fem.scene.FemScene.tilt_axis), the axial position
+  of the force's resultant on the bore's axis (resultant_z_m = length/2 + M/F), and the
+  axial length of the pin in contact (contact_length_m); pressure.csv adds the axial position
+  z_m and the axial shear.
 
 A reader refuses a file as one InputError line that names the file and what is wrong: a
 header that is neither variant (a missing, unknown or repeated column, as a file of another
@@ -29,13 +34,14 @@ import numpy as np
 from pinbore.core.errors import InputError
 from pinbore.core.scene import RUN_AGAIN
 
-STAGES = ("push", "rotate", "slide")   # radial approach; hub turned; hub pushed across
+STAGES = ("push", "rotate", "slide", "tilt")   # radial approach; hub turned; pushed across; tilted
 
 
 def stage(point) -> str:
-    """The stage of a load-programme point (approach m, rotation rad, tangential push m)."""
-    push, rotate, slide = STAGES
-    return rotate if point[1] else (slide if point[2] else push)
+    """The stage of a load-programme point (approach m, rotation rad, tangential push m,
+    tilt rad)."""
+    push, rotate, slide, tilt = STAGES
+    return rotate if point[1] else (slide if point[2] else (tilt if point[3] else push))
 
 
 @dataclass(frozen=True)
@@ -93,15 +99,20 @@ class Curve:
     newton_iterations: np.ndarray  # Newton iterations of the step
     uzawa_iterations: np.ndarray   # augmented-Lagrangian updates of the step
     gap_violation: np.ndarray      # m, the largest penetration left
+    tilt: np.ndarray | None = None            # deg, hub tilt (3D)
+    tilt_moment: np.ndarray | None = None     # N m, hub moment about the tilt axis (3D)
+    resultant_z: np.ndarray | None = None     # m, axial position of the resultant (3D)
+    contact_length: np.ndarray | None = None  # m, axial length in contact (3D)
 
     @property
     def points(self) -> int:
         return self.step.size
 
     def only(self, name: str) -> "Curve":
-        """The rows of one stage (push, rotate or slide)."""
+        """The rows of one stage (push, rotate, slide or tilt)."""
         keep = self.stage == name
-        return replace(self, **{f: getattr(self, f)[keep] for f in _fields(Curve)})
+        return replace(self, **{f: getattr(self, f)[keep] for f in _fields(Curve)
+                                if getattr(self, f) is not None})
 
 
 _SHARED = {"step": Column("step", "1", int), "stage": Column("stage", "", str, choices=STAGES),
@@ -119,7 +130,10 @@ _RESULTANTS = {
         "dissipated_work": _float("dissipated_work_J_per_m", "J/m")},
     3: {"force": _float("force_N", "N"), "tangential_force": _float("tangential_force_N", "N"),
         "friction_torque": _float("friction_torque_N_m", "N m"),
-        "dissipated_work": _float("dissipated_work_J", "J")},
+        "dissipated_work": _float("dissipated_work_J", "J"),
+        "tilt": _float("tilt_deg", "deg"), "tilt_moment": _float("tilt_moment_N_m", "N m"),
+        "resultant_z": _float("resultant_z_m", "m"),
+        "contact_length": _float("contact_length_m", "m")},
 }
 
 
@@ -129,7 +143,8 @@ def _fields(kind) -> list[str]:
 
 
 # dim -> field of Curve -> its column
-COLUMNS = {dim: {f: (_RESULTANTS[dim] | _SHARED)[f] for f in _fields(Curve)} for dim in (2, 3)}
+COLUMNS = {dim: {f: (_RESULTANTS[dim] | _SHARED)[f] for f in _fields(Curve)
+                 if f in _RESULTANTS[dim] | _SHARED} for dim in (2, 3)}
 
 
 @dataclass(frozen=True)

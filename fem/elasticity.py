@@ -42,8 +42,11 @@ def piecewise(mesh, cell_tags, values: dict[int, float]) -> dolfinx.fem.Function
 class Elasticity:
     """Space, stiffness matrices and boundary dofs of the pin-in-bore model."""
 
-    def __init__(self, mesh, cell_tags, facet_tags, pin_material, bore_material):
+    def __init__(self, mesh, cell_tags, facet_tags, pin_material, bore_material, tilt_frame=None):
+        """tilt_frame (3D): (pivot c, unit axis a) of the hub's tilt and of the moment taken
+        about it (rigid_motion)."""
         self.mesh = mesh
+        self.tilt_frame = tilt_frame
         self.dim = dim = mesh.geometry.dim
         self.V = V = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (dim,)))
         lam_pin, mu_pin = lame(pin_material.E, pin_material.nu)
@@ -102,20 +105,22 @@ class Elasticity:
         imap = self.V.dofmap.index_map
         return imap.size_global * self.V.dofmap.index_map_bs
 
-    def set_boundary_values(self, x: PETSc.Vec, shift, rotation: float = 0.0) -> None:
+    def set_boundary_values(self, x: PETSc.Vec, shift, rotation: float = 0.0,
+                            tilt: float = 0.0) -> None:
         """Write the prescribed values into x: the hub moves rigidly, translated by `shift`
-        (m) and turned by `rotation` (rad, linearised, u = shift + rotation e_z x X, the
-        small-strain rigid motion), the outer edge stays clamped."""
+        (m), turned by `rotation` and tilted by `tilt` (rad, linearised: rigid_motion about
+        self.tilt_frame), the outer edge stays clamped."""
         self.hub_motion.x.array.reshape(-1, self.dim)[self.dofs["hub"]] = rigid_motion(
-            self.hub_X, shift, rotation)
+            self.hub_X, shift, rotation, tilt, self.tilt_frame)
         dolfinx.fem.petsc.set_bc(x, self.bcs)
 
-    def pin_rigid_motion(self, shift, rotation: float = 0.0) -> PETSc.Vec:
+    def pin_rigid_motion(self, shift, rotation: float = 0.0, tilt: float = 0.0) -> PETSc.Vec:
         """A vector that moves every pin node rigidly (see set_boundary_values), the housing
         at rest."""
         f = dolfinx.fem.Function(self.V)
         X = self.V.tabulate_dof_coordinates()[self.pin_nodes, :self.dim]
-        f.x.array.reshape(-1, self.dim)[self.pin_nodes] = rigid_motion(X, shift, rotation)
+        f.x.array.reshape(-1, self.dim)[self.pin_nodes] = rigid_motion(X, shift, rotation, tilt,
+                                                                       self.tilt_frame)
         return f.x.petsc_vec.copy()
 
     def prescribed_rows(self) -> np.ndarray:
@@ -132,19 +137,37 @@ class Elasticity:
         """out = K x: the elastic internal forces (N/m per dof)."""
         self.K.mult(x, out)
 
-    def hub_reaction(self, x: PETSc.Vec, work: PETSc.Vec) -> np.ndarray:
-        """Force (N/m in 2D, N in 3D) the hub exerts on the pin, summed over its dofs: (K x)
-        at the hub."""
+    def hub_reaction(self, x: PETSc.Vec, work: PETSc.Vec) -> tuple[np.ndarray, float]:
+        """Force (N/m in 2D, N in 3D) the hub exerts on the pin, summed over its dofs, (K x)
+        at the hub; and (3D) its moment (N m) about the tilt axis through the tilt pivot
+        (self.tilt_frame), sum (X - c) x (K x) . a over the hub's nodes at their reference
+        positions X (small strain: K x has no moment over a free body, so this is also minus
+        the moment of the contact tractions; 0.0 in 2D)."""
         self.K.mult(x, work)
         local = work.getArray(readonly=True).reshape(-1, self.dim)
         hub = self.dofs["hub"]
-        owned = hub[hub < self.V.dofmap.index_map.size_local]
-        return self.mesh.comm.allreduce(local[owned].sum(axis=0))
+        mine = hub < self.V.dofmap.index_map.size_local
+        forces = local[hub[mine]]
+        moment = 0.0
+        if self.tilt_frame is not None:
+            pivot, axis = (np.asarray(v, dtype=float) for v in self.tilt_frame)
+            moment = float(np.sum(np.cross(self.hub_X[mine] - pivot, forces) @ axis))
+        total = self.mesh.comm.allreduce(np.append(forces.sum(axis=0), moment))
+        return total[:self.dim], float(total[self.dim])
 
 
-def rigid_motion(X: np.ndarray, shift, rotation: float) -> np.ndarray:
-    """Small-strain rigid motion u = shift + rotation e_z x X of points X (n, 2 or 3) about
-    the z axis (the pin's axis in the reference configuration)."""
+def rigid_motion(X: np.ndarray, shift, rotation: float, tilt: float = 0.0, frame=None) -> np.ndarray:
+    """Small-strain rigid motion of points X (n, 2 or 3):
+
+        u = shift + rotation e_z x X + tilt a x (X - c),
+
+    a turn about the z axis (the pin's axis in the reference configuration) and, in 3D, a
+    tilt about the unit axis a through the point c, `frame` = (c, a) (fem.scene.FemScene's
+    tilt_pivot and tilt_axis)."""
     turn = np.zeros_like(X)
     turn[:, 0], turn[:, 1] = -X[:, 1], X[:, 0]
-    return np.asarray(shift) + rotation * turn
+    u = np.asarray(shift) + rotation * turn
+    if tilt:
+        pivot, axis = (np.asarray(v, dtype=float) for v in frame)
+        u = u + tilt * np.cross(axis, X - pivot)
+    return u

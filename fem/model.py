@@ -20,7 +20,7 @@ def mesh_of(scene: FemScene, comm=MPI.COMM_WORLD):
     sizing = scene.sizing
     with pin_in_bore.session():
         if comm.rank == 0:
-            pin_in_bore.build(scene.geometry, sizing, scene.load.direction_deg, scene.mesh)
+            pin_in_bore.build(scene.geometry, sizing, scene.load.direction_deg, scene.mesh_options)
         data = dolfinx.io.gmsh.model_to_mesh(pin_in_bore.gmsh.model, comm, 0, gdim=scene.geometry.dim)
     return data, sizing
 
@@ -63,8 +63,9 @@ def first_touch(pin_X: np.ndarray, direction, geometry) -> float:
 def build(scene: FemScene, comm=MPI.COMM_WORLD):
     """Everything needed to solve the scene: (stepper, elasticity, contact, sizing, mesh data)."""
     data, sizing = mesh_of(scene, comm)
-    el = Elasticity(data.mesh, data.cell_tags, data.facet_tags,
-                    scene.materials.pin, scene.materials.bore)
+    el = Elasticity(data.mesh, data.cell_tags, data.facet_tags, scene.materials.pin,
+                    scene.materials.bore,
+                    (scene.tilt_pivot, scene.tilt_axis) if scene.geometry.dim == 3 else None)
     owned = el.V.dofmap.index_map.size_local
     surface = [d[d < owned] for d in (el.dofs["pin_surface"], el.dofs["bore_surface"])]
     g = scene.geometry

@@ -16,18 +16,20 @@ import numpy as np
 from pinbore.core.figures import offscreen_pyvista, plt, save_image, save_png
 from pinbore.fem import curve
 from pinbore.fem.contact import OPEN, SLIP, STATE_NAMES, STICK, tributary_lengths
-from pinbore.fem.post import angle_from, half_angle
+from pinbore.fem.post import angle_from, contact_length, half_angle, resultant_z
 
 
-def curve_rows(run, direction_deg, section):
-    """The rows of curve.csv (fields of pinbore.fem.curve.Curve), one per converged step."""
+def curve_rows(run, direction_deg, contact, pivot_z=None, copies=1):
+    """The rows of curve.csv (fields of pinbore.fem.curve.Curve), one per converged step; 3D
+    with the tilt columns (pivot_z: the bore's mid-plane, copies: 2 for a half model)."""
+    section = contact.mid_section()
     dissipated = 0.0
     for i, step in enumerate(run.steps, start=1):
         alpha = angle_from(direction_deg, step.contact.angle[section])
         touching = step.contact.status != OPEN
         stuck = np.count_nonzero(step.contact.status == STICK) / max(np.count_nonzero(touching), 1)
         dissipated += step.dissipated
-        yield {"step": i, "stage": curve.stage(step.point), "approach": step.point[0],
+        row = {"step": i, "stage": curve.stage(step.point), "approach": step.point[0],
                "rotation": np.degrees(step.point[1]), "tangential_push": step.point[2],
                "force": step.force[0], "tangential_force": step.force[1],
                "friction_torque": step.torque,
@@ -35,11 +37,19 @@ def curve_rows(run, direction_deg, section):
                "stick_fraction": stuck, "dissipated_work": dissipated,
                "newton_iterations": step.newton_iterations,
                "uzawa_iterations": step.uzawa_iterations, "gap_violation": step.gap_violation}
+        if contact.dim == 3:
+            angles, levels = contact.pin_grid
+            in_bore = (levels >= 0) & (levels <= 2 * pivot_z)
+            pressure = step.contact.pressure.reshape(levels.size, angles.size)
+            row |= {"tilt": np.degrees(step.point[3]), "tilt_moment": step.moment,
+                    "resultant_z": resultant_z(step.force[0], step.moment, pivot_z),
+                    "contact_length": contact_length(pressure[in_bore], levels[in_bore], copies)}
+        yield row
 
 
-def write_curve(path: Path, run, direction_deg, contact) -> None:
+def write_curve(path: Path, run, direction_deg, contact, pivot_z=None, copies=1) -> None:
     """One row per converged step (see the module docstring for the units)."""
-    curve.write(path, contact.dim, curve_rows(run, direction_deg, contact.mid_section()))
+    curve.write(path, contact.dim, curve_rows(run, direction_deg, contact, pivot_z, copies))
 
 
 def pressure_rows(run, direction_deg, arc_half_angle, contact):

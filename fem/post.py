@@ -1,4 +1,5 @@
-"""Quantities read off a converged state: contact half-angle, pressure profile."""
+"""Quantities read off a converged state: contact half-angle, pressure profile, axial
+contact length, axial position of the resultant."""
 
 import numpy as np
 
@@ -36,3 +37,33 @@ def half_angle(alpha: np.ndarray, p: np.ndarray) -> float:
         order = np.argsort(a)
         edges.append(contact_edge(a[order], q[order]))
     return 0.5 * (edges[0] + edges[1])
+
+
+def axial_widths(levels: np.ndarray) -> np.ndarray:
+    """Tributary axial length (m) of each level of a surface grid: half the two adjacent
+    layers (fem.contact.tributary_weights uses the same)."""
+    layers = np.diff(levels)
+    return 0.5 * (np.append(layers, 0.0) + np.insert(layers, 0, 0.0))
+
+
+def contact_length(pressure: np.ndarray, levels: np.ndarray, copies: int = 1) -> float:
+    """Axial length (m) of the pin in contact: the tributary lengths of the levels where any
+    node presses (pressure as (levels, angles)), times `copies` (2: a half model)."""
+    return copies * float(axial_widths(levels)[(pressure > 0).any(axis=1)].sum())
+
+
+def resultant_z(force: float, moment: float, pivot_z: float) -> float:
+    """Axial position (m) of the resultant of a force F along the load whose moment about the
+    tilt axis through (0, 0, pivot_z) is M: the moment of F d at z is F (z - pivot_z) (the
+    tilt axis is e_z x d), so z = pivot_z + M / F; NaN without force."""
+    return pivot_z + moment / force if force > 0 else float("nan")
+
+
+def pressure_moment(pressure, normal, weights, X, pivot, axis) -> float:
+    """Moment (N m) of the contact pressure on the pin about the axis `axis` through `pivot`,
+    taken with the sign of the hub's moment that balances it: sum w p (X - c) x nu . a over
+    the pin nodes (reference positions X, tributary areas w, bore normals nu; the bore
+    pushes the pin along -nu). Equals the hub's tilting moment of a frictionless contact,
+    by the pin's equilibrium."""
+    arm = np.asarray(X) - np.asarray(pivot)
+    return float(np.sum((weights * pressure)[:, None] * np.cross(arm, normal) @ np.asarray(axis)))

@@ -41,7 +41,8 @@ def run(scene_path, out, comm=MPI.COMM_WORLD) -> int:
                 outputs.pressure_pictures(tmp, result, scene, contact, el.symmetric)
         if comm.rank == 0:
             direction = scene.load.direction_deg
-            outputs.write_curve(tmp / "curve.csv", result, direction, contact)
+            outputs.write_curve(tmp / "curve.csv", result, direction, contact,
+                                scene.tilt_pivot[2], 2 if el.symmetric else 1)
             outputs.write_pressure(tmp / "pressure.csv", result, direction, sizing.arc_half_angle,
                                    contact)
             outputs.write_result(tmp / "result.json", summary(
@@ -63,7 +64,8 @@ def symmetry_note(scene, el) -> str | None:
     if el.symmetric:
         return ("half model z <= length/2, u_z = 0 on the mid-plane; forces, torque and work "
                 "are those of the whole pin, pressure.csv covers the modelled half")
-    why = "tilted pin" if scene.geometry.tilt_deg else "mesh.symmetry = false"
+    why = ("tilted pin" if scene.geometry.tilt_deg else
+           "tilt load" if scene.load.tilt_deg is not None else "mesh.symmetry = false")
     return f"full model ({why})"
 
 

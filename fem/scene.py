@@ -45,14 +45,21 @@ class Contact(Strict):
         return self
 
 
+SECOND_STAGES = ("rotation_deg", "tangential_push", "tilt_deg")   # after the push, one of them
+
+
 class Load(Strict):
     """The hub moves the clearance through free space, then pushes max_approach further, in
     equal steps, or in geometric steps from first_approach when that is given.
 
     Then, optionally, with the approach held, the hub turns the pin about its axis by
     rotation_deg, or pushes it across the load direction by tangential_push (m, towards
-    +90 deg from the load), in slide_steps equal steps: the pin sticks, then slips.
-    Rotations are small-strain (linearised): R phi^2 / 2 must stay below 1 % of the approach.
+    +90 deg from the load), in slide_steps equal steps: the pin sticks, then slips; or (3D)
+    tilts it by tilt_deg in tilt_steps equal steps, about the axis normal to the load and to
+    the pin's axis through the bore's mid-plane centre (positive: the end z = length turns
+    towards the load; the tilt is a load here, added to the geometry's fixed tilt_deg).
+    Rotations are small-strain (linearised): r phi^2 / 2 must stay below 1 % of the approach,
+    r the largest distance of a hub point from the rotation's axis.
     """
 
     max_approach: float = pydantic.Field(ge=0, description="hub displacement beyond first touch (m)")
@@ -62,17 +69,19 @@ class Load(Strict):
     rotation_deg: float | None = None
     tangential_push: float | None = None
     slide_steps: int = pydantic.Field(default=10, ge=1, le=10_000)
+    tilt_deg: float | None = None
+    tilt_steps: int = pydantic.Field(default=10, ge=1, le=10_000)
 
     @pydantic.model_validator(mode="after")
     def _steps(self):
-        slide = "rotation_deg" if self.rotation_deg is not None else (
-            "tangential_push" if self.tangential_push is not None else None)
+        given = [key for key in SECOND_STAGES if getattr(self, key) is not None]
+        slide = given[0] if given else None
         if self.max_approach <= 0:
             raise ValueError("max_approach must be > 0 (m)"
                              + (f": {slide} needs a radial push first" if slide else ""))
-        if self.rotation_deg is not None and self.tangential_push is not None:
-            raise ValueError("give rotation_deg or tangential_push, not both")
-        if self.rotation_deg == 0 or self.tangential_push == 0:
+        if len(given) > 1:
+            raise ValueError(f"give one of {', '.join(SECOND_STAGES)}, not {' and '.join(given)}")
+        if slide is not None and getattr(self, slide) == 0:
             raise ValueError(f"{slide} must not be 0 (leave it out for a push only)")
         if self.first_approach is not None and (self.first_approach >= self.max_approach
                                                 or self.steps < 2):
@@ -88,14 +97,14 @@ class Load(Strict):
         return [self.first_approach * ratio**k for k in range(self.steps)]
 
     @property
-    def programme(self) -> list[tuple[float, float, float]]:
-        """Every load step as (approach (m), rotation (rad), tangential push (m))."""
-        points = [(a, 0.0, 0.0) for a in self.approaches]
-        rotation = math.radians(self.rotation_deg or 0.0)
-        push = self.tangential_push or 0.0
-        if rotation or push:
-            n = self.slide_steps
-            points += [(self.max_approach, rotation * k / n, push * k / n) for k in range(1, n + 1)]
+    def programme(self) -> list[tuple[float, float, float, float]]:
+        """Every load step as (approach (m), rotation (rad), tangential push (m), tilt (rad))."""
+        points = [(a, 0.0, 0.0, 0.0) for a in self.approaches]
+        end = (0.0, math.radians(self.rotation_deg or 0.0), self.tangential_push or 0.0,
+               math.radians(self.tilt_deg or 0.0))
+        n = self.tilt_steps if self.tilt_deg is not None else self.slide_steps
+        if any(end):
+            points += [(self.max_approach, *(v * k / n for v in end[1:])) for k in range(1, n + 1)]
         return points
 
     @property
@@ -138,14 +147,53 @@ class FemScene(Strict):
             raise ValueError("load.max_approach must be smaller than the pin wall (small strain)")
         if self.mesh.symmetry and self.geometry.tilt_deg:
             raise ValueError("mesh.symmetry: a tilted pin is not symmetric about the mid-plane")
-        check_cells(self.geometry, self.sizing, self.mesh)
-        if self.load.rotation_deg is not None:
-            phi = math.radians(self.load.rotation_deg)
-            if self.geometry.pin_radius * phi**2 / 2 > 0.01 * self.load.max_approach:
-                limit = math.degrees(math.sqrt(0.02 * self.load.max_approach / self.geometry.pin_radius))
-                raise ValueError(f"load.rotation_deg: |rotation| must be <= {limit:.3g} deg here "
-                                 "(small-strain rotation: R phi^2/2 <= 1 % of max_approach)")
+        g, load = self.geometry, self.load
+        if load.tilt_deg is not None:
+            if g.dim == 2:
+                raise ValueError("load.tilt_deg applies to dim = 3 only")
+            if self.mesh.symmetry:
+                raise ValueError("mesh.symmetry: a tilt load is not symmetric about the mid-plane")
+            reach = load.max_approach + abs(math.radians(load.tilt_deg)) * (g.length / 2 + g.pin_overhang)
+            if reach >= g.pin_radius - g.hub_radius:
+                raise ValueError(f"load.tilt_deg: the tilt pushes the pin's end {reach:.3g} m into "
+                                 "the bore, more than the pin wall (small strain)")
+        for key, arm in (("rotation_deg", g.pin_radius), ("tilt_deg", self.tilt_arm)):
+            if getattr(load, key) is None:
+                continue
+            phi = math.radians(getattr(load, key))
+            if arm * phi**2 / 2 > 0.01 * load.max_approach:
+                limit = math.degrees(math.sqrt(0.02 * load.max_approach / arm))
+                raise ValueError(f"load.{key}: |{key[:-4]}| must be <= {limit:.3g} deg here "
+                                 f"(small-strain rotation: r phi^2/2 <= 1 % of max_approach, "
+                                 f"r = {arm:.3g} m)")
+        check_cells(self.geometry, self.sizing, self.mesh_options)
         return self
+
+    @property
+    def tilt_arm(self) -> float:
+        """The largest distance (m) of a hub point from the tilt axis (3D)."""
+        g = self.geometry
+        return math.hypot(g.hub_radius, (g.length or 0.0) / 2 + g.pin_overhang)
+
+    @property
+    def tilt_pivot(self) -> tuple[float, float, float]:
+        """The bore's mid-plane centre (m), the point the tilt turns about and the tilting
+        moment is taken about (3D)."""
+        return (0.0, 0.0, (self.geometry.length or 0.0) / 2)
+
+    @property
+    def tilt_axis(self) -> tuple[float, float, float]:
+        """The tilt axis: e_z x load direction, normal to the load and to the pin's axis; a
+        positive tilt about it turns the end z = length towards the load (3D)."""
+        d = self.load.direction
+        return (-d[1], d[0], 0.0)
+
+    @property
+    def mesh_options(self) -> MeshOptions:
+        """The mesh table, with the symmetry left to the mesher unless a tilt load breaks it."""
+        if self.load.tilt_deg is not None and self.mesh.symmetry is None:
+            return self.mesh.model_copy(update={"symmetry": False})
+        return self.mesh
 
     @property
     def joint(self) -> Joint:

@@ -1,8 +1,9 @@
 """Load stepping: the hub crosses the clearance, pushes the pin into the bore, then
-(optionally) turns it or pushes it sideways with the approach held.
+(optionally) turns it, pushes it sideways or (3D) tilts it with the approach held.
 
-A load point is (approach (m), rotation (rad), tangential push (m)); the hub sits at
-(c + approach) d + push d_perp, turned by the rotation (fem.elasticity.rigid_motion).
+A load point is (approach (m), rotation (rad), tangential push (m), tilt (rad)); the hub sits
+at (c + approach) d + push d_perp, turned by the rotation and tilted by the tilt
+(fem.elasticity.rigid_motion).
 
 Each load step solves  K u + f_c(u) = 0  (free dofs), u = prescribed (hub, clamped edge),
 with PETSc SNES: Newton, full steps, the tangent K_bc + K_c (fem.contact says which terms of
@@ -47,9 +48,10 @@ SNES_REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not
 class StepResult:
     """One converged load step."""
 
-    point: np.ndarray            # (approach (m), rotation (rad), tangential push (m))
+    point: np.ndarray            # (approach (m), rotation (rad), tangential push (m), tilt (rad))
     force: np.ndarray            # N/m (3D: N), hub force on the pin along (d, d_perp)
     torque: float                # N m/m (3D: N m), friction torque about the pin's axis
+    moment: float                # N m (3D), hub moment on the pin about the tilt axis (0 in 2D)
     dissipated: float            # J/m (3D: J), frictional work of this step
     newton_iterations: int       # summed over Uzawa updates
     uzawa_iterations: int
@@ -137,7 +139,7 @@ class LoadStepper:
         run = Run()
         touch = self.el.pin_rigid_motion(self.clearance * self.direction)  # exact: no force yet
         self.contact.commit(self.contact.state(touch))
-        history = [(np.zeros(3), touch, self.contact.snapshot())]
+        history = [(np.zeros(4), touch, self.contact.snapshot())]
         target_index, target, cuts = 0, programme[0], 0
         while target_index < len(programme):
             outcome = self._attempt(history, target)
@@ -175,19 +177,20 @@ class LoadStepper:
         if len(history) > 1:
             point_0, x_0, snapshot_0 = history[-2]
             previous = point - point_0
-            if np.allclose(np.cross(step, previous), 0.0, atol=1e-12 * np.abs(step).max()):
+            along = float(step @ previous) / float(previous @ previous)
+            if np.allclose(step - along * previous, 0.0, atol=1e-12 * np.abs(step).max()):
                 ratio = PREDICTOR_RATIO * float(step @ previous) / float(previous @ previous)
                 self.contact.extrapolate(snapshot_0, ratio, self.augmented)
                 return x + ratio * (x - x_0)
             return x.copy()  # a new programme: only the hub moves (the pin is held by friction)
         return x + self.el.pin_rigid_motion(step[0] * self.direction + step[2] * self.across,
-                                            step[1])
+                                            step[1], step[3])
 
     def _attempt(self, history, target) -> StepResult | str:
         """One load step; a StepResult, or the reason it failed."""
         start = time.perf_counter()
         self._predict(history, target).copy(self.x)
-        self.el.set_boundary_values(self.x, self.hub_shift(target), target[1])
+        self.el.set_boundary_values(self.x, self.hub_shift(target), target[1], target[3])
         newton, reasons = 0, []
         for uzawa in range(1, self.uzawa_max_it + 1):
             self.contact.start_solve()
@@ -209,9 +212,12 @@ class LoadStepper:
             return (f"augmented Lagrangian left a penetration (or stuck-node slip) of "
                     f"{worst:.3g} m > gap_tolerance {self.gap_tolerance:.3g} m after "
                     f"{self.uzawa_max_it} updates")
-        force = self.copies * self.el.hub_reaction(self.x, self.work)
+        force, moment = self.el.hub_reaction(self.x, self.work)
+        # a half model: twice its force; its moment about the mid-plane cancels the mirror half's
+        force, moment = self.copies * force, (moment if self.copies == 1 else 0.0)
         torque = self.copies * self.contact.torque(self.x, self.hub_shift(target))
         return StepResult(target, np.array([force @ self.direction, force @ self.across]), torque,
+                          moment,
                           self.copies * state.dissipated(self.contact.weights), newton, uzawa,
                           violation, reasons, state, time.perf_counter() - start)
 
@@ -250,4 +256,4 @@ def jacobian_matrix(K: PETSc.Mat, couplings: np.ndarray) -> PETSc.Mat:
 
 def describe(point) -> str:
     return (f"approach {point[0]:.6g} m, rotation {np.degrees(point[1]):.6g} deg, "
-            f"tangential push {point[2]:.6g} m")
+            f"tangential push {point[2]:.6g} m, tilt {np.degrees(point[3]):.6g} deg")

@@ -25,7 +25,7 @@ def _mesh(args) -> int:
     scene = scenes.load(FemScene, args.scene)
     with atomic_directory(args.out) as tmp:
         mesh_run.write(scene.geometry, scene.sizing, scene.load.direction_deg,
-                       scene.mesh, tmp)
+                       scene.mesh_options, tmp)
     return 0
 
 

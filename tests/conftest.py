@@ -55,7 +55,7 @@ class Solved:
 
         self.scene = validate(FemScene, data, "test scene")
         self.stepper, self.el, self.contact, self.sizing, _ = model.build(self.scene)
-        programme = self.scene.load.programme if approaches is None else [(a, 0, 0) for a in approaches]
+        programme = self.scene.load.programme if approaches is None else [(a, 0, 0, 0) for a in approaches]
         self.run = self.stepper.run(programme, on_step=on_step)
         assert self.run.stop is None, self.run.stop
 

@@ -70,7 +70,9 @@ BAD = [
 
 BAD_LOADS = [
     ({"max_approach": 0.0, "rotation_deg": 0.05}, "rotation_deg needs a radial push first"),
-    ({"tangential_push": 1e-6, "rotation_deg": 0.05}, "not both"),
+    ({"tangential_push": 1e-6, "rotation_deg": 0.05}, "not rotation_deg and tangential_push"),
+    ({"tilt_deg": 0.05, "rotation_deg": 0.05}, "not rotation_deg and tilt_deg"),
+    ({"tilt_deg": 0.05}, "load.tilt_deg applies to dim = 3 only"),
     ({"rotation_deg": 5.0}, "load.rotation_deg: |rotation| must be <="),
     ({"rotation_deg": 0.0}, "rotation_deg must not be 0"),
 ]
@@ -81,12 +83,17 @@ BAD_3D = [
     ({"length": 0.02, "tilt_deg": 0.1}, {}, "the tilted pin's end reaches"),
     ({"length": 0.02, "tilt_deg": 0.02}, {"symmetry": True}, "mesh.symmetry: a tilted pin"),
     ({"length": 0.02, "relief_length": 1e-3}, {}, "relief_length and relief_depth go together"),
+    ({"length": 0.02}, {"symmetry": True, "load": {"tilt_deg": 0.05}},
+     "mesh.symmetry: a tilt load is not symmetric"),
+    ({"length": 0.02}, {"load": {"tilt_deg": 1.0}}, "load.tilt_deg: |tilt| must be <= 0.254 deg"),
+    ({"length": 0.02}, {"load": {"tilt_deg": -50.0}}, "load.tilt_deg: the tilt pushes the pin's end"),
 ]
 
 
 @pytest.mark.parametrize("geometry, mesh, message", BAD_3D)
 def test_bad_3d_geometry_is_one_line_exit_2(write_scene, tmp_path, geometry, mesh, message):
-    data = scene_dict(geometry={"dim": 3} | geometry, mesh=mesh)
+    mesh = dict(mesh)
+    data = scene_dict(geometry={"dim": 3} | geometry, mesh=mesh, load=mesh.pop("load", {}))
     done = pinbore("fem", write_scene(data), "--out", tmp_path / "out")
     assert done.returncode == 2 and "Traceback" not in done.stderr
     assert message in done.stderr and len(done.stderr.strip().splitlines()) == 1
