@@ -4,7 +4,8 @@
 - `scene`: strict TOML scene models (`Strict`), reading and validation into one-line errors;
 - `output`: outputs that appear whole or not at all;
 - `figures`: pictures written byte for byte the same from the same data;
-- `html`: the pieces of the report page (figures inline, tables).
+- `html`: the pieces of the report page (figures inline, tables);
+- `compiled`: numba's on-disk cache kept in step with the files compiled code calls into.
 
 It imports no stage: `pinbore.laws`, `meshes`, `fem`, `calibration`, `reduced` build on it.
 """

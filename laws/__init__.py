@@ -1,5 +1,7 @@
-"""Contact laws for revolute clearance joints: elastic (force against approach) and
-dissipative (hysteresis). Pure functions in SI units, the formula and its source in each
+"""Contact laws for revolute clearance joints: elastic (force against approach),
+dissipative (hysteresis), friction, and the sliced law of a finite pin (force and tilting
+moment, `sliced`) with its pieces: laws as log-log tables (`tables`) and the bore's edge
+relief (`relief`). Pure functions in SI units, the formula and its source in each
 docstring. This package imports nothing from the stages, so every stage may use it.
 """
 

@@ -1,13 +1,13 @@
 """The geometry and meshing tables of a scene, and the physical-group tags every stage uses."""
 
 import math
-from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 import pydantic
 
 from pinbore.core.scene import Strict
+from pinbore.laws.relief import Relief
 
 # Physical groups (cells of each body, facets of each boundary). Stages downstream use these.
 PIN, HOUSING = 1, 2
@@ -21,24 +21,6 @@ DEFAULT_LAYERS = 12              # 3D: element layers along the modelled length
 # cell: a 2D mesh of 7.6e5 cells was still meshing after 8 min) and the direct solver's
 # factors grow faster than the dofs (3D: 88k dofs, 4e4 cells, take 116 s serial).
 MAX_CELLS = {2: 250_000, 3: 150_000}
-
-
-@dataclass(frozen=True)
-class Relief:
-    """Edge relief of the bore: over `length` (m) from each end the bore radius grows along a
-    circular arc, tangent to the bore, to `depth` (m) more at the end face; the arc's radius
-    is r = (length^2 + depth^2) / (2 depth)."""
-
-    length: float
-    depth: float
-
-    def profile(self, z, z_low, z_high):
-        """delta(z), delta'(z), delta''(z) (m, -, 1/m) of the bore between z_low and z_high."""
-        r = (self.length**2 + self.depth**2) / (2 * self.depth)
-        into = np.clip(self.length - np.minimum(z - z_low, z_high - z), 0.0, self.length)
-        side = np.where(z - z_low < z_high - z, -1.0, 1.0)                      # d(into)/dz
-        root = np.sqrt(r**2 - into**2)
-        return r - root, side * into / root, np.where(into > 0, r**2 / root**3, 0.0)
 
 
 class Geometry(Strict):

@@ -15,7 +15,7 @@ A revolute clearance joint is no constraint: the journal centre P_j moves inside
 (centre P_b, radius R_b, clearance c = R_b - R_j). With e = P_j - P_b, the penetration is
 delta = |e| - c, the normal n = e/|e|, the contact point P_b + R_b n. Continuous contact: while
 delta > 0 the normal force is F_n = F_el(delta) (1 + chi delta'/v0)  (>= 0), F_el from a
-table of the elastic law (log-log interpolation, exact for a power law), chi the hysteresis
+table of the elastic law (pinbore.laws.tables: log-log interpolation, exact for a power law), chi the hysteresis
 factor of the damping law, v0 the approach rate at the onset of this impact; the friction
 force opposes the tangential slip v_t: Ambrosio's regularised Coulomb, polynomial Stribeck or
 a linear velocity law (static, regularised near zero slip), LuGre or Dahl normalised by F_n,
@@ -56,14 +56,13 @@ preallocated buffers and solves the Schur system by Cholesky: about 1.2 us per e
 for the slider-crank.
 """
 
-import hashlib
 import math
-from pathlib import Path
 
 import numba
 import numpy as np
 
-from pinbore.laws import dissipative, friction
+from pinbore.core.compiled import follow_compiled_in
+from pinbore.laws import dissipative, friction, tables
 from pinbore.reduced import layout
 from pinbore.reduced.layout import (
     CONTINUOUS, COULOMB, COULOMB_MU, DAHL_MU, DAHL_SIGMA, DISSIPATED, DRIVE_ANGLE, DRIVE_BODY,
@@ -252,17 +251,6 @@ def mass_weighted_step(target, jac, minv, x, m, nq, scale):
 
 
 @numba.njit(cache=True)
-def elastic_force(delta, grid_log0, grid_step, table):
-    """F_el(delta) from log F tabulated on a uniform grid of log delta: power law below the
-    grid, NaN above it (beyond the joint's scale, or the law's range), which stops the run."""
-    x = (math.log(delta) - grid_log0) / grid_step
-    if x > table.size - 1 or not math.isfinite(table[min(max(int(x) + 1, 0), table.size - 1)]):
-        return math.nan
-    i = min(max(int(math.floor(x)), 0), table.size - 2)
-    return math.exp(table[i] + (x - i) * (table[i + 1] - table[i]))
-
-
-@numba.njit(cache=True)
 def joint_kinematics(q, qd, joint):
     """Penetration, normal, contact point, approach rate and slip of a clearance joint."""
     bi, bj = int(joint[JOINT_BEARING_BODY]), int(joint[JOINT_JOURNAL_BODY])
@@ -319,7 +307,7 @@ def joint_forces(q, qd, joint, impact_speed, grid_log0, grid_step, table, y):
     kin = joint_kinematics(q, qd, joint)
     if kin.delta <= 0.0:
         return JointForces(kin.delta, 0.0, 0.0, 0.0, 0.0, kin.nx, kin.ny, kin.cx, kin.cy, 0.0, 0.0)
-    f_el = elastic_force(kin.delta, grid_log0, grid_step, table)
+    f_el = tables.table_force(kin.delta, grid_log0, grid_step, table)
     f_n = dissipative.hysteresis_force(f_el, kin.rate, impact_speed, joint[JOINT_CHI])
     index = int(joint[JOINT_STATE])
     if int(joint[JOINT_FRICTION_LAW]) == IWAN:
@@ -932,26 +920,9 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
 
 
 # ---- the compiled code follows the laws and the layout
-# numba's cache checks only the file a compiled function is defined in ("Notes on caching"
-# in numba's documentation): the kernel compiles in the laws of pinbore.laws.friction and
-# .dissipative and the constants of reduced.layout, so an edit there alone would leave the
-# kernel's cached code stale. A digest of those files, kept beside the cache, drops the
-# kernel's cache index when they change, and the kernel compiles afresh once.
-COMPILED_IN = (friction.__file__, dissipative.__file__, layout.__file__)
-
-
-def _follow_compiled_in() -> None:
-    digest = hashlib.sha256(b"".join(Path(f).read_bytes() for f in COMPILED_IN)).hexdigest()
-    compiled = [f for f in globals().values() if isinstance(f, numba.core.registry.CPUDispatcher)]
-    stamp = Path(compiled[0].stats.cache_path) / "kernel.compiled_in.sha256"
-    try:
-        if stamp.exists() and stamp.read_text() == digest:
-            return
-        for function in compiled:
-            function._cache.flush()
-        stamp.write_text(digest)
-    except OSError:
-        pass   # no writable cache: numba compiles afresh anyway
-
-
-_follow_compiled_in()
+# numba's cache checks only the file a compiled function is defined in: the kernel compiles in
+# the laws of pinbore.laws.friction, .dissipative and .tables and the constants of
+# reduced.layout, so an edit there alone would leave the kernel's cached code stale
+# (pinbore.core.compiled: a digest of those files drops the kernel's cache when they change).
+COMPILED_IN = (friction.__file__, dissipative.__file__, tables.__file__, layout.__file__)
+follow_compiled_in(globals(), COMPILED_IN)

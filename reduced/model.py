@@ -11,6 +11,7 @@ import numpy as np
 from pinbore.calibration import lawsfile
 from pinbore.core.errors import InputError
 from pinbore.laws import dissipative, elastic
+from pinbore.laws.tables import log_grid
 from pinbore.reduced import kernel
 from pinbore.reduced.layout import (
     CONTINUOUS, COULOMB, COULOMB_MU, DAHL, DAHL_MU, DAHL_SIGMA, DRIVE_ANGLE, DRIVE_BODY, DRIVE_COLUMNS,
@@ -161,9 +162,7 @@ def build(scene: ReducedScene, source: str, base: Path) -> Model:
     joints, tables, friction_states = [], [], 0
     # penetrations up to a tenth of the journal radius are tabulated; beyond, the run has blown up
     top = max((BLOW_UP_FRACTION * c.journal_radius for c in scene.clearance_joints), default=1.0)
-    grid_log0 = math.log(GRID_LOW)
-    grid_step = (math.log(top) - grid_log0) / (GRID_POINTS - 1)
-    deltas = np.exp(grid_log0 + grid_step * np.arange(GRID_POINTS))
+    grid_log0, grid_step, deltas = log_grid(GRID_LOW, top, GRID_POINTS)
     for c in scene.clearance_joints:
         chi = 0.0 if c.damping_law == "none" else dissipative.HYSTERESIS[c.damping_law](c.restitution)
         code, parameters, states = friction_block(c.friction)

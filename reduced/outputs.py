@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from pinbore.core.figures import plt, save_png
+from pinbore.laws import tables
 from pinbore.laws.dissipative import hysteresis_force
 from pinbore.reduced import kernel
 from pinbore.reduced.layout import (
@@ -89,7 +90,7 @@ def refined_peak(model, j, run, k):
         delta = (2 * x**3 - 3 * x**2 + 1) * d0 + (x**3 - 2 * x**2 + x) * r0 + (-2 * x**3 + 3 * x**2) * d1 + (x**3 - x**2) * r1
         rate = ((6 * x**2 - 6 * x) * d0 + (3 * x**2 - 4 * x + 1) * r0 + (-6 * x**2 + 6 * x) * d1 + (3 * x**2 - 2 * x) * r1) / h
         for i in np.flatnonzero(delta > 0):
-            f_el = kernel.elastic_force(delta[i], model.grid_log0, model.grid_step, model.tables[j])
+            f_el = tables.table_force(delta[i], model.grid_log0, model.grid_step, model.tables[j])
             force = hysteresis_force(f_el, rate[i], speeds[a + 1, j], chi)
             if force > best[0]:
                 best = (force, float(times[a] + x[i] * h))

@@ -1,0 +1,312 @@
+"""The sliced cylindrical-joint law (pinbore.laws.sliced) against closed forms of a linear
+per-length law, convergence orders as the slices double, symmetry, the edge relief's arc,
+the end correction and a law beyond its table; the table lookup it shares with the reduced
+kernel (pinbore.laws.tables).
+
+Notation: bore length L, slices n of width h = L/n, offsets s = z - L/2, approach
+delta(s) = delta + theta s - r(z), per-length law f (N/m)."""
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+from pinbore.laws import elastic as el
+from pinbore.laws import sliced as sl
+from pinbore.laws import tables
+from pinbore.reduced import kernel
+
+L = 0.02            # m, bore length
+K = 1e11            # Pa, stiffness of the linear per-length law f = K delta
+STEEL = dict(E_bore=207e9, nu_bore=0.3, E_pin=207e9, nu_pin=0.3)
+TIGHT = el.Joint(r_bore=10.0e-3, r_pin=9.99e-3, length=L, **STEEL)    # c = 10 um
+FLORES = el.Joint(r_bore=10.0e-3, r_pin=9.5e-3, length=L, **STEEL)    # c = 0.5 mm
+NO_RELIEF = (0.0, 0.0)
+
+
+def linear_table():
+    """f = K delta tabulated: exponent 1, so the log-log table is exact at every delta."""
+    return tables.tabulate(lambda d: K * d, 1e-12, 1e-3, 200)
+
+
+def law_table(name, joint, points=600):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")      # the implicit laws' range: NaN in the table
+        return tables.tabulate(lambda d: el.PUBLISHED[name](d, joint), 1e-10, 1e-4, points)
+
+
+def run(delta, theta, slices, table, relief=NO_RELIEF, end_length=0.0):
+    return sl.sliced(delta, theta, L, slices, *table, *relief, end_length)
+
+
+def linear_closed_form(delta, theta):
+    """F (N) and M (N m) of f = K <delta + theta s> over s in [-L/2, L/2], theta != 0.
+
+    Full contact (delta >= |theta| L/2): F = K delta L, M = K theta int s^2 ds = K theta L^3/12.
+    Partial contact (|delta| < |theta| L/2), theta > 0: contact where s > -a, a = delta/theta;
+    with b = a + L/2 the contact length and u = s + a,
+        F = K theta int_0^b u du = K theta b^2 / 2 = K/(2 theta) (delta + theta L/2)^2,
+        M = K theta int_0^b u (u - a) du = K theta (b^3/3 - a b^2/2) = K theta b^2 (L - a)/6,
+    which meets the full-contact forms at a = L/2 (M = K theta L^3/12). theta < 0 mirrors
+    s -> -s: F the same with |theta|, M of opposite sign."""
+    t = abs(theta)
+    if delta >= t * L / 2:
+        return K * delta * L, K * theta * L**3 / 12
+    if delta <= -t * L / 2:
+        return 0.0, 0.0
+    a = delta / t
+    b = a + L / 2
+    return K * t * b**2 / 2, math.copysign(K * t * b**2 * (L - a) / 6, theta)
+
+
+def orders(errors):
+    """Observed orders log2(e_n / e_2n) between successive doublings."""
+    e = np.asarray(errors)
+    return np.log2(e[:-1] / e[1:])
+
+
+def fitted_order(slices, errors):
+    """Least-squares slope of -ln(error) against ln(n)."""
+    return -np.polyfit(np.log(slices), np.log(errors), 1)[0]
+
+
+# ---- the table lookup shared with the reduced kernel
+
+def test_the_kernel_looks_laws_up_with_the_laws_table():
+    """One implementation: the reduced kernel calls pinbore.laws.tables.table_force, and its
+    numba cache follows that file."""
+    assert kernel.tables.table_force is tables.table_force
+    assert tables.__file__ in kernel.COMPILED_IN
+    assert not hasattr(kernel, "elastic_force")
+
+
+def test_table_is_exact_for_a_power_law_and_nan_beyond():
+    """ln f is linear in ln delta on each segment: a power law K d^1.5 comes back to rounding
+    (~1e-14: ln f ~ 30 carries ~30 eps) between grid points and below the grid (the first
+    segment's power law continues); above the grid, or where the table is NaN, NaN."""
+    law = lambda d: 3e13 * d**1.5                       # noqa: E731
+    table = tables.tabulate(law, 1e-9, 1e-4, 50)
+    for d in (3.3e-12, 1e-9, 2.718e-7, 9.99e-5, 1e-4):
+        assert tables.table_force(d, *table) == pytest.approx(law(d), rel=1e-12)
+    assert math.isnan(tables.table_force(1.01e-4, *table))
+    grid_log0, grid_step, log_f = table
+    cut = log_f.copy()
+    cut[30:] = np.nan
+    assert math.isnan(tables.table_force(math.exp(grid_log0 + 29.5 * grid_step), grid_log0, grid_step, cut))
+    assert np.isfinite(tables.table_force(math.exp(grid_log0 + 28.5 * grid_step), grid_log0, grid_step, cut))
+
+
+# ---- closed forms
+
+@pytest.mark.parametrize("slices", [1, 2, 3, 7, 64])
+def test_untilted_pin_carries_f_times_length(slices):
+    """theta = 0, no relief, no end length: every slice has the approach delta, so
+    F = sum f(delta) L/n = f(delta) L for any n (to the rounding of n equal terms), M = 0 (the
+    offsets are exactly antisymmetric), z_F = L/2, all the length in contact. Nonlinear law
+    (Liu's), to show nothing depends on the law's shape."""
+    table = law_table("liu", TIGHT)
+    delta = 2e-6
+    force, moment, z_f, contact = run(delta, 0.0, slices, table)
+    f = tables.table_force(delta, *table)
+    assert force == pytest.approx(f * L, rel=1e-13)
+    assert abs(moment) <= 1e-13 * force * L
+    assert z_f == pytest.approx(L / 2, rel=1e-12)
+    assert contact == pytest.approx(L, rel=1e-13)
+
+
+@pytest.mark.parametrize("slices", [1, 2, 5, 16, 100])
+def test_linear_law_in_full_contact(slices):
+    """f = K delta with delta > |theta| L/2 (full contact): the midpoint rule integrates the
+    linear F integrand exactly, F = K delta L for every n. M's integrand K (delta + theta s) s
+    is quadratic; the midpoint sum gives K theta h sum s_i^2 = K theta L^3/12 (1 - 1/n^2)
+    (sum over midpoints of s_i^2 = n h^2 (n^2 - 1)/12), exactly, the closed form to order h^2."""
+    delta, theta = 5e-6, 2e-4
+    force, moment, z_f, _ = run(delta, theta, slices, linear_table())
+    closed_f, closed_m = linear_closed_form(delta, theta)
+    assert force == pytest.approx(closed_f, rel=1e-13)
+    assert moment == pytest.approx(closed_m * (1 - 1 / slices**2), rel=1e-12, abs=1e-14 * closed_m)
+    assert z_f == pytest.approx(L / 2 + moment / force, rel=1e-14)
+
+
+def test_linear_law_in_partial_contact_closed_form_and_order():
+    """f = K delta, partial contact with the contact edge at z0 = L/3 (delta = theta L/6): F and
+    M against `linear_closed_form`. The midpoint rule is exact on the slices wholly in or out
+    of contact (F's integrand is linear there); the one slice holding the edge, the edge at
+    the fraction xi of it, m = min(xi, 1 - xi), gives F_n - F = -K theta (m h)^2 / 2
+    (integrate the hinge K theta <z - z0> over the slice: the exact part is
+    K theta h^2 (1 - xi)^2/2, the midpoint K theta h^2 <1/2 - xi>). So the kink is
+    no loss of order: the error is O(h^2), from one slice instead of summed over n, but it
+    jumps with the edge's place in its slice. z0 = L/3 sits at xi = 1/3 or 2/3 as n doubles
+    (n/3 mod 1), m = 1/3 always: F's error is exactly (m h / (2L/3))^2 relative, the
+    observed order exactly 2. M has the same edge error plus the smooth O(h^2) of its
+    quadratic integrand: order 2 within 0.25 (the two parts shift against each other).
+    The contact length, a count of slices, is first order: within h/2 of 2L/3."""
+    table = linear_table()
+    theta = 1e-3
+    delta = theta * L / 6
+    closed_f, closed_m = linear_closed_form(delta, theta)
+    assert closed_f == pytest.approx(K / (2 * theta) * (delta + theta * L / 2) ** 2)
+    slices = [4 * 2**j for j in range(9)]
+    errors_f, errors_m = [], []
+    for n in slices:
+        force, moment, z_f, contact = run(delta, theta, n, table)
+        expected = -K * theta * (L / n / 3) ** 2 / 2
+        assert force - closed_f == pytest.approx(expected, rel=1e-6)
+        assert abs(contact - 2 * L / 3) <= L / n / 2 * (1 + 1e-12)
+        assert z_f == pytest.approx(L / 2 + moment / force, rel=1e-14)
+        errors_f.append(abs(force / closed_f - 1))
+        errors_m.append(abs(moment / closed_m - 1))
+    assert orders(errors_f) == pytest.approx(2.0, abs=1e-4)
+    assert np.all(np.abs(orders(errors_m) - 2) < 0.25)
+    assert errors_m[-1] < 1e-5
+
+
+@pytest.mark.parametrize("delta", [-4e-6, 0.0, 3e-6, 9.9e-6])
+def test_linear_partial_contact_converges_to_the_closed_form(delta):
+    """Edges elsewhere (delta from barely touching to barely full, theta L/2 = 1e-5): the
+    error is bounded by the edge slice's K theta (h/2)^2 / 2 plus M's smooth part, so at
+    n = 4096 (h = 4.9 um) F within 1e-5 and M within 1e-4 relative of the closed form."""
+    theta = 1e-3
+    force, moment, _, _ = run(delta, theta, 4096, linear_table())
+    closed_f, closed_m = linear_closed_form(delta, theta)
+    assert force == pytest.approx(closed_f, rel=1e-5)
+    assert moment == pytest.approx(closed_m, rel=1e-4)
+
+
+# ---- convergence for nonlinear laws
+
+@pytest.mark.parametrize("name, joint", [("liu", TIGHT), ("johnson", FLORES)])
+@pytest.mark.parametrize("delta, theta", [(5e-6, 2e-4), (1e-6, 5e-4)], ids=["full", "partial"])
+def test_order_two_for_nonlinear_laws(name, joint, delta, theta):
+    """Nonlinear per-length laws (Liu's, Johnson's line contact, tabulated on 600 points):
+    F and M at n = 16 ... 512 against n = 65536 (whose own error, ~(16/65536)^2 = 6e-8 of
+    n = 16's, is far below the differences measured). The midpoint rule is O(h^2) for a
+    smooth integrand; here the integrand has kinks: the contact edge (partial contact,
+    delta = 1e-6 < theta L/2 = 5e-6) and, much smaller, the table's own slope changes at its
+    grid points (log-log interpolation). Each kink costs one slice an O(h^2) error whose
+    coefficient jumps with the kink's place in its slice, so the order between successive
+    doublings scatters (measured 1.0-3.2 for Johnson in partial contact, whose law is nearly
+    linear near delta = 0, i.e. a true kink), but the least-squares order over the range is
+    2 within 0.15 (measured 1.99-2.08)."""
+    table = law_table(name, joint)
+    reference = run(delta, theta, 1 << 16, table)
+    slices = np.array([16 * 2**j for j in range(6)])
+    errors_f, errors_m = [], []
+    for n in slices:
+        force, moment, _, _ = run(delta, theta, int(n), table)
+        errors_f.append(abs(force / reference[0] - 1))
+        errors_m.append(abs(moment / reference[1] - 1))
+    assert fitted_order(slices, errors_f) == pytest.approx(2.0, abs=0.15)
+    assert fitted_order(slices, errors_m) == pytest.approx(2.0, abs=0.15)
+    assert errors_f[0] < 5e-3      # 16 slices already give F within 0.5 % (measured 0.18 %)
+
+
+# ---- symmetry, relief, ends, range
+
+@pytest.mark.parametrize("slices", [5, 16])
+@pytest.mark.parametrize("delta", [3e-6, -1e-6])
+def test_moment_changes_sign_with_the_tilt(slices, delta):
+    """Without relief, theta -> -theta mirrors the approach about the mid-plane
+    (delta(s; -theta) = delta(-s; theta)): F the same, M opposite, z_F mirrored. The
+    offsets are exactly antisymmetric, so only the summation order differs (rounding)."""
+    table = law_table("liu", TIGHT)
+    plus = run(delta, 4e-4, slices, table)
+    minus = run(delta, -4e-4, slices, table)
+    assert plus[1] > 0
+    assert minus[0] == pytest.approx(plus[0], rel=1e-13)
+    assert minus[1] == pytest.approx(-plus[1], rel=1e-12)
+    assert minus[2] == pytest.approx(L - plus[2], rel=1e-12)
+    assert minus[3] == pytest.approx(plus[3], rel=1e-13)
+
+
+def test_edge_relief_lowers_the_end_slices_approach_by_the_arc():
+    """A relief over l = 2 mm to d = 3 um at each end, 20 slices of 1 mm: the end slices'
+    midpoints lie x = 1.5 mm and 0.5 mm into the relieved zones, the rest is cylindrical.
+    Their approach drops by the sagitta r - sqrt(r^2 - x^2), r = (l^2 + d^2)/(2d), evaluated
+    here independently in the cancellation-free form x^2 / (r + sqrt(r^2 - x^2)) (agreement
+    to 1e-9 of the depth: the direct form loses ~eps r/depth = 4e-11 of it). F is then the
+    sum of K delta_i h over the slices (linear law, so exact), below the unrelieved K delta L."""
+    relief_length, relief_depth = 2e-3, 3e-6
+    table = linear_table()
+    delta, n = 2e-6, 20
+    z, approach, f = sl.sliced_profile(delta, 0.0, L, n, *table, relief_length, relief_depth)
+    arc = (relief_length**2 + relief_depth**2) / (2 * relief_depth)
+    into = np.clip(relief_length - np.minimum(z, L - z), 0.0, None)
+    sagitta = into**2 / (arc + np.sqrt(arc**2 - into**2))
+    assert np.count_nonzero(sagitta) == 4
+    assert sagitta[0] == pytest.approx(relief_depth * (1.5 / 2) ** 2, rel=1e-3)   # ~ x^2/(2r)
+    assert np.allclose(approach, delta - sagitta, rtol=0, atol=1e-9 * relief_depth)
+    assert np.allclose(f, K * np.clip(approach, 0, None), rtol=1e-13, atol=0)
+    force, moment, z_f, contact = run(delta, 0.0, n, table, (relief_length, relief_depth))
+    assert force == pytest.approx(np.sum(K * np.clip(delta - sagitta, 0, None) * L / n), rel=1e-12)
+    assert force < K * delta * L
+    assert abs(moment) <= 1e-13 * force * L
+    assert contact == pytest.approx(L - L / n * np.count_nonzero(delta - sagitta <= 0), rel=1e-13)
+
+
+@pytest.mark.parametrize("end_length", [1.5e-3, -0.4e-3])
+@pytest.mark.parametrize("slices", [1, 8])
+def test_end_length_adds_the_law_at_each_end(end_length, slices):
+    """Each end adds end_length (m, either sign) of per-length law at its end slice's
+    approach, moment arm that of the end slice: F(e) - F(0) = e (f_first + f_last),
+    M(e) - M(0) = e (f_first s_first + f_last s_last); with one slice that slice takes both
+    ends (s = 0). Linear law, tilted, full contact: f at the end slices in closed form."""
+    table = linear_table()
+    delta, theta = 5e-6, 2e-4
+    base = run(delta, theta, slices, table)
+    ended = run(delta, theta, slices, table, end_length=end_length)
+    s_first, s_last = -L / 2 + L / slices / 2, L / 2 - L / slices / 2
+    f_first, f_last = K * (delta + theta * s_first), K * (delta + theta * s_last)
+    assert ended[0] - base[0] == pytest.approx(end_length * (f_first + f_last), rel=1e-9)
+    assert ended[1] - base[1] == pytest.approx(end_length * (f_first * s_first + f_last * s_last),
+                                               rel=1e-9, abs=1e-12 * base[0] * L)
+    assert ended[3] == base[3]                  # the contact length counts slices only
+
+
+def test_a_law_beyond_its_table_gives_nan():
+    """The reduced model's tables hold NaN beyond their range (and Johnson's law has none
+    beyond its largest approach): one slice there makes F, M and z_F NaN, not a number."""
+    grid_log0, grid_step, log_f = linear_table()
+    cut = log_f.copy()
+    top = 4e-6
+    cut[np.exp(grid_log0 + grid_step * np.arange(cut.size)) > top] = np.nan
+    table = (grid_log0, grid_step, cut)
+    inside = run(3e-6, 0.0, 8, table)
+    assert inside[0] == pytest.approx(K * 3e-6 * L, rel=1e-12)
+    tilted = run(3e-6, 2e-4, 8, table)         # the end z = L reaches 3e-6 + 1.75e-6 > top
+    assert all(math.isnan(v) for v in tilted[:3])
+    johnson = law_table("johnson", TIGHT)      # c = 10 um: no solution above ~5 um
+    assert all(math.isnan(v) for v in run(1e-6, 1e-3, 16, johnson)[:3])
+
+
+def test_no_contact_gives_zero_force_and_nan_resultant():
+    force, moment, z_f, contact = run(-1e-6, 1e-4, 16, linear_table())   # reaches -1e-6 + 1e-6
+    assert (force, moment, contact) == (0.0, 0.0, 0.0) and math.isnan(z_f)
+
+
+# ---- how many slices
+
+def test_slices_for_one_percent_in_force():
+    """`slices_for_force` doubles n from 4 until F changes by < 0.5 % (Richardson: the error of
+    F_n is then < 1 % for any order >= 1) and, with a contact edge inside, >= 8 slices in
+    contact. Against the linear closed form:
+    - full contact (F exact for any n): 4;
+    - edge at z0 = L/3: F_n's error is (m h / (2L/3))^2, m = 1/3 (see the partial-contact
+      test): F_8 -> F_16 changes by 0.29 %, but at n = 8 only five slices (midpoints beyond
+      L/3) are in contact; at 16 eleven are, and F_16 -> F_32 changes by 0.07 %: 16, whose
+      error is (1/32)^2 = 0.1 %;
+    - contact over 1 % of the length: n resolves it with 8 slices (1024), error < 1 %;
+    - edges elsewhere: the error of the n returned < 1 %;
+    - no contact: 4 (F = 0)."""
+    table = linear_table()
+    theta = 1e-3
+    assert sl.slices_for_force(5e-6 + theta * L / 2, theta, L, *table) == 4
+    assert sl.slices_for_force(theta * L / 6, theta, L, *table) == 16
+    assert sl.slices_for_force(-0.49 * theta * L, theta, L, *table) == 1024
+    assert sl.slices_for_force(-0.6 * theta * L, theta, L, *table) == 4
+    for fraction in np.linspace(-0.49, 0.49, 23):
+        delta = fraction * theta * L
+        n = sl.slices_for_force(delta, theta, L, *table)
+        closed_f, _ = linear_closed_form(delta, theta)
+        assert abs(run(delta, theta, n, table)[0] / closed_f - 1) < 0.01, (fraction, n)
