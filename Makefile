@@ -18,8 +18,9 @@ PYTHON312 ?= $(shell for p in $$(command -v python3.12) \
 
 FEM_SCENES := $(basename $(notdir $(wildcard scenes/fem/*.toml)))
 FEM_CURVES := $(FEM_SCENES:%=build/fem/%/curve.csv)
-MESHES := $(filter-out build/mesh/study_%,$(FEM_SCENES:%=build/mesh/%/mesh.msh))
+MESHES := $(filter-out build/mesh/study_% build/mesh/study3d_%,$(FEM_SCENES:%=build/mesh/%/mesh.msh))
 STUDY_CURVES := $(filter build/fem/study_%,$(FEM_CURVES))
+STUDY3D_CURVES := $(filter build/fem/study3d_%,$(FEM_CURVES))
 REDUCED_SCENES := $(basename $(notdir $(wildcard scenes/reduced/*.toml)))
 REDUCED_RUNS := $(REDUCED_SCENES:%=build/reduced/%/summary.json)
 STAGE_CODE := $(wildcard pinbore/cli.py core/*.py laws/*.py meshes/*.py fem/*.py)
@@ -56,10 +57,10 @@ fem: $(FEM_CURVES) ## solve the default FE scenes (build/fem/<scene>/)
 build/fem/%/curve.csv: scenes/fem/%.toml $(STAGE_CODE) $(STAMP)
 	$(MPIEXEC) $(PINBORE) fem $< --out build/fem/$*
 
-calibration: build/calibration/laws.json ## fit and rank the contact laws on the study curves
+calibration: build/calibration/laws.json ## fit and rank the contact laws on the study curves (2D and 3D)
 
-build/calibration/laws.json: $(STUDY_CURVES) fem/scene.py fem/curve.py $(wildcard core/*.py laws/*.py meshes/*.py calibration/*.py) $(STAMP)
-	$(PINBORE) calibrate $(STUDY_CURVES) --out build/calibration
+build/calibration/laws.json: $(STUDY_CURVES) $(STUDY3D_CURVES) fem/scene.py fem/curve.py $(wildcard core/*.py laws/*.py meshes/*.py calibration/*.py) $(STAMP)
+	$(PINBORE) calibrate $(STUDY_CURVES) $(STUDY3D_CURVES) --out build/calibration
 
 reduced: $(REDUCED_RUNS) ## run the mechanisms with clearance joints (build/reduced/<scene>/)
 

@@ -27,12 +27,66 @@ class Curve:
     similar_materials: bool
 
 
-def read_curve(path, length: float | None, min_points: int = 3) -> Curve:
+@dataclass(frozen=True)
+class Curve3D:
+    """One 3D FE curve: per step the approach (m), tilt (rad), force (N) and tilting moment
+    (N m) about the bore's mid-plane centre; the joint (its length: that given to the
+    per-length laws that need one), the bore's length (m), whether the pin runs on beyond
+    the bore, the edge relief (length, depth) (m) or None, and the materials pair's name."""
+
+    name: str
+    path: Path                # the curve.csv (pressure.csv beside it)
+    approach: np.ndarray
+    tilt: np.ndarray
+    force: np.ndarray
+    moment: np.ndarray
+    joint: Joint
+    length: float
+    runs_on: bool
+    relief: tuple[float, float] | None
+    materials: str
+
+
+def read(path, length: float | None) -> Curve | Curve3D:
+    """A curve.csv of either kind: 2D (read_curve) or 3D (read_curve_3d)."""
+    fe = fe_curve.read(path)
+    return read_curve(path, length, fe=fe) if fe.dim == 2 else read_curve_3d(path, length, fe=fe)
+
+
+def read_curve_3d(path, length: float | None, min_points: int = 3, fe=None) -> Curve3D:
+    """Every step of a 3D DIR/curve.csv with the tilt columns, and the scene in
+    DIR/result.json; `length` as in read_curve."""
+    path = Path(path)
+    fe = fe_curve.read(path) if fe is None else fe
+    if fe.points < min_points:
+        raise InputError(f"{path}: {fe.points} points; a fit of 2 parameters needs at least "
+                         f"{min_points}")
+    for key in ("rotation", "tangential_push"):
+        if np.any(getattr(fe, key) != 0):
+            raise InputError(f"{path}: {fe_curve.column(3, key).name}: the 3D calibration reads "
+                             "push and tilt steps only")
+    if np.any(fe.approach <= 0) or np.any(fe.force <= 0):
+        row = int(np.argmax((fe.approach <= 0) | (fe.force <= 0))) + 1
+        raise InputError(f"{path}: {fe_curve.column(3, 'approach').name}, "
+                         f"{fe_curve.column(3, 'force').name}: must be positive (row {row})")
+    scene = _scene(path)
+    g, m = scene.geometry, scene.materials
+    if g.tilt_deg:
+        raise InputError(f"{path}: geometry.tilt_deg: the 3D calibration reads the tilt as a load "
+                         "(load.tilt_deg); a fixed tilt of the pin moves the origin of the approach")
+    joint = replace(scene.joint, length=length if length is not None else 2 * g.bore_radius)
+    relief = None if g.relief is None else (g.relief.length, g.relief.depth)
+    materials = f"E{m.pin.E:.3g}_nu{m.pin.nu:g}_in_E{m.bore.E:.3g}_nu{m.bore.nu:g}"
+    return Curve3D(path.parent.name, path, fe.approach, np.radians(fe.tilt), fe.force, fe.tilt_moment,
+                   joint, g.length, g.pin_overhang > 0, relief, materials)
+
+
+def read_curve(path, length: float | None, min_points: int = 3, fe=None) -> Curve:
     """Read the radial push of DIR/curve.csv (a 2D curve: forces per unit length, N/m) and
     the scene in DIR/result.json. `length` (m) is the axial length given to laws that need
     one; None takes the bore diameter."""
     path = Path(path)
-    fe = fe_curve.read(path)
+    fe = fe_curve.read(path) if fe is None else fe
     approach, force = (fe_curve.column(2, key).name for key in ("approach", "force"))
     if fe.dim != 2:
         raise InputError(f"{path}: {fe_curve.column(fe.dim, 'force').name}: units do not match; "

@@ -1,10 +1,16 @@
-"""Figures of a calibration: every law over every FE curve; error maps."""
+"""Figures of a calibration: every law over every FE curve; error maps; the 3D curves beside
+the sliced law."""
+
+from pathlib import Path
 
 import numpy as np
 
 from pinbore.core.figures import plt, save_png
 
+from pinbore.calibration import sliced
 from pinbore.calibration.lawsfile import law_force
+from pinbore.fem.curve import read_pressure
+from pinbore.laws import sliced as sliced_law
 
 COLOURS = dict(zip(["hertz", "johnson", "liu", "bai_zhao", "pereira", "radzimovsky",
                     "dubowsky_freudenstein", "esdu_78035", "linear"], plt.cm.tab10.colors))
@@ -62,3 +68,69 @@ def error_maps(path, curves, table, laws) -> None:
         ax.set_title(f"RMS force error (%), {kind}" + (" (linear: fit only)" if kind == "published" else ""))
     fig.colorbar(shown, ax=axes, label="log10 RMS relative error")
     save_png(fig, path, dpi=100, bbox_inches="tight")
+
+
+def sliced_curves(path, curves_3d, laws, force) -> None:
+    """Per 3D curve: F against the step and M against the tilt, FE points beside the
+    calibrated sliced law of its group (lines)."""
+    n = len(curves_3d)
+    fig, axes = plt.subplots(3, n, figsize=(3.6 * n, 9.4), squeeze=False)
+    for (ax, bx, cx), c in zip(axes.T, curves_3d):
+        line_load_panel(cx, c, laws[sliced.group_key(c)], force)
+        law = laws[sliced.group_key(c)]
+        f, m = sliced.predict(c, law, force)
+        steps = np.arange(1, c.force.size + 1)
+        ax.plot(steps, c.force / 1e3, "ko", ms=4, label="FE")
+        ax.plot(steps, f / 1e3, "C0-", label="sliced law")
+        ax.set_xlabel("load step (push, then tilt)")
+        ax.set_ylabel("force F (kN)")
+        ax.set_title(f"{c.name}\nL = {c.length * 1e3:g} mm, {'lug' if c.runs_on else 'flush'}",
+                     fontsize=8)
+        tilted = c.tilt != 0
+        bx.plot(np.degrees(c.tilt[tilted]), c.moment[tilted], "ko", ms=4, label="FE")
+        bx.plot(np.degrees(c.tilt[tilted]), m[tilted], "C0-", label="sliced law")
+        bx.set_xlabel(f"tilt (deg) at approach {c.approach.max() * 1e6:.3g} um")
+        bx.set_ylabel("tilting moment M (N m)")
+        for a in (ax, bx):
+            a.grid(alpha=0.3)
+            a.legend(fontsize=7)
+    save_png(fig, path, layout=True)
+
+
+def fe_line_load(pressure_csv: Path, step: int, radius: float):
+    """The FE line load along the load direction (N/m) against z (m) at one step of a 3D run:
+    per level, the pressure integrated over the refined arc, p cos(alpha) R d alpha
+    (trapezoids in the angle alpha from the load)."""
+    p = read_pressure(pressure_csv)
+    keep = p.step == step
+    z, alpha, pressure = p.z[keep], np.radians(p.angle[keep]), p.pressure[keep]
+    levels = np.unique(z)
+    load = []
+    for level in levels:
+        on = z == level
+        order = np.argsort(alpha[on])
+        load.append(np.trapezoid(pressure[on][order] * np.cos(alpha[on][order]),
+                                 alpha[on][order]) * radius)
+    return levels, np.array(load)
+
+
+def line_load_panel(ax, c, law, force) -> None:
+    """The FE line load along the pin at the largest tilt beside the sliced law's per-length
+    forces (scale x f_i; the end lengths add at the two end slices)."""
+    last = int(np.argmax(np.abs(c.tilt)))
+    if not (c.path.parent / "pressure.csv").exists():
+        ax.text(0.5, 0.5, "no pressure.csv beside the curve", ha="center", transform=ax.transAxes)
+        return
+    z, load = fe_line_load(c.path.parent / "pressure.csv", last + 1, c.joint.r_pin)
+    table = sliced.per_length_table(force, c)
+    relief = c.relief or (0.0, 0.0)
+    zs, _, f = sliced_law.sliced_profile(c.approach[last], c.tilt[last], c.length,
+                                         sliced.FIT_SLICES, *table, *relief)
+    inside = (z >= 0) & (z <= c.length)
+    ax.plot(z[inside] * 1e3, load[inside] / 1e6, "ko", ms=3, label="FE")
+    ax.plot(zs * 1e3, law.scale * f / 1e6, "C0-", label="sliced law (interior)")
+    ax.set_xlabel("z (mm)")
+    ax.set_ylabel("line load (MN/m)")
+    ax.set_title(f"at tilt {np.degrees(c.tilt[last]):.3g} deg", fontsize=8)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)

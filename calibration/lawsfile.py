@@ -95,6 +95,45 @@ class CurveEntry(Record):
     persson_half_angle_error_deg: float | None   # None: dissimilar materials
 
 
+SLICED_MODEL = ("F = scale * (sum_i f(delta_i) L/n + end_length (f_0 + f_n-1)), M likewise with "
+                "the arms z_i - L/2; delta_i = delta + theta (z_i - L/2) - relief(z_i)")
+
+
+class Errors3D(Record):
+    """How far the sliced law is from one 3D FE curve."""
+
+    force_max_rel: float
+    moment_max_rel: float | None   # over the tilted steps; None: the curve has none
+    points: int
+
+
+class Validity3D(Record):
+    approach_m: Range
+    tilt_rad: Range
+    length_m: Range
+
+
+class SlicedLaw(Record):
+    """The sliced law of a finite pin (pinbore.laws.sliced) calibrated on 3D FE curves of one
+    kind of ends and one materials pair (calibration/sliced.py): the per-length law, the
+    stiffness factor and the end length with 95 % intervals, the slices that give F within
+    1 % at the largest tilt of the curves, the ranges covered."""
+
+    model: Literal[SLICED_MODEL]
+    per_length_law: str            # a published law, or calibrated:<law> of this file
+    scale: float
+    scale_ci95: Range
+    end_length_m: float
+    end_length_ci95: Range
+    ends: Literal["flush", "running on"]
+    materials: str
+    slices_for_1_percent: int
+    points: int
+    validity: Validity3D
+    errors: dict[str, Errors3D]
+    fitted_to: list[str]
+
+
 class Units(Record):
     approach: str
     force: str
@@ -109,6 +148,7 @@ class LawsFile(Record):
     length_note: str
     curves: list[CurveEntry]
     laws: dict[str, Law]
+    sliced: dict[str, SlicedLaw]   # 3D: by kind of ends and materials (empty: no 3D curves)
     warnings: list[str]
     fit_seconds: float
 

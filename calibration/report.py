@@ -77,6 +77,8 @@ def section(build_dir: Path, bench_dir: Path) -> str:
           f"{r['best_published']} ({_pct(float(r['best_published_rms']))})",
           f"{r['second_published']} ({_pct(float(r['second_published_rms']))})",
           f"{r['best_fitted']} ({_pct(float(r['best_fitted_rms']))})"] for r in ranking]))
+    if data.sliced:
+        parts.append(sliced_section(data, folder))
     bench = bench_dir / "calibration.csv"
     if bench.exists():
         with open(bench, newline="") as f:
@@ -84,4 +86,30 @@ def section(build_dir: Path, bench_dir: Path) -> str:
         parts.append("<h3>Benchmark: fit and ranking time (make bench)</h3>" + table(rows[0], rows[1:]))
     if data.warnings:
         parts.append("<p class='note'>Validity warnings: " + "; ".join(data.warnings) + "</p>")
+    return "".join(parts)
+
+
+def sliced_section(data: lawsfile.LawsFile, folder: Path) -> str:
+    """The 3D laws: the sliced law of a finite pin per kind of ends and materials."""
+    first = next(iter(data.sliced.values()))
+    rows = [[key, law.ends, law.per_length_law,
+             f"{law.scale:.3g} [{law.scale_ci95[0]:.3g}, {law.scale_ci95[1]:.3g}]",
+             f"{law.end_length_m * 1e3:.3g} [{law.end_length_ci95[0] * 1e3:.3g}, "
+             f"{law.end_length_ci95[1] * 1e3:.3g}]", str(law.slices_for_1_percent),
+             _pct(max(e.force_max_rel for e in law.errors.values())),
+             _pct(max((e.moment_max_rel for e in law.errors.values()
+                       if e.moment_max_rel is not None), default=None)),
+             ", ".join(law.fitted_to)] for key, law in data.sliced.items()]
+    parts = ["<h3>3D: the sliced law of a finite pin (force and tilting moment)</h3>",
+             f"<p>The bore length is cut into slices, each carrying the per-length law "
+             f"<code>{first.per_length_law}</code> at its own approach &delta; + &theta; "
+             "(z - L/2); a stiffness factor and an end length per end are fitted on the 3D FE "
+             "curves (push, then tilt as a load), one law per kind of ends and materials pair "
+             "(<code>laws.json</code>: <code>sliced</code>).</p>",
+             table(["group", "ends", "per-length law", "scale [95 %]", "end length (mm) [95 %]",
+                    "slices for 1 % in F", "max error F", "max error M (tilted)", "curves"], rows)]
+    if (folder / "sliced.png").exists():
+        parts.append(figure(png_data(folder / "sliced.png"),
+                            "3D FE force and tilting moment (points) beside the calibrated sliced "
+                            "law (lines) (build/calibration/sliced.png)."))
     return "".join(parts)

@@ -11,10 +11,12 @@ import warnings
 
 import numpy as np
 
-from pinbore.calibration import figures, lawsfile
-from pinbore.calibration.curves import read_curve
+from pinbore.calibration import figures, lawsfile, sliced
+from pinbore.calibration.curves import Curve
+from pinbore.calibration.curves import read as read_any
 from pinbore.calibration.fit import NotFitted, errors, fit
 from pinbore.calibration.lawsfile import LAWS, law_force
+from pinbore.core.errors import InputError
 from pinbore.core.output import atomic_directory
 from pinbore.laws import elastic
 
@@ -97,6 +99,7 @@ def laws_json(curves, table, length, caught, seconds) -> lawsfile.LawsFile:
                                     persson_half_angle_error_deg=persson_error(c))
                 for c in curves],
         laws=laws,
+        sliced={},
         warnings=sorted({str(w.message) for w in caught}),
         fit_seconds=seconds)
 
@@ -109,21 +112,51 @@ def persson_error(curve):
     return float(np.max(np.abs(curve.half_angle - closed)))
 
 
-def run(paths, out, length=None) -> int:
-    curves = [read_curve(p, length) for p in paths]
+def per_length(name: str | None, table, curves):
+    """(name, force(d, joint) in N/m) of the per-length law of the sliced 3D law: `name` is a
+    published law or calibrated:<law>; None: the fitted law with the smallest mean RMS error
+    over the 2D curves."""
+    fitted = {n: e["fit"] for n, e in table.items() if e["fit"] is not None}
+    if name is None:
+        best = min(fitted, key=lambda n: np.mean([e.rms_rel for e in table[n]["fitted"].values()]))
+        name = f"calibrated:{best}"
+    if name.startswith("calibrated:"):
+        law = name.split(":", 1)[1]
+        if law not in fitted:
+            raise InputError(f"--per-length: {name!r} is not a law the 2D curves fitted; valid: "
+                             f"calibrated:{', calibrated:'.join(fitted)}, {', '.join(LAWS)}")
+        return name, lambda d, joint: fitted[law].force(law, d, joint)
+    if name not in LAWS or name == "linear":
+        raise InputError(f"--per-length: {name!r} is unknown; valid: "
+                         f"{', '.join(n for n in LAWS if n != 'linear')}, calibrated:<law>")
+    return name, lambda d, joint: law_force(name, d, joint)
+
+
+def run(paths, out, length=None, per_length_name=None) -> int:
+    read = [read_any(p, length) for p in paths]
+    curves = [c for c in read if isinstance(c, Curve)]
+    curves_3d = [c for c in read if not isinstance(c, Curve)]
+    if not curves:
+        raise InputError("calibrate: no 2D curve given; the 2D curves calibrate the per-length "
+                         "law that the 3D curves' sliced law is built on")
     start = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         table = evaluate(curves)
         rows = ranking(curves, table)
+        name, force = per_length(per_length_name, table, curves)
+        sliced_laws = sliced.calibrate(curves_3d, name, force) if curves_3d else {}
     seconds = time.perf_counter() - start
     with atomic_directory(out) as tmp:
-        lawsfile.write(tmp / "laws.json", laws_json(curves, table, length, caught, seconds))
+        lawsfile.write(tmp / "laws.json", laws_json(curves, table, length, caught, seconds)
+                       .model_copy(update={"sliced": sliced_laws}))
         header = list(rows[0])
         lines = [",".join(header)] + [",".join(_cell(r[h]) for h in header) for r in rows]
         (tmp / "ranking.csv").write_text("\n".join(lines) + "\n")
         figures.curves(tmp / "curves.png", curves, table, LAWS)
         figures.error_maps(tmp / "errors.png", curves, table, LAWS)
+        if curves_3d:
+            figures.sliced_curves(tmp / "sliced.png", curves_3d, sliced_laws, force)
     return 0
 
 

@@ -38,7 +38,7 @@ def _fem(args) -> int:
 def _calibrate(args) -> int:
     from pinbore.calibration import run as calibration_run
 
-    return calibration_run.run(args.curves, args.out, args.length)
+    return calibration_run.run(args.curves, args.out, args.length, args.per_length)
 
 
 def _reduced(args) -> int:
@@ -158,12 +158,16 @@ def parser() -> argparse.ArgumentParser:
     c = sub.add_parser("calibrate", help="fit and rank the contact laws on FE curves: laws.json",
                        description="Fit every contact law to FE load-approach curves (2D, per "
                                    "unit length; each curve.csv with its result.json beside it) "
-                                   "and rank them; write DIR/laws.json, DIR/ranking.csv, "
+                                   "and rank them; 3D curves (force and tilting moment) calibrate "
+                                   "the sliced law of a finite pin on the 2D law; write DIR/laws.json, DIR/ranking.csv, "
                                    "DIR/curves.png, DIR/errors.png.")
     c.add_argument("curves", nargs="+", help="curve.csv files written by `pinbore fem`")
     c.add_argument("--out", required=True, metavar="DIR", help="output directory (replaced when complete)")
     c.add_argument("--length", type=positive_length, default=None,
                    help="axial length (m) for the laws that need one; default: the bore diameter")
+    c.add_argument("--per-length", default=None, metavar="LAW",
+                   help="per-length law of the sliced 3D law: a published law or "
+                        "calibrated:<law>; default: the 2D-fitted law of least RMS error")
     c.set_defaults(func=_calibrate)
     _scene_command(sub, "reduced", _reduced,
                    "integrate a mechanism with clearance joints: timeseries.csv, summary.json",

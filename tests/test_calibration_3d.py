@@ -1,0 +1,86 @@
+"""The 3D calibration (the sliced law of a finite pin, calibration/sliced.py) against known
+truths: curves made by the sliced law itself with a known stiffness factor and end length are
+fitted back exactly, and the rules for 3D curves given to `pinbore calibrate`."""
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+from conftest import pinbore, scene_dict
+
+from pinbore.calibration import sliced
+from pinbore.calibration.curves import Curve3D
+from pinbore.core.scene import validate
+from pinbore.fem import curve
+from pinbore.fem.scene import FemScene
+from pinbore.laws.elastic import Joint
+from pinbore.calibration.lawsfile import law_force
+
+JOINT = Joint(10e-3, 9.97e-3, 210e9, 0.3, 210e9, 0.3, 0.02)
+
+
+def liu(d, joint):
+    return law_force("liu", d, joint)
+
+
+def synthetic(name, length, scale, end_length, runs_on=False):
+    """Push to 10 um in 4 steps, then tilt to twice the tilt that lifts an end (2 delta / L),
+    F and M from the sliced law with the given scale and end length."""
+    approach = np.r_[np.geomspace(2e-6, 1e-5, 4), np.full(4, 1e-5)]
+    tilt = np.r_[np.zeros(4), np.linspace(0.5, 2.0, 4) * 2e-5 / length]
+    bare = Curve3D(name, Path(name), approach, tilt, np.ones(8), np.zeros(8), JOINT, length, runs_on, None, "steel")
+    rows = sliced.basis(bare, sliced.per_length_table(liu, bare))
+    force, moment = sliced.predicted(rows, scale, end_length)
+    return Curve3D(name, Path(name), approach, tilt, force, moment, JOINT, length, runs_on, None, "steel")
+
+
+def test_the_fit_recovers_the_stiffness_factor_and_the_end_length():
+    """Two lengths of one kind of ends, made with a = 0.9 and e = 1.5 mm: fitted back to 1e-6
+    (the model is linear in a and a e: least squares is exact on exact data), intervals
+    around the truth, errors nil; the other kind of ends is a law of its own."""
+    curves = [synthetic("short", 0.01, 0.9, 1.5e-3), synthetic("long", 0.02, 0.9, 1.5e-3),
+              synthetic("lug", 0.02, 1.1, -0.5e-3, runs_on=True)]
+    laws = sliced.calibrate(curves, "liu", liu)
+    assert set(laws) == {"flush_steel", "lug_steel"}
+    flush, lug = laws["flush_steel"], laws["lug_steel"]
+    assert flush.fitted_to == ["short", "long"] and lug.fitted_to == ["lug"]
+    assert flush.scale == pytest.approx(0.9, rel=1e-6)
+    assert flush.end_length_m == pytest.approx(1.5e-3, rel=1e-6)
+    assert lug.scale == pytest.approx(1.1, rel=1e-6)
+    assert lug.end_length_m == pytest.approx(-0.5e-3, rel=1e-6)
+    assert flush.scale_ci95[0] - 1e-9 <= 0.9 <= flush.scale_ci95[1] + 1e-9
+    for law in laws.values():
+        for e in law.errors.values():
+            assert e.force_max_rel < 1e-6 and e.moment_max_rel < 1e-6
+        assert law.validity.tilt_rad[1] == pytest.approx(4e-5 / law.validity.length_m[0])
+
+
+def three_d_run(folder, geometry=None):
+    """A 3D curve.csv (push, then tilt) with its result.json, written through the file
+    modules (no FE solve: the rules under test read files)."""
+    folder.mkdir()
+    data = scene_dict(geometry={"dim": 3, "length": 0.01} | (geometry or {}), mesh={"contact_size": 8e-4},
+                      load={"max_approach": 1e-5, "steps": 3, "tilt_deg": 0.1, "tilt_steps": 3})
+    scene = validate(FemScene, data, "test")
+    (folder / "result.json").write_text(json.dumps({"scene": scene.model_dump()}))
+    rows = []
+    for i, (d, t) in enumerate([(3e-6, 0), (6e-6, 0), (1e-5, 0), (1e-5, .03), (1e-5, .06), (1e-5, .1)]):
+        rows.append({f: 0.0 for f in curve.COLUMNS[3]} | {
+            "step": i + 1, "stage": "tilt" if t else "push", "approach": d, "tilt": t,
+            "force": 1e9 * d * (1 + 10 * t), "tilt_moment": 1e3 * t, "newton_iterations": 3,
+            "uzawa_iterations": 1})
+    curve.write(folder / "curve.csv", 3, rows)
+    return folder / "curve.csv"
+
+
+@pytest.mark.parametrize("geometry, extra, message", [
+    ({}, [], "calibrate: no 2D curve given"),
+    ({"tilt_deg": 0.01}, [], "geometry.tilt_deg: the 3D calibration reads the tilt as a load"),
+])
+def test_bad_3d_curves_are_one_line_exit_2(tmp_path, geometry, extra, message):
+    path = three_d_run(tmp_path / "run", geometry)
+    done = pinbore("calibrate", path, *extra, "--out", tmp_path / "out")
+    assert done.returncode == 2, done.stderr
+    assert message in done.stderr and len(done.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
