@@ -7,6 +7,10 @@ length L takes F = P L. Every law is kept as published (errors only) and, where 
 fix its parameters, calibrated: P = s P_law(d) (d / d_ref)^q (`Fit.force`, the one
 implementation of that law, `pinbore.laws.elastic.calibrated`).
 
+The 3D laws (`sliced`, one per kind of ends and materials pair) are the sliced law of a
+finite pin (pinbore.laws.sliced) on a per-length law of this file or a published one, with
+forces in N and moments in N m (calibration/sliced.py).
+
 A file that does not validate, e.g. one written by an older version of pinbore, is one
 InputError line naming the file and the key, e.g.
 `<file>: laws.liu.fitted: required key is missing (written by another version of pinbore?

@@ -47,7 +47,9 @@ def run(scene_path, out, comm=MPI.COMM_WORLD) -> int:
                                    contact)
             outputs.write_result(tmp / "result.json", summary(
                 scene, scene_path, result, el, contact, stepper, sizing, comm,
-                {"setup": setup, "solve": solve, "total": time.perf_counter() - start}))
+                {"setup": setup, "solve": solve,
+                 "post": time.perf_counter() - start - setup - solve,   # pictures, files
+                 "total": time.perf_counter() - start}))
     if result.stop is not None:
         if comm.rank == 0:
             print(f"pinbore fem: {scene_path}: stopped early: {result.stop.message}; "
