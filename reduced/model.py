@@ -255,15 +255,35 @@ def normal_force(c, deltas, laws_data, source) -> np.ndarray:
     if c.normal_law == "hertz_point":
         return elastic.hertz_point(deltas, joint)
     if c.normal_law.startswith("calibrated:"):
+        return per_length_force(c.normal_law, laws_data, deltas, joint, source) * c.length
+    if c.normal_law.startswith("sliced:"):
         name = c.normal_law.split(":", 1)[1]
-        fitted = laws_data.fitted()
-        if name not in fitted:
+        if name not in laws_data.sliced:
             raise InputError(f"{source}: clearance_joints.normal_law: {c.normal_law!r} is not a "
-                             f"fitted law of the laws file; valid: calibrated:{', calibrated:'.join(fitted)}")
-        return fitted[name].force(name, deltas, joint) * c.length
+                             "3D law of the laws file; valid: "
+                             f"{', '.join('sliced:' + k for k in laws_data.sliced) or 'none (no 3D curves)'}")
+        law = laws_data.sliced[name]
+        # a straight pin (no tilt in the planar model): every slice at the approach d, so the
+        # sliced sum is scale (L + 2 end_length) f(d) (laws.sliced, theta = 0, no relief)
+        per_length = per_length_force(law.per_length_law, laws_data, deltas, joint, source)
+        return law.scale * (c.length + 2 * law.end_length_m) * per_length
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the range is enforced by the table (NaN beyond it)
         return elastic.PUBLISHED[c.normal_law](deltas, joint) * c.length
+
+
+def per_length_force(name, laws_data, deltas, joint, source) -> np.ndarray:
+    """P(d) (N/m) of a per-length law of the laws file (calibrated:<law>) or a published one."""
+    if not name.startswith("calibrated:"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the range is enforced by the table (NaN beyond it)
+            return elastic.PUBLISHED[name](deltas, joint)
+    law = name.split(":", 1)[1]
+    fitted = laws_data.fitted()
+    if law not in fitted:
+        raise InputError(f"{source}: clearance_joints.normal_law: {name!r} is not a "
+                         f"fitted law of the laws file; valid: calibrated:{', calibrated:'.join(fitted)}")
+    return fitted[law].force(law, deltas, joint)
 
 
 def laws_path(scene, base: Path) -> Path | None:

@@ -160,8 +160,10 @@ def validity_warnings(model, joints) -> list[str]:
     """Calibrated laws used beyond the approaches they were calibrated on."""
     out = []
     for c in model.scene.clearance_joints:
-        if (c.normal_law or "").startswith("calibrated:") and model.calibration is not None:
-            low, high = model.calibration.laws[c.normal_law.split(":", 1)[1]].validity.approach_m
+        kind, _, name = (c.normal_law or "").partition(":")
+        if kind in ("calibrated", "sliced") and model.calibration is not None:
+            laws = model.calibration.laws if kind == "calibrated" else model.calibration.sliced
+            low, high = laws[name].validity.approach_m
             peak = joints[c.name]["peak_penetration_m"]
             if peak > high:
                 out.append(f"{c.name}: peak penetration {peak:.3g} m beyond the calibrated range "

@@ -143,6 +143,9 @@ Friction = Annotated[CoulombFriction | StribeckFriction | LinearFriction | LuGre
                      | DahlFriction | IwanFriction, pydantic.Field(discriminator="law")]
 
 
+FILE_LAWS = ("calibrated:", "sliced:")   # normal laws read from the scene's laws file
+
+
 class ClearanceJoint(Strict):
     """A revolute joint with radial clearance: the journal (on journal_body) moves freely
     inside the bearing (on bearing_body) and meets its wall through the contact laws."""
@@ -184,9 +187,10 @@ class ClearanceJoint(Strict):
             raise ValueError("normal_law is required by impact = 'continuous'")
         if self.restitution == 0 and self.damping_law != "none":
             raise ValueError("restitution must be > 0 for a continuous damping law")
-        if not (self.normal_law in ELASTIC_LAWS or self.normal_law.startswith("calibrated:")):
+        if not (self.normal_law in ELASTIC_LAWS or self.normal_law.startswith(FILE_LAWS)):
             raise ValueError(f"normal_law {self.normal_law!r} is unknown; valid: "
-                             f"{', '.join(ELASTIC_LAWS)}, calibrated:<law in laws.json>")
+                             f"{', '.join(ELASTIC_LAWS)}, calibrated:<law in laws.json>, "
+                             "sliced:<3D law in laws.json>")
         if self.normal_law != "hertz_point" and self.length is None:
             raise ValueError(f"length is required by normal_law {self.normal_law!r} (a force per "
                              "unit length)")
@@ -287,7 +291,7 @@ class ReducedScene(Strict):
                 raise ValueError(f"{key}: unknown body {name!r}; bodies: {', '.join(sorted(known))}")
             if name == GROUND and key in ("drive.body", "joints.body"):
                 raise ValueError(f"{key}: must be a moving body, not {GROUND!r}")
-        if any((c.normal_law or "").startswith("calibrated:") for c in self.clearance_joints) \
+        if any((c.normal_law or "").startswith(FILE_LAWS) for c in self.clearance_joints) \
                 and self.laws_file is None:
-            raise ValueError("laws_file is required by a calibrated:<law> normal law")
+            raise ValueError("laws_file is required by a calibrated:<law> or sliced:<law> normal law")
         return self

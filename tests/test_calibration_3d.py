@@ -84,3 +84,55 @@ def test_bad_3d_curves_are_one_line_exit_2(tmp_path, geometry, extra, message):
     assert done.returncode == 2, done.stderr
     assert message in done.stderr and len(done.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "out").exists()
+
+
+def test_the_planar_model_takes_the_straight_pin_force_of_a_3d_law(tmp_path):
+    """normal_law = "sliced:<group>": the joint's tabulated force is the sliced sum at zero
+    tilt (pinbore.laws.sliced with the group's scale and end length over the joint's length),
+    whose slices all sit at the same approach. The reference looks Liu's law up in a
+    600-point log-log table over nine decades (step 0.035 in ln d): its interpolation error,
+    of order step^2/8 times the change of the local exponent, is about 1e-6; asserted 1e-5."""
+    from pinbore.calibration import lawsfile
+    from pinbore.calibration.run import evaluate, laws_json
+    from pinbore.laws import sliced as sliced_law
+    from pinbore.laws import tables
+    from pinbore.reduced.model import build
+    from pinbore.reduced.scene import ReducedScene
+    import test_calibration
+
+    laws = sliced.calibrate([synthetic("short", 0.01, 0.9, 1.5e-3)], "liu", liu)
+    flat = [test_calibration.synthetic("liu", 1.0, 0.0)]
+    data = laws_json(flat, evaluate(flat), None, [], 0.0).model_copy(update={"sliced": laws})
+    lawsfile.write(tmp_path / "laws.json", data)
+    scene = test_calibration.calibrated_scene(tmp_path / "laws.json")
+    joint = scene["clearance_joints"][0]
+    joint["normal_law"] = "sliced:flush_steel"
+    model = build(ReducedScene.model_validate(scene), "test", tmp_path)
+    d = np.exp(model.grid_log0 + model.grid_step * np.arange(model.tables.shape[1]))
+    pick = np.flatnonzero(np.isfinite(model.tables[0]))[::60]
+    table = tables.tabulate(lambda x: liu(x, model_joint(joint)), 1e-12, 1e-3, 600)
+    for i in pick:
+        expected = sliced_law.sliced(d[i], 0.0, joint["length"], 16, *table, 0.0, 0.0,
+                                     laws["flush_steel"].end_length_m)[0] * laws["flush_steel"].scale
+        assert np.exp(model.tables[0][i]) == pytest.approx(expected, rel=1e-5)
+
+
+def model_joint(joint):
+    return Joint(joint["bearing_radius"], joint["journal_radius"], joint["E"], joint["nu"],
+                 joint["E"], joint["nu"], joint["length"])
+
+
+def test_an_unknown_3d_law_is_one_line(write_scene, tmp_path):
+    """A sliced:<group> the laws file does not hold: exit 2, one line naming the key and the
+    groups there are (none: the calibration had no 3D curves)."""
+    import test_calibration
+
+    path = test_calibration.synthetic_laws_file(tmp_path)
+    scene = test_calibration.calibrated_scene(path)
+    scene["clearance_joints"][0]["normal_law"] = "sliced:flush_steel"
+    done = pinbore("reduced", write_scene(scene), "--out", tmp_path / "out")
+    assert done.returncode == 2, done.stderr
+    line = done.stderr.strip()
+    assert len(line.splitlines()) == 1
+    assert "clearance_joints.normal_law: 'sliced:flush_steel' is not a 3D law" in line
+    assert "none (no 3D curves)" in line
