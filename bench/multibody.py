@@ -47,7 +47,7 @@ def measure(integrator, repeats=3):
     dt = np.diff(times)
     mean = float(np.sum(force[1:] * dt) / times[-1])
     rms = float(np.sqrt(np.sum(force[1:] ** 2 * dt) / times[-1]))
-    return {"method": integrator["method"], "setting": integrator.get("rtol", fixed_step(model)), "wall": statistics.median(r.seconds for r in runs), "peak": peak_force,
+    return {"method": integrator["method"], "setting": integrator["rtol"] if "rtol" in integrator else fixed_step(model), "wall": statistics.median(r.seconds for r in runs), "peak": peak_force,
             "t_peak": peak_time, "mean": mean, "rms": rms, "impacts": int(counters[3]),
             "steps": int(counters[0]), "rhs": int(counters[2]), "status": run.status,
             "drift": float(drift.max())}

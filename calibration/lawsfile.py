@@ -117,6 +117,28 @@ class Validity3D(Record):
     length_m: Range
 
 
+class JointRecord(Record):
+    """The joint a per-length law was evaluated for (pinbore.laws.elastic.Joint): radii (m),
+    moduli (Pa), Poisson's ratios, and the axial length (m) the laws that need one take."""
+
+    r_bore: float
+    r_pin: float
+    E_bore: float
+    nu_bore: float
+    E_pin: float
+    nu_pin: float
+    length: float
+
+    @classmethod
+    def of(cls, joint: elastic.Joint) -> "JointRecord":
+        return cls(**{k: getattr(joint, k) for k in cls.model_fields})
+
+    def joint(self, r_bore: float, r_pin: float) -> elastic.Joint:
+        """This joint's materials and law length with the radii (m) of another joint."""
+        return elastic.Joint(r_bore, r_pin, self.E_bore, self.nu_bore, self.E_pin, self.nu_pin,
+                             self.length)
+
+
 class SlicedLaw(Record):
     """The sliced law of a finite pin (pinbore.laws.sliced) calibrated on 3D FE curves of one
     kind of ends and one materials pair (calibration/sliced.py): the per-length law, the
@@ -132,7 +154,9 @@ class SlicedLaw(Record):
     ends: Literal["flush", "running on"]
     materials: str
     slices_for_1_percent: int
-    points: int
+    fit_slices: int                # the slicing the end length was fitted with
+    joint: JointRecord             # the per-length law's joint (materials, law length)
+    points: int                    # force and tilted-moment equations of the fit
     validity: Validity3D
     errors: dict[str, Errors3D]
     fitted_to: list[str]

@@ -116,8 +116,11 @@ def per_length(name: str | None, table, curves):
     """(name, force(d, joint) in N/m) of the per-length law of the sliced 3D law: `name` is a
     published law or calibrated:<law>; None: the fitted law with the smallest mean RMS error
     over the 2D curves."""
-    fitted = {n: e["fit"] for n, e in table.items() if e["fit"] is not None}
+    fitted = {n: e["fit"] for n, e in table.items() if e["fit"] is not None and n != "linear"}
     if name is None:
+        if not fitted:
+            raise InputError("--per-length: no law could be fitted on the 2D curves; name a "
+                             f"published one: {', '.join(n for n in LAWS if n != 'linear')}")
         best = min(fitted, key=lambda n: np.mean([e.rms_rel for e in table[n]["fitted"].values()]))
         name = f"calibrated:{best}"
     if name.startswith("calibrated:"):
@@ -144,8 +147,10 @@ def run(paths, out, length=None, per_length_name=None) -> int:
         warnings.simplefilter("always")
         table = evaluate(curves)
         rows = ranking(curves, table)
-        name, force = per_length(per_length_name, table, curves)
-        sliced_laws = sliced.calibrate(curves_3d, name, force) if curves_3d else {}
+        sliced_laws = {}
+        if curves_3d:
+            name, force = per_length(per_length_name, table, curves)
+            sliced_laws = sliced.calibrate(curves_3d, name, force)
     seconds = time.perf_counter() - start
     with atomic_directory(out) as tmp:
         lawsfile.write(tmp / "laws.json", laws_json(curves, table, length, caught, seconds)

@@ -19,7 +19,11 @@ the delta method.
 
 Curves are grouped by their ends (flush or running on) and materials pair, one law per group:
 nothing of different ends or materials is pooled; lengths and tilts are (the end length is
-what makes a law of one length carry over to another).
+what makes a law of one length carry over to another). The law records the joint its
+per-length law was evaluated for (radii, materials, the length the per-length laws take)
+and the number of slices of the fit (the end length belongs to it: under tilt the end
+slice's approach depends on the slicing). A group without tilted steps and of one length
+cannot separate a from e and is refused.
 """
 
 import math
@@ -30,6 +34,7 @@ from scipy import stats
 
 from pinbore.calibration import lawsfile
 from pinbore.calibration.curves import Curve3D
+from pinbore.core.errors import InputError
 from pinbore.laws import sliced, tables
 
 FIT_SLICES = 64        # slices while fitting: F within 0.2 % of its limit (laws/sliced.py)
@@ -66,15 +71,27 @@ class Solution:
     points: int
 
 
+class NotSeparable(ValueError):
+    """The curves of a group cannot tell the stiffness factor from the end length."""
+
+
 def solve(curves, bases) -> Solution:
-    """a and e by least squares over every step of `curves` (module docstring)."""
+    """a and e by least squares over every step of `curves` (module docstring): the force of
+    every step, the moment of the tilted ones (an untilted step's moment is zero for any a,
+    e: no information). Raises NotSeparable when the design cannot fix both: untilted
+    curves of one length give F = a f (L + 2 e), a and e only through that product."""
     design, target = [], []
     for c, m in zip(curves, bases):
-        moment_scale = c.force * c.length / 2
+        tilted = c.tilt != 0
+        moment_scale = (c.force * c.length / 2)[tilted]
         design += [np.column_stack([m[:, 0], m[:, 2]]) / c.force[:, None],
-                   np.column_stack([m[:, 1], m[:, 3]]) / moment_scale[:, None]]
-        target += [np.ones_like(c.force), c.moment / moment_scale]
+                   np.column_stack([m[tilted, 1], m[tilted, 3]]) / moment_scale[:, None]]
+        target += [np.ones_like(c.force), c.moment[tilted] / moment_scale]
     x, y = np.vstack(design), np.concatenate(target)
+    singular = np.linalg.svd(x, compute_uv=False)
+    if y.size < 3 or singular[-1] < 1e-8 * singular[0]:
+        raise NotSeparable("the curves cannot separate the stiffness factor from the end "
+                           "length: give tilted steps (load.tilt_deg) or two lengths")
     dof = y.size - 2
     coef, *_ = np.linalg.lstsq(x, y, rcond=None)
     covariance = float(np.sum((y - x @ coef) ** 2)) / max(dof, 1) * np.linalg.inv(x.T @ x)
@@ -127,7 +144,11 @@ def calibrate(curves, per_length_name: str, force) -> dict[str, lawsfile.SlicedL
     for key, members in sorted(groups.items()):
         table_of = {c.name: per_length_table(force, c) for c in members}
         bases = [basis(c, table_of[c.name]) for c in members]
-        solution = solve(members, bases)
+        try:
+            solution = solve(members, bases)
+        except NotSeparable as err:
+            raise InputError(f"{', '.join(c.path.as_posix() for c in members)}: 3D group {key}: "
+                             f"{err}") from None
         widest = max(members, key=lambda c: float(np.max(np.abs(c.tilt))))
         last = int(np.argmax(np.abs(widest.tilt) + widest.approach / widest.approach.max()))
         needed = sliced.slices_for_force(widest.approach[last], widest.tilt[last], widest.length,
@@ -139,6 +160,7 @@ def calibrate(curves, per_length_name: str, force) -> dict[str, lawsfile.SlicedL
             end_length_m=solution.end_length, end_length_ci95=solution.end_length_ci95,
             ends="running on" if members[0].runs_on else "flush",
             materials=members[0].materials, slices_for_1_percent=int(needed),
+            fit_slices=FIT_SLICES, joint=lawsfile.JointRecord.of(members[0].joint),
             points=solution.points,
             validity=lawsfile.Validity3D(
                 approach_m=[float(min(c.approach.min() for c in members)),

@@ -13,7 +13,8 @@ resultant columns only:
   columns: the hub's tilt (tilt_deg), the hub's moment on the pin about the tilt axis
   through the bore's mid-plane centre (tilt_moment_N_m, positive along a positive tilt: the
   end z = length turned towards the load; fem.scene.FemScene.tilt_axis), the axial position
-  of the force's resultant on the bore's axis (resultant_z_m = length/2 + M/F), and the
+  of the force's resultant on the bore's axis (resultant_z_m = length/2 + M/F; nan, the one
+  non-finite cell a file may hold, at a step without force), and the
   axial length of the pin in contact (contact_length_m); pressure.csv adds the axial position
   z_m and the axial shear.
 
@@ -54,6 +55,7 @@ class Column:
     kind: type
     format: str = ""   # ints and names are written as they are
     choices: tuple[str, ...] = ()   # the names a str column may hold (empty: any)
+    undefined_ok: bool = False       # a float column that may hold nan (undefined, not lost)
 
     def cell(self, value):
         return format(value, self.format) if self.format else value
@@ -69,7 +71,7 @@ class Column:
         except ValueError:
             kind = "an integer" if self.kind is int else "a number"
             raise InputError(f"{where}: {text!r} is not {kind}") from None
-        if not math.isfinite(value):
+        if not math.isfinite(value) and not (self.undefined_ok and math.isnan(value)):
             raise InputError(f"{where}: {value} is not finite")
         return value
 
@@ -132,7 +134,7 @@ _RESULTANTS = {
         "friction_torque": _float("friction_torque_N_m", "N m"),
         "dissipated_work": _float("dissipated_work_J", "J"),
         "tilt": _float("tilt_deg", "deg"), "tilt_moment": _float("tilt_moment_N_m", "N m"),
-        "resultant_z": _float("resultant_z_m", "m"),
+        "resultant_z": Column("resultant_z_m", "m", float, ".9e", undefined_ok=True),  # nan: F = 0
         "contact_length": _float("contact_length_m", "m")},
 }
 

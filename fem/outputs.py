@@ -19,7 +19,7 @@ from pinbore.fem.contact import OPEN, SLIP, STATE_NAMES, STICK, tributary_length
 from pinbore.fem.post import angle_from, contact_length, half_angle, resultant_z
 
 
-def curve_rows(run, direction_deg, contact, pivot_z=None, copies=1):
+def curve_rows(run, direction_deg, contact, pivot_z, copies=1):
     """The rows of curve.csv (fields of pinbore.fem.curve.Curve), one per converged step; 3D
     with the tilt columns (pivot_z: the bore's mid-plane, copies: 2 for a half model)."""
     section = contact.mid_section()
@@ -39,7 +39,8 @@ def curve_rows(run, direction_deg, contact, pivot_z=None, copies=1):
                "uzawa_iterations": step.uzawa_iterations, "gap_violation": step.gap_violation}
         if contact.dim == 3:
             angles, levels = contact.pin_grid
-            in_bore = (levels >= 0) & (levels <= 2 * pivot_z)
+            slack = 1e-9 * pivot_z   # levels are averaged node coordinates
+            in_bore = (levels >= -slack) & (levels <= 2 * pivot_z + slack)
             pressure = step.contact.pressure.reshape(levels.size, angles.size)
             row |= {"tilt": np.degrees(step.point[3]), "tilt_moment": step.moment,
                     "resultant_z": resultant_z(step.force[0], step.moment, pivot_z),
@@ -47,7 +48,7 @@ def curve_rows(run, direction_deg, contact, pivot_z=None, copies=1):
         yield row
 
 
-def write_curve(path: Path, run, direction_deg, contact, pivot_z=None, copies=1) -> None:
+def write_curve(path: Path, run, direction_deg, contact, pivot_z, copies=1) -> None:
     """One row per converged step (see the module docstring for the units)."""
     curve.write(path, contact.dim, curve_rows(run, direction_deg, contact, pivot_z, copies))
 

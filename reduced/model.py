@@ -255,7 +255,8 @@ def normal_force(c, deltas, laws_data, source) -> np.ndarray:
     if c.normal_law == "hertz_point":
         return elastic.hertz_point(deltas, joint)
     if c.normal_law.startswith("calibrated:"):
-        return per_length_force(c.normal_law, laws_data, deltas, joint, source) * c.length
+        return per_length_force(c.normal_law, laws_data, deltas, joint,
+                                f"{source}: clearance_joints.normal_law") * c.length
     if c.normal_law.startswith("sliced:"):
         name = c.normal_law.split(":", 1)[1]
         if name not in laws_data.sliced:
@@ -263,26 +264,39 @@ def normal_force(c, deltas, laws_data, source) -> np.ndarray:
                              "3D law of the laws file; valid: "
                              f"{', '.join('sliced:' + k for k in laws_data.sliced) or 'none (no 3D curves)'}")
         law = laws_data.sliced[name]
+        carried = c.length + 2 * law.end_length_m
+        if carried <= 0:
+            raise InputError(f"{source}: clearance_joints.length: {c.length:g} m is too short for "
+                             f"{c.normal_law!r}, whose end lengths ({law.end_length_m:.3g} m each) "
+                             "leave no length to carry the load")
         # a straight pin (no tilt in the planar model): every slice at the approach d, so the
-        # sliced sum is scale (L + 2 end_length) f(d) (laws.sliced, theta = 0, no relief)
-        per_length = per_length_force(law.per_length_law, laws_data, deltas, joint, source)
-        return law.scale * (c.length + 2 * law.end_length_m) * per_length
+        # sliced sum is scale (L + 2 end_length) f(d) (laws.sliced, theta = 0, no relief); the
+        # per-length law takes the materials and law length it was calibrated with (the
+        # scene's radii: the clearance is the joint's own)
+        calibrated_joint = law.joint.joint(c.bearing_radius, c.journal_radius)
+        per_length = per_length_force(law.per_length_law, laws_data, deltas, calibrated_joint,
+                                      f"{source}: laws file: sliced.{name}.per_length_law")
+        return law.scale * carried * per_length
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the range is enforced by the table (NaN beyond it)
         return elastic.PUBLISHED[c.normal_law](deltas, joint) * c.length
 
 
-def per_length_force(name, laws_data, deltas, joint, source) -> np.ndarray:
-    """P(d) (N/m) of a per-length law of the laws file (calibrated:<law>) or a published one."""
+def per_length_force(name, laws_data, deltas, joint, where) -> np.ndarray:
+    """P(d) (N/m) of a per-length law of the laws file (calibrated:<law>) or a published one;
+    `where` names the key that gave `name` in the one-line error for an unknown law."""
     if not name.startswith("calibrated:"):
+        if name not in elastic.PUBLISHED:
+            raise InputError(f"{where}: {name!r} is not a published law; valid: "
+                             f"{', '.join(elastic.PUBLISHED)}")
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the range is enforced by the table (NaN beyond it)
             return elastic.PUBLISHED[name](deltas, joint)
     law = name.split(":", 1)[1]
     fitted = laws_data.fitted()
     if law not in fitted:
-        raise InputError(f"{source}: clearance_joints.normal_law: {name!r} is not a "
-                         f"fitted law of the laws file; valid: calibrated:{', calibrated:'.join(fitted)}")
+        raise InputError(f"{where}: {name!r} is not a fitted law of the laws file; valid: "
+                         f"calibrated:{', calibrated:'.join(fitted)}")
     return fitted[law].force(law, deltas, joint)
 
 

@@ -164,6 +164,12 @@ def validity_warnings(model, joints) -> list[str]:
         if kind in ("calibrated", "sliced") and model.calibration is not None:
             laws = model.calibration.laws if kind == "calibrated" else model.calibration.sliced
             low, high = laws[name].validity.approach_m
+            if kind == "sliced":
+                shortest, longest = laws[name].validity.length_m
+                if not shortest * (1 - 1e-9) <= c.length <= longest * (1 + 1e-9):
+                    out.append(f"{c.name}: length {c.length:.3g} m outside the lengths "
+                               f"({shortest:.3g}-{longest:.3g} m) {c.normal_law} was calibrated "
+                               "on: extrapolated")
             peak = joints[c.name]["peak_penetration_m"]
             if peak > high:
                 out.append(f"{c.name}: peak penetration {peak:.3g} m beyond the calibrated range "

@@ -88,8 +88,9 @@ def test_bad_3d_curves_are_one_line_exit_2(tmp_path, geometry, extra, message):
 
 def test_the_planar_model_takes_the_straight_pin_force_of_a_3d_law(tmp_path):
     """normal_law = "sliced:<group>": the joint's tabulated force is the sliced sum at zero
-    tilt (pinbore.laws.sliced with the group's scale and end length over the joint's length),
-    whose slices all sit at the same approach. The reference looks Liu's law up in a
+    tilt (pinbore.laws.sliced with the group's scale and end length over the joint's length,
+    the per-length law at the materials and law length it was calibrated with), whose slices
+    all sit at the same approach. The reference looks Liu's law up in a
     600-point log-log table over nine decades (step 0.035 in ln d): its interpolation error,
     of order step^2/8 times the change of the local exponent, is about 1e-6; asserted 1e-5."""
     from pinbore.calibration import lawsfile
@@ -110,16 +111,13 @@ def test_the_planar_model_takes_the_straight_pin_force_of_a_3d_law(tmp_path):
     model = build(ReducedScene.model_validate(scene), "test", tmp_path)
     d = np.exp(model.grid_log0 + model.grid_step * np.arange(model.tables.shape[1]))
     pick = np.flatnonzero(np.isfinite(model.tables[0]))[::60]
-    table = tables.tabulate(lambda x: liu(x, model_joint(joint)), 1e-12, 1e-3, 600)
+    law_joint = laws["flush_steel"].joint.joint(joint["bearing_radius"], joint["journal_radius"])
+    table = tables.tabulate(lambda x: liu(x, law_joint), 1e-12, 1e-3, 600)
     for i in pick:
         expected = sliced_law.sliced(d[i], 0.0, joint["length"], 16, *table, 0.0, 0.0,
                                      laws["flush_steel"].end_length_m)[0] * laws["flush_steel"].scale
         assert np.exp(model.tables[0][i]) == pytest.approx(expected, rel=1e-5)
 
-
-def model_joint(joint):
-    return Joint(joint["bearing_radius"], joint["journal_radius"], joint["E"], joint["nu"],
-                 joint["E"], joint["nu"], joint["length"])
 
 
 def test_an_unknown_3d_law_is_one_line(write_scene, tmp_path):
@@ -136,3 +134,15 @@ def test_an_unknown_3d_law_is_one_line(write_scene, tmp_path):
     assert len(line.splitlines()) == 1
     assert "clearance_joints.normal_law: 'sliced:flush_steel' is not a 3D law" in line
     assert "none (no 3D curves)" in line
+
+
+def test_untilted_curves_of_one_length_are_refused():
+    """Without tilt and with one length, F = a f (L + 2 e): a and e only through their
+    product, so the group is refused (one InputError line) instead of a fit of noise."""
+    from pinbore.core.errors import InputError
+
+    curve = synthetic("push only", 0.01, 0.9, 1.5e-3)
+    push = Curve3D(curve.name, curve.path, curve.approach[:4], curve.tilt[:4], curve.force[:4],
+                   curve.moment[:4], curve.joint, curve.length, False, None, "steel")
+    with pytest.raises(InputError, match="cannot separate the stiffness factor from the end length"):
+        sliced.calibrate([push], "liu", liu)
