@@ -76,8 +76,8 @@ def sliced_curves(path, curves_3d, laws, force) -> None:
     n = len(curves_3d)
     fig, axes = plt.subplots(3, n, figsize=(3.6 * n, 9.4), squeeze=False)
     for (ax, bx, cx), c in zip(axes.T, curves_3d):
-        line_load_panel(cx, c, laws[sliced.group_key(c)], force)
         law = laws[sliced.group_key(c)]
+        line_load_panel(cx, c, law, force)
         f, m = sliced.predict(c, law, force)
         steps = np.arange(1, c.force.size + 1)
         ax.plot(steps, c.force / 1e3, "ko", ms=4, label="FE")

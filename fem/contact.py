@@ -746,8 +746,12 @@ def tributary_weights(X: np.ndarray, angles, levels) -> np.ndarray:
     the polygon's tributary lengths times half the two adjacent layers."""
     if levels is None:
         return tributary_lengths(X)
-    m = angles.size
-    ring = tributary_lengths(X[:m, :2])
+    ring = tributary_lengths(X[:angles.size, :2])
+    return (axial_widths(levels)[:, None] * ring[None, :]).ravel()
+
+
+def axial_widths(levels: np.ndarray) -> np.ndarray:
+    """Tributary axial length (m) of each level of a surface grid: half the two adjacent
+    layers."""
     layers = np.diff(levels)
-    axial = 0.5 * (np.append(layers, 0.0) + np.insert(layers, 0, 0.0))
-    return (axial[:, None] * ring[None, :]).ravel()
+    return 0.5 * (np.append(layers, 0.0) + np.insert(layers, 0, 0.0))

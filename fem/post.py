@@ -3,6 +3,8 @@ contact length, axial position of the resultant."""
 
 import numpy as np
 
+from pinbore.fem.contact import axial_widths
+
 
 def angle_from(direction_deg: float, theta: np.ndarray) -> np.ndarray:
     """Signed angle (rad) of polar angles theta from the load direction, in (-pi, pi]."""
@@ -37,13 +39,6 @@ def half_angle(alpha: np.ndarray, p: np.ndarray) -> float:
         order = np.argsort(a)
         edges.append(contact_edge(a[order], q[order]))
     return 0.5 * (edges[0] + edges[1])
-
-
-def axial_widths(levels: np.ndarray) -> np.ndarray:
-    """Tributary axial length (m) of each level of a surface grid: half the two adjacent
-    layers (fem.contact.tributary_weights uses the same)."""
-    layers = np.diff(levels)
-    return 0.5 * (np.append(layers, 0.0) + np.insert(layers, 0, 0.0))
 
 
 def contact_length(pressure: np.ndarray, levels: np.ndarray, copies: int = 1) -> float:
