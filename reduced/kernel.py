@@ -29,24 +29,18 @@ the ideal ones until its multiplier (the normal force) would pull.
 Extra states integrate the energy dissipated in the joints and the work of the constraint
 forces (the drive), so the energy balance can be checked.
 
-Integrators: Dormand-Prince 5(4) [DormandPrince1980] (explicit) or Rosenbrock 2(3) (linearly implicit, for stiff
-problems), both with a PI step-size controller on (q, q') and the friction states, or DOPRI5
-at a fixed step for comparison. `integrate` takes a step in four phases, each in compiled
-functions of its own:
-- the trial step (trial_step): a stage beyond the tabulated law (NaN) has the step retried
-  ten times shorter; only if the step size collapses that way has the run blown up;
-- event location (onset_fraction, release_fraction, latch_fraction; adaptive methods only):
-  a step that would carry a joint from free flight into contact deeper than `onset_tol` is
-  shortened (secant on delta) until it ends at the onset, where v0 is recorded, so every
-  impact starts on a step boundary with a known impact speed; latches engage the same way,
-  at their angle, so their spring starts unloaded, and held contacts release at the zero of
-  their force;
-- the updates of the accepted step (release_held_contacts, onsets_and_impacts with the
-  impact log, iwan_slider_return, engage_latches), then, where the drift exceeds the onset
-  tolerance, the projection of positions and velocities back onto the constraints
-  (project_onto_constraints: one mass-weighted Gauss-Newton step each), so drift cannot
-  accumulate where Baumgarte alone is too slow;
-- the record of the accepted step (recorded), in buffers that double when full.
+Integrators: reduced.integrator (DOPRI5 with event location, Rosenbrock 2(3), fixed-step
+DOPRI5), written once for the planar and the spatial mechanisms; this kernel overloads its
+hooks for KernelArgs. A step ends at its first event (onset_fraction, release_fraction,
+latch_fraction): a step that would carry a joint from free flight into contact deeper than
+`onset_tol` is shortened (secant on delta) until it ends at the onset, where v0 is recorded,
+so every impact starts on a step boundary with a known impact speed; latches engage the same
+way, at their angle, so their spring starts unloaded, and held contacts release at the zero
+of their force. The accepted step's updates (release_held_contacts, onsets_and_impacts with
+the impact log, iwan_slider_return, engage_latches) come then, and, where the drift exceeds
+the onset tolerance, the projection of positions and velocities back onto the constraints
+(project_onto_constraints: one mass-weighted Gauss-Newton step each), so drift cannot
+accumulate where Baumgarte alone is too slow.
 The row arrays and argument bundles are laid out in reduced.layout. numba counts the
 references of every array a compiled function receives or reads out of a bundle (an atomic
 increment and decrement each), about half the run time of the slider-crank: so a
@@ -61,9 +55,13 @@ import math
 import numba
 import numpy as np
 
+from numba.extending import overload
+
 from pinbore.core.compiled import follow_compiled_in
 from pinbore.laws import dissipative, friction, tables
-from pinbore.reduced import layout
+from pinbore.reduced import integrator, layout
+from pinbore.reduced.integrator import (  # noqa: F401 (the status and method codes, re-exported)
+    BLOWN_UP, DOPRI5, DOPRI5_FIXED, OK, ROSENBROCK23, STEP_TOO_SMALL, TOO_MANY_STEPS, integrate, log_impact)
 from pinbore.reduced.layout import (
     CONTINUOUS, COULOMB, COULOMB_MU, DAHL_MU, DAHL_SIGMA, DISSIPATED, DRIVE_ANGLE, DRIVE_BODY,
     DRIVE_SPEED, ENERGY_STATES, IWAN, IWAN_K1, IWAN_K2, IWAN_MU, JOINT_BEARING_BODY,
@@ -78,12 +76,9 @@ from pinbore.reduced.layout import (
     REVOLUTE_X_J, REVOLUTE_Y_I, REVOLUTE_Y_J, STATE_STRETCH, STATE_TRAVEL, STOP, STRIBECK,
     STRIBECK_MU_MIN, STRIBECK_MU_STATIC, STRIBECK_V_MIN, TORSION_BODY_I, TORSION_BODY_J,
     TORSION_DAMPING, TORSION_FREE_ANGLE, TORSION_KIND, TORSION_STIFFNESS, WORK_IN, Contacts,
+    KernelArgs,
     Impulse, Integration, JointForces, Kinematics, Record, RelativeAngle, Workspace)
 
-# status codes
-OK, BLOWN_UP, TOO_MANY_STEPS, STEP_TOO_SMALL = 0, 1, 2, 3
-# integration methods
-DOPRI5, DOPRI5_FIXED, ROSENBROCK23 = 0, 1, 2
 LATCH_TOL = 1e-8   # rad: a latch engages within this of its angle (the step is shortened to it)
 
 
@@ -538,102 +533,11 @@ def impulse_energy(y, nq, impulse):
     return impulse.impulse
 
 
-# Dormand-Prince 5(4) tableau
-C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
-A = np.array([[0, 0, 0, 0, 0, 0], [1 / 5, 0, 0, 0, 0, 0], [3 / 40, 9 / 40, 0, 0, 0, 0],
-              [44 / 45, -56 / 15, 32 / 9, 0, 0, 0],
-              [19372 / 6561, -25360 / 2187, 64448 / 6561, -212 / 729, 0, 0],
-              [9017 / 3168, -355 / 33, 46732 / 5247, 49 / 176, -5103 / 18656, 0],
-              [35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84]])
-B5 = np.array([35 / 384, 0, 500 / 1113, 125 / 192, -2187 / 6784, 11 / 84, 0])
-E54 = B5 - np.array([5179 / 57600, 0, 7571 / 16695, 393 / 640, -92097 / 339200, 187 / 2100, 1 / 40])
-
-
-@numba.njit(cache=True)
-def error_norm(err_vec, y, y_new, nq, rtol, atol):
-    """RMS of the local error scaled by atol + rtol |y|; the energy integrals are outputs."""
-    err = 0.0
-    for i in range(y.size):
-        if 2 * nq <= i < 2 * nq + ENERGY_STATES:
-            continue
-        scale = atol + rtol * max(abs(y[i]), abs(y_new[i]))
-        err += (err_vec[i] / scale) ** 2
-    return math.sqrt(err / (y.size - ENERGY_STATES))
-
-
-@numba.njit(cache=True)
-def dopri5_step(t, y, h, k, y_new, err_vec, args, work):
-    """One Dormand-Prince 5(4) step: k[0] = f(t, y) on entry, k[6] = f(t + h, y_new) on exit."""
-    for s in range(1, 7):
-        for i in range(y.size):
-            v = y[i]
-            for r in range(s):
-                v += h * A[s, r] * k[r, i]
-            y_new[i] = v
-        rhs(t + C[s] * h, y_new, k[s], args, work)
-    for i in range(y.size):
-        e = 0.0
-        for r in range(7):
-            e += E54[r] * k[r, i]
-        err_vec[i] = h * e
-    return 6
-
-
-ROS_D = 1.0 / (2.0 + math.sqrt(2.0))
-ROS_E32 = 6.0 + math.sqrt(2.0)
-
-
-@numba.njit(cache=True)
-def rosenbrock23_step(t, y, h, k, y_new, err_vec, args, work):
-    """One linearly implicit Rosenbrock 2(3) step (Shampine & Reichelt 1997 [ShampineReichelt1997], MATLAB's ode23s),
-    L-stable, with W = I - h d J and J, df/dt by finite differences:
-        k1 = W^-1 (F0 + h d T),  F1 = f(t + h/2, y + h k1 / 2),  k2 = W^-1 (F1 - k1) + k1,
-        y1 = y + h k2,  F2 = f(t + h, y1),
-        k3 = W^-1 (F2 - e32 (k2 - F1) - 2 (k1 - F0) + h d T),  error = h (k1 - 2 k2 + k3) / 6.
-    k[0] = F0 on entry, k[6] = F2 on exit; k[1..5] are scratch."""
-    n = y.size
-    f0, f1, col = k[0], k[1], k[2]
-    jacobian = np.empty((n, n))
-    ys = y.copy()
-    for c in range(n):
-        step = 1e-7 * max(abs(y[c]), 1e-6)
-        ys[c] = y[c] + step
-        rhs(t, ys, col, args, work)
-        for r in range(n):
-            jacobian[r, c] = (col[r] - f0[r]) / step
-        ys[c] = y[c]
-    dt = 1e-7 * max(t, h)
-    rhs(t + dt, y, col, args, work)
-    tdot = (col - f0) / dt
-    w = -h * ROS_D * jacobian
-    for i in range(n):
-        w[i, i] += 1.0
-    winv = np.linalg.inv(w)
-    k1 = winv @ (f0 + h * ROS_D * tdot)
-    rhs(t + 0.5 * h, y + 0.5 * h * k1, f1, args, work)
-    k2 = winv @ (f1 - k1) + k1
-    y_new[:] = y + h * k2
-    rhs(t + h, y_new, k[6], args, work)
-    k3 = winv @ (k[6] - ROS_E32 * (k2 - f1) - 2.0 * (k1 - f0) + h * ROS_D * tdot)
-    err_vec[:] = h / 6.0 * (k1 - 2.0 * k2 + k3)
-    return n + 4
-
-
-# ---- the phases of integrate
+# ---- the phases of integrate (reduced.integrator) that are the planar mechanism's own
 # Passing the bundles to every helper (a dozen calls a step) made the slider-crank's run a
 # fifth slower than the monolithic loop; the helpers that run every step take the arrays they
 # use, and those for held contacts, Iwan elements and latches run only for mechanisms that
 # have them.
-
-@numba.njit(cache=True)
-def trial_step(method, t, y, h, k, y_new, err_vec, args, work, rtol, atol):
-    """A trial step from (t, y) over h into y_new: Rosenbrock 2(3), or DOPRI5 (adaptive or at
-    a fixed step alike). Returns (rhs calls, error norm: NaN if a stage left the law's table)."""
-    if method == ROSENBROCK23:
-        calls = rosenbrock23_step(t, y, h, k, y_new, err_vec, args, work)
-    else:
-        calls = dopri5_step(t, y, h, k, y_new, err_vec, args, work)
-    return calls, error_norm(err_vec, y, y_new, args.nq, rtol, atol)
 
 
 @numba.njit(cache=True)
@@ -702,25 +606,6 @@ def release_held_contacts(t, y, args, work, contacts):
                 changed = True
     return changed
 
-
-@numba.njit(cache=True)
-def doubled(a):
-    """a in the first rows of a zeroed array of twice its rows (a buffer that is full)."""
-    out = np.zeros((2 * a.shape[0],) + a.shape[1:], a.dtype)
-    out[:a.shape[0]] = a
-    return out
-
-
-@numba.njit(cache=True)
-def log_impact(log, impacts, t, j, rate, impulse):
-    """The impacts-th row of the impact log (layout.LOG_*), the log doubled when full; returns
-    the log."""
-    if impacts > log.shape[0]:
-        log = doubled(log)
-    row = impacts - 1
-    log[row, LOG_TIME], log[row, LOG_JOINT] = t, j
-    log[row, LOG_RATE], log[row, LOG_IMPULSE] = rate, impulse
-    return log
 
 
 @numba.njit(cache=True)
@@ -796,127 +681,79 @@ def engage_latches(y, nq, torsion, latched):
     return changed
 
 
-@numba.njit(cache=True)
-def new_record(capacity, ny, nj, nt):
-    """Buffers for `capacity` accepted steps (layout.Record; a column for absent clearance
-    joints or torsion elements keeps the shapes)."""
-    return Record(np.empty(capacity), np.empty((capacity, ny)), np.empty((capacity, max(nj, 1))),
-                  np.zeros((capacity, max(nj, 1)), np.int64), np.zeros((capacity, max(nt, 1))))
+
+# ---- the planar mechanism's hooks of the integrator (reduced.integrator), chosen by KernelArgs
+def planar(args) -> bool:
+    return getattr(args, "instance_class", None) is KernelArgs
+
+
+@overload(integrator.new_workspace, inline="always")
+def _new_workspace(args):
+    if planar(args):
+        return lambda args: workspace(args)
+
+
+@overload(integrator.evaluate, inline="always")
+def _evaluate(t, y, dy, args, work):
+    if planar(args):
+        return rhs.py_func
 
 
 @numba.njit(cache=True)
-def recorded(record, count, t, y, speeds, mode, latched):
-    """Accepted step `count` (time, state, impact speeds, contact modes, latch flags) stored
-    in the record, its buffers doubled when full; returns the record."""
-    if count == record.times.size:
-        record = Record(doubled(record.times), doubled(record.states), doubled(record.speeds),
-                        doubled(record.modes), doubled(record.latched))
-    record.times[count], record.states[count] = t, y
-    record.speeds[count, :speeds.size], record.modes[count, :mode.size] = speeds, mode
-    record.latched[count, :latched.size] = latched
-    return record
-
-
-@numba.njit(cache=True)
-def next_step_size(h, err, err_prev, exponent):
-    """PI step-size control after an accepted step: h 0.9 err^(-0.7 k) err_prev^(0.4 k), within
-    0.2 h to 5 h. Returns (the next h, the error to remember)."""
-    factor = 0.9 * err ** (-0.7 * exponent) * err_prev ** (0.4 * exponent) if err > 0 else 5.0
-    return h * min(5.0, max(0.2, factor)), max(err, 1e-4)
-
-
-@numba.njit(cache=True)
-def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_floor, max_steps):
-    """Integrate from t = 0, continuing from the impact speeds, latches and contact modes in
-    args (layout.KernelArgs), with DOPRI5 (adaptive), DOPRI5 at the fixed step max_step (no
-    error control, no event location: for comparison) or Rosenbrock 2(3) (adaptive, for
-    stiff contact). Returns the layout.Integration: times, states, impact speeds, contact
-    modes and latch flags of every accepted step, the impact log (layout.LOG_*), counters
-    (accepted, rejected, rhs calls, impacts), a status code and the time reached."""
+def start(y, args, onset_tol):
+    """The contact state at t = 0 (latches given as engaged engage) and what this mechanism
+    needs checked: (impulse joints, Iwan elements, latches)."""
     nq, joints, torsion = args.nq, args.joints, args.torsion
-    speeds, latched, mode = args.speeds, args.latched, args.mode
-    ny, nj = y0.size, joints.shape[0]
-    impulse_joints = iwan_joints = latches = False   # what this mechanism needs checked
+    nj = joints.shape[0]
+    impulse_joints = iwan_joints = latches = False
     for j in range(nj):
         impulse_joints |= int(joints[j, JOINT_IMPACT]) != CONTINUOUS
         iwan_joints |= int(joints[j, JOINT_FRICTION_LAW]) == IWAN
     for r in range(torsion.shape[0]):
         latches |= int(torsion[r, TORSION_KIND]) == LATCH
-    adaptive = method != DOPRI5_FIXED
-    event_dt = 1e-8 * max_step   # a release is located to within this time
-    exponent = 1.0 / 3.0 if method == ROSENBROCK23 else 0.2
-    engage_latches(y0, nq, torsion, latched)   # a latch given as engaged stays so
-    t, y = 0.0, y0.copy()
-    k = np.empty((7, ny))
-    y_new = np.empty(ny)
-    err_vec = np.empty(ny)
-    work = workspace(args)
-    normal = work.normal
-    rhs(t, y, k[0], args, work)
-    calls, accepted, rejected, impacts = 1, 0, 0, 0
-    h = max_step if not adaptive else min(max_step, 1e-6)
-    err_prev = 1e-4
-    record = recorded(new_record(4096, ny, nj, torsion.shape[0]), 0, t, y, speeds, mode, latched)
-    count = 1
-    log = np.empty((256, LOG_COLUMNS))
-    status = OK
-    last_nan = False
+    engage_latches(y, nq, torsion, args.latched)   # a latch given as engaged stays so
     contacts = Contacts(np.zeros(nj), np.zeros(nj, np.bool_), np.zeros(nj), np.zeros(nj))
     for j in range(nj):
         contacts.depth[j] = joint_kinematics(y[:nq], y[nq:2 * nq], joints[j]).delta
         contacts.in_contact[j] = (contacts.depth[j] > -onset_tol
                                   and int(joints[j, JOINT_IMPACT]) == CONTINUOUS)
-    while t < t_end:
-        if accepted + rejected >= max_steps:
-            status = TOO_MANY_STEPS
-            break
-        h = min(h, t_end - t, max_step)
-        if h < 1e-15 * max(t, 1e-3):
-            status = BLOWN_UP if last_nan else STEP_TOO_SMALL
-            break
-        step_calls, err = trial_step(method, t, y, h, k, y_new, err_vec, args, work, rtol, atol)
-        calls += step_calls
-        last_nan = not math.isfinite(err)
-        if last_nan:   # a stage went beyond the tabulated law: much smaller step
-            rejected += 1
-            h *= 0.1
-            continue
-        if adaptive and err > 1.0:
-            rejected += 1
-            h *= max(0.2, 0.9 * err ** -exponent)
-            continue
-        if adaptive:   # event location: the step ends at its first event
-            shorten = onset_fraction(y_new, nq, joints, mode, contacts, onset_tol)
-            if impulse_joints and h > event_dt:
-                shorten = min(shorten, release_fraction(mode, normal, contacts, rtol))
-            if latches:
-                shorten = min(shorten, latch_fraction(y, y_new, nq, torsion, latched))
-            if shorten < 1.0:
-                rejected += 1
-                h *= max(shorten, 1e-3)
-                continue
-        t += h
-        y[:] = y_new
-        accepted += 1
-        k[0, :] = k[6]  # first same as last
-        # the accepted step's updates, in order; any of them means f(t, y) is evaluated again
-        changed = impulse_joints and release_held_contacts(t, y, args, work, contacts)
-        arrived, impacts, log = onsets_and_impacts(t, y, args, work, contacts, onset_tol,
-                                                   speed_floor, log, impacts)
-        slid = iwan_joints and iwan_slider_return(y, args, contacts)
-        engaged = latches and engage_latches(y, nq, torsion, latched)
-        if project_onto_constraints(t, y, args, work, onset_tol, onset_tol / max_step) or \
-                changed or arrived or slid or engaged:
-            rhs(t, y, k[0], args, work)
-            calls += 1
-        record = recorded(record, count, t, y, speeds, mode, latched)
-        count += 1
-        if adaptive:
-            h, err_prev = next_step_size(h, err, err_prev, exponent)
-    counters = np.array([accepted, rejected, calls, impacts])
-    return Integration(record.times[:count], record.states[:count], record.speeds[:count],
-                       record.modes[:count], record.latched[:count], log[:impacts], counters,
-                       status, t)
+    return contacts, (impulse_joints, iwan_joints, latches)
+
+
+@overload(integrator.start, inline="always")
+def _start(y, args, onset_tol):
+    if planar(args):
+        return lambda y, args, onset_tol: start(y, args, onset_tol)
+
+
+@overload(integrator.event_fraction, inline="always")
+def _event_fraction(y, y_new, h, args, work, contacts, needs, onset_tol, rtol, event_dt):
+    if planar(args):
+        def fraction(y, y_new, h, args, work, contacts, needs, onset_tol, rtol, event_dt):
+            nq = args.nq
+            shorten = onset_fraction(y_new, nq, args.joints, args.mode, contacts, onset_tol)
+            if needs[0] and h > event_dt:
+                shorten = min(shorten, release_fraction(args.mode, work.normal, contacts, rtol))
+            if needs[2]:
+                shorten = min(shorten, latch_fraction(y, y_new, nq, args.torsion, args.latched))
+            return shorten
+        return fraction
+
+
+@overload(integrator.after_step, inline="always")
+def _after_step(t, y, args, work, contacts, needs, onset_tol, speed_floor, rate_tol, log, impacts):
+    if planar(args):
+        def updates(t, y, args, work, contacts, needs, onset_tol, speed_floor, rate_tol, log,
+                    impacts):
+            changed = needs[0] and release_held_contacts(t, y, args, work, contacts)
+            arrived, impacts, log = onsets_and_impacts(t, y, args, work, contacts, onset_tol,
+                                                       speed_floor, log, impacts)
+            slid = needs[1] and iwan_slider_return(y, args, contacts)
+            engaged = needs[2] and engage_latches(y, args.nq, args.torsion, args.latched)
+            projected = project_onto_constraints(t, y, args, work, onset_tol, rate_tol)
+            return projected or changed or arrived or slid or engaged, impacts, log
+        return updates
+
 
 
 # ---- the compiled code follows the laws and the layout
@@ -924,5 +761,6 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
 # the laws of pinbore.laws.friction, .dissipative and .tables and the constants of
 # reduced.layout, so an edit there alone would leave the kernel's cached code stale
 # (pinbore.core.compiled: a digest of those files drops the kernel's cache when they change).
-COMPILED_IN = (friction.__file__, dissipative.__file__, tables.__file__, layout.__file__)
+COMPILED_IN = (friction.__file__, dissipative.__file__, tables.__file__, layout.__file__,
+               integrator.__file__)
 follow_compiled_in(globals(), COMPILED_IN)
