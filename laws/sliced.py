@@ -45,12 +45,20 @@ from pinbore.laws import relief, tables
 
 
 @numba.njit(cache=True)
+def slice_geometry(i, length, slices, end_length):
+    """Slice i of `slices` over a bore of `length` (m): its offset z_i - L/2 from the
+    mid-plane, its width L/n and its weight w_i = L/n + end_length at each end slice (m)."""
+    width = length / slices
+    offset = (i + 0.5 - 0.5 * slices) * width          # antisymmetric about the mid-plane
+    return offset, width, width + end_length * ((i == 0) + (i == slices - 1))
+
+
+@numba.njit(cache=True)
 def slice_state(i, delta, theta, length, slices, grid_log0, grid_step, table, relief_length,
                 relief_depth):
     """Slice i of `slices`: its offset z_i - z_mid (m), approach delta_i (m) and per-length
     force f_i (N/m; 0 when delta_i <= 0) (the module docstring has the formulas)."""
-    width = length / slices
-    offset = (i + 0.5 - 0.5 * slices) * width          # antisymmetric about the mid-plane
+    offset = slice_geometry(i, length, slices, 0.0)[0]
     approach = delta + theta * offset
     if relief_length > 0.0 and relief_depth > 0.0:
         approach -= relief.relief_at(0.5 * length + offset, 0.0, length, relief_length,
@@ -74,14 +82,13 @@ def sliced(delta, theta, length, slices, grid_log0, grid_step, table, relief_len
     delta_i = delta + theta (z_i - L/2) - r(z_i) (module docstring; [Johnson1985] for the
     elastic-foundation idealisation). z_F is NaN when F = 0; F, M, z_F are NaN when a slice
     is beyond the table."""
-    width = length / slices
     force = moment = contact = 0.0
     for i in range(slices):
         offset, approach, f = slice_state(i, delta, theta, length, slices, grid_log0, grid_step,
                                           table, relief_length, relief_depth)
         if approach <= 0.0:
             continue
-        weight = width + end_length * ((i == 0) + (i == slices - 1))
+        _, width, weight = slice_geometry(i, length, slices, end_length)
         force += f * weight
         moment += f * offset * weight
         contact += width

@@ -328,10 +328,17 @@ def relative_angle(q, qd, row):
 
 @numba.njit(cache=True)
 def torsion_torque(q, qd, row, latched):
-    """Torque on body j (N m) of a torsion spring, stop or latch, and the power its damper
-    dissipates. A stop acts beyond its angle and only pushes; a latch, once reached
-    (`latched`), holds both ways."""
+    """Torque on body j (N m) of a torsion element on the planar relative angle, and the
+    power its damper dissipates (torsion_law)."""
     angle, rate = relative_angle(q, qd, row)
+    return torsion_law(angle, rate, row, latched)
+
+
+@numba.njit(cache=True)
+def torsion_law(angle, rate, row, latched):
+    """Torque (N m) of a torsion spring, stop or latch at a relative angle beyond its free
+    angle (rad) and its rate, and the power its damper dissipates. A stop acts beyond its
+    angle and only pushes; a latch, once reached (`latched`), holds both ways."""
     kind = int(row[TORSION_KIND])
     stiffness, damping = row[TORSION_STIFFNESS], row[TORSION_DAMPING]
     if kind == LATCH:
