@@ -75,6 +75,20 @@ def f_of(t, y, dy, args, work):
     evaluate(t, y, dy, args, work)
 
 
+@numba.njit(cache=True)
+def onset_shortening(depth, depth_new, onset_tol):
+    """Event location for a contact out of contact at the step's start (penetration `depth`)
+    and at `depth_new` at its end: the fraction of the step that ends it at the onset. One that
+    would end the step deeper than onset_tol is shortened by a secant on the penetration, one
+    that went in and out within the step (deeper at its end than at its start) by half.
+    1: no onset."""
+    if depth_new > onset_tol and depth < -onset_tol:
+        return 0.99 * (-depth) / (depth_new - depth)
+    if depth_new > max(depth, 0.0) + onset_tol:   # back within the step: bisect
+        return 0.5
+    return 1.0
+
+
 # Dormand-Prince 5(4) tableau
 C = np.array([0.0, 1 / 5, 3 / 10, 4 / 5, 8 / 9, 1.0, 1.0])
 A = np.array([[0, 0, 0, 0, 0, 0], [1 / 5, 0, 0, 0, 0, 0], [3 / 40, 9 / 40, 0, 0, 0, 0],
@@ -294,10 +308,11 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
 
 
 # ---- the compiled code follows the mechanisms that overload its hooks
-# numba's cache checks only this file: the integrator compiles in the right-hand side and the
-# event code of the kernel and what they call, so an edit there alone would leave its cached
+# numba's cache checks only this file: the integrator compiles in the right-hand sides and the
+# event code of both kernels and what they call, so an edit there alone would leave its cached
 # code stale (pinbore.core.compiled drops the cache when those files change).
 HERE = Path(__file__).parent
 COMPILED_IN = (friction.__file__, dissipative.__file__, tables.__file__, sliced.__file__,
-               layout.__file__, str(HERE / "kernel.py"))
+               layout.__file__, str(HERE / "kernel.py"), str(HERE / "spatial_kernel.py"),
+               str(HERE / "spatial_layout.py"))
 follow_compiled_in(globals(), COMPILED_IN)

@@ -199,11 +199,20 @@ def constraints(t, q, qd, revolute, prismatic, drive, alpha):
 @numba.njit(cache=True)
 def cholesky_solve(a, b, m):
     """Solve a x = b in place (x in b) for the leading m x m block of a small symmetric
-    positive definite a (overwritten)."""
+    positive semi-definite a (overwritten). A row that depends on the rows before it (a pivot
+    below 1e-10 of its diagonal: redundant constraints, as a closed loop of revolute joints in
+    space has) is dropped, its unknown set to 0: for consistent equations the others still
+    solve them all."""
     for j in range(m):
         d = a[j, j]
+        scale = d
         for k in range(j):
             d -= a[j, k] * a[j, k]
+        if d <= 1e-10 * scale:
+            a[j, j] = 0.0
+            for i in range(j + 1, m):
+                a[i, j] = 0.0
+            continue
         a[j, j] = math.sqrt(d)
         for i in range(j + 1, m):
             v = a[i, j]
@@ -214,12 +223,12 @@ def cholesky_solve(a, b, m):
         v = b[i]
         for k in range(i):
             v -= a[i, k] * b[k]
-        b[i] = v / a[i, i]
+        b[i] = v / a[i, i] if a[i, i] > 0.0 else 0.0
     for i in range(m - 1, -1, -1):
         v = b[i]
         for k in range(i + 1, m):
             v -= a[k, i] * b[k]
-        b[i] = v / a[i, i]
+        b[i] = v / a[i, i] if a[i, i] > 0.0 else 0.0
 
 
 @numba.njit(cache=True)
@@ -550,18 +559,13 @@ def impulse_energy(y, nq, impulse):
 @numba.njit(cache=True)
 def onset_fraction(y_new, nq, joints, mode, contacts, onset_tol):
     """Event location: the fraction of a trial step that ends it at the first contact onset
-    of a free joint. One that would end the step deeper than onset_tol is shortened by a
-    secant on delta, one that went in and out within the step (deeper at its end than at its
-    start) by half. 1: no onset."""
+    of a free joint (integrator.onset_shortening). 1: no onset."""
     depth, in_contact = contacts.depth, contacts.in_contact
     shorten = 1.0
     for j in range(joints.shape[0]):
         if not in_contact[j] and mode[j] == 0:
             d_new = joint_kinematics(y_new[:nq], y_new[nq:2 * nq], joints[j]).delta
-            if d_new > onset_tol and depth[j] < -onset_tol:
-                shorten = min(shorten, 0.99 * (-depth[j]) / (d_new - depth[j]))
-            elif d_new > max(depth[j], 0.0) + onset_tol:   # back within the step: bisect
-                shorten = min(shorten, 0.5)
+            shorten = min(shorten, integrator.onset_shortening(depth[j], d_new, onset_tol))
     return shorten
 
 

@@ -74,23 +74,28 @@ class Model:
             mode=np.zeros(nj, np.int64) if mode is None else np.array(mode, np.int64))
 
     def elastic_energy(self, joint: int, delta: float) -> float:
-        """U(delta) = int_0^delta F_el, exact for the log-log interpolant the dynamics use:
-        on a segment F = F_i (d / d_i)^s_i, whose integral is F_i d_i ((d/d_i)^(s_i+1) - 1)/(s_i+1);
-        below the grid the first segment's power law continues to 0."""
-        if delta <= 0:
-            return 0.0
-        log_f = self.tables[joint]
-        d = np.exp(self.grid_log0 + self.grid_step * np.arange(log_f.size))
-        f = np.exp(log_f)
-        slope = np.diff(log_f) / self.grid_step
-        x = (math.log(delta) - self.grid_log0) / self.grid_step
-        i = min(max(int(math.floor(x)), 0), log_f.size - 2)
-        below = f[0] * d[0] / (slope[0] + 1)
-        whole = f[:i] * d[:i] * ((d[1:i + 1] / d[:i]) ** (slope[:i] + 1) - 1) / (slope[:i] + 1)
-        if delta < d[0]:
-            return below * (delta / d[0]) ** (slope[0] + 1)
-        part = f[i] * d[i] * ((delta / d[i]) ** (slope[i] + 1) - 1) / (slope[i] + 1)
-        return float(below + whole.sum() + part)
+        """U(delta) of joint's law (table_energy)."""
+        return table_energy(self.tables[joint], self.grid_log0, self.grid_step, delta)
+
+
+def table_energy(log_f, grid_log0: float, grid_step: float, delta: float) -> float:
+    """U(delta) = int_0^delta F_el of a law tabulated as ln F (pinbore.laws.tables), exact for
+    the log-log interpolant the dynamics use: on a segment F = F_i (d / d_i)^s_i, whose
+    integral is F_i d_i ((d/d_i)^(s_i+1) - 1)/(s_i+1); below the grid the first segment's power
+    law continues to 0."""
+    if delta <= 0:
+        return 0.0
+    d = np.exp(grid_log0 + grid_step * np.arange(log_f.size))
+    f = np.exp(log_f)
+    slope = np.diff(log_f) / grid_step
+    x = (math.log(delta) - grid_log0) / grid_step
+    i = min(max(int(math.floor(x)), 0), log_f.size - 2)
+    below = f[0] * d[0] / (slope[0] + 1)
+    whole = f[:i] * d[:i] * ((d[1:i + 1] / d[:i]) ** (slope[:i] + 1) - 1) / (slope[:i] + 1)
+    if delta < d[0]:
+        return below * (delta / d[0]) ** (slope[0] + 1)
+    part = f[i] * d[i] * ((delta / d[i]) ** (slope[i] + 1) - 1) / (slope[i] + 1)
+    return float(below + whole.sum() + part)
 
 
 def shortest_period(model: Model) -> float:
@@ -258,28 +263,34 @@ def normal_force(c, deltas, laws_data, source) -> np.ndarray:
         return per_length_force(c.normal_law, laws_data, deltas, joint,
                                 f"{source}: clearance_joints.normal_law") * c.length
     if c.normal_law.startswith("sliced:"):
-        name = c.normal_law.split(":", 1)[1]
-        if name not in laws_data.sliced:
-            raise InputError(f"{source}: clearance_joints.normal_law: {c.normal_law!r} is not a "
-                             "3D law of the laws file; valid: "
-                             f"{', '.join('sliced:' + k for k in laws_data.sliced) or 'none (no 3D curves)'}")
-        law = laws_data.sliced[name]
-        carried = c.length + 2 * law.end_length_m
-        if carried <= 0:
-            raise InputError(f"{source}: clearance_joints.length: {c.length:g} m is too short for "
-                             f"{c.normal_law!r}, whose end lengths ({law.end_length_m:.3g} m each) "
-                             "leave no length to carry the load")
         # a straight pin (no tilt in the planar model): every slice at the approach d, so the
-        # sliced sum is scale (L + 2 end_length) f(d) (laws.sliced, theta = 0, no relief); the
-        # per-length law takes the materials and law length it was calibrated with (the
-        # scene's radii: the clearance is the joint's own)
-        calibrated_joint = law.joint.joint(c.bearing_radius, c.journal_radius)
-        per_length = per_length_force(law.per_length_law, laws_data, deltas, calibrated_joint,
-                                      f"{source}: laws file: sliced.{name}.per_length_law")
-        return law.scale * carried * per_length
+        # sliced sum is scale (L + 2 end_length) f(d) (laws.sliced, theta = 0, no relief)
+        scale, end_length, per_length = sliced_parts(c, deltas, laws_data, source)
+        return scale * (c.length + 2 * end_length) * per_length
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the range is enforced by the table (NaN beyond it)
         return elastic.PUBLISHED[c.normal_law](deltas, joint) * c.length
+
+
+def sliced_parts(c, deltas, laws_data, source):
+    """(stiffness factor a, end length e (m), per-length law f (N/m) at deltas) of a clearance
+    joint's `sliced:<group>` law; one InputError line for an unknown group or a joint too
+    short for the end lengths. The per-length law takes the materials and law length it was
+    calibrated with (the scene's radii: the clearance is the joint's own)."""
+    name = c.normal_law.split(":", 1)[1]
+    if name not in laws_data.sliced:
+        raise InputError(f"{source}: clearance_joints.normal_law: {c.normal_law!r} is not a "
+                         "3D law of the laws file; valid: "
+                         f"{', '.join('sliced:' + k for k in laws_data.sliced) or 'none (no 3D curves)'}")
+    law = laws_data.sliced[name]
+    if c.length + 2 * law.end_length_m <= 0:
+        raise InputError(f"{source}: clearance_joints.length: {c.length:g} m is too short for "
+                         f"{c.normal_law!r}, whose end lengths ({law.end_length_m:.3g} m each) "
+                         "leave no length to carry the load")
+    calibrated_joint = law.joint.joint(c.bearing_radius, c.journal_radius)
+    per_length = per_length_force(law.per_length_law, laws_data, deltas, calibrated_joint,
+                                  f"{source}: laws file: sliced.{name}.per_length_law")
+    return law.scale, law.end_length_m, per_length
 
 
 def per_length_force(name, laws_data, deltas, joint, where) -> np.ndarray:

@@ -97,9 +97,10 @@ def refined_peak(model, j, run, k):
     return best
 
 
-def sample(model, run):
-    """Per-step columns interpolated to the output sample times (and the per-step data)."""
-    cols, energy, drift = per_step(model, run)
+def sample(model, run, columns=per_step):
+    """Per-step columns (`columns`: per_step, or the spatial model's) interpolated to the
+    output sample times (and the per-step data)."""
+    cols, energy, drift = columns(model, run)
     grid = np.arange(0.0, run.times[-1], model.scene.output.sample_time)
     grid = np.append(grid, run.times[-1]) if grid[-1] < run.times[-1] else grid
     sampled = {k: np.interp(grid, run.times, v) for k, v in cols.items()}
@@ -117,10 +118,11 @@ def write_timeseries(path, series) -> None:
 
 def summary(model, series, run, status_text, scene_file) -> Summary:
     """The run's summary (reduced/summary.py) from its series (`sample`) and the Trajectory."""
-    counters, status = run.counters, run.status
-    e = series["energy"]
-    total = e["kinetic"] + e["potential"] + e["elastic"] + e["dissipated"] - e["work_in"]
-    scale = max(float(np.max(e["kinetic"])), 1e-300)
+    return summary_of(model, series, run, status_text, scene_file, joint_peaks(model, series, run))
+
+
+def joint_peaks(model, series, run) -> dict:
+    """Each clearance joint's peaks and impacts (summary.JointPeaks) of a planar run."""
     joints = {}
     for j, c in enumerate(model.scene.clearance_joints):
         force = series["steps"][f"{c.name}_normal_force_N"]
@@ -136,6 +138,15 @@ def summary(model, series, run, status_text, scene_file) -> Summary:
                           "peak_penetration_m": float(np.max(series["steps"][f"{c.name}_penetration_m"], initial=0.0)),
                           "peak_friction_force_N": float(np.max(np.abs(series["steps"][f"{c.name}_friction_force_N"]), initial=0.0)),
                           "clearance_m": c.bearing_radius - c.journal_radius}
+    return joints
+
+
+def summary_of(model, series, run, status_text, scene_file, joints) -> Summary:
+    """The summary of a run (planar or spatial) from its series, Trajectory and joint peaks."""
+    counters, status = run.counters, run.status
+    e = series["energy"]
+    total = e["kinetic"] + e["potential"] + e["elastic"] + e["dissipated"] - e["work_in"]
+    scale = max(float(np.max(e["kinetic"])), 1e-300)
     return Summary.model_validate({
         "status": "complete" if status == kernel.OK else "incomplete",
         "stop": None if status == kernel.OK else {"time_s": run.t_end, "reason": status_text},

@@ -65,8 +65,9 @@ def simulate(model: Model, y0=None, duration=None, args=None) -> Trajectory:
     step = fixed_step(model) if s.method == "dopri5_fixed" else s.max_step
     fixed = (METHODS[s.method], s.rtol, s.atol, step, onset_tolerance(model), SPEED_FLOOR, MAX_STEPS)
     start = time.perf_counter()
-    if not kernel.integrate.signatures:   # the first run of this process compiles (or loads)
-        kernel.integrate(y0, 0.0, model.kernel_args(), *fixed)
+    # the first run of this process and kind of mechanism compiles (or loads); later, this
+    # returns at once
+    kernel.integrate(y0, 0.0, model.kernel_args(), *fixed)
     compiled = time.perf_counter()
     result = kernel.integrate(y0, model.scene.duration if duration is None else duration, args,
                               *fixed)
@@ -86,22 +87,29 @@ def ideal_twin(scene: ReducedScene) -> ReducedScene:
 
 
 def run(scene_path, out) -> int:
+    """`pinbore reduced`: a planar (kind = "reduced") or spatial (kind = "spatial") scene."""
     scene_path = Path(scene_path)
-    scene = scenes.load(ReducedScene, scene_path)
-    model = build(scene, str(scene_path), scene_path.parent)
+    if scenes.read_toml(scene_path).get("kind") == "spatial":
+        from pinbore.reduced import spatial_model, spatial_outputs
+        scene = scenes.load(spatial_model.SpatialScene, scene_path)
+        builder, writer, twin_of = spatial_model.build, spatial_outputs, spatial_model.ideal_twin
+    else:
+        scene = scenes.load(ReducedScene, scene_path)
+        builder, writer, twin_of = build, outputs, ideal_twin
+    model = builder(scene, str(scene_path), scene_path.parent)
     trajectory = simulate(model)
     twin = None
     if scene.clearance_joints and scene.output.plots:
-        twin_model = build(ideal_twin(scene), str(scene_path), scene_path.parent)
+        twin_model = builder(twin_of(scene), str(scene_path), scene_path.parent)
         twin = (twin_model, simulate(twin_model))
     with atomic_directory(out, inputs=[laws_path(scene, scene_path.parent)]) as tmp:
-        series = outputs.sample(model, trajectory)
+        series = writer.sample(model, trajectory)
         outputs.write_timeseries(tmp / "timeseries.csv", series)
-        result = judged(outputs.summary(model, series, trajectory, STATUS[trajectory.status],
-                                        str(scene_path)), scene)
+        result = judged(writer.summary(model, series, trajectory, STATUS[trajectory.status],
+                                       str(scene_path)), scene)
         summary.write(tmp / "summary.json", result)
         if scene.output.plots:
-            outputs.plots(tmp, model, series, twin)
+            writer.plots(tmp, model, series, twin)
     if trajectory.status != kernel.OK:
         print(f"pinbore reduced: {scene_path}: stopped at t = {trajectory.t_end:.6g} s: {STATUS[trajectory.status]}; "
               f"kept the time series up to there in {out} (marked incomplete)", file=sys.stderr)

@@ -1,0 +1,809 @@
+r"""The compiled core of the spatial model: rigid bodies in 3D, ideal joints, clearance joints.
+
+Bodies. Each body has its centre of mass r and Euler parameters p = (e0, e1, e2, e3), |p| = 1
+([Nikravesh1988] ch. 6), with the rotation matrix
+
+    A(p) = 2 [(e0^2 - 1/2) I + e e^T + e0 e~],     e = (e1, e2, e3),
+
+and G(p) = [-e, -e~ + e0 I] (3 x 4), so that the angular velocity in the body frame is
+w' = 2 G p' and, since G' p' = 0, w'' = 2 G p''. The state holds (r, p) and their rates (7
+coordinates a body, the planar model's layout, reduced.spatial_layout). The dynamics are
+written in the body velocities v = (r', w), w = A w' global:
+
+    m r'' = m g + F + Phi_r^T lambda_r ...     M v' + D^T lambda = Q(q, v, t),
+    J w' + w x (J w) = N,   J = A J' A^T        (Euler's equations, gyroscopic term in Q),
+    D v' = gamma - 2 a Phi' - a^2 Phi          (Baumgarte, as the planar model),
+
+D the constraint Jacobian against v, lambda from the Schur system (D M^-1 D^T) lambda =
+D M^-1 Q - gamma~, M = diag(m I, J) block-diagonal with an explicit inverse. The Euler
+parameters then follow from p'' = G^T w''/2 + k p, where G^T G = I - p p^T leaves the
+component along p to the normalisation constraint (p^T p - 1)/2 = 0: p^T p'' = -p'^T p' (and
+its Baumgarte terms), Nikravesh's augmented formulation reduced to the body velocities. After
+every accepted step the parameters are normalised and the positions and velocities projected
+onto the constraints (one mass-weighted Gauss-Newton step each, as the planar model), so
+neither drift accumulates.
+
+Ideal joints are built of primitive constraints ([Nikravesh1988] ch. 7): a point of body i on
+a point of body j (3 rows), a vector of i normal to a vector of j (dot-1), a vector of i
+normal to the line between two points (dot-2); a spherical joint is one point, a universal
+one point and a dot-1 (the cross axes stay normal), a revolute one point and two dot-1, a
+cylindrical two dot-1 and two dot-2, a prismatic the cylindrical plus a dot-1 that stops the
+rotation about the axis, a fixed joint a point and three dot-1. The drive prescribes the
+relative angle about a joint's axis, theta = atan2(c_i . b_j, a_i . b_j) = angle0 + omega t,
+with c_i = u_i x a_i. Each row gives its value, its Jacobian against (r'_k, w_k), its
+explicit time rate and gamma, the velocity terms of its second derivative with the sign
+changed: for a body point P = r + s, P'' = r'' + w' x s + w x (w x s); for a body vector a,
+a'' = w' x a + w x (w x a).
+
+Clearance joints (continuous contact only):
+- cylindrical: a journal (axis u_j through the point P_j) in a bore of length L (axis u_b
+  through its mid-plane centre P_b, radius R_b, clearance c = R_b - R_j). The bore is cut
+  into n slices (pinbore.laws.sliced.slice_geometry: offset z_i from the mid-plane, weight
+  w_i = L/n + e at each end slice). At slice i the journal's axis point X_i = P_j + z_i u_j
+  has the eccentricity e_i = X_i - P_b - z_i u_b; its component across the bore has length
+  |e_i^perp|, the normal n_i = e_i^perp/|e_i^perp| and the penetration delta_i = |e_i^perp|
+  - c. A journal tilted by theta in the plane of its eccentricity e0 gives exactly
+  delta_i = (e0 - c) + sin(theta) z_i: the sliced law (pinbore.laws.sliced) with its
+  small-angle tilt read as sin(theta). Each slice carries a (f_el(delta_i) (1 + chi
+  delta_i'/v0)) w_i, a the law's stiffness factor, f_el the per-length law (N/m, a table of
+  pinbore.laws.tables), chi the hysteresis factor ([LankaraniNikravesh1990] and the Hunt-
+  Crossley family of pinbore.laws.dissipative, hysteresis_force), v0 the approach rate when
+  the joint's radial contact began. The force -f n_i acts on the journal at X_i and +f n_i on
+  the bore at B_i = X_i - e_i^perp, its point on the bore's axis: delta_i' = n_i . (v_J(X_i)
+  - v_B(B_i)) exactly, so the forces do the work of the law, and X_i - B_i is along n_i, so
+  the pair has no moment. Friction of the static laws of pinbore.laws.friction (the
+  regularised Coulomb [Ambrosio2003], Stribeck, linear) acts at the contact point
+  C_i = B_i + R_b n_i against the slip there (the relative velocity of the journal's and the
+  bore's material points, less its normal part), on both bodies at the same point.
+  Shoulders (the project's own law; no source is cited for it): with an axial clearance c_a
+  the journal point's axial offset s = (P_j - P_b) . u_b is free within |s| <= c_a; beyond,
+  a linear penalty k_a (|s| - c_a) with the joint's hysteresis factor pushes it back along
+  u_b, acting at P_j on both bodies (again exactly the work of the law, no moment).
+- spherical: a ball (centre P_j) in a socket (centre P_s), delta = |P_j - P_s| - c, the Hertz
+  point law of pinbore.laws.elastic (hertz_point) with the damping and friction above
+  ([FloresLankarani2010]; [Tian2009]), acting at the contact point P_s + R_b n.
+Each joint has two contact channels (radial or spherical; axial), whose onsets the
+integrator locates as the planar model does (no law is evaluated in free flight: a channel
+whose deepest point is out of contact adds nothing) and whose impact speeds it records.
+
+Torsion elements act on the relative angle about a body-fixed axis, measured like the drive:
+springs, stops and latches with the planar model's law (reduced.kernel.torsion_law).
+The integrators are reduced.integrator's: this module overloads its hooks for SpatialArgs.
+"""
+
+import math
+
+import numba
+import numpy as np
+from numba.extending import overload
+
+from pinbore.core.compiled import follow_compiled_in
+from pinbore.laws import dissipative, friction, sliced, tables
+from pinbore.reduced import integrator, kernel, layout, spatial_layout
+from pinbore.reduced.integrator import log_impact
+from pinbore.reduced.kernel import LATCH_TOL, cholesky_solve, joint_friction, torsion_law
+from pinbore.reduced.layout import (
+    DISSIPATED, JOINT_BEARING_RADIUS, JOINT_CHI, JOINT_CLEARANCE, LATCH, TORSION_BODY_I,
+    TORSION_BODY_J, TORSION_FREE_ANGLE, TORSION_KIND, WORK_IN, Contacts)
+from pinbore.reduced.spatial_layout import (
+    ANGLE, AXIAL, CHANNELS, CYLINDER, DOT1, DOT2, POINT, PRIM_A_I, PRIM_ANGLE0, PRIM_B_J,
+    PRIM_BODY_I, PRIM_BODY_J, PRIM_C_I, PRIM_KIND, PRIM_S_I, PRIM_S_J, PRIM_SPEED, RADIAL,
+    SJ_AXIAL_CLEARANCE, SJ_AXIAL_STIFFNESS, SJ_BEARING_AXIS, SJ_BEARING_BODY, SJ_BEARING_POINT,
+    SJ_END_LENGTH, SJ_JOURNAL_AXIS, SJ_JOURNAL_BODY, SJ_JOURNAL_POINT, SJ_KIND, SJ_LENGTH,
+    SJ_SCALE, SJ_SLICES, TORSION_A_I, TORSION_B_J, TORSION_C_I, Depth, SpatialArgs, SpatialWork)
+
+
+# ---- small vectors as tuples (no allocation)
+@numba.njit(cache=True)
+def vec(a, i):
+    return (a[i], a[i + 1], a[i + 2])
+
+
+@numba.njit(cache=True)
+def add(a, b):
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+
+
+@numba.njit(cache=True)
+def sub(a, b):
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+@numba.njit(cache=True)
+def scaled(a, k):
+    return (k * a[0], k * a[1], k * a[2])
+
+
+@numba.njit(cache=True)
+def dot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+@numba.njit(cache=True)
+def cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+@numba.njit(cache=True)
+def matvec(m, a):
+    return (m[0, 0] * a[0] + m[0, 1] * a[1] + m[0, 2] * a[2],
+            m[1, 0] * a[0] + m[1, 1] * a[1] + m[1, 2] * a[2],
+            m[2, 0] * a[0] + m[2, 1] * a[1] + m[2, 2] * a[2])
+
+
+@numba.njit(cache=True)
+def tmatvec(m, a):
+    """m^T a."""
+    return (m[0, 0] * a[0] + m[1, 0] * a[1] + m[2, 0] * a[2],
+            m[0, 1] * a[0] + m[1, 1] * a[1] + m[2, 1] * a[2],
+            m[0, 2] * a[0] + m[1, 2] * a[1] + m[2, 2] * a[2])
+
+
+# ---- Euler parameters
+@numba.njit(cache=True)
+def rotation(p, out):
+    """A(p) into out (3 x 3) for unit p = (e0, e1, e2, e3)."""
+    e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
+    out[0, 0], out[0, 1], out[0, 2] = e0 * e0 + e1 * e1 - 0.5, e1 * e2 - e0 * e3, e1 * e3 + e0 * e2
+    out[1, 0], out[1, 1], out[1, 2] = e1 * e2 + e0 * e3, e0 * e0 + e2 * e2 - 0.5, e2 * e3 - e0 * e1
+    out[2, 0], out[2, 1], out[2, 2] = e1 * e3 - e0 * e2, e2 * e3 + e0 * e1, e0 * e0 + e3 * e3 - 0.5
+    out *= 2.0
+
+
+@numba.njit(cache=True)
+def g_times(p, pd):
+    """G(p) p' (3)."""
+    e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
+    return (-e1 * pd[0] + e0 * pd[1] + e3 * pd[2] - e2 * pd[3],
+            -e2 * pd[0] - e3 * pd[1] + e0 * pd[2] + e1 * pd[3],
+            -e3 * pd[0] + e2 * pd[1] - e1 * pd[2] + e0 * pd[3])
+
+
+@numba.njit(cache=True)
+def gt_times(p, w):
+    """G(p)^T w (4)."""
+    e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
+    return (-e1 * w[0] - e2 * w[1] - e3 * w[2], e0 * w[0] - e3 * w[1] + e2 * w[2],
+            e3 * w[0] + e0 * w[1] - e1 * w[2], -e2 * w[0] + e1 * w[1] + e0 * w[2])
+
+
+@numba.njit(cache=True)
+def unit_parameters(q, b):
+    """The Euler parameters of body b, normalised (4-tuple)."""
+    i = 7 * b + 3
+    n = math.sqrt(q[i] ** 2 + q[i + 1] ** 2 + q[i + 2] ** 2 + q[i + 3] ** 2)
+    return (q[i] / n, q[i + 1] / n, q[i + 2] / n, q[i + 3] / n)
+
+
+@numba.njit(cache=True)
+def body_states(y, args, work):
+    """Position, rotation matrix, velocity, global angular velocity w = A 2 G p' and global
+    inverse inertia A J'^-1 A^T of every body into the workspace."""
+    nq = args.nq
+    pos, rot, vel, omega, jinv = work.pos, work.rot, work.vel, work.omega, work.jinv
+    inertia_inv = args.inertia_inv
+    for b in range(pos.shape[0]):
+        p = unit_parameters(y, b)
+        rotation(p, rot[b])
+        w_body = scaled(g_times(p, vec(y, nq + 7 * b + 3) + (y[nq + 7 * b + 6],)), 2.0)
+        for k in range(3):
+            pos[b, k] = y[7 * b + k]
+            vel[b, k] = y[nq + 7 * b + k]
+        w = matvec(rot[b], w_body)
+        omega[b, 0], omega[b, 1], omega[b, 2] = w
+        a = rot[b]
+        jinv[b] = a @ inertia_inv[b] @ a.T
+
+
+@numba.njit(cache=True)
+def point_state(work, b, s_body):
+    """A body point s' (the ground: a global point): (P, its velocity, w x (w x s), s = A s'
+    the arm from the centre of mass)."""
+    if b < 0:
+        return s_body, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    s = matvec(work.rot[b], s_body)
+    w = vec(work.omega[b], 0)
+    ws = cross(w, s)
+    return add(vec(work.pos[b], 0), s), add(vec(work.vel[b], 0), ws), cross(w, ws), s
+
+
+@numba.njit(cache=True)
+def vector_state(work, b, a_body):
+    """A body vector a' (the ground: global): (a = A a', a' rate w x a, w x (w x a))."""
+    if b < 0:
+        return a_body, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    a = matvec(work.rot[b], a_body)
+    w = vec(work.omega[b], 0)
+    wa = cross(w, a)
+    return a, wa, cross(w, wa)
+
+
+@numba.njit(cache=True)
+def material_velocity(work, b, x):
+    """Velocity (global) of the material point of body b at the global point x."""
+    if b < 0:
+        return (0.0, 0.0, 0.0)
+    return add(vec(work.vel[b], 0), cross(vec(work.omega[b], 0), sub(x, vec(work.pos[b], 0))))
+
+
+@numba.njit(cache=True)
+def put(jac, row, b, linear, angular, sign):
+    """Add sign (linear, angular) to the Jacobian columns (r', w) of body b."""
+    if b < 0:
+        return
+    for k in range(3):
+        jac[row, 6 * b + k] += sign * linear[k]
+        jac[row, 6 * b + 3 + k] += sign * angular[k]
+
+
+ZERO = (0.0, 0.0, 0.0)
+
+
+@numba.njit(cache=True)
+def dot1(work, bi, a_body, bj, b_body):
+    """a_i . b_j: (value, coefficient k of w_i (-k: w_j), rate, velocity part of its second
+    derivative)."""
+    a, ad, ac = vector_state(work, bi, a_body)
+    b, bd, bc = vector_state(work, bj, b_body)
+    return dot(a, b), cross(a, b), dot(ad, b) + dot(a, bd), dot(ac, b) + 2 * dot(ad, bd) + dot(a, bc)
+
+
+@numba.njit(cache=True)
+def constraint_count(primitives):
+    m = 0
+    for k in range(primitives.shape[0]):
+        m += 3 if int(primitives[k, PRIM_KIND]) == POINT else 1
+    return m
+
+
+@numba.njit(cache=True)
+def fill_constraints(t, work, primitives, alpha):
+    """Jacobian D (against (r'_k, w_k)), Phi, Phi_t and gamma - 2 a Phi' - a^2 Phi into the
+    workspace (body states current). Returns the number of rows."""
+    jac, phi, phi_t, rhs_c = work.jac, work.phi, work.phi_t, work.rhs_c
+    jac[:] = 0.0
+    row = 0
+    for k in range(primitives.shape[0]):
+        r = primitives[k]
+        kind, bi, bj = int(r[PRIM_KIND]), int(r[PRIM_BODY_I]), int(r[PRIM_BODY_J])
+        if kind == POINT:
+            pi, _, ci, si = point_state(work, bi, vec(r, PRIM_S_I))
+            pj, _, cj, sj = point_state(work, bj, vec(r, PRIM_S_J))
+            for c in range(3):
+                unit = (1.0 if c == 0 else 0.0, 1.0 if c == 1 else 0.0, 1.0 if c == 2 else 0.0)
+                put(jac, row + c, bi, unit, cross(si, unit), 1.0)
+                put(jac, row + c, bj, unit, cross(sj, unit), -1.0)
+                phi[row + c], phi_t[row + c], rhs_c[row + c] = pi[c] - pj[c], 0.0, cj[c] - ci[c]
+            row += 3
+            continue
+        if kind == DOT1:
+            value, coefficient, _, acc = dot1(work, bi, vec(r, PRIM_A_I), bj, vec(r, PRIM_B_J))
+            put(jac, row, bi, ZERO, coefficient, 1.0)
+            put(jac, row, bj, ZERO, coefficient, -1.0)
+            phi[row], phi_t[row], rhs_c[row] = value, 0.0, -acc
+        elif kind == DOT2:
+            a, ad, ac = vector_state(work, bi, vec(r, PRIM_A_I))
+            pi, vi, ci, si = point_state(work, bi, vec(r, PRIM_S_I))
+            pj, vj, cj, sj = point_state(work, bj, vec(r, PRIM_S_J))
+            d, dd = sub(pj, pi), sub(vj, vi)
+            put(jac, row, bi, scaled(a, -1.0), cross(a, add(d, si)), 1.0)
+            put(jac, row, bj, a, cross(sj, a), 1.0)
+            phi[row], phi_t[row] = dot(a, d), 0.0
+            rhs_c[row] = -(dot(ac, d) + 2 * dot(ad, dd) + dot(a, sub(cj, ci)))
+        else:   # ANGLE: theta = atan2(s, c) = angle0 + speed t
+            c_, kc, cd, cacc = dot1(work, bi, vec(r, PRIM_A_I), bj, vec(r, PRIM_B_J))
+            s_, ks, sd, sacc = dot1(work, bi, vec(r, PRIM_C_I), bj, vec(r, PRIM_B_J))
+            rho2 = s_ * s_ + c_ * c_
+            coefficient = scaled(sub(scaled(ks, c_), scaled(kc, s_)), 1.0 / rho2)
+            put(jac, row, bi, ZERO, coefficient, 1.0)
+            put(jac, row, bj, ZERO, coefficient, -1.0)
+            rate = (c_ * sd - s_ * cd) / rho2
+            gap = math.atan2(s_, c_) - r[PRIM_ANGLE0] - r[PRIM_SPEED] * t
+            phi[row] = gap - 2 * math.pi * math.floor(gap / (2 * math.pi) + 0.5)
+            phi_t[row] = -r[PRIM_SPEED]
+            rhs_c[row] = -(c_ * sacc - s_ * cacc) / rho2 + 2 * rate * (s_ * sd + c_ * cd) / rho2
+        row += 1
+    vel, omega = work.vel, work.omega
+    for i in range(row):
+        rate = phi_t[i]
+        for b in range(vel.shape[0]):
+            for c in range(3):
+                rate += jac[i, 6 * b + c] * vel[b, c] + jac[i, 6 * b + 3 + c] * omega[b, c]
+        rhs_c[i] -= 2 * alpha * rate + alpha * alpha * phi[i]
+    return row
+
+
+@numba.njit(cache=True)
+def apply_inverse_mass(args, work, x, out):
+    """out = M^-1 x for a vector of 6 a body (masses; global inverse inertias)."""
+    masses, jinv = args.masses, work.jinv
+    for b in range(masses.size):
+        for c in range(3):
+            out[6 * b + c] = x[6 * b + c] / masses[b]
+            out[6 * b + 3 + c] = (jinv[b, c, 0] * x[6 * b + 3] + jinv[b, c, 1] * x[6 * b + 4]
+                                  + jinv[b, c, 2] * x[6 * b + 5])
+
+
+@numba.njit(cache=True)
+def fill_schur(args, work, m):
+    """M^-1 D^T (rows of work.mjac) and the Schur matrix D M^-1 D^T of the first m rows."""
+    jac, mjac, schur = work.jac, work.mjac, work.schur
+    n = jac.shape[1]
+    for i in range(m):
+        apply_inverse_mass(args, work, jac[i], mjac[i])
+    for i in range(m):
+        for k in range(i + 1):
+            v = 0.0
+            for c in range(n):
+                v += jac[i, c] * mjac[k, c]
+            schur[i, k] = v
+            schur[k, i] = v
+
+
+# ---- clearance joints
+@numba.njit(cache=True)
+def slice_kinematics(work, joint, i):
+    """Slice i of a cylindrical joint: (delta_i, rate, n_i, X_i on the journal axis, B_i on the
+    bore axis, weight w_i) (module docstring)."""
+    bb, bj = int(joint[SJ_BEARING_BODY]), int(joint[SJ_JOURNAL_BODY])
+    pb = point_state(work, bb, vec(joint, SJ_BEARING_POINT))[0]
+    ub = vector_state(work, bb, vec(joint, SJ_BEARING_AXIS))[0]
+    pj = point_state(work, bj, vec(joint, SJ_JOURNAL_POINT))[0]
+    uj = vector_state(work, bj, vec(joint, SJ_JOURNAL_AXIS))[0]
+    offset, _, weight = sliced.slice_geometry(i, joint[SJ_LENGTH], int(joint[SJ_SLICES]),
+                                              joint[SJ_END_LENGTH])
+    x = add(pj, scaled(uj, offset))
+    e = sub(x, add(pb, scaled(ub, offset)))
+    across = sub(e, scaled(ub, dot(e, ub)))
+    size = math.sqrt(dot(across, across))
+    n = scaled(across, 1.0 / size) if size > 0.0 else (1.0, 0.0, 0.0)
+    b = sub(x, across)
+    rate = dot(n, sub(material_velocity(work, bj, x), material_velocity(work, bb, b)))
+    return size - joint[JOINT_CLEARANCE], rate, n, x, b, weight
+
+
+@numba.njit(cache=True)
+def axial_kinematics(work, joint):
+    """Shoulders of a cylindrical joint: (penetration |s| - c_a, its rate, the axis u_b signed
+    towards the journal's offset, the journal point P_j); -inf without shoulders."""
+    if joint[SJ_AXIAL_CLEARANCE] <= 0.0:
+        return -math.inf, 0.0, (1.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    bb, bj = int(joint[SJ_BEARING_BODY]), int(joint[SJ_JOURNAL_BODY])
+    pb = point_state(work, bb, vec(joint, SJ_BEARING_POINT))[0]
+    ub = vector_state(work, bb, vec(joint, SJ_BEARING_AXIS))[0]
+    pj = point_state(work, bj, vec(joint, SJ_JOURNAL_POINT))[0]
+    s = dot(sub(pj, pb), ub)
+    u = ub if s >= 0.0 else scaled(ub, -1.0)
+    rate = dot(u, sub(material_velocity(work, bj, pj), material_velocity(work, bb, pj)))
+    return abs(s) - joint[SJ_AXIAL_CLEARANCE], rate, u, pj
+
+
+@numba.njit(cache=True)
+def sphere_kinematics(work, joint):
+    """Ball in socket: (delta = |P_j - P_s| - c, its rate, n, P_j, P_s)."""
+    bb, bj = int(joint[SJ_BEARING_BODY]), int(joint[SJ_JOURNAL_BODY])
+    ps = point_state(work, bb, vec(joint, SJ_BEARING_POINT))[0]
+    pj = point_state(work, bj, vec(joint, SJ_JOURNAL_POINT))[0]
+    e = sub(pj, ps)
+    size = math.sqrt(dot(e, e))
+    n = scaled(e, 1.0 / size) if size > 0.0 else (1.0, 0.0, 0.0)
+    rate = dot(n, sub(material_velocity(work, bj, pj), material_velocity(work, bb, ps)))
+    return size - joint[JOINT_CLEARANCE], rate, n, pj, ps
+
+
+@numba.njit(cache=True)
+def channel_depth(work, joint, channel):
+    """The deepest penetration of a contact channel and its approach rate (layout.Depth)."""
+    if channel == AXIAL:
+        if int(joint[SJ_KIND]) != CYLINDER:
+            return Depth(-math.inf, 0.0)
+        delta, rate, _, _ = axial_kinematics(work, joint)
+        return Depth(delta, rate)
+    if int(joint[SJ_KIND]) != CYLINDER:
+        delta, rate, _, _, _ = sphere_kinematics(work, joint)
+        return Depth(delta, rate)
+    deepest, deepest_rate = -math.inf, 0.0
+    for i in range(int(joint[SJ_SLICES])):
+        delta, rate, _, _, _, _ = slice_kinematics(work, joint, i)
+        if delta > deepest:
+            deepest, deepest_rate = delta, rate
+    return Depth(deepest, deepest_rate)
+
+
+@numba.njit(cache=True)
+def push(force, work, b, f, x):
+    """Add the force f (N, global) acting at the global point x to body b's force and torque."""
+    if b < 0:
+        return
+    arm = sub(x, vec(work.pos[b], 0))
+    torque = cross(arm, f)
+    for c in range(3):
+        force[6 * b + c] += f[c]
+        force[6 * b + 3 + c] += torque[c]
+
+
+@numba.njit(cache=True)
+def contact_force(force, work, joint, table, grid_log0, grid_step, impact_speed, delta, rate, n,
+                  x_journal, x_bearing, weight):
+    """One contact element (a slice, or the ball) in contact (delta > 0): the normal force
+    weight (f_el (1 + chi rate/v0)) pushes the journal at x_journal along -n and the bearing at
+    x_bearing along +n; friction acts at the contact point x_bearing + R_b n on both against
+    the slip. Returns (normal force N, elastic force N, friction force N, dissipated power W);
+    NaN forces beyond the law's table."""
+    bb, bj = int(joint[SJ_BEARING_BODY]), int(joint[SJ_JOURNAL_BODY])
+    f_el = tables.table_force(delta, grid_log0, grid_step, table) * weight
+    f_n = dissipative.hysteresis_force(f_el, rate, impact_speed, joint[JOINT_CHI])
+    push(force, work, bj, scaled(n, -f_n), x_journal)
+    push(force, work, bb, scaled(n, f_n), x_bearing)
+    power = (f_n - f_el) * rate
+    contact = add(x_bearing, scaled(n, joint[JOINT_BEARING_RADIUS]))
+    v = sub(material_velocity(work, bj, contact), material_velocity(work, bb, contact))
+    slip = sub(v, scaled(n, dot(v, n)))
+    speed = math.sqrt(dot(slip, slip))
+    f_t = 0.0
+    if speed > 0.0:
+        f_t = joint_friction(joint, f_n, speed, 0.0)[0]
+        push(force, work, bj, scaled(slip, -f_t / speed), contact)
+        push(force, work, bb, scaled(slip, f_t / speed), contact)
+        power += f_t * speed
+    return f_n, f_el, f_t, power
+
+
+@numba.njit(cache=True)
+def joint_forces(force, work, joint, table, grid_log0, grid_step, radial_speed, axial_speed):
+    """All the forces of a clearance joint into `force`: (radial or spherical normal force N,
+    axial force N, friction force N, dissipated power W); NaN beyond the law's table."""
+    scale = joint[SJ_SCALE]
+    normal = tangential = power = axial = 0.0
+    if int(joint[SJ_KIND]) == CYLINDER:
+        for i in range(int(joint[SJ_SLICES])):
+            delta, rate, n, x, b, weight = slice_kinematics(work, joint, i)
+            if delta > 0.0:
+                f_n, _, f_t, p = contact_force(force, work, joint, table, grid_log0, grid_step,
+                                               radial_speed, delta, rate, n, x, b, scale * weight)
+                normal += f_n
+                tangential += f_t
+                power += p
+        delta, rate, u, pj = axial_kinematics(work, joint)
+        if delta > 0.0:
+            f_el = joint[SJ_AXIAL_STIFFNESS] * delta
+            axial = dissipative.hysteresis_force(f_el, rate, axial_speed, joint[JOINT_CHI])
+            push(force, work, int(joint[SJ_JOURNAL_BODY]), scaled(u, -axial), pj)
+            push(force, work, int(joint[SJ_BEARING_BODY]), scaled(u, axial), pj)
+            power += (axial - f_el) * rate
+    else:
+        delta, rate, n, pj, ps = sphere_kinematics(work, joint)
+        if delta > 0.0:
+            normal, _, tangential, power = contact_force(force, work, joint, table, grid_log0,
+                                                         grid_step, radial_speed, delta, rate, n,
+                                                         pj, ps, 1.0)
+    return normal, axial, tangential, power
+
+
+# ---- torsion elements
+@numba.njit(cache=True)
+def relative_angle(work, row):
+    """Relative angle about body i's axis (atan2 of c_i . b_j and a_i . b_j) beyond the free
+    angle, and its rate (w_j - w_i) . u_i."""
+    bi, bj = int(row[TORSION_BODY_I]), int(row[TORSION_BODY_J])
+    c_, kc, cd, _ = dot1(work, bi, vec(row, TORSION_A_I), bj, vec(row, TORSION_B_J))
+    s_, ks, sd, _ = dot1(work, bi, vec(row, TORSION_C_I), bj, vec(row, TORSION_B_J))
+    angle = math.atan2(s_, c_) - row[TORSION_FREE_ANGLE]
+    angle -= 2 * math.pi * math.floor(angle / (2 * math.pi) + 0.5)
+    return angle, (c_ * sd - s_ * cd) / (s_ * s_ + c_ * c_)
+
+
+@numba.njit(cache=True)
+def torsion_axis(work, row):
+    """The axis u_i = a_i x c_i of a torsion element (global)."""
+    bi = int(row[TORSION_BODY_I])
+    a = vector_state(work, bi, vec(row, TORSION_A_I))[0]
+    c = vector_state(work, bi, vec(row, TORSION_C_I))[0]
+    return cross(a, c)
+
+
+# ---- the right-hand side
+@numba.njit(cache=True)
+def workspace(args):
+    nb, nj = args.masses.size, args.joints.shape[0]
+    m = constraint_count(args.primitives)
+    return SpatialWork(np.zeros((nb, 3)), np.zeros((nb, 3, 3)), np.zeros((nb, 3)),
+                       np.zeros((nb, 3)), np.zeros((nb, 3, 3)), np.zeros((m, 6 * nb)),
+                       np.zeros(m), np.zeros(m), np.zeros(m), np.zeros((m, m)),
+                       np.zeros(6 * nb), np.zeros(max(CHANNELS * nj, 1)), np.zeros((m, 6 * nb)))
+
+
+@numba.njit(cache=True)
+def applied_forces(t, y, args, work):
+    """Gravity, gyroscopic terms, clearance joints and torsion elements into work.force (6 a
+    body); returns the dissipated power (NaN beyond a law's table). work.normal gets each
+    channel's normal force."""
+    masses, gravity, joints, torsion = args.masses, args.gravity, args.joints, args.torsion
+    force, normal, speeds = work.force, work.normal, args.speeds
+    for b in range(masses.size):
+        w = vec(work.omega[b], 0)
+        a = work.rot[b]
+        jw = matvec(a, matvec(args.inertia[b], tmatvec(a, w)))
+        gyro = cross(w, jw)
+        for c in range(3):
+            force[6 * b + c] = masses[b] * gravity[c]
+            force[6 * b + 3 + c] = -gyro[c]
+    normal[:] = 0.0
+    dissipation = 0.0
+    for k in range(joints.shape[0]):
+        f_n, f_a, _, power = joint_forces(force, work, joints[k], args.tables[k], args.grid_log0,
+                                          args.grid_step, speeds[CHANNELS * k],
+                                          speeds[CHANNELS * k + 1])
+        normal[CHANNELS * k], normal[CHANNELS * k + 1] = f_n, f_a
+        dissipation += power
+    for k in range(torsion.shape[0]):
+        angle, rate = relative_angle(work, torsion[k])
+        torque, power = torsion_law(angle, rate, torsion[k], args.latched[k] > 0)
+        u = torsion_axis(work, torsion[k])
+        for b, sign in ((int(torsion[k, TORSION_BODY_J]), 1.0), (int(torsion[k, TORSION_BODY_I]), -1.0)):
+            if b >= 0:
+                for c in range(3):
+                    force[6 * b + 3 + c] += sign * torque * u[c]
+        dissipation += power
+    return dissipation
+
+
+@numba.njit(cache=True)
+def rhs(t, y, dy, args, work):
+    """dy = f(t, y) (module docstring): velocities, the Euler parameters' second derivatives
+    with their normalisation, dissipated power, power of the constraints."""
+    nq, masses = args.nq, args.masses
+    body_states(y, args, work)
+    dissipation = applied_forces(t, y, args, work)
+    if not math.isfinite(dissipation):
+        dy[:] = math.nan   # penetration beyond the tabulated law: the integrator stops
+        return
+    force, rhs_c, jac = work.force, work.rhs_c, work.jac
+    m = fill_constraints(t, work, args.primitives, args.baumgarte)
+    work_in = 0.0
+    if m > 0:
+        fill_schur(args, work, m)
+        for i in range(m):   # (D M^-1 D^T) lambda = D M^-1 Q - gamma~
+            v = -rhs_c[i]
+            for c in range(force.size):
+                v += work.mjac[i, c] * force[c]
+            rhs_c[i] = v
+        cholesky_solve(work.schur, rhs_c, m)
+        for c in range(force.size):
+            v = force[c]
+            for i in range(m):
+                v -= jac[i, c] * rhs_c[i]
+            force[c] = v
+        for i in range(m):
+            work_in += rhs_c[i] * work.phi_t[i]
+    alpha = args.baumgarte
+    for b in range(masses.size):
+        for c in range(3):
+            dy[7 * b + c] = y[nq + 7 * b + c]
+            dy[nq + 7 * b + c] = force[6 * b + c] / masses[b]
+        for c in range(4):
+            dy[7 * b + 3 + c] = y[nq + 7 * b + 3 + c]
+        wd = matvec(work.jinv[b], vec(force, 6 * b + 3))   # w' (global)
+        p = unit_parameters(y, b)
+        pd = vec(y, nq + 7 * b + 3) + (y[nq + 7 * b + 6],)
+        half = gt_times(p, scaled(tmatvec(work.rot[b], wd), 0.5))
+        pp = p[0] ** 2 + p[1] ** 2 + p[2] ** 2 + p[3] ** 2
+        raw = vec(y, 7 * b + 3) + (y[7 * b + 6],)
+        norm2 = raw[0] ** 2 + raw[1] ** 2 + raw[2] ** 2 + raw[3] ** 2
+        along = (-(pd[0] ** 2 + pd[1] ** 2 + pd[2] ** 2 + pd[3] ** 2)
+                 - 2 * alpha * (raw[0] * pd[0] + raw[1] * pd[1] + raw[2] * pd[2] + raw[3] * pd[3])
+                 - 0.5 * alpha * alpha * (norm2 - 1.0)) / pp
+        for c in range(4):
+            dy[nq + 7 * b + 3 + c] = half[c] + along * p[c]
+    dy[2 * nq + DISSIPATED] = dissipation
+    dy[2 * nq + WORK_IN] = work_in
+
+
+def rhs_value(t, y, args):
+    """(f(t, y), normal force per contact channel) as new arrays (Python-side convenience)."""
+    dy = np.empty_like(y)
+    work = workspace(args)
+    rhs(t, y, dy, args, work)
+    return dy, work.normal[:CHANNELS * args.joints.shape[0]].copy()
+
+
+# ---- projection onto the constraints
+@numba.njit(cache=True)
+def normalise(y, nq, nb):
+    """Euler parameters to unit length, their rates normal to them."""
+    for b in range(nb):
+        i = 7 * b + 3
+        n = math.sqrt(y[i] ** 2 + y[i + 1] ** 2 + y[i + 2] ** 2 + y[i + 3] ** 2)
+        along = 0.0
+        for c in range(4):
+            y[i + c] /= n
+            along += y[i + c] * y[nq + i + c]
+        for c in range(4):
+            y[nq + i + c] -= along * y[i + c]
+
+
+@numba.njit(cache=True)
+def turn(y, b, rotation_vector):
+    """Turn body b by a small global rotation vector: p <- (cos(|r|/2), sin(|r|/2) r/|r|) p."""
+    angle = math.sqrt(dot(rotation_vector, rotation_vector))
+    if angle == 0.0:
+        return
+    k = math.sin(0.5 * angle) / angle
+    a0, a = math.cos(0.5 * angle), scaled(rotation_vector, k)
+    i = 7 * b + 3
+    b0, bv = y[i], (y[i + 1], y[i + 2], y[i + 3])
+    v = add(add(scaled(bv, a0), scaled(a, b0)), cross(a, bv))
+    y[i], y[i + 1], y[i + 2], y[i + 3] = a0 * b0 - dot(a, bv), v[0], v[1], v[2]
+
+
+@numba.njit(cache=True)
+def project_onto_constraints(t, y, args, work, tolerance, rate_tolerance):
+    """Normalise the Euler parameters; then one Gauss-Newton step of positions and one of
+    velocities onto Phi = 0 and D v + Phi_t = 0, least change in the mass metric
+    (dx = -M^-1 D^T (D M^-1 D^T)^-1 Phi), each only where the residual exceeds its
+    tolerance (m, m/s). Returns whether a constraint was projected."""
+    nq, nb = args.nq, args.masses.size
+    rhs_c, mjac = work.rhs_c, work.mjac
+    normalise(y, nq, nb)
+    changed = False
+    for level in range(2):
+        body_states(y, args, work)
+        m = fill_constraints(t, work, args.primitives, 0.0)
+        largest = 0.0
+        for i in range(m):
+            if level == 0:
+                rhs_c[i] = work.phi[i]
+            else:
+                v = work.phi_t[i]
+                for b in range(nb):
+                    for c in range(3):
+                        v += work.jac[i, 6 * b + c] * work.vel[b, c] + work.jac[i, 6 * b + 3 + c] * work.omega[b, c]
+                rhs_c[i] = v
+            largest = max(largest, abs(rhs_c[i]))
+        if largest <= (tolerance if level == 0 else rate_tolerance):
+            continue
+        changed = True
+        fill_schur(args, work, m)
+        cholesky_solve(work.schur, rhs_c, m)
+        step = np.zeros(6)
+        for b in range(nb):
+            step[:] = 0.0
+            for c in range(6):
+                for i in range(m):
+                    step[c] -= mjac[i, 6 * b + c] * rhs_c[i]
+            if level == 0:
+                for c in range(3):
+                    y[7 * b + c] += step[c]
+                turn(y, b, (step[3], step[4], step[5]))
+            else:
+                for c in range(3):
+                    y[nq + 7 * b + c] += step[c]
+                w = (work.omega[b, 0] + step[3], work.omega[b, 1] + step[4], work.omega[b, 2] + step[5])
+                pd = gt_times(unit_parameters(y, b), scaled(tmatvec(work.rot[b], w), 0.5))
+                for c in range(4):
+                    y[nq + 7 * b + 3 + c] = pd[c]
+        normalise(y, nq, nb)
+    return changed
+
+
+# ---- the spatial mechanism's hooks of the integrator (reduced.integrator)
+@numba.njit(cache=True)
+def engage_latches(work, torsion, latched):
+    """Latch every latch that has reached its angle (body states current)."""
+    changed = False
+    for r in range(torsion.shape[0]):
+        if latched[r] == 0.0 and int(torsion[r, TORSION_KIND]) == LATCH and \
+                relative_angle(work, torsion[r])[0] > -LATCH_TOL:
+            latched[r] = 1.0
+            changed = True
+    return changed
+
+
+@numba.njit(cache=True)
+def start(y, args, onset_tol):
+    """Contact channels at t = 0 (latches given as engaged engage) and what to check:
+    (no held contacts, no Iwan elements, latches)."""
+    work = workspace(args)
+    body_states(y, args, work)
+    torsion = args.torsion
+    latches = False
+    for r in range(torsion.shape[0]):
+        latches |= int(torsion[r, TORSION_KIND]) == LATCH
+    engage_latches(work, torsion, args.latched)
+    nc = CHANNELS * args.joints.shape[0]
+    contacts = Contacts(np.zeros(nc), np.zeros(nc, np.bool_), np.zeros(nc), np.zeros(nc))
+    for c in range(nc):
+        contacts.depth[c] = channel_depth(work, args.joints[c // CHANNELS], c % CHANNELS).delta
+        contacts.in_contact[c] = contacts.depth[c] > -onset_tol
+    return contacts, (False, False, latches)
+
+
+@numba.njit(cache=True)
+def event_fraction(y, y_new, args, work, contacts, latches, onset_tol):
+    """The fraction of a trial step that ends it at the first onset of a channel
+    (integrator.onset_shortening) or at a latch's angle (secant); 1: none."""
+    torsion, latched = args.torsion, args.latched
+    body_states(y_new, args, work)
+    shorten = 1.0
+    for c in range(contacts.depth.size):
+        if not contacts.in_contact[c]:
+            d_new = channel_depth(work, args.joints[c // CHANNELS], c % CHANNELS).delta
+            shorten = min(shorten, integrator.onset_shortening(contacts.depth[c], d_new, onset_tol))
+    if latches:
+        angles_new = np.empty(torsion.shape[0])
+        for r in range(torsion.shape[0]):
+            angles_new[r] = relative_angle(work, torsion[r])[0]
+        body_states(y, args, work)
+        for r in range(torsion.shape[0]):
+            if latched[r] == 0.0 and int(torsion[r, TORSION_KIND]) == LATCH and angles_new[r] > LATCH_TOL:
+                a_old = relative_angle(work, torsion[r])[0]
+                shorten = min(shorten, 0.99 * (-a_old) / (angles_new[r] - a_old))
+    return shorten
+
+
+@numba.njit(cache=True)
+def after_step(t, y, args, work, contacts, latches, onset_tol, speed_floor, rate_tol, log, impacts):
+    """Accepted step: projection; each channel's depth, its onset (impact speed v0 at least
+    speed_floor, logged) or separation; latches. Returns (changed, impacts, log)."""
+    changed = project_onto_constraints(t, y, args, work, onset_tol, rate_tol)
+    body_states(y, args, work)
+    speeds = args.speeds
+    for c in range(contacts.depth.size):
+        depth = channel_depth(work, args.joints[c // CHANNELS], c % CHANNELS)
+        contacts.depth[c] = depth.delta
+        if not contacts.in_contact[c] and depth.delta > -onset_tol:
+            contacts.in_contact[c] = True
+            speeds[c] = max(depth.rate, speed_floor)
+            impacts += 1
+            log = log_impact(log, impacts, t, c // CHANNELS, depth.rate, 0.0)
+            changed = True
+        elif contacts.in_contact[c] and depth.delta < -onset_tol:
+            contacts.in_contact[c] = False
+    if latches:
+        changed |= engage_latches(work, args.torsion, args.latched)
+    return changed, impacts, log
+
+
+def spatial(args) -> bool:
+    return getattr(args, "instance_class", None) is SpatialArgs
+
+
+@overload(integrator.new_workspace, inline="always")
+def _new_workspace(args):
+    if spatial(args):
+        return lambda args: workspace(args)
+
+
+@overload(integrator.evaluate, inline="always")
+def _evaluate(t, y, dy, args, work):
+    if spatial(args):
+        return lambda t, y, dy, args, work: rhs(t, y, dy, args, work)
+
+
+@overload(integrator.start, inline="always")
+def _start(y, args, onset_tol):
+    if spatial(args):
+        return lambda y, args, onset_tol: start(y, args, onset_tol)
+
+
+@overload(integrator.event_fraction, inline="always")
+def _event_fraction(y, y_new, h, args, work, contacts, needs, onset_tol, rtol, event_dt):
+    if spatial(args):
+        return lambda y, y_new, h, args, work, contacts, needs, onset_tol, rtol, event_dt: \
+            event_fraction(y, y_new, args, work, contacts, needs[2], onset_tol)
+
+
+@overload(integrator.after_step, inline="always")
+def _after_step(t, y, args, work, contacts, needs, onset_tol, speed_floor, rate_tol, log, impacts):
+    if spatial(args):
+        return lambda t, y, args, work, contacts, needs, onset_tol, speed_floor, rate_tol, log, \
+            impacts: after_step(t, y, args, work, contacts, needs[2], onset_tol, speed_floor,
+                                rate_tol, log, impacts)
+
+
+integrate = integrator.integrate
+
+# ---- the compiled code follows the laws, the layouts and the planar kernel's shared parts
+COMPILED_IN = (friction.__file__, dissipative.__file__, tables.__file__, sliced.__file__,
+               layout.__file__, spatial_layout.__file__, kernel.__file__, integrator.__file__)
+follow_compiled_in(globals(), COMPILED_IN)
