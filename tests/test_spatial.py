@@ -1,0 +1,205 @@
+"""The spatial multibody model against independent references: the planar model (a planar
+mechanism written as a spatial one), Euler's equations of a free body (momenta, torque-free
+spin, the intermediate-axis flip with its elliptic-integral period), the sliced law's slice
+sum; bad spatial scenes."""
+
+import copy
+import math
+import tomllib
+
+import numpy as np
+import pytest
+from conftest import ROOT, pinbore
+from scipy.special import ellipk
+
+from pinbore.laws import sliced
+from pinbore.laws.tables import tabulate
+from pinbore.reduced import spatial_kernel
+from pinbore.reduced.model import build as build_planar
+from pinbore.reduced.outputs import per_step as planar_per_step
+from pinbore.reduced.run import simulate
+from pinbore.reduced.scene import ReducedScene
+from pinbore.reduced.spatial_layout import (CYLINDER, SJ_BEARING_AXIS, SJ_BEARING_BODY,
+                                            SJ_BEARING_POINT, SJ_END_LENGTH, SJ_JOURNAL_AXIS,
+                                            SJ_JOURNAL_BODY, SJ_JOURNAL_POINT, SJ_KIND, SJ_LENGTH,
+                                            SJ_SCALE, SJ_SLICES, SPATIAL_JOINT_COLUMNS)
+from pinbore.reduced.layout import JOINT_BEARING_RADIUS, JOINT_CLEARANCE
+from pinbore.reduced.spatial_model import build
+from pinbore.reduced.spatial_outputs import per_step
+from pinbore.reduced.spatial_scene import SpatialScene
+
+SCENES = ROOT / "scenes" / "reduced"
+PLANAR = tomllib.loads((SCENES / "slider_crank_flores2004.toml").read_text())
+SPATIAL = tomllib.loads((SCENES / "spatial_slider_crank_flores.toml").read_text())
+
+
+def run(data, planar=False):
+    model = (build_planar(ReducedScene.model_validate(data), "test", ROOT) if planar
+             else build(SpatialScene.model_validate(data), "test", ROOT))
+    trajectory = simulate(model)
+    assert trajectory.status == 0, (trajectory.status, trajectory.t_end)
+    return model, trajectory
+
+
+def first_impact(data, planar):
+    """Time and speed of the first onset, and the largest force before the contact opens."""
+    model, trajectory = run(data, planar)
+    cols = (planar_per_step if planar else per_step)(model, trajectory)[0]
+    force = cols["rod_slider_normal_force_N"]
+    first = np.flatnonzero(force > 0)[0]
+    end = first + np.argmax(force[first:] == 0)
+    return trajectory.impacts[0], float(force[first:end].max()), cols, first
+
+
+def test_planar_scene_as_spatial_reproduces_the_planar_model():
+    """The Flores slider-crank in the x-y plane: free flight, the first onset (located by both
+    to the same tolerance) and the first impact's peak. Before the impact the motion is the
+    ideal kinematics integrated at rtol 1e-10 by both (same equations, different coordinates):
+    the slider's position agrees to 1e-8 of the crank length. The first impact's peak force is
+    read at the accepted steps, at most 20 ns apart: for a contact of about 50 us (a half sine
+    of frequency w = pi / 50 us) the sampled maximum is within (w h)^2 / 8 = 2e-7 of the true
+    one, so the two peaks agree to 1e-6 when the dynamics do."""
+    planar, spatial = copy.deepcopy(PLANAR), copy.deepcopy(SPATIAL)
+    for data in (planar, spatial):
+        data["duration"] = 4e-4   # past the first impact (its peak at 0.25 ms)
+        data["integrator"] = {"rtol": 1e-10, "atol": 1e-13, "max_step": 2e-8}
+    (p_log, p_peak, p_cols, p_first) = first_impact(planar, True)
+    (s_log, s_peak, s_cols, s_first) = first_impact(spatial, False)
+    assert s_log[0] == pytest.approx(p_log[0], rel=1e-8)    # onset time
+    assert s_log[2] == pytest.approx(p_log[2], rel=1e-6)    # impact speed
+    t = np.linspace(0, p_log[0], 50)
+    x_planar = np.interp(t, p_cols["time_s"], p_cols["slider_x_m"])
+    x_spatial = np.interp(t, s_cols["time_s"], s_cols["slider_x_m"])
+    assert np.max(np.abs(x_spatial - x_planar)) < 1e-8 * 0.05
+    assert s_peak == pytest.approx(p_peak, rel=1e-6)
+
+
+def free_body(omega, inertia=((1.0, 0, 0), (0, 2.0, 0), (0, 0, 3.0)), duration=1.0, rtol=1e-10):
+    return {"kind": "spatial", "duration": duration, "bodies": [{
+        "name": "body", "mass": 2.0, "inertia": [list(r) for r in inertia],
+        "velocity": [0.3, -0.2, 0.1], "omega": list(omega)}],
+        "integrator": {"rtol": rtol, "atol": 1e-13, "max_step": 1e-2},
+        "output": {"sample_time": 1e-3, "plots": False}}
+
+
+def angular_momentum(cols, model):
+    """Global angular momentum about the centre of mass, A J' A^T w, per step."""
+    out = []
+    for k in range(cols["time_s"].size):
+        p = [cols[f"body_e{i}_1"][k] for i in range(4)]
+        a = np.empty((3, 3))
+        spatial_kernel.rotation(np.array(p), a)
+        w = np.array([cols[f"body_w{c}_rad_per_s"][k] for c in "xyz"])
+        out.append(a @ model.inertia[0] @ a.T @ w)
+    return np.array(out)
+
+
+def test_free_body_conserves_momenta_and_energy():
+    """Torque-free tumbling: linear momentum exactly (no force), angular momentum fixed in
+    space and kinetic energy constant (Euler's equations), to 1e-8 of their size at rtol 1e-10
+    (the error of a few thousand steps at that tolerance)."""
+    model, trajectory = run(free_body([0.5, 2.0, 0.3]))
+    cols, energy, _ = per_step(model, trajectory)
+    momentum = angular_momentum(cols, model)
+    assert np.max(np.abs(momentum - momentum[0])) < 1e-8 * np.linalg.norm(momentum[0])
+    assert np.ptp(energy["kinetic"]) < 1e-8 * energy["kinetic"][0]
+    np.testing.assert_allclose(cols["body_vx_m_per_s"], 0.3, rtol=1e-12)
+    np.testing.assert_allclose(cols["body_x_m"], 0.3 * cols["time_s"], atol=1e-12)
+
+
+def test_spin_about_a_principal_axis_keeps_angular_momentum_fixed_in_space():
+    """A body spinning about its major axis with a small wobble: H stays fixed to 1e-9."""
+    model, trajectory = run(free_body([1e-3, 2e-3, 5.0]))
+    momentum = angular_momentum(per_step(model, trajectory)[0], model)
+    assert np.max(np.abs(momentum - momentum[0])) < 1e-9 * np.linalg.norm(momentum[0])
+
+
+def test_intermediate_axis_flip_has_the_closed_form_period():
+    """Tennis-racket theorem: spin about the intermediate axis (J2) with a small perturbation
+    w1(0): the body flips periodically. Near the separatrix Euler's equations give the period
+    T = 4 K(k) / sqrt((J2 - J1)(J3 - J2) ... ) in Jacobi elliptic functions; for w1(0) = eps,
+    w3(0) = 0, the exact solution is w2 = w0 dn-type with period (Landau-Lifshitz sec. 37)
+        T = 4 K(m) / p,  p = sqrt((J3 - J2)(J2 - J1) / (J1 J3)) w0-scaled, m from the energy.
+    The period of w2 (two flips) from the zero crossings of w2 agrees to 1e-5."""
+    j1, j2, j3 = 1.0, 2.0, 3.0
+    w0, eps = 2.0, 1e-3
+    h2 = (j2 * w0) ** 2 + (j1 * eps) ** 2          # |H|^2
+    e2 = j2 * w0**2 + j1 * eps**2                   # 2 T
+    # Landau-Lifshitz sec. 37 (J3 > J2 > J1, M^2 < 2 E J2 here: m < 1 with their ordering)
+    if h2 > e2 * j2:
+        raise AssertionError("case not covered")
+    tau_scale = math.sqrt((j3 - j2) * (e2 * j1 - h2) * 0 + (j2 - j1) * (j3 * e2 - h2) / (j1 * j2 * j3))
+    m = (j3 - j2) * (h2 - e2 * j1) / ((j2 - j1) * (j3 * e2 - h2))
+    period_w2 = 4 * ellipk(m) / tau_scale
+    model, trajectory = run(free_body([eps, w0, 0.0], ((j1, 0, 0), (0, j2, 0), (0, 0, j3)),
+                                      duration=1.2 * period_w2, rtol=1e-11))
+    cols = per_step(model, trajectory)[0]
+    t, w = cols["time_s"], cols["body_wy_rad_per_s"]
+    body_w2 = []
+    for k in range(t.size):   # the body-frame component about the intermediate axis
+        a = np.empty((3, 3))
+        spatial_kernel.rotation(np.array([cols[f"body_e{i}_1"][k] for i in range(4)]), a)
+        body_w2.append((a.T @ np.array([cols[f"body_w{c}_rad_per_s"][k] for c in "xyz"]))[1])
+    body_w2 = np.array(body_w2)
+    crossings = t[:-1][np.diff(np.sign(body_w2)) != 0]
+    assert crossings.size >= 2, crossings
+    assert crossings[1] - crossings[0] == pytest.approx(period_w2 / 2, rel=1e-5)
+    assert w.size > 0
+
+
+def cylinder(length=0.02, slices=16, end_length=0.0, scale=1.0):
+    joint = np.zeros(SPATIAL_JOINT_COLUMNS)
+    joint[SJ_KIND], joint[SJ_BEARING_BODY], joint[SJ_JOURNAL_BODY] = CYLINDER, -1, 0
+    joint[SJ_BEARING_AXIS:SJ_BEARING_AXIS + 3] = joint[SJ_JOURNAL_AXIS:SJ_JOURNAL_AXIS + 3] = (0, 0, 1)
+    joint[SJ_LENGTH], joint[SJ_SLICES], joint[SJ_END_LENGTH], joint[SJ_SCALE] = length, slices, end_length, scale
+    joint[JOINT_CLEARANCE], joint[JOINT_BEARING_RADIUS] = 1e-4, 0.01
+    return joint
+
+
+@pytest.mark.parametrize("end_length,scale", [(0.0, 1.0), (1.5e-3, 0.8), (-1e-3, 1.2)])
+def test_slice_sum_equals_the_sliced_law(end_length, scale):
+    """A journal tilted by theta in the plane of its eccentricity (about y, eccentricity
+    along x): the kernel's slice sum of the force and of its moment about the bore's centre
+    equal scale x laws.sliced.sliced(delta, sin theta, ...) to round-off (1e-12): the same
+    slices, weights and law (module docstring of reduced.spatial_kernel)."""
+    grid_log0, grid_step, table = tabulate(lambda d: 3e10 * d**1.1, 1e-12, 1e-3, 400)
+    joint = cylinder(end_length=end_length, scale=scale)
+    delta, theta = 2e-6, 1.5e-4
+    rot = np.empty((3, 3))
+    spatial_kernel.rotation(np.array([math.cos(theta / 2), 0, math.sin(theta / 2), 0]), rot)
+    # journal body 0: centre at the bore centre shifted by c + delta along x, tilted by theta
+    # about y (its axis leans towards +x for z > 0)
+    work = spatial_kernel.SpatialWork(np.array([[1e-4 + delta, 0, 0]]), rot[None], np.zeros((1, 3)),
+                                      np.zeros((1, 3)), np.eye(3)[None], np.zeros((0, 6)),
+                                      np.zeros(0), np.zeros(0), np.zeros(0), np.zeros((0, 0)),
+                                      np.zeros(6), np.zeros(2), np.zeros((0, 6)))
+    force = np.zeros(6)
+    f_n, _, _, _ = spatial_kernel.joint_forces(force, work, joint, table, grid_log0, grid_step,
+                                               1.0, 1.0)
+    expected = sliced.sliced(delta, math.sin(theta), 0.02, 16, grid_log0, grid_step, table, 0.0,
+                             0.0, end_length)
+    assert -force[0] == pytest.approx(scale * expected[0], rel=1e-12)
+    assert f_n == pytest.approx(scale * expected[0], rel=1e-12)
+    # the moment on the journal about its centre: the slice forces act at X_i = z_i u_j, whose
+    # arm across the force is z_i cos theta (the law's z_i measured along the tilted axis)
+    assert -force[4] == pytest.approx(scale * expected[1] * math.cos(theta), rel=1e-12)
+
+
+@pytest.mark.parametrize("change,key", [
+    (lambda d: d["bodies"][0].update(orientation=[1.0, 0.1, 0.0, 0.0]), "bodies.0"),
+    (lambda d: d["bodies"][0].update(rotation=[[1, 0, 0], [0, 1, 0], [0, 0, -1]]), "bodies.0"),
+    (lambda d: d["bodies"][0].update(inertia=[[1, 0, 0], [0, 1, 0], [0, 0, 3]]), "bodies.0"),
+    (lambda d: d["bodies"][0].update(inertia=[[1, 0, 0], [0, -1, 0], [0, 0, 1]]), "bodies.0"),
+    (lambda d: d["joints"][0].update(axis_i=[0, 0, 0]), "joints.0"),
+    (lambda d: d["clearance_joints"][0].update(journal_radius=0.011), "clearance_joints.0"),
+    (lambda d: d["drive"].update(joint="nowhere"), "(scene)"),
+    (lambda d: d["joints"][1].update(body_i="nobody"), "(scene)"),
+])
+def test_bad_spatial_scenes_are_one_line_exit_2(write_scene, tmp_path, change, key):
+    data = copy.deepcopy(SPATIAL)
+    change(data)
+    out = tmp_path / "out"
+    result = pinbore("reduced", write_scene(data), "--out", out)
+    assert result.returncode == 2, result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1 and key in result.stderr, result.stderr
+    assert not out.exists()
