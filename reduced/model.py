@@ -11,7 +11,8 @@ import numpy as np
 from pinbore.calibration import lawsfile
 from pinbore.core.errors import InputError
 from pinbore.laws import dissipative, elastic
-from pinbore.laws.tables import log_grid
+from pinbore.laws.sliced import sliced
+from pinbore.laws.tables import log_grid, split_compliance
 from pinbore.reduced import kernel
 from pinbore.reduced.layout import (
     CONTINUOUS, COULOMB, COULOMB_MU, DAHL, DAHL_MU, DAHL_SIGMA, DRIVE_ANGLE, DRIVE_BODY, DRIVE_COLUMNS,
@@ -269,14 +270,32 @@ def normal_force(c, deltas, laws_data, source) -> np.ndarray:
             raise InputError(f"{source}: clearance_joints.length: {c.length:g} m is too short for "
                              f"{c.normal_law!r}, whose end lengths ({law.end_length_m:.3g} m each) "
                              "leave no length to carry the load")
-        # a straight pin (no tilt in the planar model): every slice at the approach d, so the
-        # sliced sum is scale (L + 2 end_length) f(d) (laws.sliced, theta = 0, no relief); the
-        # per-length law takes the materials and law length it was calibrated with (the
-        # scene's radii: the clearance is the joint's own)
-        calibrated_joint = law.joint.joint(c.bearing_radius, c.journal_radius)
-        per_length = per_length_force(law.per_length_law, laws_data, deltas, calibrated_joint,
-                                      f"{source}: laws file: sliced.{name}.per_length_law")
-        return law.scale * carried * per_length
+        # a straight pin (no tilt in the planar model): every slice at the same approach, so
+        # one slice of width L + 2 end_length gives the sliced sum (laws.sliced, theta = 0,
+        # no relief): F = scale (L + 2 e) f_loc(d - c_b F / L); the per-length law takes the
+        # materials and law length it was calibrated with (the scene's radii: the clearance
+        # is the joint's own), tabulated on the grid of `deltas`
+        if law.section is not None:
+            # the 2D FE curve of the calibrated section: valid for its own radii only
+            if not (math.isclose(c.bearing_radius, law.joint.r_bore, rel_tol=1e-9)
+                    and math.isclose(c.journal_radius, law.joint.r_pin, rel_tol=1e-9)):
+                raise InputError(
+                    f"{source}: clearance_joints.bearing_radius, journal_radius: "
+                    f"{c.normal_law!r} is built on the FE curve of its own section (radii "
+                    f"{law.joint.r_bore:g} m and {law.joint.r_pin:g} m); use those radii, or "
+                    "a sliced law calibrated with --per-length calibrated:<law>")
+            per_length = law.section.force(deltas)
+        else:
+            calibrated_joint = law.joint.joint(c.bearing_radius, c.journal_radius)
+            per_length = per_length_force(law.per_length_law, laws_data, deltas,
+                                          calibrated_joint,
+                                          f"{source}: laws file: sliced.{name}.per_length_law")
+        grid_log0 = math.log(deltas[0])
+        grid_step = math.log(deltas[1] / deltas[0])
+        bulk = law.bulk_compliance_m2_per_N
+        local = split_compliance(grid_log0, grid_step, np.log(per_length), bulk)
+        return np.array([sliced(d, 0.0, c.length, 1, *local, 0.0, 0.0, law.end_length_m,
+                                law.scale, bulk)[0] for d in deltas])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the range is enforced by the table (NaN beyond it)
         return elastic.PUBLISHED[c.normal_law](deltas, joint) * c.length
