@@ -162,3 +162,41 @@ def test_untilted_curves_of_one_length_are_refused():
                    curve.moment[:4], curve.joint, curve.length, False, None, "steel")
     with pytest.raises(InputError, match="cannot separate the stiffness factor, the end length"):
         sliced.calibrate([push], LIU)
+
+
+def test_a_law_on_its_sections_fe_curve_holds_for_that_section_only(tmp_path):
+    """A sliced law whose per-length law is the FE curve of its section (here: Liu's law at
+    a few points standing in for it) applies to a joint of that section's radii; the planar
+    model takes it at those radii (the long pin: a = 1, e = 0 would be f L) and refuses
+    other radii in one line naming the keys (a 30 um clearance curve says nothing of a
+    0.5 mm one)."""
+    from pinbore.calibration import lawsfile
+    from pinbore.calibration.run import evaluate, laws_json
+    from pinbore.core.errors import InputError
+    from pinbore.reduced.model import build
+    from pinbore.reduced.scene import ReducedScene
+    import test_calibration
+
+    points = np.geomspace(1e-6, 6e-5, 12)
+    section = lawsfile.Section(curve="section", approach_m=list(points),
+                               force_N_per_m=list(liu(points, JOINT)))
+    per_length = sliced.PerLength("section", lambda d, c: section.force(d), lambda c: section)
+    laws = sliced.calibrate([synthetic("short", 0.01, 0.9, 1.5e-3, 0.4),
+                             synthetic("long", 0.02, 0.9, 1.5e-3, 0.4)], per_length)
+    law = laws["flush_steel"]
+    # Liu's law log-log between 12 points (ratio 1.45) differs from Liu's by its curvature,
+    # a few 1e-3 at most: the fit finds the made-up a = 0.9 to that
+    assert law.section == section and law.scale == pytest.approx(0.9, rel=1e-2)
+    flat = [test_calibration.synthetic("liu", 1.0, 0.0)]
+    data = laws_json(flat, evaluate(flat), None, [], 0.0).model_copy(update={"sliced": laws})
+    lawsfile.write(tmp_path / "laws.json", data)
+    scene = test_calibration.calibrated_scene(tmp_path / "laws.json")
+    joint = scene["clearance_joints"][0]
+    joint |= {"normal_law": "sliced:flush_steel", "bearing_radius": JOINT.r_bore,
+              "journal_radius": JOINT.r_pin}
+    model = build(ReducedScene.model_validate(scene), "test", tmp_path)
+    assert np.isfinite(model.tables[0]).sum() > 100
+    joint["journal_radius"] = JOINT.r_pin - 1e-5
+    with pytest.raises(InputError, match="clearance_joints.bearing_radius, journal_radius: "
+                                         "'sliced:flush_steel' is built on the FE curve"):
+        build(ReducedScene.model_validate(scene), "test", tmp_path)
