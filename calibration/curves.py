@@ -25,6 +25,7 @@ class Curve:
     joint: Joint
     housing_ratio: float
     similar_materials: bool
+    section: tuple | None = None   # the plane section: radii, housing and hub radii, materials
 
 
 @dataclass(frozen=True)
@@ -45,6 +46,7 @@ class Curve3D:
     runs_on: bool
     relief: tuple[float, float] | None
     materials: str
+    section: tuple | None = None   # the plane section: radii, housing and hub radii, materials
 
 
 def read(path, length: float | None) -> Curve | Curve3D:
@@ -78,7 +80,7 @@ def read_curve_3d(path, length: float | None, min_points: int = 3, fe=None) -> C
     relief = None if g.relief is None else (g.relief.length, g.relief.depth)
     materials = f"E{m.pin.E:.3g}_nu{m.pin.nu:g}_in_E{m.bore.E:.3g}_nu{m.bore.nu:g}"
     return Curve3D(path.parent.name, path, fe.approach, np.radians(fe.tilt), fe.force, fe.tilt_moment,
-                   joint, g.length, g.pin_overhang > 0, relief, materials)
+                   joint, g.length, g.pin_overhang > 0, relief, materials, section_of(scene))
 
 
 def read_curve(path, length: float | None, min_points: int = 3, fe=None) -> Curve:
@@ -107,7 +109,16 @@ def read_curve(path, length: float | None, min_points: int = 3, fe=None) -> Curv
     g = scene.geometry
     joint = replace(scene.joint, length=length if length is not None else 2 * g.bore_radius)
     return Curve(path.parent.name, push.approach, push.force, push.half_angle, joint,
-                 g.housing_radius / g.bore_radius, scene.materials.pin == scene.materials.bore)
+                 g.housing_radius / g.bore_radius, scene.materials.pin == scene.materials.bore,
+                 section_of(scene))
+
+
+def section_of(scene: FemScene) -> tuple:
+    """What makes two runs' plane sections the same: radii of bore, pin, housing and hub
+    (m), and both materials (E, nu)."""
+    g, m = scene.geometry, scene.materials
+    return (g.bore_radius, g.pin_radius, g.housing_radius, g.hub_radius, m.pin.E, m.pin.nu,
+            m.bore.E, m.bore.nu)
 
 
 def _scene(path: Path) -> FemScene:

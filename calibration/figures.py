@@ -11,6 +11,7 @@ from pinbore.calibration import sliced
 from pinbore.calibration.lawsfile import law_force
 from pinbore.fem.curve import read_pressure
 from pinbore.laws import sliced as sliced_law
+from pinbore.laws import tables
 
 COLOURS = dict(zip(["hertz", "johnson", "liu", "bai_zhao", "pereira", "radzimovsky",
                     "dubowsky_freudenstein", "esdu_78035", "linear"], plt.cm.tab10.colors))
@@ -116,19 +117,21 @@ def fe_line_load(pressure_csv: Path, step: int, radius: float):
 
 def line_load_panel(ax, c, law, force) -> None:
     """The FE line load along the pin at the largest tilt beside the sliced law's per-length
-    forces (scale x f_i; the end lengths add at the two end slices)."""
+    forces (a f_loc(delta_i); the end lengths add at the two end slices)."""
     last = int(np.argmax(np.abs(c.tilt)))
     if not (c.path.parent / "pressure.csv").exists():
         ax.text(0.5, 0.5, "no pressure.csv beside the curve", ha="center", transform=ax.transAxes)
         return
     z, load = fe_line_load(c.path.parent / "pressure.csv", last + 1, c.joint.r_pin)
-    table = sliced.per_length_table(force, c)
+    bulk = law.bulk_compliance_m2_per_N
+    local = tables.split_compliance(*sliced.per_length_table(force, c), bulk)
     relief = c.relief or (0.0, 0.0)
     zs, _, f = sliced_law.sliced_profile(c.approach[last], c.tilt[last], c.length,
-                                         sliced.FIT_SLICES, *table, *relief)
+                                         sliced.FIT_SLICES, *local, *relief, law.end_length_m,
+                                         law.scale, bulk)
     inside = (z >= 0) & (z <= c.length)
     ax.plot(z[inside] * 1e3, load[inside] / 1e6, "ko", ms=3, label="FE")
-    ax.plot(zs * 1e3, law.scale * f / 1e6, "C0-", label="sliced law (interior)")
+    ax.plot(zs * 1e3, f / 1e6, "C0-", label="sliced law (interior)")
     ax.set_xlabel("z (mm)")
     ax.set_ylabel("line load (MN/m)")
     ax.set_title(f"at tilt {np.degrees(c.tilt[last]):.3g} deg", fontsize=8)

@@ -18,6 +18,7 @@ run pinbore calibrate again)`. The file holds no version number: the model is th
 """
 
 import json
+import math
 from pathlib import Path
 from typing import Annotated, Literal
 
@@ -99,8 +100,10 @@ class CurveEntry(Record):
     persson_half_angle_error_deg: float | None   # None: dissimilar materials
 
 
-SLICED_MODEL = ("F = scale * (sum_i f(delta_i) L/n + end_length (f_0 + f_n-1)), M likewise with "
-                "the arms z_i - L/2; delta_i = delta + theta (z_i - L/2) - relief(z_i)")
+SLICED_MODEL = ("F = scale * (sum_i f_loc(delta_i) L/n + end_length (f_0 + f_n-1)), M likewise "
+                "with the arms z_i - L/2; delta_i = delta - bulk_compliance F / L + theta (z_i - "
+                "L/2) - relief(z_i); f_loc: the per-length law f with the bulk compliance taken "
+                "out, f(u + bulk_compliance f_loc(u)) = f_loc(u)")
 
 
 class Errors3D(Record):
@@ -139,18 +142,46 @@ class JointRecord(Record):
                              self.length)
 
 
+SECTION_REACH = 2.0   # the section law holds up to this multiple of the FE's last approach
+
+
+class Section(Record):
+    """The per-length law `section`: the 2D FE curve of the 3D curves' own plane section
+    (radii, housing, hub, materials), its push steps (m, N/m)."""
+
+    curve: str
+    approach_m: list[float]
+    force_N_per_m: list[float]
+
+    def force(self, d) -> np.ndarray:
+        """P(d) (N/m): log-log interpolation between the FE points, the power law of the
+        first two points below them (P -> 0 with d) and of the last two above them up to
+        twice the last approach (the split of the bulk compliance, laws/sliced.py, reaches
+        local approaches above the FE's: u = d - c_b P(d)), NaN beyond (no further
+        extrapolation of the FE)."""
+        x, lx, lf = np.log(np.asarray(d, float)), np.log(self.approach_m), np.log(self.force_N_per_m)
+        below = lf[0] + (lf[1] - lf[0]) / (lx[1] - lx[0]) * (x - lx[0])
+        above = lf[-1] + (lf[-1] - lf[-2]) / (lx[-1] - lx[-2]) * (x - lx[-1])
+        y = np.where(x < lx[0], below, np.where(x > lx[-1], above, np.interp(x, lx, lf)))
+        return np.where(x > lx[-1] + math.log(SECTION_REACH), np.nan, np.exp(y))
+
+
 class SlicedLaw(Record):
     """The sliced law of a finite pin (pinbore.laws.sliced) calibrated on 3D FE curves of one
     kind of ends and one materials pair (calibration/sliced.py): the per-length law, the
-    stiffness factor and the end length with 95 % intervals, the slices that give F within
-    1 % at the largest tilt of the curves, the ranges covered."""
+    stiffness factor, the end length and the bulk compliance (m^2/N) with 95 % intervals,
+    the slices that give F within 1 % at the largest tilt of the curves, the ranges
+    covered."""
 
     model: Literal[SLICED_MODEL]
-    per_length_law: str            # a published law, or calibrated:<law> of this file
+    per_length_law: str            # a published law, calibrated:<law> of this file, or section
+    section: Section | None        # the 2D FE curve of per_length_law = "section"
     scale: float
     scale_ci95: Range
     end_length_m: float
     end_length_ci95: Range
+    bulk_compliance_m2_per_N: float
+    bulk_compliance_ci95: Range
     ends: Literal["flush", "running on"]
     materials: str
     slices_for_1_percent: int

@@ -1,6 +1,7 @@
 """The report's calibration section: which contact law to use where."""
 
 import csv
+import math
 from pathlib import Path
 
 import numpy as np
@@ -95,18 +96,27 @@ def sliced_section(data: lawsfile.LawsFile, folder: Path) -> str:
     rows = [[key, law.ends, law.per_length_law,
              f"{law.scale:.3g} [{law.scale_ci95[0]:.3g}, {law.scale_ci95[1]:.3g}]",
              f"{law.end_length_m * 1e3:.3g} [{law.end_length_ci95[0] * 1e3:.3g}, "
-             f"{law.end_length_ci95[1] * 1e3:.3g}]", str(law.slices_for_1_percent),
+             f"{law.end_length_ci95[1] * 1e3:.3g}]",
+             f"{law.bulk_compliance_m2_per_N:.3g} [{law.bulk_compliance_ci95[0]:.3g}, "
+             f"{law.bulk_compliance_ci95[1]:.3g}]",
+             f"{math.pi * law.joint.E_bore * law.bulk_compliance_m2_per_N:.3g}",
+             str(law.slices_for_1_percent),
              _pct(max(e.force_max_rel for e in law.errors.values())),
              _pct(max((e.moment_max_rel for e in law.errors.values()
                        if e.moment_max_rel is not None), default=None)),
              ", ".join(law.fitted_to)] for key, law in data.sliced.items()]
     parts = ["<h3>3D: the sliced law of a finite pin (force and tilting moment)</h3>",
              f"<p>The bore length is cut into slices, each carrying the per-length law "
-             f"<code>{first.per_length_law}</code> at its own approach &delta; + &theta; "
-             "(z - L/2); a stiffness factor and an end length per end are fitted on the 3D FE "
-             "curves (push, then tilt as a load), one law per kind of ends and materials pair "
-             "(<code>laws.json</code>: <code>sliced</code>).</p>",
+             f"<code>{first.per_length_law}</code> at its own approach &delta; - c<sub>b</sub> "
+             "F/L + &theta; (z - L/2), less the bulk compliance c<sub>b</sub> that the housing "
+             "shares over the whole length (it moves the bore as a whole under the resultant F, "
+             "so the tilt acts on the contact's own compliance). A stiffness factor, an end "
+             "length per end and c<sub>b</sub> are fitted on the 3D FE curves (push, then tilt "
+             "as a load), one law per kind of ends and materials pair (<code>laws.json</code>: "
+             "<code>sliced</code>); &pi; E<sub>bore</sub> c<sub>b</sub> is the bulk compliance "
+             "in units of the housing's.</p>",
              table(["group", "ends", "per-length law", "scale [95 %]", "end length (mm) [95 %]",
+                    "bulk compliance c_b (m^2/N) [95 %]", "pi E_bore c_b",
                     "slices for 1 % in F", "max error F", "max error M (tilted)", "curves"], rows)]
     if (folder / "sliced.png").exists():
         parts.append(figure(png_data(folder / "sliced.png"),

@@ -3,36 +3,53 @@
 A pin sits in a bore of length L (m, the lug's thickness) spanning 0 <= z <= L. The hub
 approaches by delta (m) along the load and tilts by theta (rad, small) about the axis normal
 to the load and to the pin's axis, through the bore's mid-plane centre z_mid = L/2; positive
-theta turns the pin's end z = L towards the load. The local approach is
+theta turns the pin's end z = L towards the load.
 
-    delta(z) = delta + theta (z - z_mid) - r(z)   (m),
+The bore is cut into n equal slices, midpoints z_i = (i + 1/2) L/n, each a plane section
+carrying a per-length law of its own approach: the elastic-foundation idealisation
+[Johnson1985], here applied along the axis with a plane-strain law per slice (e.g. the
+improved elastic-foundation law of [Liu2007] or Johnson's line contact,
+pinbore.laws.elastic). The slicing along the axis, and the split of the section law below,
+are this module's own construction (no source for them is cited).
 
-r(z) the bore's edge relief (pinbore.laws.relief; none when its length or depth is 0). The
-bore is cut into n equal slices, midpoints z_i = (i + 1/2) L/n, and each slice is a plane
-section carrying a per-length law f(delta_i) (N/m; 0 for delta_i <= 0) of its own approach,
-independently of its neighbours: the elastic-foundation idealisation [Johnson1985], here
-applied along the axis with a plane-strain law per slice (e.g. the improved elastic-foundation
-law of [Liu2007] or Johnson's line contact, pinbore.laws.elastic). The slicing along the axis
-is this module's own construction (no source for it is cited); the coupling of neighbouring
-slices through the bodies, which it leaves out, shows at the ends, where a fitted end length
-stands in for it. The sums are the midpoint rule of the integrals of f(delta(z)) and of
-f(delta(z)) (z - z_mid) over [0, L], with weights w_i:
+Shared bulk compliance. A plane-section law f(delta) (N/m) holds two compliances in series:
+the contact region's and the far field's, the housing around the bore carrying the load out
+to its support. In a finite pin the far field is a plate of thickness L that sees only the
+resultant F of the slices (Saint-Venant): it moves the bore as a whole, uniformly along z.
+So the section law is split, for a bulk compliance c_b (m^2/N) per unit length,
 
-    F   = sum_i f(delta_i) w_i                 (N, the force the hub needs, along the load)
-    M   = sum_i f(delta_i) (z_i - z_mid) w_i   (N m, about the across axis)
-    w_i = L/n + e [i = 0] + e [i = n - 1]      (m),
+    delta = u + c_b f_loc(u)      (f(delta) = f_loc(u): the local law f_loc of the slices),
 
-e = `end_length` (m, may be negative): each end adds e metres of the per-length law at its
-end slice's approach, moment arm that of the end slice (with n = 1 the one slice gets both).
+pinbore.laws.tables.split_compliance, and the slices see the hub's approach less the bore's
+uniform displacement c_b F / L:
+
+    delta_i = delta - c_b F / L + theta (z_i - z_mid) - r(z_i)   (m),
+    F   = a sum_i f_loc(delta_i) w_i                 (N, the force the hub needs, along the load)
+    M   = a sum_i f_loc(delta_i) (z_i - z_mid) w_i   (N m, about the across axis)
+    w_i = L/n + e [i = 0] + e [i = n - 1]            (m),
+
+r(z) the bore's edge relief (pinbore.laws.relief; none when its length or depth is 0), a a
+stiffness factor and e = `end_length` (m, may be negative): each end adds e metres of the law
+at its end slice's approach, moment arm that of the end slice (with n = 1 the one slice gets
+both). F is implicit in delta_i: the shared approach x = delta - c_b F(x) / L is the root of
+x + c_b F(x) / L - delta, increasing in x, found by Newton's method kept inside its bracket
+[delta - c_b F(delta) / L, delta]. With c_b = 0 the slices are independent. A straight pin
+(theta = 0, no relief) with a = 1, e = 0 carries f(delta) L for any c_b: the split leaves the
+plane-section law whole where the load is uniform, so the long-pin limit is the 2D law. Under
+tilt the far field takes the resultant's part of the approach only; the tilt goes into the
+local compression, so a tilted pin carries more moment, nearer its loaded end, than
+independent slices of the whole section law give (what the 3D FE shows: calibration/sliced.py).
+
 F and M are the generalised forces conjugate to delta and theta (the virtual work of the
-slices is sum_i f_i w_i d(delta_i) = F d(delta) + M d(theta)), so M > 0 for theta > 0 without
-relief. The resultant acts at z_F = z_mid + M/F (NaN when F = 0); the contact length is the
-sum of the widths L/n of the slices with delta_i > 0.
+slices is sum_i f_i w_i d(delta_i) = F d(delta) + M d(theta) plus the far field's, whose
+uniform displacement does no work against a moment), so M > 0 for theta > 0 without relief.
+The resultant acts at z_F = z_mid + M/F (NaN when F = 0); the contact length is the sum of
+the widths L/n of the slices with delta_i > 0.
 
-The per-length law enters as a table of ln f on a uniform grid of ln delta
-(pinbore.laws.tables: exact for a power law, NaN beyond the table, so a slice beyond the
-law's range makes F, M and z_F NaN rather than a silent number). The functions are compiled
-(numba) so the multibody kernel can call them in its right-hand side.
+The local law enters as a table of ln f_loc on a uniform grid of ln u (pinbore.laws.tables:
+exact for a power law, NaN beyond the table, so a slice beyond the law's range makes F, M
+and z_F NaN rather than a silent number). The functions are compiled (numba) so the
+multibody kernel can call them in its right-hand side.
 """
 
 import math
@@ -54,65 +71,129 @@ def slice_geometry(i, length, slices, end_length):
 
 
 @numba.njit(cache=True)
-def slice_state(i, delta, theta, length, slices, grid_log0, grid_step, table, relief_length,
+def slice_state(i, shared, theta, length, slices, grid_log0, grid_step, table, relief_length,
                 relief_depth):
-    """Slice i of `slices`: its offset z_i - z_mid (m), approach delta_i (m) and per-length
-    force f_i (N/m; 0 when delta_i <= 0) (the module docstring has the formulas)."""
+    """Slice i of `slices` at the shared approach `shared` (m, the hub's approach less the
+    bore's uniform displacement): its offset z_i - z_mid (m), approach delta_i (m), local
+    per-length force f_i (N/m; 0 when delta_i <= 0) and df_i/d delta_i (N/m^2)."""
     offset = slice_geometry(i, length, slices, 0.0)[0]
-    approach = delta + theta * offset
+    approach = shared + theta * offset
     if relief_length > 0.0 and relief_depth > 0.0:
         approach -= relief.relief_at(0.5 * length + offset, 0.0, length, relief_length,
                                      relief_depth)[0]
-    force = tables.table_force(approach, grid_log0, grid_step, table) if approach > 0.0 else 0.0
-    return offset, approach, force
+    if approach <= 0.0:
+        return offset, approach, 0.0, 0.0
+    force, slope = tables.table_force_slope(approach, grid_log0, grid_step, table)
+    return offset, approach, force, slope
+
+
+@numba.njit(cache=True)
+def slice_sums(shared, theta, length, slices, grid_log0, grid_step, table, relief_length,
+               relief_depth, end_length, scale):
+    """(F (N), M (N m), dF/d shared (N/m), contact length (m)) of the slices at the shared
+    approach `shared` (module docstring: F = a sum_i f_i w_i, M = a sum_i f_i z'_i w_i)."""
+    force = moment = stiffness = contact = 0.0
+    for i in range(slices):
+        offset, approach, f, slope = slice_state(i, shared, theta, length, slices, grid_log0,
+                                                 grid_step, table, relief_length, relief_depth)
+        if approach <= 0.0:
+            continue
+        _, width, weight = slice_geometry(i, length, slices, end_length)
+        weight *= scale
+        force += f * weight
+        moment += f * offset * weight
+        stiffness += slope * weight
+        contact += width
+    return force, moment, stiffness, contact
+
+
+@numba.njit(cache=True)
+def shared_approach(delta, theta, length, slices, grid_log0, grid_step, table, relief_length,
+                    relief_depth, end_length, scale, compliance):
+    """The root x of x + compliance F(x) / L - delta (module docstring): the approach the
+    slices share once the bore has moved by its bulk compliance (m^2/N) times F / L. Newton's
+    method inside the bracket [delta - compliance F(delta) / L, delta] (bisection where a
+    Newton step leaves it), to 1e-12 of the bracket's scale; NaN when F is NaN."""
+    if compliance == 0.0:
+        return delta
+    c = compliance / length
+    high = delta
+    f_high = slice_sums(high, theta, length, slices, grid_log0, grid_step, table,
+                        relief_length, relief_depth, end_length, scale)[0]
+    if not math.isfinite(f_high):
+        return math.nan
+    if f_high == 0.0:
+        return delta
+    low = delta - c * f_high
+    tolerance = 1e-12 * (abs(delta) + c * f_high)
+    x = low
+    for _ in range(200):
+        force, _, stiffness, _ = slice_sums(x, theta, length, slices, grid_log0, grid_step,
+                                            table, relief_length, relief_depth, end_length,
+                                            scale)
+        if not math.isfinite(force):
+            return math.nan
+        g = x + c * force - delta
+        if g > 0.0:
+            high = x
+        else:
+            low = x
+        step = g / (1.0 + c * stiffness)
+        x_new = x - step
+        if not low < x_new < high:
+            x_new = 0.5 * (low + high)
+        if abs(x_new - x) <= tolerance or high - low <= tolerance:
+            return x_new
+        x = x_new
+    return x
 
 
 @numba.njit(cache=True)
 def sliced(delta, theta, length, slices, grid_log0, grid_step, table, relief_length, relief_depth,
-           end_length):
+           end_length, scale, compliance):
     """(F (N), M (N m), z_F (m), contact length (m)) of a pin approached by delta (m) and
-    tilted by theta (rad) in a bore of `length` (m) cut into `slices` slices, the per-length
-    law f (N/m) given by its table (grid_log0, grid_step, table = ln f: pinbore.laws.tables),
-    the bore's edge relief over `relief_length` to `relief_depth` (m; 0 for none), and
-    `end_length` (m) of per-length law added at each end:
+    tilted by theta (rad) in a bore of `length` (m) cut into `slices` slices, the local
+    per-length law f_loc (N/m) given by its table (grid_log0, grid_step, table = ln f_loc:
+    pinbore.laws.tables), the bore's edge relief over `relief_length` to `relief_depth` (m;
+    0 for none), `end_length` (m) of law added at each end, the stiffness factor `scale` and
+    the bulk compliance `compliance` (m^2/N; 0: independent slices):
 
-        F = sum_i f(delta_i) w_i,   M = sum_i f(delta_i) (z_i - L/2) w_i,
-        w_i = L/n + end_length at i = 0 and at i = n - 1,   z_F = L/2 + M/F,
+        F = a sum_i f_loc(delta_i) w_i,   M = a sum_i f_loc(delta_i) (z_i - L/2) w_i,
+        delta_i = delta - c_b F / L + theta (z_i - L/2) - r(z_i),
+        w_i = L/n + end_length at i = 0 and at i = n - 1,   z_F = L/2 + M/F
 
-    delta_i = delta + theta (z_i - L/2) - r(z_i) (module docstring; [Johnson1985] for the
-    elastic-foundation idealisation). z_F is NaN when F = 0; F, M, z_F are NaN when a slice
-    is beyond the table."""
-    force = moment = contact = 0.0
-    for i in range(slices):
-        offset, approach, f = slice_state(i, delta, theta, length, slices, grid_log0, grid_step,
-                                          table, relief_length, relief_depth)
-        if approach <= 0.0:
-            continue
-        _, width, weight = slice_geometry(i, length, slices, end_length)
-        force += f * weight
-        moment += f * offset * weight
-        contact += width
+    (module docstring; [Johnson1985] for the elastic-foundation idealisation). z_F is NaN
+    when F = 0; F, M, z_F are NaN when a slice is beyond the table."""
+    shared = shared_approach(delta, theta, length, slices, grid_log0, grid_step, table,
+                             relief_length, relief_depth, end_length, scale, compliance)
+    if not math.isfinite(shared):
+        return math.nan, math.nan, math.nan, math.nan
+    force, moment, _, contact = slice_sums(shared, theta, length, slices, grid_log0, grid_step,
+                                           table, relief_length, relief_depth, end_length, scale)
     resultant = 0.5 * length + moment / force if force != 0.0 else math.nan
     return force, moment, resultant, contact
 
 
 @numba.njit(cache=True)
 def sliced_profile(delta, theta, length, slices, grid_log0, grid_step, table, relief_length,
-                   relief_depth):
-    """The slices of `sliced` (same arguments but the end length): arrays of their midpoints
-    z_i (m), approaches delta_i (m) and per-length forces f_i (N/m), the pressure along the
-    pin as the law sees it."""
+                   relief_depth, end_length, scale, compliance):
+    """The slices of `sliced` (same arguments): arrays of their midpoints z_i (m),
+    approaches delta_i (m) and per-length forces a f_loc(delta_i) (N/m), the line load along
+    the pin as the law sees it (the end lengths' share not included)."""
+    shared = shared_approach(delta, theta, length, slices, grid_log0, grid_step, table,
+                             relief_length, relief_depth, end_length, scale, compliance)
     z, approach, force = np.empty(slices), np.empty(slices), np.empty(slices)
     for i in range(slices):
-        offset, approach[i], force[i] = slice_state(i, delta, theta, length, slices, grid_log0,
-                                                    grid_step, table, relief_length, relief_depth)
+        offset, approach[i], f, _ = slice_state(i, shared, theta, length, slices, grid_log0,
+                                                grid_step, table, relief_length, relief_depth)
+        force[i] = scale * f
         z[i] = 0.5 * length + offset
     return z, approach, force
 
 
 def slices_for_force(delta, theta, length, grid_log0, grid_step, table, relief_length=0.0,
-                     relief_depth=0.0, end_length=0.0, tolerance=0.01, start=4, most=1 << 16,
-                     resolved=8):
+                     relief_depth=0.0, end_length=0.0, scale=1.0, compliance=0.0, tolerance=0.01,
+                     start=4, most=1 << 16, resolved=8):
     """The number of slices n (start 2^k) that gives F within `tolerance` (relative) of its
     limit n -> infinity: doubling n from `start` until F changes by less than tolerance / 2.
 
@@ -129,7 +210,7 @@ def slices_for_force(delta, theta, length, grid_log0, grid_step, table, relief_l
     """
     def run(n):
         return sliced(delta, theta, length, n, grid_log0, grid_step, table, relief_length,
-                      relief_depth, end_length)
+                      relief_depth, end_length, scale, compliance)
 
     n = start
     coarse = run(n)

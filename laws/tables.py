@@ -17,15 +17,23 @@ import numpy as np
 
 
 @numba.njit(cache=True)
-def table_force(delta, grid_log0, grid_step, table):
-    """f(delta) (units of the tabulated law) for delta > 0 from `table` = ln f on the grid
-    ln delta_j = grid_log0 + j grid_step: log-log interpolation, the power law of the first
-    segment below the grid, NaN above it or where the table is NaN."""
+def table_force_slope(delta, grid_log0, grid_step, table):
+    """(f, df/d delta) at delta > 0 from `table` = ln f on the grid ln delta_j = grid_log0 +
+    j grid_step: log-log interpolation, the power law of the first segment below the grid,
+    NaN above it or where the table is NaN. On a segment f = f_i (delta/delta_i)^s with
+    s = (table_i+1 - table_i) / grid_step, so df/d delta = s f / delta."""
     x = (math.log(delta) - grid_log0) / grid_step
     if x > table.size - 1 or not math.isfinite(table[min(max(int(x) + 1, 0), table.size - 1)]):
-        return math.nan
+        return math.nan, math.nan
     i = min(max(int(math.floor(x)), 0), table.size - 2)
-    return math.exp(table[i] + (x - i) * (table[i + 1] - table[i]))
+    f = math.exp(table[i] + (x - i) * (table[i + 1] - table[i]))
+    return f, (table[i + 1] - table[i]) / grid_step * f / delta
+
+
+@numba.njit(cache=True)
+def table_force(delta, grid_log0, grid_step, table):
+    """f(delta) (units of the tabulated law) for delta > 0 (table_force_slope)."""
+    return table_force_slope(delta, grid_log0, grid_step, table)[0]
 
 
 def log_grid(d_low: float, d_high: float, points: int):
@@ -42,3 +50,35 @@ def tabulate(law, d_low: float, d_high: float, points: int):
     `table_force` over [d_low, d_high]."""
     grid_log0, grid_step, deltas = log_grid(d_low, d_high, points)
     return grid_log0, grid_step, np.log(np.asarray(law(deltas), float))
+
+
+def split_compliance(grid_log0, grid_step, table, compliance: float):
+    """The table of the law that remains when a linear compliance is taken out of a tabulated
+    law: given f(delta) (the table), the law f(u) with
+
+        delta = u + compliance f     (compliance in m per unit of f, e.g. m^2/N for N/m),
+
+    on a uniform grid of ln u over the same number of points. u(delta) grows as long as
+    compliance f'(delta) < 1; where it stops growing (a stiffening law is stiffer there than
+    the compliance taken out of it) or the table turns NaN (the law's range ends), the new
+    table ends: its lookup gives NaN beyond. Raises ValueError when not even the first two
+    points remain."""
+    finite = int(np.argmin(np.isfinite(table))) if not np.all(np.isfinite(table)) else table.size
+    deltas = np.exp(grid_log0 + grid_step * np.arange(finite))
+    f = np.exp(table[:finite])
+    u = deltas - compliance * f
+    rising = np.flatnonzero(np.diff(u) <= 0)
+    end = int(rising[0]) + 1 if rising.size else u.size
+    if end < 2 or u[0] <= 0:
+        raise ValueError(f"a compliance of {compliance:.4g} is more than the law's own "
+                         "(delta - compliance f(delta) must grow with delta)")
+    new_log0, new_step, grid = log_grid(u[0], u[end - 1], table.size)
+    return new_log0, new_step, np.interp(np.log(grid), np.log(u[:end]), table[:end])
+
+
+def largest_compliance(grid_log0, grid_step, table, up_to: float = math.inf) -> float:
+    """The compliance split_compliance can take out of a tabulated law up to the approach
+    `up_to` (m): 1 / max f'(delta) there (the secant slopes between the table's points)."""
+    deltas = np.exp(grid_log0 + grid_step * np.arange(table.size))
+    slopes = np.diff(np.exp(table)) / np.diff(deltas)
+    return float(1.0 / np.nanmax(slopes[deltas[:-1] <= up_to]))

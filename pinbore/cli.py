@@ -166,8 +166,10 @@ def parser() -> argparse.ArgumentParser:
     c.add_argument("--length", type=positive_length, default=None,
                    help="axial length (m) for the laws that need one; default: the bore diameter")
     c.add_argument("--per-length", default=None, metavar="LAW",
-                   help="per-length law of the sliced 3D law: a published law or "
-                        "calibrated:<law>; default: the 2D-fitted law of least RMS error")
+                   help="per-length law of the sliced 3D law: section (the 2D FE curve of the "
+                        "3D curves' own plane section), a published law or calibrated:<law>; "
+                        "default: section when every 3D curve's section is among the 2D "
+                        "curves, else the 2D-fitted law of least RMS error")
     c.set_defaults(func=_calibrate)
     _scene_command(sub, "reduced", _reduced,
                    "integrate a mechanism with clearance joints: timeseries.csv, summary.json",

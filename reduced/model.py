@@ -11,7 +11,8 @@ import numpy as np
 from pinbore.calibration import lawsfile
 from pinbore.core.errors import InputError
 from pinbore.laws import dissipative, elastic
-from pinbore.laws.tables import log_grid
+from pinbore.laws.sliced import sliced
+from pinbore.laws.tables import log_grid, split_compliance
 from pinbore.reduced import kernel
 from pinbore.reduced.layout import (
     CONTINUOUS, COULOMB, COULOMB_MU, DAHL, DAHL_MU, DAHL_SIGMA, DRIVE_ANGLE, DRIVE_BODY, DRIVE_COLUMNS,
@@ -263,20 +264,28 @@ def normal_force(c, deltas, laws_data, source) -> np.ndarray:
         return per_length_force(c.normal_law, laws_data, deltas, joint,
                                 f"{source}: clearance_joints.normal_law") * c.length
     if c.normal_law.startswith("sliced:"):
-        # a straight pin (no tilt in the planar model): every slice at the approach d, so the
-        # sliced sum is scale (L + 2 end_length) f(d) (laws.sliced, theta = 0, no relief)
-        scale, end_length, per_length = sliced_parts(c, deltas, laws_data, source)
-        return scale * (c.length + 2 * end_length) * per_length
+        # a straight pin (no tilt in the planar model): every slice at the same approach, so
+        # one slice of width L + 2 end_length gives the sliced sum (laws.sliced, theta = 0,
+        # no relief): F = scale (L + 2 e) f_loc(d - c_b F / L), tabulated on the grid of
+        # `deltas`
+        law, per_length = sliced_parts(c, deltas, laws_data, source)
+        grid_log0 = math.log(deltas[0])
+        grid_step = math.log(deltas[1] / deltas[0])
+        bulk = law.bulk_compliance_m2_per_N
+        local = split_compliance(grid_log0, grid_step, np.log(per_length), bulk)
+        return np.array([sliced(d, 0.0, c.length, 1, *local, 0.0, 0.0, law.end_length_m,
+                                law.scale, bulk)[0] for d in deltas])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the range is enforced by the table (NaN beyond it)
         return elastic.PUBLISHED[c.normal_law](deltas, joint) * c.length
 
 
 def sliced_parts(c, deltas, laws_data, source):
-    """(stiffness factor a, end length e (m), per-length law f (N/m) at deltas) of a clearance
-    joint's `sliced:<group>` law; one InputError line for an unknown group or a joint too
-    short for the end lengths. The per-length law takes the materials and law length it was
-    calibrated with (the scene's radii: the clearance is the joint's own)."""
+    """(the law, its per-length law f (N/m) at deltas) of a clearance joint's
+    `sliced:<group>` law; one InputError line for an unknown group, a joint too short for
+    the end lengths, or radii other than those of a law on its section's FE curve. The
+    per-length law takes the materials and law length it was calibrated with (the scene's
+    radii: the clearance is the joint's own)."""
     name = c.normal_law.split(":", 1)[1]
     if name not in laws_data.sliced:
         raise InputError(f"{source}: clearance_joints.normal_law: {c.normal_law!r} is not a "
@@ -287,10 +296,19 @@ def sliced_parts(c, deltas, laws_data, source):
         raise InputError(f"{source}: clearance_joints.length: {c.length:g} m is too short for "
                          f"{c.normal_law!r}, whose end lengths ({law.end_length_m:.3g} m each) "
                          "leave no length to carry the load")
-    calibrated_joint = law.joint.joint(c.bearing_radius, c.journal_radius)
-    per_length = per_length_force(law.per_length_law, laws_data, deltas, calibrated_joint,
-                                  f"{source}: laws file: sliced.{name}.per_length_law")
-    return law.scale, law.end_length_m, per_length
+    if law.section is None:
+        calibrated_joint = law.joint.joint(c.bearing_radius, c.journal_radius)
+        return law, per_length_force(law.per_length_law, laws_data, deltas, calibrated_joint,
+                                     f"{source}: laws file: sliced.{name}.per_length_law")
+    # the 2D FE curve of the calibrated section: valid for its own radii only
+    if not (math.isclose(c.bearing_radius, law.joint.r_bore, rel_tol=1e-9)
+            and math.isclose(c.journal_radius, law.joint.r_pin, rel_tol=1e-9)):
+        raise InputError(
+            f"{source}: clearance_joints.bearing_radius, journal_radius: {c.normal_law!r} is "
+            f"built on the FE curve of its own section (radii {law.joint.r_bore:g} m and "
+            f"{law.joint.r_pin:g} m); use those radii, or a sliced law calibrated with "
+            "--per-length calibrated:<law>")
+    return law, law.section.force(deltas)
 
 
 def per_length_force(name, laws_data, deltas, joint, where) -> np.ndarray:

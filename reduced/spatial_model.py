@@ -134,7 +134,16 @@ def per_length_table(c, deltas, laws_data, source):
     if c.normal_law == "hertz_point":   # the point law spread evenly over the length
         return 1.0, 0.0, elastic.hertz_point(deltas, joint) / c.length
     if c.normal_law.startswith("sliced:"):
-        return sliced_parts(c, deltas, laws_data, source)
+        law, per_length = sliced_parts(c, deltas, laws_data, source)
+        if law.bulk_compliance_m2_per_N > 0:
+            # the shared bulk compliance moves the bore axis by c_b F / L along the slices'
+            # resultant: an implicit 2D displacement per evaluation the spatial kernel does
+            # not solve yet; without it the law would not be the calibrated one
+            raise InputError(f"{source}: clearance_joints.normal_law: {c.normal_law!r} has a "
+                             "bulk compliance (laws.json: bulk_compliance_m2_per_N > 0), which "
+                             "the spatial model does not take yet; use a per-length law "
+                             "(published or calibrated:<law>) cut into slices")
+        return law.scale, law.end_length_m, per_length
     return 1.0, 0.0, per_length_force(c.normal_law, laws_data, deltas, joint,
                                       f"{source}: clearance_joints.normal_law")
 

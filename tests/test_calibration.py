@@ -183,3 +183,19 @@ def test_a_laws_file_of_another_version_is_one_line_exit_2(write_scene, tmp_path
     assert len(line.splitlines()) == 1 and f"laws_file: {path}: {message}" in line
     assert line.endswith("(written by another version of pinbore? run pinbore calibrate again)")
     assert not (tmp_path / "out").exists()
+
+
+def test_a_3d_curve_without_its_section_is_one_line_for_the_section_law(fe_run, tmp_path):
+    """--per-length section needs the 2D curve of each 3D curve's own plane section: a 3D
+    run of another clearance than the 2D run's is refused in one line, exit 2, nothing
+    written."""
+    from test_calibration_3d import three_d_run
+
+    other = three_d_run(tmp_path / "run3d", {"pin_radius": 9.98e-3})
+    done = pinbore("calibrate", fe_run / "curve.csv", other, "--per-length", "section",
+                   "--out", tmp_path / "out")
+    assert done.returncode == 2, done.stderr
+    line = done.stderr.strip()
+    assert len(line.splitlines()) == 1 and "--per-length: section:" in line
+    assert "no 2D curve of its plane section" in line
+    assert not (tmp_path / "out").exists()

@@ -36,8 +36,8 @@ def law_table(name, joint, points=600):
         return tables.tabulate(lambda d: el.PUBLISHED[name](d, joint), 1e-10, 1e-4, points)
 
 
-def run(delta, theta, slices, table, relief=NO_RELIEF, end_length=0.0):
-    return sl.sliced(delta, theta, L, slices, *table, *relief, end_length)
+def run(delta, theta, slices, table, relief=NO_RELIEF, end_length=0.0, scale=1.0, compliance=0.0):
+    return sl.sliced(delta, theta, L, slices, *table, *relief, end_length, scale, compliance)
 
 
 def linear_closed_form(delta, theta):
@@ -230,7 +230,7 @@ def test_edge_relief_lowers_the_end_slices_approach_by_the_arc():
     relief_length, relief_depth = 2e-3, 3e-6
     table = linear_table()
     delta, n = 2e-6, 20
-    z, approach, f = sl.sliced_profile(delta, 0.0, L, n, *table, relief_length, relief_depth)
+    z, approach, f = sl.sliced_profile(delta, 0.0, L, n, *table, relief_length, relief_depth, 0.0, 1.0, 0.0)
     arc = (relief_length**2 + relief_depth**2) / (2 * relief_depth)
     into = np.clip(relief_length - np.minimum(z, L - z), 0.0, None)
     sagitta = into**2 / (arc + np.sqrt(arc**2 - into**2))
@@ -310,3 +310,98 @@ def test_slices_for_one_percent_in_force():
         n = sl.slices_for_force(delta, theta, L, *table)
         closed_f, _ = linear_closed_form(delta, theta)
         assert abs(run(delta, theta, n, table)[0] / closed_f - 1) < 0.01, (fraction, n)
+
+
+# ---- the shared bulk compliance
+
+def test_split_compliance_of_a_linear_law_is_the_series_spring():
+    """f = K delta with a compliance c taken out leaves f_loc = K u / (1 - c K): springs in
+    series, 1/K = 1/K_loc + c (closed form); the table is exact for a power law."""
+    c = 0.4 / K
+    table = tables.split_compliance(*linear_table(), c)
+    for u in (1e-9, 3e-7, 1e-5):
+        assert tables.table_force(u, *table) == pytest.approx(K * u / (1 - c * K), rel=1e-10)
+    assert tables.largest_compliance(*linear_table()) == pytest.approx(1 / K, rel=1e-10)
+    with pytest.raises(ValueError, match="compliance"):
+        tables.split_compliance(*linear_table(), 1.01 / K)
+
+
+def test_split_compliance_ends_where_a_stiffening_law_outgrows_it():
+    """f = K delta^2 / d0: u = delta - c f grows while 2 c K delta / d0 < 1, i.e. up to
+    delta* = d0 / (2 c K); the split table ends there (NaN beyond) and holds below it
+    (closed form: f at delta = u + c f, the root of c K/d0 delta^2 - delta + u = 0)."""
+    d0, c = 1e-6, 0.1 / K
+    table = tables.tabulate(lambda d: K * d**2 / d0, 1e-12, 1e-3, 400)
+    local = tables.split_compliance(*table, c)
+    star = d0 / (2 * c * K)
+    top = star - c * K * star**2 / d0                 # u at delta*
+    assert math.exp(local[0] + local[1] * (local[2].size - 1)) == pytest.approx(top, rel=0.05)
+    assert math.isnan(tables.table_force(1.1 * top, *local))
+    for u in (1e-9, 1e-7, 0.5 * top):
+        q = c * K / d0
+        delta = (1 - math.sqrt(1 - 4 * q * u)) / (2 * q)
+        assert tables.table_force(u, *local) == pytest.approx(K * delta**2 / d0, rel=1e-3)
+    assert tables.largest_compliance(*table, up_to=1e-7) == pytest.approx(d0 / (2 * K * 1e-7), rel=0.05)
+
+
+@pytest.mark.parametrize("name, joint", [("liu", TIGHT), ("johnson", FLORES)])
+@pytest.mark.parametrize("fraction", [0.3, 0.8])
+def test_untilted_pin_with_bulk_compliance_carries_the_section_law(name, joint, fraction):
+    """The long-pin limit: a straight pin (theta = 0, a = 1, e = 0) carries f(delta) L for any
+    bulk compliance, the split law and the shared displacement c_b F / L undoing each other
+    (module docstring). Reference: the section law itself. Tolerance: the split table's
+    interpolation (600 points over six decades; 1e-5 measured scale of the log-log error)."""
+    table = law_table(name, joint)
+    bulk = fraction * tables.largest_compliance(*table)
+    local = tables.split_compliance(*table, bulk)
+    for delta in (2e-7, 3e-6, 2e-5):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            expected = el.PUBLISHED[name](np.array([delta]), joint)[0] * L
+        force, moment, _, _ = run(delta, 0.0, 16, local, compliance=bulk)
+        assert force == pytest.approx(expected, rel=2e-4)
+        assert moment == pytest.approx(0.0, abs=1e-12 * force * L)
+
+
+@pytest.mark.parametrize("slices", [1, 8, 64])
+def test_bulk_compliance_leaves_the_force_and_stiffens_the_tilt(slices):
+    """Linear law f = K delta, bulk compliance c, full contact: the local law is K_loc u,
+    K_loc = K / (1 - c K). The uniform part carries F: F = K_loc L (delta - c F / L) gives
+    F = K delta L (the section law's), while the tilt acts on the local springs alone:
+    M = K_loc theta sum z_i^2 L/n = K_loc theta L^3/12 (1 - 1/n^2) (midpoint sums of z^2),
+    1 / (1 - c K) times the moment of independent slices of the section law. Reference:
+    these closed forms, to the shared approach's tolerance (1e-12) and round-off."""
+    c = 0.5 / K
+    local = tables.split_compliance(*linear_table(), c)
+    delta, theta = 4e-6, 2e-4                       # delta > theta L/2 = 2e-6: full contact
+    force, moment, resultant, _ = run(delta, theta, slices, local, compliance=c)
+    k_loc = K / (1 - c * K)
+    assert force == pytest.approx(K * delta * L, rel=1e-9)
+    assert moment == pytest.approx(k_loc * theta * L**3 / 12 * (1 - 1 / slices**2),
+                                   rel=1e-9, abs=1e-12)
+    plain = run(delta, theta, slices, linear_table())
+    assert moment == pytest.approx(plain[1] / (1 - c * K), rel=1e-9, abs=1e-12)
+
+
+def test_bulk_compliance_in_partial_contact_is_the_closed_form_at_the_shared_approach():
+    """Partial contact, linear law: the slices see x = delta - c F / L; F(x) is the linear
+    closed form (linear_closed_form with K_loc), so x solves x + c F(x) / L = delta, a
+    quadratic in x here, solved independently (numpy roots). F, M at 1024 slices against
+    the closed form at that x: the partial-contact midpoint error (order 2, 1e-5 at 1024)."""
+    c = 0.5 / K
+    k_loc = K / (1 - c * K)
+    local = tables.split_compliance(*linear_table(), c)
+    delta, theta = 1e-6, 4e-4                       # theta L/2 = 4 um: one end lifts off
+    # F(x) = K_loc/(2 theta) (x + h)^2 while |x| < h = theta L/2, so in y = x + h
+    # x + c F(x) / L = delta reads q y^2 + y - (delta + h) = 0, q = c K_loc / (2 theta L)
+    h = theta * L / 2
+    q = c * k_loc / (2 * theta * L)
+    y = max(np.roots([q, 1.0, -(delta + h)]).real)
+    x = y - h
+    assert abs(x) < h
+    a, b = x / theta, y / theta                     # as in linear_closed_form
+    f_exact = k_loc * theta * b**2 / 2
+    m_exact = k_loc * theta * b**2 * (L - a) / 6
+    force, moment, _, _ = run(delta, theta, 1024, local, compliance=c)
+    assert force == pytest.approx(f_exact, rel=1e-5)
+    assert moment == pytest.approx(m_exact, rel=1e-5)

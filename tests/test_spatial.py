@@ -160,7 +160,8 @@ def cylinder(length=0.02, slices=16, end_length=0.0, scale=1.0):
 def test_slice_sum_equals_the_sliced_law(end_length, scale):
     """A journal tilted by theta in the plane of its eccentricity (about y, eccentricity
     along x): the kernel's slice sum of the force and of its moment about the bore's centre
-    equal scale x laws.sliced.sliced(delta, sin theta, ...) to round-off (1e-12): the same
+    equal laws.sliced.sliced(delta, sin theta, ..., scale, no bulk compliance) to round-off
+    (1e-12): the same
     slices, weights and law (module docstring of reduced.spatial_kernel)."""
     grid_log0, grid_step, table = tabulate(lambda d: 3e10 * d**1.1, 1e-12, 1e-3, 400)
     joint = cylinder(end_length=end_length, scale=scale)
@@ -177,12 +178,12 @@ def test_slice_sum_equals_the_sliced_law(end_length, scale):
     f_n, _, _, _ = spatial_kernel.joint_forces(force, work, joint, table, grid_log0, grid_step,
                                                1.0, 1.0)
     expected = sliced.sliced(delta, math.sin(theta), 0.02, 16, grid_log0, grid_step, table, 0.0,
-                             0.0, end_length)
-    assert -force[0] == pytest.approx(scale * expected[0], rel=1e-12)
-    assert f_n == pytest.approx(scale * expected[0], rel=1e-12)
+                             0.0, end_length, scale, 0.0)
+    assert -force[0] == pytest.approx(expected[0], rel=1e-12)
+    assert f_n == pytest.approx(expected[0], rel=1e-12)
     # the moment on the journal about its centre: the slice forces act at X_i = z_i u_j, whose
     # arm across the force is z_i cos theta (the law's z_i measured along the tilted axis)
-    assert -force[4] == pytest.approx(scale * expected[1] * math.cos(theta), rel=1e-12)
+    assert -force[4] == pytest.approx(expected[1] * math.cos(theta), rel=1e-12)
 
 
 @pytest.mark.parametrize("change,key", [
