@@ -75,6 +75,15 @@ def f_of(t, y, dy, args, work):
     evaluate(t, y, dy, args, work)
 
 
+def evaluate_once(workspace, rhs, t, y, args):
+    """(f(t, y) as a new array, the workspace it was evaluated in): one right-hand side call
+    of a kernel (its `workspace` and `rhs`) from Python, for post-processing."""
+    dy = np.empty_like(y)
+    work = workspace(args)
+    rhs(t, y, dy, args, work)
+    return dy, work
+
+
 @numba.njit(cache=True)
 def onset_shortening(depth, depth_new, onset_tol):
     """Event location for a contact out of contact at the step's start (penetration `depth`)

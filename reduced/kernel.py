@@ -460,9 +460,7 @@ def rhs(t, y, dy, args, work):
 
 def rhs_value(t, y, args):
     """(f(t, y), normal force per clearance joint) as new arrays (Python-side convenience)."""
-    dy = np.empty_like(y)
-    work = workspace(args)
-    rhs(t, y, dy, args, work)
+    dy, work = integrator.evaluate_once(workspace, rhs, t, y, args)
     return dy, work.normal[:args.joints.shape[0]].copy()
 
 

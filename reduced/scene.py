@@ -222,6 +222,33 @@ def check_fixed_steps(duration: float, step: float) -> None:
                          f"steps, more than {MAX_STEPS:.0e}: a longer step or a shorter duration")
 
 
+def check_run_size(scene) -> None:
+    """Refuse a run that would not fit in memory (samples) or could not finish (fixed steps)."""
+    samples = scene.duration / scene.output.sample_time
+    if samples > MAX_SAMPLES:
+        raise ValueError(f"output.sample_time: {samples:.3g} samples over the duration, more "
+                         f"than {MAX_SAMPLES:.0e}: sample less often or shorten the duration")
+    if scene.integrator.fixed_step is not None:
+        check_fixed_steps(scene.duration, scene.integrator.fixed_step)
+
+
+def check_body_names(scene, used) -> None:
+    """Body names unique and not the ground; every (name, key) of `used` a body or the ground;
+    a laws file where a normal law needs one."""
+    names = [b.name for b in scene.bodies]
+    if len(set(names)) != len(names) or GROUND in names:
+        raise ValueError(f"bodies: names must be unique and not {GROUND!r}")
+    known = set(names) | {GROUND}
+    for name, key in used:
+        if name not in known:
+            raise ValueError(f"{key}: unknown body {name!r}; bodies: {', '.join(sorted(known))}")
+        if name == GROUND and key in ("drive.body", "joints.body"):
+            raise ValueError(f"{key}: must be a moving body, not {GROUND!r}")
+    if any((c.normal_law or "").startswith(FILE_LAWS) for c in scene.clearance_joints) \
+            and scene.laws_file is None:
+        raise ValueError("laws_file is required by a calibrated:<law> or sliced:<law> normal law")
+
+
 class Integrator(Strict):
     """dopri5: explicit, adaptive, contact onsets located (the default); rosenbrock23: linearly
     implicit and L-stable (Shampine-Reichelt), for stiff contact laws or springs;
@@ -263,20 +290,11 @@ class ReducedScene(Strict):
 
     @pydantic.model_validator(mode="after")
     def _bounded(self):
-        samples = self.duration / self.output.sample_time
-        if samples > MAX_SAMPLES:
-            raise ValueError(f"output.sample_time: {samples:.3g} samples over the duration, more "
-                             f"than {MAX_SAMPLES:.0e}: sample less often or shorten the duration")
-        if self.integrator.fixed_step is not None:
-            check_fixed_steps(self.duration, self.integrator.fixed_step)
+        check_run_size(self)
         return self
 
     @pydantic.model_validator(mode="after")
     def _names(self):
-        names = [b.name for b in self.bodies]
-        if len(set(names)) != len(names) or GROUND in names:
-            raise ValueError(f"bodies: names must be unique and not {GROUND!r}")
-        known = set(names) | {GROUND}
         used = [(j.body_i, "joints.body_i") for j in self.joints if j.type == "revolute"]
         used += [(j.body_j, "joints.body_j") for j in self.joints if j.type == "revolute"]
         used += [(j.body, "joints.body") for j in self.joints if j.type == "prismatic"]
@@ -286,12 +304,5 @@ class ReducedScene(Strict):
         used += [(t.body_j, "torsion.body_j") for t in self.torsion]
         if self.drive:
             used.append((self.drive.body, "drive.body"))
-        for name, key in used:
-            if name not in known:
-                raise ValueError(f"{key}: unknown body {name!r}; bodies: {', '.join(sorted(known))}")
-            if name == GROUND and key in ("drive.body", "joints.body"):
-                raise ValueError(f"{key}: must be a moving body, not {GROUND!r}")
-        if any((c.normal_law or "").startswith(FILE_LAWS) for c in self.clearance_joints) \
-                and self.laws_file is None:
-            raise ValueError("laws_file is required by a calibrated:<law> or sliced:<law> normal law")
+        check_body_names(self, used)
         return self

@@ -17,10 +17,9 @@ import numpy as np
 import pydantic
 
 from pinbore.core.scene import Strict
-from pinbore.reduced.scene import (DAMPING_LAWS, ELASTIC_LAWS, FILE_LAWS, GROUND, CoulombFriction,
+from pinbore.reduced.scene import (DAMPING_LAWS, ELASTIC_LAWS, FILE_LAWS, CoulombFriction,
                                    Integrator, LinearFriction, Output, StribeckFriction,
-                                   check_fixed_steps)
-from pinbore.reduced.scene import MAX_SAMPLES
+                                   check_body_names, check_run_size)
 
 Vector3 = Annotated[list[float], pydantic.Field(min_length=3, max_length=3)]
 Quaternion = Annotated[list[float], pydantic.Field(min_length=4, max_length=4)]
@@ -231,29 +230,18 @@ class SpatialScene(Strict):
         if self.integrator.method == "dopri5_fixed" and self.integrator.fixed_step is None:
             raise ValueError("integrator.fixed_step: required by method = 'dopri5_fixed' in a "
                              "spatial scene")
-        samples = self.duration / self.output.sample_time
-        if samples > MAX_SAMPLES:
-            raise ValueError(f"output.sample_time: {samples:.3g} samples over the duration, more "
-                             f"than {MAX_SAMPLES:.0e}: sample less often or shorten the duration")
-        if self.integrator.fixed_step is not None:
-            check_fixed_steps(self.duration, self.integrator.fixed_step)
+        check_run_size(self)
         return self
 
     @pydantic.model_validator(mode="after")
     def _names(self):
-        names = [b.name for b in self.bodies]
-        if len(set(names)) != len(names) or GROUND in names:
-            raise ValueError(f"bodies: names must be unique and not {GROUND!r}")
-        known = set(names) | {GROUND}
         used = [(j.body_i, "joints.body_i") for j in self.joints]
         used += [(j.body_j, "joints.body_j") for j in self.joints]
         used += [(c.bearing_body, "clearance_joints.bearing_body") for c in self.clearance_joints]
         used += [(c.journal_body, "clearance_joints.journal_body") for c in self.clearance_joints]
         used += [(t.body_i, "torsion.body_i") for t in self.torsion]
         used += [(t.body_j, "torsion.body_j") for t in self.torsion]
-        for name, key in used:
-            if name not in known:
-                raise ValueError(f"{key}: unknown body {name!r}; bodies: {', '.join(sorted(known))}")
+        check_body_names(self, used)
         if self.drive is not None:
             driven = {j.name: j for j in self.joints if j.name}
             if self.drive.joint not in driven:
@@ -262,7 +250,4 @@ class SpatialScene(Strict):
             if driven[self.drive.joint].type not in ("revolute", "cylindrical"):
                 raise ValueError("drive.joint: must be a revolute or cylindrical joint (it turns "
                                  "about the joint's axis)")
-        if any(c.normal_law.startswith(FILE_LAWS) for c in self.clearance_joints) \
-                and self.laws_file is None:
-            raise ValueError("laws_file is required by a calibrated:<law> or sliced:<law> normal law")
         return self
