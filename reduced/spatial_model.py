@@ -28,7 +28,8 @@ from pinbore.reduced.spatial_layout import (
     SJ_END_LENGTH, SJ_JOURNAL_AXIS, SJ_JOURNAL_BODY, SJ_JOURNAL_POINT, SJ_KIND, SJ_LENGTH,
     SJ_SCALE, SJ_SLICES, SPATIAL_JOINT_COLUMNS, SPATIAL_TORSION_COLUMNS, SPHERE, TORSION_A_I,
     TORSION_B_J, TORSION_C_I, SpatialArgs)
-from pinbore.reduced.spatial_scene import GROUND, SpatialScene, unit_axis
+from pinbore.reduced.scene import GROUND
+from pinbore.reduced.spatial_scene import SpatialScene, unit_axis
 
 
 @dataclass
