@@ -144,15 +144,15 @@ def solve(curves, tables_of) -> Solution:
         diff_step=1e-7, x_scale=[0.1, 0.5, 0.1], xtol=1e-12, ftol=1e-12)
     if np.any(fit.fun == BEYOND):
         raise CannotFit("the per-length law does not reach the local approaches of the "
-                           "curves (its range ends): choose another (--per-length)")
+                        "curves (its range ends): choose another (--per-length)")
     jacobian = fit.jac / unit                     # per unit of a, e (m), c_b (m^2/N)
     points = fit.fun.size
     scaled = jacobian * unit
     singular = np.linalg.svd(scaled, compute_uv=False)
     if points < 4 or singular[-1] < 1e-6 * singular[0]:
         raise CannotFit("the curves cannot separate the stiffness factor, the end length "
-                           "and the bulk compliance: give tilted steps (load.tilt_deg) and two "
-                           "lengths")
+                        "and the bulk compliance: give tilted steps (load.tilt_deg) and two "
+                        "lengths")
     dof = points - 3
     covariance = float(np.sum(fit.fun ** 2)) / dof * np.linalg.inv(jacobian.T @ jacobian)
     half = stats.t.ppf(0.975, dof) * np.sqrt(np.diag(covariance))
