@@ -116,7 +116,7 @@ def per_length(name: str | None, table, curves, curves_3d) -> sliced.PerLength:
     """The per-length law of the sliced 3D law: `name` is a published law, calibrated:<law>,
     or section (the 2D FE curve of each 3D curve's own plane section: radii, housing, hub,
     materials). None: section when every 3D curve has its section among the 2D curves (the
-    exact plane-strain law of the joint: the calibrated laws miss it by 6-40 % at c/R = 3e-3),
+    exact plane-strain law of the joint: the calibrated laws miss it by 6-42 % at c/R = 3e-3),
     else the fitted law with the smallest mean RMS error over the 2D curves."""
     sections = {c.section: c for c in curves}
     fitted = {n: e["fit"] for n, e in table.items() if e["fit"] is not None and n != "linear"}
@@ -134,12 +134,12 @@ def per_length(name: str | None, table, curves, curves_3d) -> sliced.PerLength:
         if missing:
             raise InputError(f"--per-length: section: {missing[0].path}: no 2D curve of its plane "
                              "section (radii, housing and hub radii, materials) among the curves")
-
-        def record(c):
-            plane = sections[c.section]
-            return lawsfile.Section(curve=plane.name, approach_m=[float(x) for x in plane.approach],
-                                    force_N_per_m=[float(x) for x in plane.force])
-        return sliced.PerLength(name, lambda d, c: record(c).force(d), record)
+        records = {key: lawsfile.Section(curve=plane.name,
+                                         approach_m=[float(x) for x in plane.approach],
+                                         force_N_per_m=[float(x) for x in plane.force])
+                   for key, plane in sections.items()}
+        return sliced.PerLength(name, lambda d, c: records[c.section].force(d),
+                                lambda c: records[c.section])
     if name.startswith("calibrated:"):
         law = name.split(":", 1)[1]
         if law not in fitted:
