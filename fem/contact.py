@@ -644,10 +644,10 @@ class PinBoreContact:
         proj = kin.projection
         corners = self.bore.corners(proj.k[act], proj.l[act])
         rows = np.concatenate([self.pin_rows[act, None], self.bore_rows[corners]], axis=1)
-        rows = rows.reshape(len(act), -1)
+        rows = rows.reshape(len(act), (1 + corners.shape[1]) * self.dim)
         b = np.concatenate([np.ones((len(act), 1)), -kin.n[act]], axis=1)    # x - Y weights
         nu = kin.normal[act]
-        grad = -(b[:, :, None] * nu[:, None, :]).reshape(len(act), -1)      # dg/dU
+        grad = -(b[:, :, None] * nu[:, None, :]).reshape(rows.shape)        # dg/dU
         w, pa = self.weights[act], p[act]
         residual = -pa[:, None] * grad
         f = self.friction
@@ -691,9 +691,14 @@ class PinBoreContact:
         if self.comm.rank == 0:
             F.setValues(rows.ravel(), residual.ravel(), addv=PETSc.InsertMode.ADD_VALUES)
 
-    def add_tangent(self, u: PETSc.Vec, J: PETSc.Mat) -> None:
-        """J += K_c(u). Collective; call J.assemble() afterwards."""
-        _, rows, _, tangent = self._local_terms(self._kinematics(u), with_tangent=True)
+    def add_tangent(self, u: PETSc.Vec, J: PETSc.Mat) -> np.ndarray:
+        """J += K_c(u). Collective; call J.assemble() afterwards. Returns the kind of term
+        each pin node adds (OPEN: none; in contact: STICK without friction, else its stick
+        or slip status): where two tangents differ."""
+        act, rows, _, tangent = self._local_terms(self._kinematics(u), with_tangent=True)
+        kind = np.full(len(self.pin_X), OPEN, dtype=np.int8)
+        kind[act] = (STICK if self.friction is None
+                     else np.where(self.friction.status[act] == STICK, STICK, SLIP))
         if self.comm.rank == 0 and len(rows):
             # all blocks in one call: summed into CSR rows (a call per node cost a third of
             # a 3D solve)
@@ -706,6 +711,7 @@ class PinBoreContact:
             J.setValuesIJV(csr.indptr.astype(PETSc.IntType), csr.indices.astype(PETSc.IntType),
                            csr.data, addv=PETSc.InsertMode.ADD_VALUES,
                            rowmap=used.astype(PETSc.IntType))
+        return kind
 
 
 # --- surface grids and their tributary weights -------------------------------------------------

@@ -95,6 +95,7 @@ def summary(scene, scene_path, result, el, contact, stepper, sizing, comm, wall)
         "cutbacks": result.cutbacks,
         "newton_iterations": [s.newton_iterations for s in steps],
         "uzawa_iterations": [s.uzawa_iterations for s in steps],
+        "factorizations": [s.factorizations for s in steps],
         "snes_reasons": [s.reasons for s in steps],
         "gap_violation_m": [s.gap_violation for s in steps],
         "max_gap_violation_m": max((s.gap_violation for s in steps), default=None),
