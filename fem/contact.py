@@ -644,10 +644,10 @@ class PinBoreContact:
         proj = kin.projection
         corners = self.bore.corners(proj.k[act], proj.l[act])
         rows = np.concatenate([self.pin_rows[act, None], self.bore_rows[corners]], axis=1)
-        rows = rows.reshape(len(act), -1)
+        rows = rows.reshape(len(act), (1 + corners.shape[1]) * self.dim)
         b = np.concatenate([np.ones((len(act), 1)), -kin.n[act]], axis=1)    # x - Y weights
         nu = kin.normal[act]
-        grad = -(b[:, :, None] * nu[:, None, :]).reshape(len(act), -1)      # dg/dU
+        grad = -(b[:, :, None] * nu[:, None, :]).reshape(rows.shape)        # dg/dU
         w, pa = self.weights[act], p[act]
         residual = -pa[:, None] * grad
         f = self.friction
