@@ -7,19 +7,18 @@ import math
 
 import numpy as np
 import pytest
-from conftest import Solved, pinbore
+from conftest import Solved, pinbore, scene_dict
 
-STEEL = {"E": 210e9, "nu": 0.3, "density": 7850.0}
-IMPACT = {
-    "kind": "impact",
-    "geometry": {"dim": 2, "pin_radius": 9.99e-3, "bore_radius": 10.0e-3,
-                 "housing_radius": 0.2, "hub_radius": 2.0e-3},
-    "materials": {"pin": dict(STEEL), "bore": dict(STEEL)},
-    "contact": {"method": "penalty", "friction": 0.0},
-    "impact": {"speed": 1.0, "direction_deg": -90.0},
-    "mesh": {"contact_size": 2e-4},   # coarse: about 50 nodes over the contact arc
-    "output": {"picture": False},
-}
+def _impact_base() -> dict:
+    """The FE test scene as an impact: steel with its density, penalty, 1 m/s along -y."""
+    scene = scene_dict(contact={"method": "penalty"}, mesh={"contact_size": 2e-4})  # coarse:
+    scene.pop("load")                               # about 50 nodes over the contact arc
+    for body in scene["materials"].values():
+        body["density"] = 7850.0
+    return scene | {"kind": "impact", "impact": {"speed": 1.0, "direction_deg": -90.0}}
+
+
+IMPACT = _impact_base()
 # The slow limit: a heavy link (12 t/m) at 14 mm/s in a housing of 3 radii: the same energy
 # as the steel pin at 1 m/s (approach about 5 um), a contact of about 1 ms, forty times the
 # housing's lowest period (about 4 x 30 mm / 3200 m/s = 25 us)
@@ -172,3 +171,15 @@ def test_a_run_that_fails_keeps_what_it_computed(write_scene, tmp_path):
     history = impact_file.read_history(out / "history.csv")
     assert summary.status == "incomplete" and "halvings" in summary.stop
     assert summary.restitution is None and history.time.size == summary.steps + 1 > 1
+
+
+def test_every_shipped_impact_scene_is_valid():
+    from conftest import ROOT
+
+    from pinbore.core import scene
+    from pinbore.fem.impact_scene import ImpactScene
+
+    paths = sorted((ROOT / "scenes" / "impact").glob("*.toml"))
+    assert paths
+    for path in paths:
+        scene.load(ImpactScene, path)
