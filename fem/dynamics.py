@@ -271,8 +271,9 @@ class ImpactStepper:
 
     def _effective(self, dt) -> PETSc.Mat:
         """A = (1 - alpha_m)/(beta dt^2) M_q + K_q, the Jacobian without the
-        contact (cached for the last dt)."""
-        if self.A_dt != dt:
+        contact (cached for the last dt when the material's tangent is constant; else with
+        T^T K_t(u) T at the current u)."""
+        if self.A_dt != dt or not self.material.constant_tangent:
             c = (1 - self.alpha_m) / (self.beta * dt**2)
             self.A = self.M.copy()
             self.A.scale(c)
