@@ -21,6 +21,8 @@ FEM_CURVES := $(FEM_SCENES:%=build/fem/%/curve.csv)
 MESHES := $(filter-out build/mesh/study_% build/mesh/study3d_%,$(FEM_SCENES:%=build/mesh/%/mesh.msh))
 STUDY_CURVES := $(filter build/fem/study_%,$(FEM_CURVES))
 STUDY3D_CURVES := $(filter build/fem/study3d_%,$(FEM_CURVES))
+IMPACT_SCENES := $(basename $(notdir $(wildcard scenes/impact/*.toml)))
+IMPACT_RUNS := $(IMPACT_SCENES:%=build/impact/%/impact.json)
 REDUCED_SCENES := $(basename $(notdir $(wildcard scenes/reduced/*.toml)))
 REDUCED_RUNS := $(REDUCED_SCENES:%=build/reduced/%/summary.json)
 STAGE_CODE := $(wildcard pinbore/cli.py core/*.py laws/*.py meshes/*.py fem/*.py)
@@ -29,7 +31,7 @@ DYNAMICS_SCENE := scenes/reduced/slider_crank_flores2004.toml
 DYNAMICS := $(addprefix build/dynamics/,poincare/summary.json bifurcation/summary.json design/summary.json)
 DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(wildcard pinbore/cli.py core/*.py laws/*.py calibration/lawsfile.py reduced/*.py) $(STAMP)
 
-.PHONY: all venv mesh fem calibration reduced dynamics report bench stress test test-slow clean help
+.PHONY: all venv mesh fem impact calibration reduced dynamics report bench stress test test-slow clean help
 .DELETE_ON_ERROR:
 
 all: report ## set up .venv, run the default scenes, build the report (the main job)
@@ -56,6 +58,11 @@ fem: $(FEM_CURVES) ## solve the default FE scenes (build/fem/<scene>/)
 
 build/fem/%/curve.csv: scenes/fem/%.toml $(STAGE_CODE) $(STAMP)
 	$(MPIEXEC) $(PINBORE) fem $< --out build/fem/$*
+
+impact: $(IMPACT_RUNS) ## run the dynamic impacts of scenes/impact/ (build/impact/<scene>/)
+
+build/impact/%/impact.json: scenes/impact/%.toml $(STAGE_CODE) $(STAMP)
+	$(PINBORE) impact $< --out build/impact/$*
 
 calibration: build/calibration/laws.json ## fit and rank the contact laws on the study curves (2D and 3D)
 
@@ -97,6 +104,7 @@ bench: $(STUDY_CURVES) $(STAMP) ## run the benchmarks: bench/*.csv and plots (a 
 	$(PY) bench/calibrate.py --out bench
 	$(PY) bench/multibody.py --out bench
 	$(PY) bench/sweep.py --out bench
+	$(PY) bench/impact.py --out bench
 
 stress: $(STAMP) ## the stress matrix: bench/stress_*.csv, bench/stress.png (about 3 min)
 	$(PY) bench/stress.py --out bench

@@ -211,8 +211,10 @@ def _write(path: Path, columns: dict[str, Column], rows) -> None:
             out.writerow([c.cell(row[field]) for field, c in columns.items()])
 
 
-def _read(path: Path, variants: dict[int, dict[str, Column]]) -> tuple[int, dict]:
-    """The variant (dim) a file's header names and its columns as arrays by field."""
+def _read(path: Path, variants: dict[int, dict[str, Column]],
+          command: str = "fem") -> tuple[int, dict]:
+    """The variant (dim) a file's header names and its columns as arrays by field (a file
+    that does not fit names `pinbore <command>` to run again)."""
     try:
         with open(path, newline="") as f:
             lines = [row for row in csv.reader(f) if row]
@@ -221,7 +223,7 @@ def _read(path: Path, variants: dict[int, dict[str, Column]]) -> tuple[int, dict
     if not lines:
         raise InputError(f"{path}: empty file, not even a header line")
     header, rows = lines[0], lines[1:]
-    dim = _variant(path, header, variants)
+    dim = _variant(path, header, variants, command)
     at = {name: i for i, name in enumerate(header)}
     for i, row in enumerate(rows, start=1):
         if len(row) != len(header):
@@ -231,7 +233,8 @@ def _read(path: Path, variants: dict[int, dict[str, Column]]) -> tuple[int, dict
                  for field, c in variants[dim].items()}
 
 
-def _variant(path: Path, header: list[str], variants: dict[int, dict[str, Column]]) -> int:
+def _variant(path: Path, header: list[str], variants: dict[int, dict[str, Column]],
+             command: str = "fem") -> int:
     """The dim whose columns the header names (in any order), or one InputError line on the
     first difference from the nearest variant."""
     repeated = [name for i, name in enumerate(header) if name in header[:i]]
@@ -245,7 +248,7 @@ def _variant(path: Path, header: list[str], variants: dict[int, dict[str, Column
         if not any(differences[dim]):
             return dim
     missing, unknown = min(differences.values(), key=lambda d: len(d[0]) + len(d[1]))
-    again = RUN_AGAIN.format(command="fem")
+    again = RUN_AGAIN.format(command=command)
     for c in missing:   # an unknown column named like a missing one: another unit
         alike = [name for name in unknown if name.split("_")[0] == c.name.split("_")[0]]
         if alike:

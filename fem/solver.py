@@ -116,33 +116,10 @@ class LoadStepper:
         self.snes = self._make_snes(newton_max_it, force_atol, couplings)
 
     def _make_snes(self, max_it, force_atol, couplings):
-        comm = self.el.mesh.comm
-        J = jacobian_matrix(self.el.K_bc, couplings)
-        snes = PETSc.SNES().create(comm)
-        snes.setOptionsPrefix("pinbore_")
-        snes.setType("newtonls")
-        snes.getLineSearch().setType("basic")
-        snes.setTolerances(atol=force_atol, rtol=1e-9, stol=1e-14, max_it=max_it)
-        # Nodes entering contact under a stiff penalty can raise the residual a thousandfold
-        # for an iteration; that is not divergence. max_it and the cutbacks catch real failure.
-        snes.setDivergenceTolerance(PETSc.UNLIMITED)
-        snes.setFunction(self._residual, self.x.duplicate())
-        snes.setJacobian(self._jacobian, J)
-        # GMRES on the current Jacobian, preconditioned by LU factors that are kept while they
-        # serve (_jacobian; fresh factors converge in one iteration). A solve that reaches
-        # max_it is taken as an inexact Newton step (CONVERGED_ITS; the next iteration
-        # refactors); a failed factorisation fails the Newton solve, and the step is cut back.
-        ksp = snes.getKSP()
-        ksp.setType("gmres")
-        ksp.setTolerances(rtol=LINEAR_RTOL, atol=0.0, max_it=REUSE_MAX_ITERATIONS)
-        ksp.setGMRESRestart(REUSE_MAX_ITERATIONS)
-        PETSc.Options().setValue("pinbore_ksp_converged_maxits", True)
-        self.lu = KeptLU(comm)
-        pc = ksp.getPC()
-        pc.setType("python")
-        pc.setPythonContext(self.lu)
-        snes.setFromOptions()
-        return snes
+        self.lu = KeptLU(self.el.mesh.comm)
+        return newton_solver(self.el.mesh.comm, jacobian_matrix(self.el.K_bc, couplings),
+                             self._residual, self._jacobian, self.x, max_it, force_atol,
+                             kept=self.lu)
 
     def _residual(self, snes, x, F):
         self.el.internal_force(x, F)
@@ -226,27 +203,11 @@ class LoadStepper:
         start, factorizations = time.perf_counter(), self.factorizations
         self._predict(history, target).copy(self.x)
         self.el.set_boundary_values(self.x, self.hub_shift(target), target[1], target[3])
-        newton, reasons = 0, []
-        for uzawa in range(1, self.uzawa_max_it + 1):
-            self.contact.start_solve()
-            self.snes.solve(None, self.x)
-            reason = self.snes.getConvergedReason()
-            newton += self.snes.getIterationNumber()
-            reasons.append(SNES_REASONS.get(reason, str(reason)))
-            if reason < 0:
-                return f"Newton failed ({reasons[-1]}) after {newton} iterations"
-            state = self.contact.state(self.x)
-            violation = float(np.max(-state.gap, initial=0.0))
-            worst = max(violation, self.contact.stick_violation(state)) if self.augmented else 0.0
-            if worst <= self.gap_tolerance and self.contact.friction_settled(state):
-                break
-            self.contact.update_friction(state)
-            if self.augmented:
-                self.contact.update_multipliers(state)
-        else:
-            return (f"augmented Lagrangian left a penetration (or stuck-node slip) of "
-                    f"{worst:.3g} m > gap_tolerance {self.gap_tolerance:.3g} m after "
-                    f"{self.uzawa_max_it} updates")
+        solved = contact_solve(self.snes, self.x, self.contact, self.augmented,
+                               self.uzawa_max_it, self.gap_tolerance)
+        if isinstance(solved, str):
+            return solved
+        newton, uzawa, reasons, state, violation = solved
         force, moment = self.el.hub_reaction(self.x, self.work)
         # a half model: twice its force; its moment about the mid-plane cancels the mirror half's
         force, moment = self.copies * force, (moment if self.copies == 1 else 0.0)
@@ -259,6 +220,68 @@ class LoadStepper:
 
     def hub_shift(self, point) -> np.ndarray:
         return (self.clearance + point[0]) * self.direction + point[2] * self.across
+
+
+def contact_solve(snes, x, contact, augmented: bool, uzawa_max_it: int, gap_tolerance: float):
+    """Newton solves from x (updated in place) with the contact's Uzawa and friction updates
+    between them, until the penetration (and stuck-node slip) is within gap_tolerance
+    (augmented Lagrangian) and the friction's active sets settle. (newton iterations, uzawa
+    updates, SNES reasons, contact state, largest penetration (m)), or why it failed."""
+    newton, reasons = 0, []
+    for uzawa in range(1, uzawa_max_it + 1):
+        contact.start_solve()
+        snes.solve(None, x)
+        reason = snes.getConvergedReason()
+        newton += snes.getIterationNumber()
+        reasons.append(SNES_REASONS.get(reason, str(reason)))
+        if reason < 0:
+            return f"Newton failed ({reasons[-1]}) after {newton} iterations"
+        state = contact.state(x)
+        violation = float(np.max(-state.gap, initial=0.0))
+        worst = max(violation, contact.stick_violation(state)) if augmented else 0.0
+        if worst <= gap_tolerance and contact.friction_settled(state):
+            return newton, uzawa, reasons, state, violation
+        contact.update_friction(state)
+        if augmented:
+            contact.update_multipliers(state)
+    return (f"augmented Lagrangian left a penetration (or stuck-node slip) of "
+            f"{worst:.3g} m > gap_tolerance {gap_tolerance:.3g} m after {uzawa_max_it} updates")
+
+
+def newton_solver(comm, J: PETSc.Mat, residual, jacobian, template: PETSc.Vec, max_it: int,
+                  force_atol: float, kept: "KeptLU | None" = None) -> PETSc.SNES:
+    """PETSc SNES: Newton with full steps, the callbacks residual(snes, x, F) and
+    jacobian(snes, x, J, P) into J, converged at |F| <= force_atol (or rtol 1e-9). The
+    linear solver: MUMPS LU of every J, or with `kept` GMRES preconditioned by its factors,
+    which the jacobian callback refreshes (kept.factor) when they no longer serve."""
+    snes = PETSc.SNES().create(comm)
+    snes.setOptionsPrefix("pinbore_")
+    snes.setType("newtonls")
+    snes.getLineSearch().setType("basic")
+    snes.setTolerances(atol=force_atol, rtol=1e-9, stol=1e-14, max_it=max_it)
+    # Nodes entering contact under a stiff penalty can raise the residual a thousandfold
+    # for an iteration; that is not divergence. max_it and the cutbacks catch real failure.
+    snes.setDivergenceTolerance(PETSc.UNLIMITED)
+    snes.setFunction(residual, template.duplicate())
+    snes.setJacobian(jacobian, J)
+    ksp = snes.getKSP()
+    pc = ksp.getPC()
+    if kept is None:
+        ksp.setType("preonly")
+        pc.setType("lu")
+        pc.setFactorSolverType("mumps")
+    else:
+        # Fresh factors converge in one GMRES iteration. A solve that reaches max_it is an
+        # inexact Newton step (CONVERGED_ITS; the next iteration refactors); a failed
+        # factorisation fails the Newton solve, and the step is cut back.
+        ksp.setType("gmres")
+        ksp.setTolerances(rtol=LINEAR_RTOL, atol=0.0, max_it=REUSE_MAX_ITERATIONS)
+        ksp.setGMRESRestart(REUSE_MAX_ITERATIONS)
+        PETSc.Options().setValue(f"{snes.getOptionsPrefix()}ksp_converged_maxits", True)
+        pc.setType("python")
+        pc.setPythonContext(kept)
+    snes.setFromOptions()
+    return snes
 
 
 class KeptLU:

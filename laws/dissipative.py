@@ -8,6 +8,7 @@ named after their authors return chi(e). None of them reproduces its target e ex
 """
 
 import math
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -117,9 +118,18 @@ def yigit_coefficient(e, stiffness, exponent, mass, speed):
     return mass * speed * (1 - e**2) / (3 * stiffness * dm**2 * integral)
 
 
-def restitution(force, mass, speed):
-    """Effective coefficient of restitution of a force law F(d, d') in one impact: a mass m
-    meets the contact at speed v0 and leaves it when d returns to 0; e = |d'_out| / v0."""
+class Impact(NamedTuple):
+    """One impact of a mass on a force law (`impact`)."""
+
+    restitution: float    # e = |d'_out| / v0
+    duration: float       # s, from first contact to separation (d = 0)
+    max_approach: float   # m, the largest d
+
+
+def impact(force, mass, speed) -> Impact:
+    """One impact of a mass m meeting a force law F(d, d') at speed v0: m d'' = -F, d(0) = 0,
+    d'(0) = v0, until d returns to 0 (DOP853, rtol 1e-11). The effective restitution
+    e = |d'_out| / v0, the contact duration and the largest approach (at d' = 0)."""
     def rhs(_, y):
         return [y[1], -force(y[0], y[1]) / mass]
 
@@ -127,11 +137,23 @@ def restitution(force, mass, speed):
         return y[0]
     leaves.terminal, leaves.direction = True, -1
 
+    def turns(_, y):
+        return y[1]
+    turns.direction = -1
+
     # time scale: the elastic contact duration is a few (m / K)^(1/2); integrate far enough
     span = 1.0
     while True:
         sol = solve_ivp(rhs, (0, span), [0.0, speed], method="DOP853", rtol=1e-11, atol=1e-15,
-                        events=leaves, dense_output=False, first_step=span * 1e-9)
+                        events=(leaves, turns), dense_output=False, first_step=span * 1e-9)
         if sol.t_events[0].size:
-            return abs(sol.y_events[0][0][1]) / speed
+            deepest = float(sol.y_events[1][0][0]) if sol.t_events[1].size else float(sol.y.max())
+            return Impact(abs(sol.y_events[0][0][1]) / speed, float(sol.t_events[0][0]), deepest)
         span *= 10
+
+
+def restitution(force, mass, speed):
+    """Effective coefficient of restitution of a force law F(d, d') in one impact: a mass m
+    meets the contact at speed v0 and leaves it when d returns to 0; e = |d'_out| / v0
+    (`impact`)."""
+    return impact(force, mass, speed).restitution

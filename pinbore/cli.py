@@ -35,6 +35,16 @@ def _fem(args) -> int:
     return fem_run.run(args.scene, args.out)
 
 
+def _impact(args) -> int:
+    from pinbore.core import scene as scenes
+    from pinbore.fem.impact_scene import ImpactScene   # the scene model only: no DOLFINx yet
+
+    scene = scenes.load(ImpactScene, args.scene)
+    from pinbore.fem import impact_run
+
+    return impact_run.run(args.scene, args.out, scene)
+
+
 def _calibrate(args) -> int:
     from pinbore.calibration import run as calibration_run
 
@@ -155,6 +165,12 @@ def parser() -> argparse.ArgumentParser:
                    "DIR/curve.csv, DIR/pressure.csv, DIR/result.json and, when the scene asks, "
                    "DIR/fields.xdmf and pictures (2D: contact.png; 3D: pressure_map.png, "
                    "axial_profile.png). Runs under mpiexec -n N.")
+    _scene_command(sub, "impact", _impact,
+                   "the pin flies into the bore and rebounds: history.csv, impact.json",
+                   "Integrate the dynamic impact of an impact scene (kind = \"impact\", plane "
+                   "strain): the pin with its mass hits the bore at the impact speed and "
+                   "rebounds; write DIR/history.csv, DIR/impact.json (restitution, contact "
+                   "duration, peak force, energy book) and DIR/force_time.png.")
     c = sub.add_parser("calibrate", help="fit and rank the contact laws on FE curves: laws.json",
                        description="Fit every contact law to FE load-approach curves (2D, per "
                                    "unit length; each curve.csv with its result.json beside it) "

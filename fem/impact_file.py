@@ -1,0 +1,122 @@
+"""The files of `pinbore impact`, defined once: history.csv (one row per time step) and
+impact.json (the summary: restitution, contact duration, peak force, energy book). The impact
+run writes them through `write_history` and `write_summary`; the calibration, the report,
+the benchmarks and the tests read them through `read_history` and `read_summary`.
+
+Plane strain: forces per unit length (N/m), energies per unit length (J/m), masses per unit
+length (kg/m). Every history column name carries its unit. A file that does not fit (another
+version's columns, a cell that is not a finite number, a summary key missing) is one
+InputError line naming the file and the rule.
+"""
+
+from dataclasses import dataclass, fields
+from pathlib import Path
+
+import numpy as np
+
+from pinbore.core.scene import Record, read_json
+from pinbore.fem.curve import Column, _float, _read, _write
+
+COMMAND = "impact"
+
+
+@dataclass(frozen=True)
+class History:
+    """The columns of a history.csv as arrays, one entry per time point from t = 0."""
+
+    path: Path
+    time: np.ndarray             # s
+    approach: np.ndarray         # m, hub travel along the impact direction beyond first touch
+    force: np.ndarray            # N/m, contact resultant along the impact direction
+    hub_velocity: np.ndarray     # m/s, along the impact direction
+    pin_velocity: np.ndarray     # m/s, the pin's momentum along it over its mass
+    half_angle: np.ndarray       # deg, contact half-angle
+    min_gap: np.ndarray          # m, smallest gap of the pin's nodes (< 0: penetration)
+    kinetic: np.ndarray          # J/m
+    strain: np.ndarray           # J/m
+    contact_energy: np.ndarray   # J/m, stored by the penalty
+    contact_work: np.ndarray     # J/m, done by the bodies on the contact so far
+    residual: np.ndarray         # J/m, E_0 - kinetic - strain - contact_energy
+    newton_iterations: np.ndarray
+    time_step: np.ndarray        # s
+
+
+COLUMNS = {
+    "time": _float("time_s", "s"), "approach": _float("approach_m", "m"),
+    "force": _float("force_per_length_N_per_m", "N/m"),
+    "hub_velocity": _float("hub_velocity_m_per_s", "m/s"),
+    "pin_velocity": _float("pin_velocity_m_per_s", "m/s"),
+    "half_angle": _float("half_angle_deg", "deg", ".6f"), "min_gap": _float("min_gap_m", "m"),
+    "kinetic": _float("kinetic_energy_J_per_m", "J/m"),
+    "strain": _float("strain_energy_J_per_m", "J/m"),
+    "contact_energy": _float("contact_energy_J_per_m", "J/m"),
+    "contact_work": _float("contact_work_J_per_m", "J/m"),
+    "residual": _float("energy_residual_J_per_m", "J/m"),
+    "newton_iterations": Column("newton_iterations", "1", int),
+    "time_step": _float("time_step_s", "s"),
+}
+assert list(COLUMNS) == [f.name for f in fields(History) if f.name != "path"]
+
+
+def write_history(path: Path, rows) -> None:
+    """history.csv; a row maps every field of History (but path) to its value."""
+    _write(path, COLUMNS, rows)
+
+
+def read_history(path) -> History:
+    path = Path(path)
+    _, values = _read(path, {2: COLUMNS}, COMMAND)
+    return History(path, **values)
+
+
+class EnergyBook(Record):
+    """Where the impact energy m v0^2 / 2 went, at the end of the run (J/m), and the book's
+    largest residual over the run relative to the impact energy."""
+
+    impact_J_per_m: float
+    kinetic_J_per_m: float
+    strain_J_per_m: float
+    contact_J_per_m: float           # stored by the penalty
+    contact_work_J_per_m: float      # done on the contact (trapezoidal rule)
+    rebound_J_per_m: float           # |p|^2 / (2 m): the pin's flight after separation
+    wave_J_per_m: float              # kinetic + strain - rebound: vibration and waves
+    residual_J_per_m: float          # impact - kinetic - strain - contact
+    scheme_residual_J_per_m: float   # impact - kinetic - strain - contact work
+    max_relative_residual: float     # max over the run of |residual| / impact
+
+
+class ImpactSummary(Record):
+    scene_file: str
+    scene: dict
+    status: str                      # complete | incomplete
+    stop: str | None
+    speed_m_per_s: float
+    pin_mass_kg_per_m: float         # the FE pin's mass (annulus + hub + added)
+    hub_mass_kg_per_m: float         # the rigid hub: its own core and the added mass
+    restitution: float | None        # -p . d / (m v0) after separation; None: no separation
+    rebound_velocity_m_per_s: list[float]
+    contact_duration_s: float | None
+    peak_force_N_per_m: float
+    approach_at_peak_m: float
+    max_approach_m: float
+    energy: EnergyBook
+    estimate: dict                   # Liu's law before the run: duration, max approach
+    time_step_s: float
+    spectral_radius: float
+    steps: int
+    steps_in_contact: int
+    cutbacks: int
+    newton_iterations: int
+    dofs: int
+    mesh: dict
+    contact: dict
+    wall_time_s: dict
+    platform: dict
+
+
+def write_summary(path: Path, summary: ImpactSummary) -> None:
+    path.write_text(summary.model_dump_json(indent=2) + "\n")
+
+
+def read_summary(path, source: str | None = None) -> ImpactSummary:
+    return read_json(ImpactSummary, path, COMMAND, source)

@@ -1,0 +1,185 @@
+"""The dynamic impact (pinbore impact) against independent references: free flight (exact
+kinematics), the quasi-static FE curve in the slow limit, conservation of energy and
+momentum, convergence of e in the time step; bad impact scenes."""
+
+import copy
+import math
+
+import numpy as np
+import pytest
+from conftest import Solved, pinbore, scene_dict
+
+def _impact_base() -> dict:
+    """The FE test scene as an impact: steel with its density, penalty, 1 m/s along -y."""
+    scene = scene_dict(contact={"method": "penalty"}, mesh={"contact_size": 2e-4})  # coarse:
+    scene.pop("load")                               # about 50 nodes over the contact arc
+    for body in scene["materials"].values():
+        body["density"] = 7850.0
+    return scene | {"kind": "impact", "impact": {"speed": 1.0, "direction_deg": -90.0}}
+
+
+IMPACT = _impact_base()
+# The slow limit: a heavy link (12 t/m) at 14 mm/s in a housing of 3 radii: the same energy
+# as the steel pin at 1 m/s (approach about 5 um), a contact of about 1 ms, forty times the
+# housing's lowest period (about 4 x 30 mm / 3200 m/s = 25 us)
+SLOW = {"geometry": {"housing_radius": 0.03},
+        "impact": {"hub_mass": 12000.0, "speed": 0.0143, "steps_per_contact": 50}}
+
+
+def impact_scene(**tables) -> dict:
+    scene = copy.deepcopy(IMPACT)
+    for table, values in tables.items():
+        scene[table].update(values)
+    return scene
+
+
+class Impact:
+    """An in-process impact of a scene dict: scene, stepper, run and summary."""
+
+    def __init__(self, data, run=True):
+        from pinbore.core.scene import validate
+        from pinbore.fem import impact_run
+        from pinbore.fem.impact_scene import ImpactScene
+
+        self.scene = validate(ImpactScene, data, "test scene")
+        self.stepper, el, contact, sizing = impact_run.build(self.scene)
+        if run:
+            self.run = self.stepper.run()
+            assert self.run.stop is None, self.run.stop
+            self.summary = impact_run.summarise(self.scene, "test", self.run, self.stepper, el,
+                                                sizing, contact, {})
+
+    def column(self, name):
+        return np.array([getattr(r, name) for r in self.run.records])
+
+
+def test_free_flight_is_exact():
+    """Before contact nothing acts on the pin: generalized-alpha integrates the constant
+    velocity exactly (position v0 t, velocity v0, no acceleration) whatever the step, and the
+    kinetic energy is m v0^2 / 2 of the FE pin's mass (rho pi R^2 within the polygon's area
+    error, 0.5 %)."""
+    data = impact_scene(impact={"initial_gap": 2e-6, "spectral_radius": 0.7})
+    flight = Impact(data, run=False)
+    st, v0, gap = flight.stepper, 1.0, 2e-6
+    st.start()
+    st.t, st.contact_work = 0.0, 0.0
+    records = [st.step(st.dt) for _ in range(int(gap / (v0 * st.dt)) - 1)]
+    for r in records:
+        assert r.approach == pytest.approx(-gap + v0 * r.time, abs=1e-15)
+        assert r.hub_velocity == pytest.approx(v0, rel=1e-13)
+        assert r.pin_velocity == pytest.approx(v0, rel=1e-13)
+        assert r.force == 0.0 and r.strain < 1e-10 * st.impact_energy   # K u of a rigid motion: round-off
+        assert r.kinetic == pytest.approx(st.impact_energy, rel=1e-13)
+    assert st.mass == pytest.approx(flight.scene.pin_mass, rel=5e-3)
+
+
+def test_slow_impact_follows_the_quasi_static_curve():
+    """Far below the wave speed and slow against the housing's periods, the force at every
+    approach is the quasi-static FE force on the same mesh (pinbore fem's stepper on the
+    equivalent scene): the peak within 1 % (inertia of the bodies (T/t_c)^2 < 1e-3, the
+    quasi-static curve linear between 13 points about 0.3 %, the peak sampled to O(dt^2)),
+    and e = 1 within the energy book's 1e-3."""
+    slow = Impact(impact_scene(**SLOW))
+    s = slow.summary
+    approaches = list(np.linspace(0.1, 1.0, 13) * s.max_approach_m)
+    static = Solved(slow.scene.equivalent_fem_scene.model_dump(), approaches)
+    expected = np.interp(s.approach_at_peak_m, approaches, static.forces)
+    print(f"peak {s.peak_force_N_per_m:.6g} N/m at {s.approach_at_peak_m:.4g} m; "
+          f"quasi-static {expected:.6g} N/m; e = {s.restitution:.5f}")
+    assert s.peak_force_N_per_m == pytest.approx(expected, rel=0.01)
+    assert s.restitution == pytest.approx(1.0, abs=1e-3)
+    assert s.energy.max_relative_residual < 1e-3
+
+
+def test_energy_and_momentum_books():
+    """The steel pin at 1 m/s: at rho_inf = 1 the scheme conserves kinetic + strain + the
+    contact's work to round-off (E_0 - K - U - W_c below 1e-8 E_0 at every step); the energy
+    the contact's time integration loses (W_c - Pi_c, first order in dt) stays below 1 % at
+    100 steps per contact; after separation the pin's momentum is constant (no force acts
+    on it) and e^2 = 1 - (E_wave + residual) / E_0."""
+    fast = Impact(impact_scene())
+    s, st = fast.summary, fast.stepper
+    e0 = st.impact_energy
+    scheme = e0 - fast.column("kinetic") - fast.column("strain") - fast.column("contact_work")
+    assert np.abs(scheme).max() < 1e-8 * e0
+    assert s.energy.max_relative_residual < 1e-2
+    force = fast.column("force")
+    after = np.arange(len(force)) > np.flatnonzero(force > 0)[-1]
+    velocity = fast.column("pin_velocity")[after]
+    assert np.ptp(velocity) < 1e-10 * abs(velocity[0])
+    book = s.energy
+    # (the rebound energy holds the sideways velocity too, about 1e-4 v0 from the mesh's
+    # asymmetry: (1e-4)^2 of e^2)
+    assert s.restitution**2 == pytest.approx(1 - (book.wave_J_per_m + book.residual_J_per_m) / e0,
+                                             rel=1e-6)
+    assert 0 < s.restitution < 1
+
+
+@pytest.mark.slow
+def test_restitution_converges_with_the_time_step():
+    """Halving the step twice (50, 100, 200 steps per contact): e converges (differences
+    shrinking), and the energy lost by the contact's integration halves with the step
+    (first order: the nodes entering contact within a step), so e^2 + E_wave / E_0 -> 1."""
+    runs = [Impact(impact_scene(impact={"steps_per_contact": n})).summary for n in (50, 100, 200)]
+    e = np.array([s.restitution for s in runs])
+    loss = np.array([s.energy.residual_J_per_m / s.energy.impact_J_per_m for s in runs])
+    print("e", e, "contact integration loss / E0", loss)
+    assert abs(e[2] - e[1]) < abs(e[1] - e[0])
+    order = math.log2(abs(loss[1]) / abs(loss[2]))
+    assert 0.7 < order < 1.5
+
+
+@pytest.mark.parametrize("table, key, value, rule", [
+    ("impact", "speed", 0.0, "greater than 0"),
+    ("impact", "speed", -1.0, "greater than 0"),
+    ("impact", "hub_mass", -0.1, "greater than or equal to 0"),
+    ("impact", "time_step", 1e-5, "must be <="),
+    ("impact", "spectral_radius", 1.5, "less than or equal to 1"),
+])
+def test_bad_impact_scene(write_scene, tmp_path, table, key, value, rule):
+    data = impact_scene()
+    data[table][key] = value
+    out = tmp_path / "out"
+    done = pinbore("impact", write_scene(data), "--out", out)
+    assert done.returncode == 2, done.stderr
+    lines = done.stderr.strip().splitlines()
+    assert len(lines) == 1 and f"{table}.{key}" in lines[0] and rule in lines[0], lines
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("body", ["pin", "bore"])
+def test_density_must_be_positive(write_scene, tmp_path, body):
+    data = impact_scene()
+    data["materials"][body]["density"] = 0.0
+    out = tmp_path / "out"
+    done = pinbore("impact", write_scene(data), "--out", out)
+    assert done.returncode == 2 and f"materials.{body}.density" in done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1 and not out.exists()
+
+
+def test_a_run_that_fails_keeps_what_it_computed(write_scene, tmp_path):
+    """Newton allowed 2 iterations and one halving: the run stops at the first contact step
+    it cannot solve, keeps the converged steps, marks impact.json incomplete, exit 1."""
+    from pinbore.fem import impact_file
+
+    data = impact_scene()
+    data["solver"] = {"newton_max_it": 2, "max_cutbacks": 1}
+    out = tmp_path / "out"
+    done = pinbore("impact", write_scene(data), "--out", out)
+    assert done.returncode == 1, done.stderr
+    summary = impact_file.read_summary(out / "impact.json")
+    history = impact_file.read_history(out / "history.csv")
+    assert summary.status == "incomplete" and "halvings" in summary.stop
+    assert summary.restitution is None and history.time.size == summary.steps + 1 > 1
+
+
+def test_every_shipped_impact_scene_is_valid():
+    from conftest import ROOT
+
+    from pinbore.core import scene
+    from pinbore.fem.impact_scene import ImpactScene
+
+    paths = sorted((ROOT / "scenes" / "impact").glob("*.toml"))
+    assert paths
+    for path in paths:
+        scene.load(ImpactScene, path)
