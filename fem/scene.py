@@ -2,7 +2,7 @@
 
 import functools
 import math
-from typing import Literal
+from typing import Annotated, Literal
 
 import pydantic
 
@@ -13,15 +13,60 @@ from pinbore.meshes.sizing import Sizing, check_cells, estimate_sizing
 
 
 class Material(Strict):
-    """Linear elastic, isotropic."""
+    """Isotropic, linear elastic; with a yield stress, elasto-plastic (von Mises, isotropic
+    hardening: linear with hardening_modulus H (0: perfectly plastic, the default), or the
+    table `hardening` of (equivalent plastic strain, yield stress (Pa)) pairs from
+    (0, yield_stress), held constant beyond its last pair; fem.plasticity)."""
 
     E: float = pydantic.Field(gt=0, description="Young's modulus (Pa)")
     nu: float = pydantic.Field(gt=-1, lt=0.5, description="Poisson's ratio")
+    yield_stress: float | None = pydantic.Field(default=None, gt=0, description="Y (Pa)")
+    hardening_modulus: float | None = pydantic.Field(default=None, ge=0,
+                                                     description="H = d sigma_y / dp (Pa)")
+    hardening: list[Annotated[list[float], pydantic.Field(min_length=2, max_length=2)]] | None = None
+
+    @pydantic.field_validator("hardening_modulus", "hardening")
+    @classmethod
+    def _needs_yield(cls, value, info):
+        if value is not None and info.data.get("yield_stress") is None:
+            raise ValueError("needs yield_stress (Pa) in the same table")
+        return value
+
+    @pydantic.field_validator("hardening")
+    @classmethod
+    def _table(cls, table, info):
+        if table is None:
+            return table
+        if info.data.get("hardening_modulus") is not None:
+            raise ValueError("give hardening_modulus or the table hardening, not both")
+        strains = [e for e, _ in table]
+        stresses = [s for _, s in table]
+        if not table or strains[0] != 0 or stresses[0] != info.data["yield_stress"]:
+            raise ValueError("the first pair must be (0, yield_stress): [[0.0, "
+                             f"{info.data['yield_stress']:g}], ...]")
+        if any(b <= a for a, b in zip(strains, strains[1:])):
+            raise ValueError("the plastic strains must increase strictly")
+        if any(b < a for a, b in zip(stresses, stresses[1:])):
+            raise ValueError("the yield stresses must not decrease (no softening)")
+        return table
+
+    @property
+    def hardening_curve(self) -> tuple[list[float], list[float], float]:
+        """(plastic strains, yield stresses (Pa), slope beyond the last point (Pa)), the form
+        fem.plasticity.yield_stress reads."""
+        if self.hardening is not None:
+            return [e for e, _ in self.hardening], [s for _, s in self.hardening], 0.0
+        return [0.0], [self.yield_stress], self.hardening_modulus or 0.0
 
 
 class Materials(Strict):
     pin: Material
     bore: Material
+
+    @property
+    def plastic(self) -> bool:
+        """Whether either body can yield."""
+        return self.pin.yield_stress is not None or self.bore.yield_stress is not None
 
 
 class Contact(Strict):
