@@ -120,21 +120,19 @@ def radial_return(strain, plastic_strain, equivalent, shear_modulus, bulk_modulu
     eps_p = plastic_strain.copy()
     p_new = equivalent.copy()
     tangent = np.zeros((n, 6, 6))
+    s = np.empty(6)
     for i in range(n):
         mu, kappa = shear_modulus[i], bulk_modulus[i]
-        elastic = strain[i] - plastic_strain[i]
-        trace = elastic[0] + elastic[1] + elastic[2]
-        s = 2.0 * mu * elastic
+        trace = 0.0
         for a in range(3):
-            s[a] -= 2.0 * mu * trace / 3.0
-        norm = np.sqrt(np.sum(s * s))
-        q = np.sqrt(1.5) * norm
+            trace += strain[i, a] - plastic_strain[i, a]
+        norm2 = 0.0
         for a in range(6):
-            for b in range(6):
-                tangent[i, a, b] = 2.0 * mu if a == b else 0.0
-        for a in range(3):
-            for b in range(3):
-                tangent[i, a, b] += kappa - 2.0 * mu / 3.0
+            s[a] = 2.0 * mu * (strain[i, a] - plastic_strain[i, a] - (trace / 3.0 if a < 3 else 0.0))
+            norm2 += s[a] * s[a]
+        norm = np.sqrt(norm2)
+        q = np.sqrt(1.5) * norm
+        theta, beta = 1.0, 0.0          # the elastic branch: C = kappa I (x) I + 2 mu I_dev
         j = curve[i]
         if j >= 0:
             p = equivalent[i]
@@ -152,24 +150,20 @@ def radial_return(strain, plastic_strain, equivalent, shear_modulus, bulk_modulu
                                                        count, tail)
                 dp = p - equivalent[i]
                 theta = 1.0 - 3.0 * mu * dp / q
-                unit = s / norm
-                for a in range(6):
-                    eps_p[i, a] += 1.5 * dp * s[a] / q
-                s = theta * s
-                p_new[i] = p
                 beta = 3.0 * mu / (3.0 * mu + slope) - 1.0 + theta
                 for a in range(6):
-                    for b in range(6):
-                        deviatoric = (1.0 if a == b else 0.0) - (1.0 / 3.0 if a < 3 and b < 3 else 0.0)
-                        tangent[i, a, b] = (2.0 * mu * theta * deviatoric
-                                            - 2.0 * mu * beta * unit[a] * unit[b])
-                for a in range(3):
-                    for b in range(3):
-                        tangent[i, a, b] += kappa
+                    eps_p[i, a] += 1.5 * dp * s[a] / q
+                p_new[i] = p
         for a in range(6):
-            stress[i, a] = s[a]
-        for a in range(3):
-            stress[i, a] += kappa * trace
+            stress[i, a] = theta * s[a] + (kappa * trace if a < 3 else 0.0)
+            for b in range(6):
+                value = 2.0 * mu * theta * ((1.0 if a == b else 0.0)
+                                            - (1.0 / 3.0 if a < 3 and b < 3 else 0.0))
+                if beta != 0.0:
+                    value -= 2.0 * mu * beta * s[a] * s[b] / norm2
+                if a < 3 and b < 3:
+                    value += kappa
+                tangent[i, a, b] = value
     return stress, eps_p, p_new, tangent
 
 
@@ -297,6 +291,8 @@ class ElastoPlastic:
         self.plastic_strain = np.zeros((n, 6))
         self.equivalent = np.zeros(n)
         self.stress = np.zeros((n, 6))
+        self.committed = 0          # commits and restores so far (a key of evaluate's cache)
+        self._key = self._last = None
 
     # --- evaluation at an iterate ----------------------------------------------------------
 
@@ -311,9 +307,16 @@ class ElastoPlastic:
 
     def evaluate(self, x: PETSc.Vec):
         """The return map from the committed state at the strain of x: stress, plastic
-        strain, equivalent plastic strain, tangent (radial_return)."""
-        return radial_return(self.strain_at_points(x), self.plastic_strain, self.equivalent,
-                             self.shear_modulus, self.bulk_modulus, self.curve, *self.tables)
+        strain, equivalent plastic strain, tangent (radial_return). Newton asks for the
+        residual and then the tangent at the same iterate: the second call reuses the first
+        (keyed on the vector and PETSc's count of its changes)."""
+        key = (x.handle, x.stateGet(), self.committed)
+        if key != self._key:
+            self._key = key
+            self._last = radial_return(self.strain_at_points(x), self.plastic_strain,
+                                       self.equivalent, self.shear_modulus, self.bulk_modulus,
+                                       self.curve, *self.tables)
+        return self._last
 
     def internal_force(self, x: PETSc.Vec, out: PETSc.Vec) -> None:
         """out = f_int(x) = int sigma(x) : eps(v) dx (N/m per dof in 2D, N in 3D)."""
@@ -345,6 +348,7 @@ class ElastoPlastic:
         stress, eps_p, p, _ = self.evaluate(x)
         density = 0.5 * np.einsum("ni,ni->n", self.stress + stress, eps_p - self.plastic_strain)
         self.stress, self.plastic_strain, self.equivalent = stress, eps_p, p
+        self.committed += 1
         return self._integral(density)
 
     def snapshot(self):
@@ -352,6 +356,7 @@ class ElastoPlastic:
 
     def restore(self, snapshot) -> None:
         self.stress, self.plastic_strain, self.equivalent = (a.copy() for a in snapshot)
+        self.committed += 1
 
     def _integral(self, density: np.ndarray) -> float:
         return float(self.comm.allreduce(float(density @ self.volume), op=MPI.SUM))

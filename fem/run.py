@@ -24,10 +24,10 @@ def run(scene_path, out, comm=MPI.COMM_WORLD) -> int:
         stepper, el, contact, sizing, data = model.build(scene, comm)
         setup = time.perf_counter() - start
         programme = scene.load.programme
-        fields = (outputs.FieldWriter(tmp / "fields.xdmf", el, contact)
+        fields = (outputs.FieldWriter(tmp / "fields.xdmf", el, contact, stepper.material)
                   if scene.output.fields else None)
         # a progress bar on rank 0 when it writes to a terminal (tqdm decides: disable=None)
-        with tqdm(total=len(programme), desc=f"fem {Path(scene_path).stem}", unit="step",
+        with tqdm(total=scene.load.step_count, desc=f"fem {Path(scene_path).stem}", unit="step",
                   disable=None if comm.rank == 0 else True, leave=False) as bar:
             result = stepper.run(programme, bar, on_step=fields.write if fields else None)
         if fields:

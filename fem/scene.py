@@ -2,6 +2,7 @@
 
 import functools
 import math
+from dataclasses import dataclass
 from typing import Annotated, Literal
 
 import pydantic
@@ -93,6 +94,23 @@ class Contact(Strict):
 SECOND_STAGES = ("rotation_deg", "tangential_push", "tilt_deg")   # after the push, one of them
 
 
+@dataclass(frozen=True)
+class Unload:
+    """A load-programme item: move the hub back until its force returns to zero, in about
+    `steps` steps (fem.solver.LoadStepper finds the approach where the contact opens)."""
+
+    steps: int
+
+
+@dataclass(frozen=True)
+class Reload:
+    """A load-programme item: push again from where the last unloading ended to `approach`
+    (m), in `steps` equal steps."""
+
+    approach: float
+    steps: int
+
+
 class Load(Strict):
     """The hub moves the clearance through free space, then pushes max_approach further, in
     equal steps, or in geometric steps from first_approach when that is given.
@@ -116,6 +134,9 @@ class Load(Strict):
     slide_steps: int = pydantic.Field(default=10, ge=1, le=10_000)
     tilt_deg: float | None = None
     tilt_steps: int = pydantic.Field(default=10, ge=1, le=10_000)
+    unload: bool = False
+    unload_steps: int | None = pydantic.Field(default=None, ge=1, le=10_000)
+    cycles: int = pydantic.Field(default=1, ge=1, le=1000)
 
     @pydantic.model_validator(mode="after")
     def _steps(self):
@@ -131,6 +152,12 @@ class Load(Strict):
         if self.first_approach is not None and (self.first_approach >= self.max_approach
                                                 or self.steps < 2):
             raise ValueError("first_approach must be below max_approach, with steps >= 2")
+        if self.cycles > 1 and not self.unload:
+            raise ValueError("cycles > 1 needs unload = true (a cycle ends at zero force)")
+        if self.unload_steps is not None and not self.unload:
+            raise ValueError("unload_steps applies to unload = true only")
+        if self.unload and slide is not None:
+            raise ValueError(f"unload: a load programme unloads after the push, not after {slide}")
         return self
 
     @property
@@ -142,15 +169,25 @@ class Load(Strict):
         return [self.first_approach * ratio**k for k in range(self.steps)]
 
     @property
-    def programme(self) -> list[tuple[float, float, float, float]]:
-        """Every load step as (approach (m), rotation (rad), tangential push (m), tilt (rad))."""
+    def programme(self) -> list:
+        """Every load step as (approach (m), rotation (rad), tangential push (m), tilt (rad));
+        with `unload`, each cycle ends with an Unload and the next reloads (Reload)."""
         points = [(a, 0.0, 0.0, 0.0) for a in self.approaches]
+        if self.unload:
+            unload = Unload(self.unload_steps or self.steps)
+            return points + [unload] + [Reload(self.max_approach, self.steps), unload] * (self.cycles - 1)
         end = (0.0, math.radians(self.rotation_deg or 0.0), self.tangential_push or 0.0,
                math.radians(self.tilt_deg or 0.0))
         n = self.tilt_steps if self.tilt_deg is not None else self.slide_steps
         if any(end):
             points += [(self.max_approach, *(v * k / n for v in end[1:])) for k in range(1, n + 1)]
         return points
+
+    @property
+    def step_count(self) -> int:
+        """The load steps of the programme as planned (an unloading's search for zero force
+        counts as one)."""
+        return sum(item.steps if isinstance(item, (Unload, Reload)) else 1 for item in self.programme)
 
     @property
     def direction(self) -> tuple[float, float]:
