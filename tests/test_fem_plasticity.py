@@ -99,6 +99,7 @@ def test_residual_approach_is_where_the_force_vanishes(cycle):
     assert cycle.residual[ends[1]] == pytest.approx(cycle.residual[ends[0]], rel=1e-3)
 
 
+@pytest.mark.slow
 def test_unloading_slope_is_that_of_the_elastic_curve():
     """Just past first yield the plastic zone is small: the first unloading slope equals the
     slope of the purely elastic curve at the same force (its secant over the same force
@@ -139,22 +140,39 @@ def test_a_material_that_never_yields_is_the_elastic_model():
 
 
 def test_first_yield_matches_johnson_line_contact():
-    """Large clearance (c/R = 0.1), where the contact is Hertzian (test_fem_validation), pin
-    and bore of one steel with Y = 250 MPa: the FE first yields (largest von Mises stress of
-    its quadrature points reaches Y; the elastic stress grows as sqrt(P), so the load is
-    P_k (Y / vm_k)^2 from the last elastic step) at Johnson's load P = pi R* p0^2 / E*,
-    p0 = 3.1 k = 3.1 Y / sqrt3 (Contact Mechanics §6.2, von Mises, nu = 0.3), R* the
-    conformal radius [Johnson1985]; and the plastic model starts yielding between the steps
-    that bracket it."""
-    clearance, radius, Y = 1e-3, 10e-3, 250e6
+    """Large clearance (c/R = 0.1), light load (a/R < 0.03), where the contact is Hertzian
+    (test_fem_validation: a and p0 within 2 %), pin and bore of one steel, Y = 100 MPa. The
+    FE first yields when the largest von Mises stress of its quadrature points reaches Y;
+    the elastic stress grows as sqrt(P), so from the last elastic step k that load is
+    P_k (Y / vm_k)^2, and the plastic model does start yielding at the next step. Johnson's
+    closed form [Johnson1985] (§6.2, von Mises, nu = 0.3): p0 = 3.1 k = 3.1 Y / sqrt3, so
+    P = pi R* p0^2 / E* with the conformal 1/R* = 1/R_pin - 1/R_bore.
+
+    Measured: the FE yields at 0.84-0.87 of Johnson's load on the default mesh, 0.89 with
+    every element size halved (the stresses of P1 elements scatter by about 2 % of p0 from
+    element to element and the largest one is taken; along the load axis the FE stress
+    sigma_xx carries a tension of about 0.025 p0 that a half-space does not have: the pin
+    is a ring on a rigid hub). So the FE yields early, by 13-16 % in load (6-8 % in
+    stress); held to [0.8, 1.02]."""
+    clearance, radius, Y = 1e-3, 10e-3, 100e6
     steel = plastic(Y, 10e9)
+    data = with_clearance(clearance, materials={"pin": steel, "bore": steel},
+                          contact={"method": "penalty"}, load={"max_approach": 2e-6, "steps": 4})
     largest = []
-    solved = Solved(with_clearance(clearance, materials={"pin": steel, "bore": steel},
-                                   contact={"method": "penalty"},
-                                   load={"max_approach": 1e-5, "steps": 8}),
-                    on_step=lambda x, step: largest.append(von_mises(solved_material().stress).max()))
-    del solved
-    raise NotImplementedError
+    holder = {}
+    solved = Solved(data, on_step=lambda x, step: largest.append(
+        von_mises(holder["stepper"].material.stress).max()), hook=holder)
+    steps = solved.run.steps
+    elastic = [i for i, s in enumerate(steps) if s.max_plastic_strain == 0.0]
+    k = elastic[-1]
+    assert k + 1 < len(steps) and steps[k + 1].max_plastic_strain > 0   # yields at the next step
+    fe = steps[k].force[0] * (Y / largest[k]) ** 2
+    assert steps[k].force[0] < fe <= steps[k + 1].force[0]
+    r_star = radius * (radius - clearance) / clearance
+    p0 = 3.1 * Y / math.sqrt(3)
+    johnson = math.pi * r_star * p0**2 / solved.scene.effective_modulus
+    print(f"first yield: FE {fe:.4e} N/m, Johnson {johnson:.4e} N/m, ratio {fe / johnson:.4f}")
+    assert 0.8 <= fe / johnson <= 1.02
 
 
 def test_old_curves_read_without_the_plastic_columns(tmp_path):
