@@ -13,10 +13,15 @@ resultant columns only:
   columns: the hub's tilt (tilt_deg), the hub's moment on the pin about the tilt axis
   through the bore's mid-plane centre (tilt_moment_N_m, positive along a positive tilt: the
   end z = length turned towards the load; fem.scene.FemScene.tilt_axis), the axial position
-  of the force's resultant on the bore's axis (resultant_z_m = length/2 + M/F; nan, the one
-  non-finite cell a file may hold, at a step without force), and the
+  of the force's resultant on the bore's axis (resultant_z_m = length/2 + M/F; nan at a
+  step without force), and the
   axial length of the pin in contact (contact_length_m); pressure.csv adds the axial position
   z_m and the axial shear.
+
+Both variants carry the plastic work of each step (J/m or J), the largest equivalent plastic
+strain so far, and the residual approach (m): on the last step of an unloading the approach
+at which the hub force returned to zero, nan on the other steps (nan, undefined, is the one
+non-finite value a file may hold, here and in resultant_z_m).
 
 Columns added by later versions (the plastic work of each step, the largest equivalent plastic
 strain, the residual approach after an unloading) may be missing from a file written before
