@@ -101,6 +101,7 @@ build/report/index.html: $(FEM_CURVES) $(MESHES) build/calibration/laws.json $(R
 bench: $(STUDY_CURVES) $(STAMP) ## run the benchmarks: bench/*.csv and plots (a few minutes)
 	$(PY) bench/fem2d.py --out bench
 	$(PY) bench/fem3d.py --out bench
+	$(PY) bench/plastic.py --out bench
 	$(PY) bench/calibrate.py --out bench
 	$(PY) bench/multibody.py --out bench
 	$(PY) bench/sweep.py --out bench

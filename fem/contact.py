@@ -641,6 +641,10 @@ class PinBoreContact:
             act = np.flatnonzero(self.normal_set & np.isfinite(kin.gap))
             p = np.zeros_like(kin.gap)
             p[act] = self.lam[act] - self.penalty * kin.gap[act]
+        if act.size == 0:   # no node in contact (an unloading has opened it): no terms
+            width = (1 + (2 if self.dim == 2 else 4)) * self.dim
+            return (act, np.zeros((0, width), dtype=self.pin_rows.dtype), np.zeros((0, width)),
+                    np.zeros((0, width, width)) if with_tangent else None)
         proj = kin.projection
         corners = self.bore.corners(proj.k[act], proj.l[act])
         rows = np.concatenate([self.pin_rows[act, None], self.bore_rows[corners]], axis=1)

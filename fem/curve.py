@@ -13,10 +13,19 @@ resultant columns only:
   columns: the hub's tilt (tilt_deg), the hub's moment on the pin about the tilt axis
   through the bore's mid-plane centre (tilt_moment_N_m, positive along a positive tilt: the
   end z = length turned towards the load; fem.scene.FemScene.tilt_axis), the axial position
-  of the force's resultant on the bore's axis (resultant_z_m = length/2 + M/F; nan, the one
-  non-finite cell a file may hold, at a step without force), and the
+  of the force's resultant on the bore's axis (resultant_z_m = length/2 + M/F; nan at a
+  step without force), and the
   axial length of the pin in contact (contact_length_m); pressure.csv adds the axial position
   z_m and the axial shear.
+
+Both variants carry the plastic work of each step (J/m or J), the largest equivalent plastic
+strain so far, and the residual approach (m): on the last step of an unloading the approach
+at which the hub force returned to zero, nan on the other steps (nan, undefined, is the one
+non-finite value a file may hold, here and in resultant_z_m).
+
+Columns added by later versions (the plastic work of each step, the largest equivalent plastic
+strain, the residual approach after an unloading) may be missing from a file written before
+them: the reader fills them with their `absent` value (0, 0 and nan: an elastic push).
 
 A reader refuses a file as one InputError line that names the file and what is wrong: a
 header that is neither variant (a missing, unknown or repeated column, as a file of another
@@ -35,13 +44,15 @@ import numpy as np
 from pinbore.core.errors import InputError
 from pinbore.core.scene import RUN_AGAIN
 
-STAGES = ("push", "rotate", "slide", "tilt")   # radial approach; hub turned; pushed across; tilted
+# radial approach; hub turned; pushed across; tilted; moved back to zero force; pushed again
+STAGES = ("push", "rotate", "slide", "tilt", "unload", "reload")
+UNLOAD, RELOAD = STAGES[4:]
 
 
 def stage(point) -> str:
     """The stage of a load-programme point (approach m, rotation rad, tangential push m,
     tilt rad)."""
-    push, rotate, slide, tilt = STAGES
+    push, rotate, slide, tilt = STAGES[:4]
     return rotate if point[1] else (slide if point[2] else (tilt if point[3] else push))
 
 
@@ -56,6 +67,7 @@ class Column:
     format: str = ""   # ints and names are written as they are
     choices: tuple[str, ...] = ()   # the names a str column may hold (empty: any)
     undefined_ok: bool = False       # a float column that may hold nan (undefined, not lost)
+    absent: float | None = None      # a column added later: its value in files without it
 
     def cell(self, value):
         return format(value, self.format) if self.format else value
@@ -98,6 +110,10 @@ class Curve:
     half_angle: np.ndarray         # deg, contact half-angle
     stick_fraction: np.ndarray     # of the touching nodes, those that stick
     dissipated_work: np.ndarray    # friction work so far: 2D J/m, 3D J
+    plastic_work: np.ndarray       # plastic work of this step: 2D J/m, 3D J (0: elastic)
+    max_plastic_strain: np.ndarray  # the largest equivalent plastic strain so far
+    residual_approach: np.ndarray  # m, on the last step of an unloading: the approach at
+                                   # which the force returned to zero (nan on other steps)
     newton_iterations: np.ndarray  # Newton iterations of the step
     uzawa_iterations: np.ndarray   # augmented-Lagrangian updates of the step
     gap_violation: np.ndarray      # m, the largest penetration left
@@ -124,15 +140,20 @@ _SHARED = {"step": Column("step", "1", int), "stage": Column("stage", "", str, c
            "stick_fraction": _float("stick_fraction", "1", ".4f"),
            "newton_iterations": Column("newton_iterations", "1", int),
            "uzawa_iterations": Column("uzawa_iterations", "1", int),
-           "gap_violation": _float("gap_violation_m", "m", ".3e")}
+           "gap_violation": _float("gap_violation_m", "m", ".3e"),
+           "max_plastic_strain": Column("max_plastic_strain", "1", float, ".6e", absent=0.0),
+           "residual_approach": Column("residual_approach_m", "m", float, ".9e",
+                                       undefined_ok=True, absent=math.nan)}
 _RESULTANTS = {
     2: {"force": _float("force_per_length_N_per_m", "N/m"),
         "tangential_force": _float("tangential_force_per_length_N_per_m", "N/m"),
         "friction_torque": _float("friction_torque_per_length_N", "N m/m"),
-        "dissipated_work": _float("dissipated_work_J_per_m", "J/m")},
+        "dissipated_work": _float("dissipated_work_J_per_m", "J/m"),
+        "plastic_work": Column("plastic_work_J_per_m", "J/m", float, ".9e", absent=0.0)},
     3: {"force": _float("force_N", "N"), "tangential_force": _float("tangential_force_N", "N"),
         "friction_torque": _float("friction_torque_N_m", "N m"),
         "dissipated_work": _float("dissipated_work_J", "J"),
+        "plastic_work": Column("plastic_work_J", "J", float, ".9e", absent=0.0),
         "tilt": _float("tilt_deg", "deg"), "tilt_moment": _float("tilt_moment_N_m", "N m"),
         "resultant_z": Column("resultant_z_m", "m", float, ".9e", undefined_ok=True),  # nan: F = 0
         "contact_length": _float("contact_length_m", "m")},
@@ -230,6 +251,7 @@ def _read(path: Path, variants: dict[int, dict[str, Column]],
             raise InputError(f"{path}: row {i}: {len(row)} cells, the header names {len(header)}")
     return dim, {field: np.array([c.parse(row[at[c.name]], f"{path}: {c.name}: row {i}")
                                   for i, row in enumerate(rows, start=1)], dtype=c.kind)
+                 if c.name in at else np.full(len(rows), c.absent, dtype=c.kind)
                  for field, c in variants[dim].items()}
 
 
@@ -243,7 +265,8 @@ def _variant(path: Path, header: list[str], variants: dict[int, dict[str, Column
     differences = {}
     for dim, columns in variants.items():
         names = [c.name for c in columns.values()]
-        differences[dim] = ([c for c in columns.values() if c.name not in header],
+        differences[dim] = ([c for c in columns.values()
+                             if c.name not in header and c.absent is None],
                             [name for name in header if name not in names])
         if not any(differences[dim]):
             return dim

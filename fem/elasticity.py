@@ -133,18 +133,41 @@ class Elasticity:
         """F = 0 at the prescribed dofs (their values are set, not solved for)."""
         dolfinx.fem.petsc.set_bc(F, self.bcs, alpha=0.0)
 
+    # --- the material interface of the load stepper (fem.solver), shared with
+    # fem.plasticity.ElastoPlastic; linear elasticity has a constant tangent and no state
+
+    plastic = False
+
     def internal_force(self, x: PETSc.Vec, out: PETSc.Vec) -> None:
         """out = K x: the elastic internal forces (N/m per dof)."""
         self.K.mult(x, out)
 
-    def hub_reaction(self, x: PETSc.Vec, work: PETSc.Vec) -> tuple[np.ndarray, float]:
-        """Force (N/m in 2D, N in 3D) the hub exerts on the pin, summed over its dofs, (K x)
-        at the hub; and (3D) its moment (N m) about the tilt axis through the tilt pivot
-        (self.tilt_frame), sum (X - c) x (K x) . a over the hub's nodes at their reference
-        positions X (small strain: K x has no moment over a free body, so this is also minus
-        the moment of the contact tractions; 0.0 in 2D)."""
-        self.K.mult(x, work)
-        local = work.getArray(readonly=True).reshape(-1, self.dim)
+    def add_tangent(self, x: PETSc.Vec, J: PETSc.Mat) -> None:
+        """J += K_bc (the stiffness with identity rows and columns at the prescribed dofs;
+        J's pattern holds K_bc's)."""
+        J.axpy(1.0, self.K_bc, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+
+    def commit(self, x: PETSc.Vec) -> float:
+        """No state to keep; the plastic work of the step: 0 (J/m)."""
+        return 0.0
+
+    def snapshot(self):
+        return None
+
+    def restore(self, snapshot) -> None:
+        pass
+
+    def max_plastic_strain(self) -> float:
+        return 0.0
+
+    def hub_reaction(self, forces: PETSc.Vec) -> tuple[np.ndarray, float]:
+        """Force (N/m in 2D, N in 3D) the hub exerts on the pin, summed over its dofs, from
+        the internal forces `forces` (K x, or those of an elasto-plastic material) at the hub;
+        and (3D) its moment (N m) about the tilt axis through the tilt pivot
+        (self.tilt_frame), sum (X - c) x f . a over the hub's nodes at their reference
+        positions X (small strain: the internal forces have no moment over a free body, so
+        this is also minus the moment of the contact tractions; 0.0 in 2D)."""
+        local = forces.getArray(readonly=True).reshape(-1, self.dim)
         hub = self.dofs["hub"]
         mine = hub < self.V.dofmap.index_map.size_local
         forces = local[hub[mine]]

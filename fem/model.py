@@ -7,6 +7,7 @@ from mpi4py import MPI
 
 from pinbore.fem.contact import PinBoreContact
 from pinbore.fem.elasticity import Elasticity
+from pinbore.fem.plasticity import ElastoPlastic
 from pinbore.fem.scene import FemScene
 from pinbore.fem.solver import LoadStepper
 from pinbore.meshes import pin_in_bore
@@ -75,6 +76,8 @@ def build(scene: FemScene, comm=MPI.COMM_WORLD):
         "pin_runs_on": g.pin_overhang > 0}
     contact = PinBoreContact(el.V, *surface, g.bore_radius, penalty_of(scene, sizing.contact_size),
                              el.K.createVecRight(), friction=scene.contact.friction, **three_d)
+    material = (ElastoPlastic(el, data.cell_tags, scene.materials.pin, scene.materials.bore)
+                if scene.materials.plastic else None)   # elastic: the constant stiffness alone
     direction = np.append(scene.load.direction, [0.0] * (g.dim - 2))
     tolerance = scene.contact.gap_tolerance or DEFAULT_GAP_TOLERANCE * scene.load.max_approach
     stepper = LoadStepper(el, contact, clearance=first_touch(contact.pin_X, direction, g),
@@ -83,5 +86,6 @@ def build(scene: FemScene, comm=MPI.COMM_WORLD):
                           uzawa_max_it=scene.solver.uzawa_max_it,
                           max_cutbacks=scene.solver.max_cutbacks,
                           force_atol=residual_tolerance(scene, contact.penalty * sizing.contact_size),
-                          couplings=contact.couplings(direction, sizing.arc_half_angle))
+                          couplings=contact.couplings(direction, sizing.arc_half_angle),
+                          material=material)
     return stepper, el, contact, sizing, data

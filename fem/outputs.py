@@ -29,12 +29,14 @@ def curve_rows(run, direction_deg, contact, pivot_z, copies=1):
         touching = step.contact.status != OPEN
         stuck = np.count_nonzero(step.contact.status == STICK) / max(np.count_nonzero(touching), 1)
         dissipated += step.dissipated
-        row = {"step": i, "stage": curve.stage(step.point), "approach": step.point[0],
+        row = {"step": i, "stage": step.stage or curve.stage(step.point), "approach": step.point[0],
                "rotation": np.degrees(step.point[1]), "tangential_push": step.point[2],
                "force": step.force[0], "tangential_force": step.force[1],
                "friction_torque": step.torque,
                "half_angle": np.degrees(half_angle(alpha, step.contact.pressure[section])),
                "stick_fraction": stuck, "dissipated_work": dissipated,
+               "plastic_work": step.plastic_work, "max_plastic_strain": step.max_plastic_strain,
+               "residual_approach": step.residual_approach,
                "newton_iterations": step.newton_iterations,
                "uzawa_iterations": step.uzawa_iterations, "gap_violation": step.gap_violation}
         if contact.dim == 3:
@@ -83,15 +85,19 @@ def write_result(path: Path, result: dict) -> None:
 
 
 class FieldWriter:
-    """Displacement, von Mises stress and contact pressure per converged step, for ParaView."""
+    """Displacement, von Mises stress and contact pressure per converged step, for ParaView;
+    with an elasto-plastic material also the equivalent plastic strain (cell means, DG0)."""
 
-    def __init__(self, path: Path, elasticity, contact):
+    def __init__(self, path: Path, elasticity, contact, material=None):
         mesh = elasticity.mesh
+        self.material = material if material is not None and material.plastic else None
         self.u = dolfinx.fem.Function(elasticity.V, name="displacement")
         Q = dolfinx.fem.functionspace(mesh, ("DG", 0))
         self.von_mises = dolfinx.fem.Function(Q, name="von_mises")
         self.vm_expr = dolfinx.fem.Expression(elasticity.von_mises(self.u),
                                               Q.element.interpolation_points)
+        self.plastic_strain = dolfinx.fem.Function(Q, name="equivalent_plastic_strain")
+        self.cells = mesh.topology.index_map(mesh.topology.dim).size_local
         W = dolfinx.fem.functionspace(mesh, ("Lagrange", 1))
         self.pressure = dolfinx.fem.Function(W, name="contact_pressure")
         # gathered pin nodes -> local scalar dofs (same layout as the blocked vector space)
@@ -105,11 +111,19 @@ class FieldWriter:
     def write(self, x, step):
         x.copy(self.u.x.petsc_vec)
         self.u.x.scatter_forward()
-        self.von_mises.interpolate(self.vm_expr)
+        shown = [self.u, self.von_mises, self.pressure]
+        if self.material is None:
+            self.von_mises.interpolate(self.vm_expr)
+        else:   # the stress of the committed state (DG0: one value per cell)
+            for f, name in ((self.von_mises, "von_mises"),
+                            (self.plastic_strain, "equivalent_plastic_strain")):
+                f.x.array[:self.cells] = self.material.cell_values(name)
+                f.x.scatter_forward()
+            shown.append(self.plastic_strain)
         self.pressure.x.array[:] = 0.0
         self.pressure.x.array[self.local] = step.contact.pressure[self.mine]
         self.step += 1
-        for f in (self.u, self.von_mises, self.pressure):
+        for f in shown:
             self.file.write_function(f, float(self.step))
 
     def close(self):

@@ -24,14 +24,16 @@ def run(scene_path, out, comm=MPI.COMM_WORLD) -> int:
         stepper, el, contact, sizing, data = model.build(scene, comm)
         setup = time.perf_counter() - start
         programme = scene.load.programme
-        fields = (outputs.FieldWriter(tmp / "fields.xdmf", el, contact)
+        fields = (outputs.FieldWriter(tmp / "fields.xdmf", el, contact, stepper.material)
                   if scene.output.fields else None)
         # a progress bar on rank 0 when it writes to a terminal (tqdm decides: disable=None)
-        with tqdm(total=len(programme), desc=f"fem {Path(scene_path).stem}", unit="step",
+        with tqdm(total=scene.load.step_count, desc=f"fem {Path(scene_path).stem}", unit="step",
                   disable=None if comm.rank == 0 else True, leave=False) as bar:
             result = stepper.run(programme, bar, on_step=fields.write if fields else None)
         if fields:
             fields.close()
+        # collective: every rank asks, rank 0 writes it
+        beyond = stepper.material.plastic and stepper.material.beyond_table()
         solve = time.perf_counter() - start - setup
         if result.steps and scene.output.picture:
             if scene.geometry.dim == 2:
@@ -49,7 +51,11 @@ def run(scene_path, out, comm=MPI.COMM_WORLD) -> int:
                 scene, scene_path, result, el, contact, stepper, sizing, comm,
                 {"setup": setup, "solve": solve,
                  "post": time.perf_counter() - start - setup - solve,   # pictures, files
-                 "total": time.perf_counter() - start}))
+                 "total": time.perf_counter() - start}, beyond))
+    if beyond and comm.rank == 0:
+        print(f"pinbore fem: {scene_path}: warning: the equivalent plastic strain went past the "
+              "last pair of a hardening table (the yield stress was held constant there)",
+              file=sys.stderr)
     if result.stop is not None:
         if comm.rank == 0:
             print(f"pinbore fem: {scene_path}: stopped early: {result.stop.message}; "
@@ -71,7 +77,7 @@ def symmetry_note(scene, el) -> str | None:
     return f"full model ({why})"
 
 
-def summary(scene, scene_path, result, el, contact, stepper, sizing, comm, wall):
+def summary(scene, scene_path, result, el, contact, stepper, sizing, comm, wall, beyond=False):
     steps = result.steps
     return {
         "scene_file": str(scene_path),
@@ -98,6 +104,12 @@ def summary(scene, scene_path, result, el, contact, stepper, sizing, comm, wall)
         "factorizations": [s.factorizations for s in steps],
         "snes_reasons": [s.reasons for s in steps],
         "gap_violation_m": [s.gap_violation for s in steps],
+        "plasticity": None if not stepper.material.plastic else {
+            "plastic_work": sum(s.plastic_work for s in steps),     # J/m (3D: J)
+            "max_plastic_strain": max((s.max_plastic_strain for s in steps), default=0.0),
+            "beyond_hardening_table": beyond},
+        "residual_approach_m": [s.residual_approach for s in steps
+                                if math.isfinite(s.residual_approach)],
         "max_gap_violation_m": max((s.gap_violation for s in steps), default=None),
         "wall_time_s": wall,
         "step_wall_time_s": [s.wall_time for s in steps],

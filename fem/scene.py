@@ -2,7 +2,8 @@
 
 import functools
 import math
-from typing import Literal
+from dataclasses import dataclass
+from typing import Annotated, Literal
 
 import pydantic
 
@@ -13,15 +14,60 @@ from pinbore.meshes.sizing import Sizing, check_cells, estimate_sizing
 
 
 class Material(Strict):
-    """Linear elastic, isotropic."""
+    """Isotropic, linear elastic; with a yield stress, elasto-plastic (von Mises, isotropic
+    hardening: linear with hardening_modulus H (0: perfectly plastic, the default), or the
+    table `hardening` of (equivalent plastic strain, yield stress (Pa)) pairs from
+    (0, yield_stress), held constant beyond its last pair; fem.plasticity)."""
 
     E: float = pydantic.Field(gt=0, description="Young's modulus (Pa)")
     nu: float = pydantic.Field(gt=-1, lt=0.5, description="Poisson's ratio")
+    yield_stress: float | None = pydantic.Field(default=None, gt=0, description="Y (Pa)")
+    hardening_modulus: float | None = pydantic.Field(default=None, ge=0,
+                                                     description="H = d sigma_y / dp (Pa)")
+    hardening: list[Annotated[list[float], pydantic.Field(min_length=2, max_length=2)]] | None = None
+
+    @pydantic.field_validator("hardening_modulus", "hardening")
+    @classmethod
+    def _needs_yield(cls, value, info):
+        if value is not None and info.data.get("yield_stress") is None:
+            raise ValueError("needs yield_stress (Pa) in the same table")
+        return value
+
+    @pydantic.field_validator("hardening")
+    @classmethod
+    def _table(cls, table, info):
+        if table is None:
+            return table
+        if info.data.get("hardening_modulus") is not None:
+            raise ValueError("give hardening_modulus or the table hardening, not both")
+        strains = [e for e, _ in table]
+        stresses = [s for _, s in table]
+        if not table or strains[0] != 0 or stresses[0] != info.data["yield_stress"]:
+            raise ValueError("the first pair must be (0, yield_stress): [[0.0, "
+                             f"{info.data['yield_stress']:g}], ...]")
+        if any(b <= a for a, b in zip(strains, strains[1:])):
+            raise ValueError("the plastic strains must increase strictly")
+        if any(b < a for a, b in zip(stresses, stresses[1:])):
+            raise ValueError("the yield stresses must not decrease (no softening)")
+        return table
+
+    @property
+    def hardening_curve(self) -> tuple[list[float], list[float], float]:
+        """(plastic strains, yield stresses (Pa), slope beyond the last point (Pa)), the form
+        fem.plasticity.yield_stress reads."""
+        if self.hardening is not None:
+            return [e for e, _ in self.hardening], [s for _, s in self.hardening], 0.0
+        return [0.0], [self.yield_stress], self.hardening_modulus or 0.0
 
 
 class Materials(Strict):
     pin: Material
     bore: Material
+
+    @property
+    def plastic(self) -> bool:
+        """Whether either body can yield."""
+        return self.pin.yield_stress is not None or self.bore.yield_stress is not None
 
 
 class Contact(Strict):
@@ -48,6 +94,23 @@ class Contact(Strict):
 SECOND_STAGES = ("rotation_deg", "tangential_push", "tilt_deg")   # after the push, one of them
 
 
+@dataclass(frozen=True)
+class Unload:
+    """A load-programme item: move the hub back until its force returns to zero, in about
+    `steps` steps (fem.solver.LoadStepper finds the approach where the contact opens)."""
+
+    steps: int
+
+
+@dataclass(frozen=True)
+class Reload:
+    """A load-programme item: push again from where the last unloading ended to `approach`
+    (m), in `steps` equal steps."""
+
+    approach: float
+    steps: int
+
+
 class Load(Strict):
     """The hub moves the clearance through free space, then pushes max_approach further, in
     equal steps, or in geometric steps from first_approach when that is given.
@@ -71,6 +134,9 @@ class Load(Strict):
     slide_steps: int = pydantic.Field(default=10, ge=1, le=10_000)
     tilt_deg: float | None = None
     tilt_steps: int = pydantic.Field(default=10, ge=1, le=10_000)
+    unload: bool = False
+    unload_steps: int | None = pydantic.Field(default=None, ge=1, le=10_000)
+    cycles: int = pydantic.Field(default=1, ge=1, le=1000)
 
     @pydantic.model_validator(mode="after")
     def _steps(self):
@@ -86,6 +152,12 @@ class Load(Strict):
         if self.first_approach is not None and (self.first_approach >= self.max_approach
                                                 or self.steps < 2):
             raise ValueError("first_approach must be below max_approach, with steps >= 2")
+        if self.cycles > 1 and not self.unload:
+            raise ValueError("cycles > 1 needs unload = true (a cycle ends at zero force)")
+        if self.unload_steps is not None and not self.unload:
+            raise ValueError("unload_steps applies to unload = true only")
+        if self.unload and slide is not None:
+            raise ValueError(f"unload: a load programme unloads after the push, not after {slide}")
         return self
 
     @property
@@ -97,15 +169,25 @@ class Load(Strict):
         return [self.first_approach * ratio**k for k in range(self.steps)]
 
     @property
-    def programme(self) -> list[tuple[float, float, float, float]]:
-        """Every load step as (approach (m), rotation (rad), tangential push (m), tilt (rad))."""
+    def programme(self) -> list:
+        """Every load step as (approach (m), rotation (rad), tangential push (m), tilt (rad));
+        with `unload`, each cycle ends with an Unload and the next reloads (Reload)."""
         points = [(a, 0.0, 0.0, 0.0) for a in self.approaches]
+        if self.unload:
+            unload = Unload(self.unload_steps or self.steps)
+            return points + [unload] + [Reload(self.max_approach, self.steps), unload] * (self.cycles - 1)
         end = (0.0, math.radians(self.rotation_deg or 0.0), self.tangential_push or 0.0,
                math.radians(self.tilt_deg or 0.0))
         n = self.tilt_steps if self.tilt_deg is not None else self.slide_steps
         if any(end):
             points += [(self.max_approach, *(v * k / n for v in end[1:])) for k in range(1, n + 1)]
         return points
+
+    @property
+    def step_count(self) -> int:
+        """The load steps of the programme as planned (an unloading's search for zero force
+        counts as one)."""
+        return sum(item.steps if isinstance(item, (Unload, Reload)) else 1 for item in self.programme)
 
     @property
     def direction(self) -> tuple[float, float]:

@@ -48,14 +48,18 @@ import scipy.sparse
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from pinbore.fem import curve
 from pinbore.fem.contact import ContactState, PinBoreContact
 from pinbore.fem.elasticity import Elasticity
+from pinbore.fem.scene import Reload, Unload
 
 PREDICTOR_RATIO = 0.5
 LINEAR_RTOL = 1e-8            # of each Newton step's linear solve (relative)
 REUSE_NODES = 8               # pin nodes whose contact terms may differ from the factorised ones
 REFACTOR_ITERATIONS = 20      # a linear solve that took more: refactor at the next one
 REUSE_MAX_ITERATIONS = 40     # GMRES iterations on a kept factorisation before giving up
+UNLOAD_FORCE_TOLERANCE = 1e-4   # of the force at the top: the unloading has reached zero force
+UNLOAD_SEARCH_STEPS = 20        # steps of the search for zero force before it gives up
 SNES_REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
 
 
@@ -75,6 +79,10 @@ class StepResult:
     reasons: list[str]
     contact: ContactState
     wall_time: float
+    stage: str = ""              # of pinbore.fem.curve.STAGES
+    plastic_work: float = 0.0    # J/m (3D: J), plastic work of this step
+    max_plastic_strain: float = 0.0
+    residual_approach: float = float("nan")  # m, last step of an unloading: zero force here
 
     @property
     def approach(self) -> float:
@@ -99,8 +107,12 @@ class Run:
 class LoadStepper:
     def __init__(self, elasticity: Elasticity, contact: PinBoreContact, *, clearance, direction,
                  method, gap_tolerance, newton_max_it, uzawa_max_it, max_cutbacks, force_atol,
-                 couplings):
+                 couplings, material=None):
+        """material: the bodies' internal forces, tangent and state (internal_force,
+        add_tangent, commit, snapshot, restore, max_plastic_strain): the Elasticity itself
+        (constant stiffness, no state) unless given (fem.plasticity.ElastoPlastic)."""
         self.el, self.contact = elasticity, contact
+        self.material = elasticity if material is None else material
         self.clearance, self.direction = clearance, np.asarray(direction, dtype=float)
         self.across = np.zeros_like(self.direction)      # e_z x direction
         self.across[:2] = -self.direction[1], self.direction[0]
@@ -114,6 +126,12 @@ class LoadStepper:
         self.work = self.x.duplicate()
         self.factorizations, self.factored = 0, None   # and the contact terms they factorised
         self.snes = self._make_snes(newton_max_it, force_atol, couplings)
+        if self.material.plastic and contact.friction is None:
+            # A point at the edge of the plastic zone, beside a node entering contact, can
+            # flip between the elastic and the plastic branch from one iterate to the next
+            # and Newton cycles (measured: a two-cycle at 1.25e4 N/m on the first push step,
+            # two cutbacks); a backtracking line search breaks the cycle.
+            self.snes.getLineSearch().setType("bt")
 
     def _make_snes(self, max_it, force_atol, couplings):
         self.lu = KeptLU(self.el.mesh.comm)
@@ -122,72 +140,157 @@ class LoadStepper:
                              kept=self.lu)
 
     def _residual(self, snes, x, F):
-        self.el.internal_force(x, F)
+        self.material.internal_force(x, F)
         self.contact.add_residual(x, F)
         F.assemble()
         self.el.zero_prescribed(F)
 
     def _jacobian(self, snes, x, J, P):
         J.zeroEntries()
-        J.axpy(1.0, self.el.K_bc, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        self.material.add_tangent(x, J)
         kind = self.contact.add_tangent(x, J)
         J.assemble()
         J.zeroRows(self.prescribed, diag=1.0)  # contact terms on a plane of symmetry
         # Keep the factors of an earlier Jacobian as GMRES's preconditioner while the contact
         # terms differ from their own at no more than REUSE_NODES pin nodes and they served
-        # the last linear solve; else refactor (module docstring). The decision is collective.
+        # the last linear solve; else refactor (module docstring). A plastic material's
+        # tangent changes wherever a point yields: always refactor. The decision is collective.
         ksp = snes.getKSP()
         changed = np.inf if self.factored is None else np.count_nonzero(kind != self.factored)
-        refactor = changed > REUSE_NODES or ksp.getIterationNumber() > REFACTOR_ITERATIONS
+        refactor = (self.material.plastic or changed > REUSE_NODES
+                    or ksp.getIterationNumber() > REFACTOR_ITERATIONS)
         if self.el.mesh.comm.allreduce(refactor, op=MPI.LOR):
             self.lu.factor(J)
             self.factored = kind
             self.factorizations += 1
 
     def run(self, programme, progress=None, on_step=None) -> Run:
-        """Solve for each load point in turn (see the module docstring); cut back and retry
-        on failure. on_step(x, step) is called after every converged step."""
-        programme = [np.asarray(p, dtype=float) for p in programme]
-        run = Run()
+        """Solve for each load point of the programme in turn (see the module docstring; an
+        Unload or Reload item stands for the steps it takes); cut back and retry on failure.
+        on_step(x, step) is called after every converged step."""
+        self._run, self._progress, self._on_step = Run(), progress, on_step
         touch = self.el.pin_rigid_motion(self.clearance * self.direction)  # exact: no force yet
         self.contact.commit(self.contact.state(touch))
-        history = [(np.zeros(4), touch, self.contact.snapshot())]
-        target_index, target, cuts = 0, programme[0], 0
-        while target_index < len(programme):
-            outcome = self._attempt(history, target)
+        self._history = [(np.zeros(4), touch, self.contact.snapshot(), self.material.snapshot())]
+        for item in programme:
+            if isinstance(item, Unload):
+                done = self._unload(item.steps)
+            elif isinstance(item, Reload):
+                start = self._history[-1][0]
+                done = all(self._reach(np.append(a, start[1:]), curve.RELOAD, count=True)
+                           for a in np.linspace(start[0], item.approach, item.steps + 1)[1:])
+            else:
+                point = np.asarray(item, dtype=float)
+                done = self._reach(point, curve.stage(point), count=True)
+            if not done:
+                break
+        return self._run
+
+    def _reach(self, final, stage: str, accept=None, count=False):
+        """Converge the load point `final`, halving the step on failure (the converged
+        intermediate steps are kept); True, or False when it gave up (Run.stop says where
+        and why), or the StepResult of a converged step that `accept` refused (the state
+        stays at the last accepted step). count: a step of the progress bar."""
+        target, cuts = final, 0
+        while True:
+            outcome = self._attempt(self._history, target)
             if isinstance(outcome, StepResult):
-                self.contact.commit(outcome.contact)
-                run.steps.append(outcome)
-                if on_step is not None:
-                    on_step(self.x, outcome)
-                history = history[-1:] + [(target, self.x.copy(), self.contact.snapshot())]
-                if np.array_equal(target, programme[target_index]):
-                    target_index, cuts = target_index + 1, 0
-                    if progress is not None:
-                        progress.update(1)
-                if target_index < len(programme):
-                    target = programme[target_index]
+                outcome.stage = stage
+                if accept is not None and not accept(outcome):
+                    return outcome
+                self._accept(outcome)
+                if np.array_equal(target, final):
+                    if count and self._progress is not None:
+                        self._progress.update(1)
+                    return True
+                target = final
                 continue
             cuts += 1
-            run.cutbacks += 1
+            self._run.cutbacks += 1
             if cuts > self.max_cutbacks:
-                run.stop = Stop(float(target[0]), f"{outcome}; gave up after {self.max_cutbacks} "
-                                f"cutbacks at load point {describe(target)}")
-                history[-1][1].copy(self.x)  # leave the last converged state in x
-                self.contact.restore(history[-1][2])
+                self._run.stop = Stop(float(target[0]), f"{outcome}; gave up after "
+                                      f"{self.max_cutbacks} cutbacks at load point {describe(target)}")
+                _, x, contact, material = self._history[-1]
+                x.copy(self.x)  # leave the last converged state in x
+                self.contact.restore(contact)
+                self.material.restore(material)
+                return False
+            target = 0.5 * (self._history[-1][0] + target)
+
+    def _accept(self, step: StepResult) -> None:
+        """Commit a converged step: contact and material state, the run's list, history."""
+        self.contact.commit(step.contact)
+        step.plastic_work = self.copies * self.material.commit(self.x)
+        step.max_plastic_strain = self.material.max_plastic_strain()
+        self._run.steps.append(step)
+        if self._on_step is not None:
+            self._on_step(self.x, step)
+        self._history = self._history[-1:] + [(step.point, self.x.copy(), self.contact.snapshot(),
+                                               self.material.snapshot())]
+
+    def _unload(self, steps: int) -> bool:
+        """From the last step, move the hub back until the hub force returns to zero: `steps`
+        - 1 steps planned for equal decrements of the force along the curve (the next approach
+        from the secant of the last two unloading steps), then a search for the approach where
+        the contact opens (secant steps on the curve, bisection when a step overshoots into
+        free flight), until the force is below UNLOAD_FORCE_TOLERANCE of the force at the top.
+        The last step's residual_approach is the curve's zero extrapolated along that secant.
+
+        The unloading curve is convex (the contact narrows as the force falls), so a secant
+        from above lands short of the zero: the search approaches it from the loaded side."""
+        last = self._run.steps[-1] if self._run.steps else None
+        if last is None or last.force[0] <= 0:
+            self._run.stop = Stop(0.0, "unload: no force to unload from")
+            return False
+        top = last.force[0]
+        tolerance = UNLOAD_FORCE_TOLERANCE * top
+        # before the first unloading step: twice the loading secant (unloading is elastic, stiffer)
+        before = self._run.steps[-2] if len(self._run.steps) > 1 else None
+        slope = 2 * (top / last.approach if before is None or last.approach <= before.approach
+                     else (top - before.force[0]) / (last.approach - before.approach))
+        free = -self.clearance          # below it the pin is surely free (concentric at -c)
+        in_contact = lambda step: bool(np.any(step.contact.pressure > 0))  # noqa: E731
+        planned = 1
+        for _ in range(steps - 1 + UNLOAD_SEARCH_STEPS):
+            point, force = self._history[-1][0], self._run.steps[-1].force[0]
+            if planned >= steps and force <= tolerance:
                 break
-            target = 0.5 * (history[-1][0] + target)
-        return run
+            drop = force / max(steps - planned + 1, 1) if planned < steps else force
+            target = point[0] - drop / slope
+            if target <= free:   # the secant points into free flight: halve the distance
+                target = 0.5 * (free + point[0])
+            outcome = self._reach(np.append(target, point[1:]), curve.UNLOAD, accept=in_contact)
+            if outcome is False:
+                return False
+            if isinstance(outcome, StepResult):   # the contact opened: the zero lies above
+                free = target
+                continue
+            if planned < steps:
+                planned += 1
+                if self._progress is not None:
+                    self._progress.update(1)
+            done = self._run.steps[-1]
+            slope = (force - done.force[0]) / (point[0] - done.approach)
+        else:
+            self._run.stop = Stop(float(self._history[-1][0][0]),
+                                  f"unload: the force did not fall below {tolerance:.3g} within "
+                                  f"{UNLOAD_SEARCH_STEPS} steps of the search for zero force")
+            return False
+        done = self._run.steps[-1]
+        done.residual_approach = done.approach - done.force[0] / slope
+        if self._progress is not None:
+            self._progress.update(1)
+        return True
 
     def _predict(self, history, target):
         """Half-secant extrapolation of displacements and multipliers while the step
         continues the previous one; at a change of programme the last state (the hub alone
         moves); at the first step the pin moved rigidly with the hub."""
-        point, x, snapshot = history[-1]
+        point, x, snapshot, _ = history[-1]
         self.contact.restore(snapshot)
         step = target - point
         if len(history) > 1:
-            point_0, x_0, snapshot_0 = history[-2]
+            point_0, x_0, snapshot_0, _ = history[-2]
             previous = point - point_0
             along = float(step @ previous) / float(previous @ previous)
             if np.allclose(step - along * previous, 0.0, atol=1e-12 * np.abs(step).max()):
@@ -208,7 +311,8 @@ class LoadStepper:
         if isinstance(solved, str):
             return solved
         newton, uzawa, reasons, state, violation = solved
-        force, moment = self.el.hub_reaction(self.x, self.work)
+        self.material.internal_force(self.x, self.work)
+        force, moment = self.el.hub_reaction(self.work)
         # a half model: twice its force; its moment about the mid-plane cancels the mirror half's
         force, moment = self.copies * force, (moment if self.copies == 1 else 0.0)
         torque = self.copies * self.contact.torque(self.x, self.hub_shift(target))

@@ -48,13 +48,16 @@ def effective_modulus(scene: dict) -> float:
 class Solved:
     """An in-process FE solve of a scene dict: the run and the objects behind it."""
 
-    def __init__(self, data: dict, approaches=None, on_step=None):
+    def __init__(self, data: dict, approaches=None, on_step=None, hook=None):
+        """hook: a dict that receives the stepper before the run (for on_step to read)."""
         from pinbore.fem import model
         from pinbore.fem.scene import FemScene
         from pinbore.core.scene import validate
 
         self.scene = validate(FemScene, data, "test scene")
         self.stepper, self.el, self.contact, self.sizing, _ = model.build(self.scene)
+        if hook is not None:
+            hook["stepper"] = self.stepper
         programme = self.scene.load.programme if approaches is None else [(a, 0, 0, 0) for a in approaches]
         self.run = self.stepper.run(programme, on_step=on_step)
         assert self.run.stop is None, self.run.stop

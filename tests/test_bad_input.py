@@ -64,8 +64,32 @@ MISPLACED = [
 ]
 
 
-@pytest.mark.parametrize("command, scene, message", NOT_FINITE + MISPLACED,
-                         ids=[m[2].split(":")[0] for m in NOT_FINITE + MISPLACED])
+STEEL_Y = {"E": 210e9, "nu": 0.3, "yield_stress": 250e6}
+
+# elasto-plastic materials and load-unload programmes
+PLASTIC = [
+    ("fem", fem_with(materials={"bore": {**STEEL_Y, "yield_stress": 0.0}}),
+     "materials.bore.yield_stress: Input should be greater than 0"),
+    ("fem", fem_with(materials={"bore": {**STEEL_Y, "hardening_modulus": -1e9}}),
+     "materials.bore.hardening_modulus: Input should be greater than or equal to 0"),
+    ("fem", fem_with(materials={"bore": {"E": 210e9, "nu": 0.3, "hardening_modulus": 1e9}}),
+     "materials.bore.hardening_modulus: needs yield_stress (Pa) in the same table"),
+    ("fem", fem_with(materials={"bore": {**STEEL_Y, "hardening": [[0.0, 250e6], [0.01, 300e6], [0.005, 320e6]]}}),
+     "materials.bore.hardening: the plastic strains must increase strictly"),
+    ("fem", fem_with(materials={"bore": {**STEEL_Y, "hardening": [[0.0, 250e6], [0.01, 200e6]]}}),
+     "materials.bore.hardening: the yield stresses must not decrease (no softening)"),
+    ("fem", fem_with(materials={"bore": {**STEEL_Y, "hardening": [[0.001, 250e6], [0.01, 300e6]]}}),
+     "materials.bore.hardening: the first pair must be (0, yield_stress)"),
+    ("fem", fem_with(materials={"bore": {**STEEL_Y, "hardening_modulus": 1e9, "hardening": [[0.0, 250e6]]}}),
+     "materials.bore.hardening: give hardening_modulus or the table hardening, not both"),
+    ("fem", fem_with(load={"cycles": 3}), "load: cycles > 1 needs unload = true"),
+    ("fem", fem_with(load={"unload": True, "rotation_deg": 0.01}),
+     "load: unload: a load programme unloads after the push, not after rotation_deg"),
+]
+
+
+@pytest.mark.parametrize("command, scene, message", NOT_FINITE + MISPLACED + PLASTIC,
+                         ids=[m[2].split(":")[0] + str(i) for i, m in enumerate(NOT_FINITE + MISPLACED + PLASTIC)])
 def test_bad_scene_value(write_scene, tmp_path, command, scene, message):
     out = tmp_path / "out"
     expect_one_line(pinbore(command, write_scene(scene), "--out", out), message, out)

@@ -46,7 +46,7 @@ def test_the_variants_name_their_units():
     assert (curve.column(3, "force").name, curve.column(3, "force").unit) == ("force_N", "N")
     shared = {f for f in curve.COLUMNS[2] if curve.column(2, f) == curve.column(3, f)}
     assert shared == set(curve.COLUMNS[2]) - {"force", "tangential_force", "friction_torque",
-                                               "dissipated_work"}
+                                               "dissipated_work", "plastic_work"}
 
 
 @pytest.mark.parametrize("dim", [2, 3])
@@ -73,7 +73,7 @@ BAD_CURVES = [   # an edit of a written 2D curve.csv (its lines), what the one l
      "force_N: units do not match; expected force_per_length_N_per_m (N/m)"),
     (_header_edit(lambda h: h[:-1] + ["step"]), "step: the column appears twice"),
     (lambda lines: lines[:2] + [lines[2].rsplit(",", 1)[0]] + lines[3:],
-     "row 2: 13 cells, the header names 14"),
+     "row 2: 16 cells, the header names 17"),
     (lambda lines: lines[:1] + [lines[1].replace("push", "squeeze")] + lines[2:],
      "stage: row 1: 'squeeze' is not one of push, rotate, slide"),
     (lambda lines: lines[:3] + [lines[3].replace(",1,", ",x,")] + lines[4:],

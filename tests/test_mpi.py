@@ -14,15 +14,22 @@ MPIEXEC = Path(sys.executable).parent / "mpiexec"
 
 
 def curve(path):
-    """Force (2D: N/m, 3D: N), half-angle and stick fraction of every step."""
+    """Force (2D: N/m, 3D: N), half-angle, stick fraction, plastic work and largest plastic
+    strain of every step."""
     c = fe_curve.read(path)
-    return np.column_stack([c.force, c.half_angle, c.stick_fraction])
+    return np.column_stack([c.force, c.half_angle, c.stick_fraction, c.plastic_work,
+                            c.max_plastic_strain])
 
 
 SCENES = {
     "2D frictional": scene_dict(output={"fields": True, "picture": True},
                                 contact={"friction": 0.3}, load={"rotation_deg": 0.05,
                                                                  "slide_steps": 2}),
+    "2D plastic, unloaded": scene_dict(
+        materials={"pin": {"E": 210e9, "nu": 0.3},
+                   "bore": {"E": 210e9, "nu": 0.3, "yield_stress": 40e6, "hardening_modulus": 2e9}},
+        mesh={"contact_size": 1.75e-4, "grading": 0.5}, output={"fields": True, "picture": True},
+        load={"steps": 3, "unload": True, "unload_steps": 2}),
     "3D": scene_dict(geometry={"dim": 3, "length": 0.02}, output={"fields": True, "picture": True},
                      mesh={"contact_size": 5e-4, "grading": 0.5, "layers": 3},
                      load={"steps": 2}),
