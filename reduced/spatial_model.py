@@ -32,6 +32,9 @@ from pinbore.reduced.scene import GROUND
 from pinbore.reduced.spatial_scene import SpatialScene, unit_axis
 
 
+PARALLEL = 1e-9   # |1 - |u_b . u_j|| below which a journal's axis is aligned with its bore's
+
+
 @dataclass
 class SpatialModel:
     scene: SpatialScene
@@ -216,6 +219,17 @@ def build(scene: SpatialScene, source: str, base: Path) -> SpatialModel:
     return model
 
 
+def ideal_kind(c, bore_axis, journal_axis) -> str:
+    """The ideal joint that closes a clearance joint: spherical for a ball; for a journal a
+    revolute on the bore's axis, or, when the journal's axis is tilted against the bore's at
+    the start (a misaligned joint, global axes given), a spherical joint at the bore's
+    centre: the journal centred, its tilt left to the other joints (a revolute could not
+    close)."""
+    if c.type == "spherical" or abs(abs(bore_axis @ journal_axis) - 1) > PARALLEL:
+        return "spherical"
+    return "revolute"
+
+
 def closed(model: SpatialModel, index, rot, starts) -> np.ndarray:
     """The ideal primitives plus the clearance joints whose start is in `starts`, closed
     (cylindrical: a revolute on the bore axis; spherical: a spherical joint)."""
@@ -223,9 +237,9 @@ def closed(model: SpatialModel, index, rot, starts) -> np.ndarray:
     for c in model.scene.clearance_joints:
         if c.start not in starts:
             continue
-        kind = "revolute" if c.type == "cylindrical" else "spherical"
         u_b = np.array(unit_axis(c.bearing_axis, "bearing_axis")) if c.bearing_axis else np.zeros(3)
         u_j = np.array(unit_axis(c.journal_axis, "journal_axis")) if c.journal_axis else np.zeros(3)
+        kind = ideal_kind(c, rot[c.bearing_body] @ u_b, rot[c.journal_body] @ u_j)
         extra += joint_primitives(kind, index[c.bearing_body], index[c.journal_body],
                                   c.bearing_point, c.journal_point, u_b, u_j, rot[c.bearing_body],
                                   rot[c.journal_body], "clearance_joints")
@@ -270,14 +284,18 @@ def load(path: Path) -> SpatialScene:
 
 
 def ideal_twin(scene: SpatialScene) -> SpatialScene:
-    """The same mechanism with every clearance joint replaced by its ideal joint (cylindrical:
-    a revolute on the bore's axis; spherical: a spherical joint)."""
+    """The same mechanism with every clearance joint replaced by its ideal joint (ideal_kind:
+    a revolute on the bore's axis, a spherical joint for a ball or a misaligned journal)."""
     data = scene.model_dump()
+    rot = {GROUND: np.eye(3)} | {b.name: rotation_matrix(b.parameters()) for b in scene.bodies}
     for c in scene.clearance_joints:
-        ideal = {"type": "revolute" if c.type == "cylindrical" else "spherical",
-                 "body_i": c.bearing_body, "point_i": c.bearing_point,
+        axes = (None, None) if c.type == "spherical" else (
+            rot[c.bearing_body] @ unit_axis(c.bearing_axis, "bearing_axis"),
+            rot[c.journal_body] @ unit_axis(c.journal_axis, "journal_axis"))
+        kind = ideal_kind(c, *axes)
+        ideal = {"type": kind, "body_i": c.bearing_body, "point_i": c.bearing_point,
                  "body_j": c.journal_body, "point_j": c.journal_point}
-        if c.type == "cylindrical":
+        if kind == "revolute":
             ideal |= {"axis_i": c.bearing_axis, "axis_j": c.journal_axis}
         data["joints"].append(ideal)
     data["clearance_joints"] = []
