@@ -248,17 +248,18 @@ def closed(model: SpatialModel, index, rot, starts) -> np.ndarray:
 
 def initial_state(model: SpatialModel, index, rot, source) -> np.ndarray:
     """Positions on the ideal joints with the clearance joints closed (mass-weighted least
-    change from the scene's guesses), velocities projected onto the ideal joints and the
-    clearance joints that start "ideal"."""
+    change from the scene's guesses); then the velocities as given (each body's r' and global
+    w, on the positions found), projected onto the ideal joints and the clearance joints that
+    start "ideal" (those that start "free" keep their relative velocity)."""
     s = model.scene
-    q = np.concatenate([[*b.position, *b.parameters()] for b in s.bodies])
-    qd = []
-    for b in s.bodies:
-        p = np.array(b.parameters())
-        w_body = rot[b.name].T @ np.array(b.omega, float)
-        qd += [*b.velocity, *spatial_kernel.gt_times(p, tuple(0.5 * w_body))]
-    y = np.concatenate([q, qd, np.zeros(ENERGY_STATES)])
+    nq = model.nq
+    y = np.concatenate([np.concatenate([[*b.position, *b.parameters()] for b in s.bodies]),
+                        np.zeros(nq + ENERGY_STATES)])
     for starts in (("ideal", "free"), ("ideal",)):
+        for k, b in enumerate(s.bodies):   # the given velocities at the current orientation
+            p = y[7 * k + 3:7 * k + 7] / np.linalg.norm(y[7 * k + 3:7 * k + 7])
+            w_body = rotation_matrix(p).T @ np.array(b.omega, float)
+            y[nq + 7 * k:nq + 7 * k + 7] = [*b.velocity, *spatial_kernel.gt_times(p, tuple(0.5 * w_body))]
         args = model.kernel_args(primitives=closed(model, index, rot, starts))
         work = spatial_kernel.workspace(args)
         for _ in range(50):
