@@ -51,6 +51,18 @@ class MechanismState:
     period: int             # periods elapsed since the start
 
 
+def advanced(flow, state: MechanismState, periods: int, args) -> MechanismState:
+    """The state `periods` drive periods on, integrating the flow's model with the kernel
+    arguments `args` (their impact speeds, modes and latches updated in place); the
+    trajectory is kept in flow.last. An integration that stops is a FloatingPointError."""
+    flow.last = simulate(flow.model, state.y, periods * flow.period, args)
+    if flow.last.status != kernel.OK:
+        raise FloatingPointError(f"the integration stopped at t = {flow.last.t_end:.6g} s "
+                                 f"of period {state.period} (status {flow.last.status})")
+    return MechanismState(flow.last.states[-1].copy(), args.speeds, args.mode, args.latched,
+                          state.period + periods)
+
+
 class MechanismFlow:
     """A driven reduced model advanced by whole crank periods. Coordinates: positions and
     velocities of every body, the driven angle taken relative to the drive, scaled by the
@@ -76,14 +88,8 @@ class MechanismFlow:
         return drive
 
     def advance(self, state: MechanismState, periods: int = 1) -> MechanismState:
-        args = self.model.kernel_args(state.speeds, state.latched, state.mode,
-                                      self._drive(state.period))
-        self.last = simulate(self.model, state.y, periods * self.period, args)
-        if self.last.status != kernel.OK:
-            raise FloatingPointError(f"the integration stopped at t = {self.last.t_end:.6g} s "
-                                     f"of period {state.period} (status {self.last.status})")
-        return MechanismState(self.last.states[-1].copy(), args.speeds, args.mode, args.latched,
-                              state.period + periods)
+        return advanced(self, state, periods, self.model.kernel_args(
+            state.speeds, state.latched, state.mode, self._drive(state.period)))
 
     def coordinates(self, state: MechanismState) -> np.ndarray:
         nq = self.model.nq
@@ -160,13 +166,7 @@ class SpatialMechanismFlow:
         return MechanismState(self.model.y0.copy(), args.speeds, args.mode, args.latched, 0)
 
     def advance(self, state: MechanismState, periods: int = 1) -> MechanismState:
-        args = self.model.kernel_args(state.speeds, state.latched)
-        self.last = simulate(self.model, state.y, periods * self.period, args)
-        if self.last.status != kernel.OK:
-            raise FloatingPointError(f"the integration stopped at t = {self.last.t_end:.6g} s "
-                                     f"of period {state.period} (status {self.last.status})")
-        return MechanismState(self.last.states[-1].copy(), args.speeds, args.mode, args.latched,
-                              state.period + periods)
+        return advanced(self, state, periods, self.model.kernel_args(state.speeds, state.latched))
 
     def _signs(self, y) -> np.ndarray:
         """+1, or -1 on the Euler parameters (and their rates) of a body whose largest

@@ -51,13 +51,8 @@ def section(build_dir: Path, bench_dir: Path) -> str:
             parts.append(figure(png_data(folder / "attitude.png"),
                                 f"Scene {folder.name}: attitude rate of the free-floating body "
                                 "during deployment, with the ideal hinge (dashed)."))
-        for name in s.clearance_joints:
-            if (folder / f"{name}.png").exists():
-                parts.append(figure(png_data(folder / f"{name}.png"),
-                                    f"Scene {folder.name}, joint {name}: the journal centre inside "
-                                    "the clearance circle, and the normal contact force."))
-        for warning in s.warnings:
-            parts.append(f"<p class='note'>{folder.name}: {warning}</p>")
+        parts += joint_figures(folder, s, "the journal centre inside the clearance circle, and "
+                               "the normal contact force.")
     parts += stress_part(bench_dir)
     return "".join(parts)
 
@@ -77,12 +72,15 @@ def spatial_figures(folder: Path, s) -> list[str]:
         parts.append(figure(png_data(folder / "attitude.png"),
                             f"Scene {folder.name}: the three attitude rates of the free-floating "
                             "body (global axes) during deployment, with the ideal hinge (dashed)."))
-    for name in s.clearance_joints:
-        if (folder / f"{name}.png").exists():
-            parts.append(figure(png_data(folder / f"{name}.png"),
-                                f"Scene {folder.name}, joint {name}: contact forces against time "
-                                "(a journal: the slices' radial sum and the shoulders' axial force; "
-                                "a ball: its force on the socket)."))
+    return parts + joint_figures(folder, s, "contact forces against time (a journal: the "
+                                 "slices' radial sum and the shoulders' axial force; a ball: its "
+                                 "force on the socket).")
+
+
+def joint_figures(folder: Path, s, caption: str) -> list[str]:
+    """Each clearance joint's figure with `caption`, then the run's warnings."""
+    parts = [figure(png_data(folder / f"{name}.png"), f"Scene {folder.name}, joint {name}: {caption}")
+             for name in s.clearance_joints if (folder / f"{name}.png").exists()]
     return parts + [f"<p class='note'>{folder.name}: {w}</p>" for w in s.warnings]
 
 

@@ -29,7 +29,7 @@ from pinbore.reduced.spatial_layout import (
     SJ_SCALE, SJ_SLICES, SPATIAL_JOINT_COLUMNS, SPATIAL_TORSION_COLUMNS, SPHERE, TORSION_A_I,
     TORSION_B_J, TORSION_C_I, SpatialArgs)
 from pinbore.reduced.scene import GROUND
-from pinbore.reduced.spatial_scene import SpatialScene, unit_axis
+from pinbore.reduced.spatial_scene import SpatialScene, rotation_matrix, unit_axis
 
 
 PARALLEL = 1e-9   # |1 - |u_b . u_j|| below which a journal's axis is aligned with its bore's
@@ -72,12 +72,6 @@ class SpatialModel:
     def elastic_energy(self, joint: int, delta: float) -> float:
         """U(delta) of the per-length (or point) law of a joint (reduced.model.table_energy)."""
         return table_energy(self.tables[joint], self.grid_log0, self.grid_step, delta)
-
-
-def rotation_matrix(p) -> np.ndarray:
-    out = np.empty((3, 3))
-    spatial_kernel.rotation(np.asarray(p, float), out)
-    return out
 
 
 def normals(u):

@@ -35,6 +35,14 @@ def unit_axis(v, key):
     return [c / n for c in v]
 
 
+def rotation_matrix(p) -> np.ndarray:
+    """A(p) of unit Euler parameters p (the spatial kernel's, reduced.spatial_kernel.rotation)."""
+    from pinbore.reduced import spatial_kernel   # compiled: loaded when a rotation is needed
+    out = np.empty((3, 3))
+    spatial_kernel.rotation(np.asarray(p, float), out)
+    return out
+
+
 class Body(Strict):
     name: str
     mass: float = pydantic.Field(gt=0, description="kg")
@@ -238,7 +246,6 @@ class SpatialScene(Strict):
         """A journal whose axis is tilted against its bore's at the start (a misaligned joint;
         it starts centred) fits only if its ends stay inside the clearance there:
         (L / 2) sin(tilt) < c."""
-        from pinbore.reduced.spatial_model import rotation_matrix   # (it imports this module)
         bodies = {b.name: b for b in self.bodies}
         for k, c in enumerate(self.clearance_joints):
             if c.type != "cylindrical" or c.bearing_body not in bodies | {GROUND: None} or \
