@@ -28,8 +28,12 @@ REDUCED_RUNS := $(REDUCED_SCENES:%=build/reduced/%/summary.json)
 STAGE_CODE := $(wildcard pinbore/cli.py core/*.py laws/*.py meshes/*.py fem/*.py)
 MPIEXEC := $(if $(filter-out 1,$(NP)),$(VENV)/bin/mpiexec -n $(NP))
 DYNAMICS_SCENE := scenes/reduced/slider_crank_flores2004.toml
-DYNAMICS := $(addprefix build/dynamics/,poincare/summary.json bifurcation/summary.json design/summary.json)
-DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(wildcard pinbore/cli.py core/*.py laws/*.py calibration/lawsfile.py reduced/*.py) $(STAMP)
+SPATIAL_DYNAMICS_SCENE := scenes/reduced/spatial_slider_crank_flores_misaligned.toml
+DYNAMICS := $(addprefix build/dynamics/,poincare/summary.json bifurcation/summary.json design/summary.json \
+                                        spatial_poincare/summary.json spatial_bifurcation/summary.json)
+DYNAMICS_CODE := $(wildcard pinbore/cli.py core/*.py laws/*.py calibration/lawsfile.py reduced/*.py) $(STAMP)
+DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(DYNAMICS_CODE)
+SPATIAL_DYNAMICS_DEPS := $(SPATIAL_DYNAMICS_SCENE) $(DYNAMICS_CODE)
 
 .PHONY: all venv mesh fem impact calibration reduced dynamics report bench stress test test-slow clean help
 .DELETE_ON_ERROR:
@@ -75,7 +79,7 @@ build/reduced/%/summary.json: scenes/reduced/%.toml build/calibration/laws.json 
                               $(wildcard core/*.py laws/*.py calibration/lawsfile.py reduced/*.py) $(STAMP)
 	$(PINBORE) reduced $< --out build/reduced/$*
 
-dynamics: $(DYNAMICS) ## Poincare map, bifurcation diagram and design map of the slider-crank (build/dynamics/)
+dynamics: $(DYNAMICS) ## Poincare maps, bifurcation diagrams and design map of the slider-crank, planar and misaligned spatial (build/dynamics/)
 
 # (the sweeps run their points on the local cores; their per-point caches make a rerun resume)
 build/dynamics/poincare/summary.json: $(DYNAMICS_DEPS)
@@ -90,6 +94,15 @@ build/dynamics/design/summary.json: $(DYNAMICS_DEPS)
 	$(PINBORE) dynamics $< --analysis design --range 1e-4 5e-4 --points 5 --speeds 2000 5000 4 \
 	    --transient 10 --periods 10 --max-force 20000 --max-deviation 1.0 \
 	    --out build/dynamics/design --cache build/dynamics/cache
+
+build/dynamics/spatial_poincare/summary.json: $(SPATIAL_DYNAMICS_DEPS)
+	$(PINBORE) dynamics $< --analysis poincare --transient 20 --periods 40 --out build/dynamics/spatial_poincare
+
+# (the clearance stays above 0.175 mm, below which the tilted journal does not fit its bore)
+build/dynamics/spatial_bifurcation/summary.json: $(SPATIAL_DYNAMICS_DEPS)
+	$(PINBORE) dynamics $< --analysis bifurcation --parameter clearance --range 2e-4 5e-4 \
+	    --points 20 --transient 10 --periods 20 --out build/dynamics/spatial_bifurcation \
+	    --cache build/dynamics/cache
 
 report: build/report/index.html ## build build/report/index.html from the results
 

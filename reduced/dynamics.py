@@ -2,9 +2,9 @@ r"""Nonlinear dynamics of periodically driven systems, seen once per driving per
 
 A `Flow` is what the analyses need of a system: its driving period, a way to advance a state
 by whole periods, the state's coordinates (normalised, so that distances mean something) and
-a way to perturb a state along them. `MechanismFlow` wraps a driven reduced model; the tests
-wrap a forced Duffing oscillator the same way, so every analysis is checked on a system with
-published behaviour.
+a way to perturb a state along them. `MechanismFlow` wraps a driven planar model and
+`SpatialMechanismFlow` a driven spatial one; the tests wrap a forced Duffing oscillator the
+same way, so every analysis is checked on a system with published behaviour.
 
 - Poincare map (stroboscopic, at the driving period): the first `transient` periods are
   discarded, then `periods` samples are kept. The transient criterion is the count given
@@ -29,12 +29,15 @@ from dataclasses import dataclass, replace
 import numpy as np
 from tqdm import tqdm
 
-from pinbore.reduced import kernel
+from pinbore.reduced import kernel, spatial_kernel
 from pinbore.reduced.layout import (
     DRIVE_ANGLE, DRIVE_BODY, DRIVE_SPEED, JOINT_BEARING_BODY, JOINT_BEARING_X, JOINT_BEARING_Y,
     JOINT_CLEARANCE, JOINT_JOURNAL_BODY, JOINT_JOURNAL_X, JOINT_JOURNAL_Y)
 from pinbore.reduced.model import Model, project
 from pinbore.reduced.run import simulate
+from pinbore.reduced.spatial_layout import (
+    ANGLE, CYLINDER, PRIM_BODY_I, PRIM_BODY_J, PRIM_KIND, PRIM_SPEED, SJ_BEARING_AXIS,
+    SJ_BEARING_BODY, SJ_BEARING_POINT, SJ_JOURNAL_BODY, SJ_JOURNAL_POINT, SJ_KIND)
 
 MAX_PERIOD = 16
 
@@ -46,6 +49,18 @@ class MechanismState:
     mode: np.ndarray        # contact modes (held contacts of impulse joints)
     latched: np.ndarray     # latch flags of the torsion elements
     period: int             # periods elapsed since the start
+
+
+def advanced(flow, state: MechanismState, periods: int, args) -> MechanismState:
+    """The state `periods` drive periods on, integrating the flow's model with the kernel
+    arguments `args` (their impact speeds, modes and latches updated in place); the
+    trajectory is kept in flow.last. An integration that stops is a FloatingPointError."""
+    flow.last = simulate(flow.model, state.y, periods * flow.period, args)
+    if flow.last.status != kernel.OK:
+        raise FloatingPointError(f"the integration stopped at t = {flow.last.t_end:.6g} s "
+                                 f"of period {state.period} (status {flow.last.status})")
+    return MechanismState(flow.last.states[-1].copy(), args.speeds, args.mode, args.latched,
+                          state.period + periods)
 
 
 class MechanismFlow:
@@ -73,14 +88,8 @@ class MechanismFlow:
         return drive
 
     def advance(self, state: MechanismState, periods: int = 1) -> MechanismState:
-        args = self.model.kernel_args(state.speeds, state.latched, state.mode,
-                                      self._drive(state.period))
-        self.last = simulate(self.model, state.y, periods * self.period, args)
-        if self.last.status != kernel.OK:
-            raise FloatingPointError(f"the integration stopped at t = {self.last.t_end:.6g} s "
-                                     f"of period {state.period} (status {self.last.status})")
-        return MechanismState(self.last.states[-1].copy(), args.speeds, args.mode, args.latched,
-                              state.period + periods)
+        return advanced(self, state, periods, self.model.kernel_args(
+            state.speeds, state.latched, state.mode, self._drive(state.period)))
 
     def coordinates(self, state: MechanismState) -> np.ndarray:
         nq = self.model.nq
@@ -127,6 +136,108 @@ class MechanismFlow:
                            self._drive(state.period), model.minv)
         y[:nq], y[nq:2 * nq] = q, qd
         return replace(state, y=y)
+
+
+class SpatialMechanismFlow:
+    """A driven spatial model (reduced.spatial_model) advanced by whole drive periods.
+
+    Coordinates, per body: its centre scaled by the smallest clearance c; its Euler
+    parameters p, with the sign that makes the largest in magnitude positive (p and -p are
+    one orientation, and a turn of 2 pi changes the sign), scaled by c / (2 k), k the body's
+    radius of gyration sqrt(trace J / 3m) (a small turn d theta changes p by d theta / 2 and
+    moves a point at k by k d theta); their rates scaled by c omega the same way. The drive
+    needs no shift from period to period: its constraint holds the relative angle modulo
+    2 pi."""
+
+    def __init__(self, model):
+        self.model = model
+        drive = model.primitives[model.primitives[:, PRIM_KIND] == ANGLE]
+        self.omega = drive[0, PRIM_SPEED]
+        self.period = 2 * math.pi / abs(self.omega)
+        self.length = min(model.joints[:, JOINT_CLEARANCE], default=1e-3)
+        gyration = np.sqrt(np.trace(model.inertia, axis1=1, axis2=2) / (3 * model.masses))
+        per_body = np.concatenate([np.full((model.masses.size, 3), 1.0),
+                                   np.repeat(0.5 / gyration[:, None], 4, axis=1)], axis=1).ravel()
+        self.scale = self.length * np.concatenate([per_body, per_body * abs(self.omega)])
+        self.last = None   # the Trajectory of the last advance
+
+    def start(self) -> MechanismState:
+        args = self.model.kernel_args()
+        return MechanismState(self.model.y0.copy(), args.speeds, args.mode, args.latched, 0)
+
+    def advance(self, state: MechanismState, periods: int = 1) -> MechanismState:
+        return advanced(self, state, periods, self.model.kernel_args(state.speeds, state.latched))
+
+    def _signs(self, y) -> np.ndarray:
+        """+1, or -1 on the Euler parameters (and their rates) of a body whose largest
+        parameter in magnitude is negative."""
+        nq = self.model.nq
+        signs = np.ones(2 * nq)
+        for b in range(self.model.masses.size):
+            p = y[7 * b + 3:7 * b + 7]
+            if p[np.argmax(np.abs(p))] < 0:
+                signs[7 * b + 3:7 * b + 7] = signs[nq + 7 * b + 3:nq + 7 * b + 7] = -1.0
+        return signs
+
+    def coordinates(self, state: MechanismState) -> np.ndarray:
+        y = state.y[:2 * self.model.nq]
+        return y * self._signs(y) / self.scale
+
+    def perturb(self, state: MechanismState, dx: np.ndarray) -> MechanismState:
+        """The state moved by dx (in coordinates), then made consistent with the ideal joints
+        and the drive (Euler parameters normalised; Gauss-Newton projection)."""
+        nq = self.model.nq
+        y = state.y.copy()
+        y[:2 * nq] += dx * self.scale * self._signs(y)
+        args = self.model.kernel_args(state.speeds, state.latched)
+        work = spatial_kernel.workspace(args)
+        for _ in range(50):
+            if not spatial_kernel.project_onto_constraints(0.0, y, args, work, 1e-14, 1e-14):
+                break
+        return replace(state, y=y)
+
+    def _frame(self):
+        """The first clearance joint, and two unit vectors across its bore's axis in the
+        bearing body's frame (the body's x axis made normal to the axis, or y if the axis
+        lies near x; a ball: x and y)."""
+        row = self.model.joints[0]
+        if int(row[SJ_KIND]) != CYLINDER:
+            return row, np.eye(3)[0], np.eye(3)[1]
+        u = row[SJ_BEARING_AXIS:SJ_BEARING_AXIS + 3]
+        helper = np.eye(3)[0] if abs(u[0]) < 0.9 else np.eye(3)[1]
+        f = helper - (helper @ u) * u
+        f /= np.linalg.norm(f)
+        return row, f, np.cross(u, f)
+
+    def observed(self, state: MechanismState) -> np.ndarray:
+        """The first clearance joint's journal centre relative to its bearing centre (m) and
+        its rate (m/s), across the bore (in the bearing body's frame); without clearance
+        joints, the centre of the first body that is not driven (x, y global)."""
+        args = self.model.kernel_args()
+        work = spatial_kernel.workspace(args)
+        spatial_kernel.body_states(state.y, args, work)
+        if not self.model.joints.shape[0]:
+            return np.array([*work.pos[self._free_body(), :2], *work.vel[self._free_body(), :2]])
+        row, f, g = self._frame()
+        bb, bj = int(row[SJ_BEARING_BODY]), int(row[SJ_JOURNAL_BODY])
+        pj = spatial_kernel.point_state(work, bj, tuple(row[SJ_JOURNAL_POINT:SJ_JOURNAL_POINT + 3]))[0]
+        pb = spatial_kernel.point_state(work, bb, tuple(row[SJ_BEARING_POINT:SJ_BEARING_POINT + 3]))[0]
+        e = np.subtract(pj, pb)
+        v = np.subtract(spatial_kernel.material_velocity(work, bj, pj),
+                        spatial_kernel.material_velocity(work, bb, pj))
+        a = work.rot[bb] if bb >= 0 else np.eye(3)
+        return np.array([e @ (a @ f), e @ (a @ g), v @ (a @ f), v @ (a @ g)])
+
+    def _free_body(self) -> int:
+        drive = self.model.primitives[self.model.primitives[:, PRIM_KIND] == ANGLE]
+        driven = {int(b) for b in drive[:, [PRIM_BODY_I, PRIM_BODY_J]].ravel()}
+        return next(b for b in range(self.model.masses.size) if b not in driven)
+
+    def observed_name(self) -> str:
+        if self.model.joints.shape[0]:
+            return (f"journal centre of {self.model.scene.clearance_joints[0].name} relative to "
+                    "its bearing, across the bore")
+        return f"centre of body {self.model.names[self._free_body()]}"
 
 
 def poincare(flow, state, transient: int, periods: int, progress: bool = False):

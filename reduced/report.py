@@ -32,7 +32,17 @@ def section(build_dir: Path, bench_dir: Path) -> str:
         if s.verdict:
             parts.append(f"<p class='note'><b>{html.escape(folder.name)} is suspect</b>: "
                          f"{html.escape('; '.join(s.verdict))}.</p>")
+    spatial = [folder for folder in summaries if is_spatial(folder)]
+    if spatial:
+        parts.append("<p>Spatial scenes (" + ", ".join(html.escape(f.name) for f in spatial)
+                     + "): rigid bodies in 3D on Euler parameters, the same ideal joints, drive, "
+                     "torsion springs and latches; cylindrical clearance joints cut into slices "
+                     "along the bore (a tilted journal loads its edge and feels a tilting moment), "
+                     "with shoulders, and spherical ones (a ball in its socket).</p>")
     for folder, s in summaries.items():
+        if is_spatial(folder):
+            parts += spatial_figures(folder, s)
+            continue
         if (folder / "acceleration.png").exists() and s.clearance_joints:
             parts.append(figure(png_data(folder / "acceleration.png"),
                                 f"Scene {folder.name}: slider acceleration against crank angle, "
@@ -41,15 +51,37 @@ def section(build_dir: Path, bench_dir: Path) -> str:
             parts.append(figure(png_data(folder / "attitude.png"),
                                 f"Scene {folder.name}: attitude rate of the free-floating body "
                                 "during deployment, with the ideal hinge (dashed)."))
-        for name in s.clearance_joints:
-            if (folder / f"{name}.png").exists():
-                parts.append(figure(png_data(folder / f"{name}.png"),
-                                    f"Scene {folder.name}, joint {name}: the journal centre inside "
-                                    "the clearance circle, and the normal contact force."))
-        for warning in s.warnings:
-            parts.append(f"<p class='note'>{folder.name}: {warning}</p>")
+        parts += joint_figures(folder, s, "the journal centre inside the clearance circle, and "
+                               "the normal contact force.")
     parts += stress_part(bench_dir)
     return "".join(parts)
+
+
+def is_spatial(folder: Path) -> bool:
+    """A spatial run: its time series has Euler parameters (reduced.spatial_outputs)."""
+    try:
+        with (folder / "timeseries.csv").open(encoding="utf-8") as f:
+            return "_e0_1" in f.readline()
+    except OSError:
+        return False
+
+
+def spatial_figures(folder: Path, s) -> list[str]:
+    parts = []
+    if (folder / "attitude.png").exists():
+        parts.append(figure(png_data(folder / "attitude.png"),
+                            f"Scene {folder.name}: the three attitude rates of the free-floating "
+                            "body (global axes) during deployment, with the ideal hinge (dashed)."))
+    return parts + joint_figures(folder, s, "contact forces against time (a journal: the "
+                                 "slices' radial sum and the shoulders' axial force; a ball: its "
+                                 "force on the socket).")
+
+
+def joint_figures(folder: Path, s, caption: str) -> list[str]:
+    """Each clearance joint's figure with `caption`, then the run's warnings."""
+    parts = [figure(png_data(folder / f"{name}.png"), f"Scene {folder.name}, joint {name}: {caption}")
+             for name in s.clearance_joints if (folder / f"{name}.png").exists()]
+    return parts + [f"<p class='note'>{folder.name}: {w}</p>" for w in s.warnings]
 
 
 STRESS_OUTCOMES = ["complete", "suspect", "incomplete", "refused", "hang", "crash"]
@@ -87,19 +119,24 @@ def dynamics_section(build_dir: Path) -> str:
         return "".join(parts) + "<p class='note'>No results: run <code>make dynamics</code>.</p>"
     captions = {"poincare": "Poincare map of the journal centre",
                 "bifurcation": "bifurcation diagram against the radial clearance",
-                "design": "design map (white: thresholds)"}
+                "design": "design map (white: thresholds)",
+                "spatial_poincare": "Misaligned spatial slider-crank (bore tilted 1 deg): Poincare "
+                                    "map of the journal centre across the bore",
+                "spatial_bifurcation": "Misaligned spatial slider-crank: bifurcation diagram "
+                                       "against the radial clearance"}
     for name, caption in captions.items():
         path = folder / name / "summary.json"
         if not path.exists():
             continue
         s = load_json(path, "dynamics")
+        kind = name.removeprefix("spatial_")
         facts = {"poincare": lambda: f"{s['kind']}" + (f", period {s['period']}" if s["period"] else "")
                  + (f", largest Lyapunov exponent {s['lyapunov_per_s']:.4g} 1/s" if s["lyapunov_per_s"] else ""),
                  "bifurcation": lambda: ", ".join(f"{k}: {v} points" for k, v in s["counts"].items()),
                  "design": lambda: "; ".join(f"{speed} rpm: " + (f"{b['low_m'] * 1e3:.3g}-{b['high_m'] * 1e3:.3g} mm"
                                                                  if b["low_m"] is not None else "none")
-                                             for speed, b in s["band"].items())}[name]()
-        png = folder / name / f"{name}.png"
+                                             for speed, b in s["band"].items())}[kind]()
+        png = folder / name / f"{kind}.png"
         if png.exists():
             parts.append(figure(png_data(png), f"{caption} ({facts}; {s['wall_time_s']:.1f} s)."))
     return "".join(parts)

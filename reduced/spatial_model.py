@@ -29,7 +29,10 @@ from pinbore.reduced.spatial_layout import (
     SJ_SCALE, SJ_SLICES, SPATIAL_JOINT_COLUMNS, SPATIAL_TORSION_COLUMNS, SPHERE, TORSION_A_I,
     TORSION_B_J, TORSION_C_I, SpatialArgs)
 from pinbore.reduced.scene import GROUND
-from pinbore.reduced.spatial_scene import SpatialScene, unit_axis
+from pinbore.reduced.spatial_scene import SpatialScene, rotation_matrix, unit_axis
+
+
+PARALLEL = 1e-9   # |1 - |u_b . u_j|| below which a journal's axis is aligned with its bore's
 
 
 @dataclass
@@ -69,12 +72,6 @@ class SpatialModel:
     def elastic_energy(self, joint: int, delta: float) -> float:
         """U(delta) of the per-length (or point) law of a joint (reduced.model.table_energy)."""
         return table_energy(self.tables[joint], self.grid_log0, self.grid_step, delta)
-
-
-def rotation_matrix(p) -> np.ndarray:
-    out = np.empty((3, 3))
-    spatial_kernel.rotation(np.asarray(p, float), out)
-    return out
 
 
 def normals(u):
@@ -216,6 +213,17 @@ def build(scene: SpatialScene, source: str, base: Path) -> SpatialModel:
     return model
 
 
+def ideal_kind(c, bore_axis, journal_axis) -> str:
+    """The ideal joint that closes a clearance joint: spherical for a ball; for a journal a
+    revolute on the bore's axis, or, when the journal's axis is tilted against the bore's at
+    the start (a misaligned joint, global axes given), a spherical joint at the bore's
+    centre: the journal centred, its tilt left to the other joints (a revolute could not
+    close)."""
+    if c.type == "spherical" or abs(abs(bore_axis @ journal_axis) - 1) > PARALLEL:
+        return "spherical"
+    return "revolute"
+
+
 def closed(model: SpatialModel, index, rot, starts) -> np.ndarray:
     """The ideal primitives plus the clearance joints whose start is in `starts`, closed
     (cylindrical: a revolute on the bore axis; spherical: a spherical joint)."""
@@ -223,9 +231,9 @@ def closed(model: SpatialModel, index, rot, starts) -> np.ndarray:
     for c in model.scene.clearance_joints:
         if c.start not in starts:
             continue
-        kind = "revolute" if c.type == "cylindrical" else "spherical"
         u_b = np.array(unit_axis(c.bearing_axis, "bearing_axis")) if c.bearing_axis else np.zeros(3)
         u_j = np.array(unit_axis(c.journal_axis, "journal_axis")) if c.journal_axis else np.zeros(3)
+        kind = ideal_kind(c, rot[c.bearing_body] @ u_b, rot[c.journal_body] @ u_j)
         extra += joint_primitives(kind, index[c.bearing_body], index[c.journal_body],
                                   c.bearing_point, c.journal_point, u_b, u_j, rot[c.bearing_body],
                                   rot[c.journal_body], "clearance_joints")
@@ -234,17 +242,18 @@ def closed(model: SpatialModel, index, rot, starts) -> np.ndarray:
 
 def initial_state(model: SpatialModel, index, rot, source) -> np.ndarray:
     """Positions on the ideal joints with the clearance joints closed (mass-weighted least
-    change from the scene's guesses), velocities projected onto the ideal joints and the
-    clearance joints that start "ideal"."""
+    change from the scene's guesses); then the velocities as given (each body's r' and global
+    w, on the positions found), projected onto the ideal joints and the clearance joints that
+    start "ideal" (those that start "free" keep their relative velocity)."""
     s = model.scene
-    q = np.concatenate([[*b.position, *b.parameters()] for b in s.bodies])
-    qd = []
-    for b in s.bodies:
-        p = np.array(b.parameters())
-        w_body = rot[b.name].T @ np.array(b.omega, float)
-        qd += [*b.velocity, *spatial_kernel.gt_times(p, tuple(0.5 * w_body))]
-    y = np.concatenate([q, qd, np.zeros(ENERGY_STATES)])
+    nq = model.nq
+    y = np.concatenate([np.concatenate([[*b.position, *b.parameters()] for b in s.bodies]),
+                        np.zeros(nq + ENERGY_STATES)])
     for starts in (("ideal", "free"), ("ideal",)):
+        for k, b in enumerate(s.bodies):   # the given velocities at the current orientation
+            p = y[7 * k + 3:7 * k + 7] / np.linalg.norm(y[7 * k + 3:7 * k + 7])
+            w_body = rotation_matrix(p).T @ np.array(b.omega, float)
+            y[nq + 7 * k:nq + 7 * k + 7] = [*b.velocity, *spatial_kernel.gt_times(p, tuple(0.5 * w_body))]
         args = model.kernel_args(primitives=closed(model, index, rot, starts))
         work = spatial_kernel.workspace(args)
         for _ in range(50):
@@ -270,14 +279,18 @@ def load(path: Path) -> SpatialScene:
 
 
 def ideal_twin(scene: SpatialScene) -> SpatialScene:
-    """The same mechanism with every clearance joint replaced by its ideal joint (cylindrical:
-    a revolute on the bore's axis; spherical: a spherical joint)."""
+    """The same mechanism with every clearance joint replaced by its ideal joint (ideal_kind:
+    a revolute on the bore's axis, a spherical joint for a ball or a misaligned journal)."""
     data = scene.model_dump()
+    rot = {GROUND: np.eye(3)} | {b.name: rotation_matrix(b.parameters()) for b in scene.bodies}
     for c in scene.clearance_joints:
-        ideal = {"type": "revolute" if c.type == "cylindrical" else "spherical",
-                 "body_i": c.bearing_body, "point_i": c.bearing_point,
+        axes = (None, None) if c.type == "spherical" else (
+            rot[c.bearing_body] @ unit_axis(c.bearing_axis, "bearing_axis"),
+            rot[c.journal_body] @ unit_axis(c.journal_axis, "journal_axis"))
+        kind = ideal_kind(c, *axes)
+        ideal = {"type": kind, "body_i": c.bearing_body, "point_i": c.bearing_point,
                  "body_j": c.journal_body, "point_j": c.journal_point}
-        if c.type == "cylindrical":
+        if kind == "revolute":
             ideal |= {"axis_i": c.bearing_axis, "axis_j": c.journal_axis}
         data["joints"].append(ideal)
     data["clearance_joints"] = []

@@ -107,8 +107,11 @@ def plots(folder, model, series, twin) -> None:
     cols = series["steps"]
     for c in model.scene.clearance_joints:
         fig, ax = plt.subplots(figsize=(10, 4.5))
-        ax.plot(cols["time_s"], cols[f"{c.name}_normal_force_N"], lw=0.6, label="radial")
-        ax.plot(cols["time_s"], cols[f"{c.name}_axial_force_N"], lw=0.6, label="axial")
+        if c.type == "cylindrical":
+            ax.plot(cols["time_s"], cols[f"{c.name}_normal_force_N"], lw=0.6, label="radial")
+            ax.plot(cols["time_s"], cols[f"{c.name}_axial_force_N"], lw=0.6, label="axial")
+        else:
+            ax.plot(cols["time_s"], cols[f"{c.name}_normal_force_N"], lw=0.6, label="ball on socket")
         ax.set_xlabel("time (s)")
         ax.set_ylabel("contact force (N)")
         ax.set_title(c.name)

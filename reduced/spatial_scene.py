@@ -17,9 +17,9 @@ import numpy as np
 import pydantic
 
 from pinbore.core.scene import Strict
-from pinbore.reduced.scene import (DAMPING_LAWS, ELASTIC_LAWS, FILE_LAWS, CoulombFriction,
-                                   Integrator, LinearFriction, Output, StribeckFriction,
-                                   check_body_names, check_run_size)
+from pinbore.reduced.scene import (DAMPING_LAWS, ELASTIC_LAWS, FILE_LAWS, GROUND,
+                                   CoulombFriction, Integrator, LinearFriction, Output,
+                                   StribeckFriction, check_body_names, check_run_size)
 
 Vector3 = Annotated[list[float], pydantic.Field(min_length=3, max_length=3)]
 Quaternion = Annotated[list[float], pydantic.Field(min_length=4, max_length=4)]
@@ -33,6 +33,14 @@ def unit_axis(v, key):
     if n == 0:
         raise ValueError(f"{key}: an axis must have nonzero length")
     return [c / n for c in v]
+
+
+def rotation_matrix(p) -> np.ndarray:
+    """A(p) of unit Euler parameters p (the spatial kernel's, reduced.spatial_kernel.rotation)."""
+    from pinbore.reduced import spatial_kernel   # compiled: loaded when a rotation is needed
+    out = np.empty((3, 3))
+    spatial_kernel.rotation(np.asarray(p, float), out)
+    return out
 
 
 class Body(Strict):
@@ -231,6 +239,30 @@ class SpatialScene(Strict):
             raise ValueError("integrator.fixed_step: required by method = 'dopri5_fixed' in a "
                              "spatial scene")
         check_run_size(self)
+        return self
+
+    @pydantic.model_validator(mode="after")
+    def _journals_fit(self):
+        """A journal whose axis is tilted against its bore's at the start (a misaligned joint;
+        it starts centred) fits only if its ends stay inside the clearance there:
+        (L / 2) sin(tilt) < c."""
+        bodies = {b.name: b for b in self.bodies}
+        for k, c in enumerate(self.clearance_joints):
+            if c.type != "cylindrical" or c.bearing_body not in bodies | {GROUND: None} or \
+                    c.journal_body not in bodies | {GROUND: None}:
+                continue   # unknown bodies: _names says so
+            axes = []
+            for name, axis in ((c.bearing_body, c.bearing_axis), (c.journal_body, c.journal_axis)):
+                rot = np.eye(3) if name == GROUND else rotation_matrix(bodies[name].parameters())
+                axes.append(rot @ unit_axis(axis, "axis"))
+            sine = float(np.linalg.norm(np.cross(*axes)))
+            clearance = c.bearing_radius - c.journal_radius
+            if 0.5 * c.length * sine >= clearance:
+                raise ValueError(
+                    f"clearance_joints.{k} ({c.name}): the journal, tilted by "
+                    f"{math.degrees(math.asin(min(sine, 1.0))):.3g} deg against its bore, does not "
+                    f"fit: centred, its ends lie (L/2) sin(tilt) = {0.5 * c.length * sine:.4g} m "
+                    f"off the bore's axis, beyond the radial clearance {clearance:.4g} m")
         return self
 
     @pydantic.model_validator(mode="after")

@@ -29,14 +29,20 @@ from tqdm import tqdm
 from pinbore.core import scene as scenes
 from pinbore.core.errors import InputError
 from pinbore.core.output import atomic_directory
-from pinbore.reduced import dynamics
+from pinbore.reduced import dynamics, spatial_model, spatial_outputs
 from pinbore.reduced import dynamics_plots as plots
 from pinbore.reduced.analyses import (PARAMETERS, Analysis, BifurcationOptions, DesignOptions,
                                       LyapunovOptions, PoincareOptions, Sampled, ShootingOptions)
 from pinbore.reduced.model import build
 from pinbore.reduced.outputs import per_step
 from pinbore.reduced.run import ideal_twin
-from pinbore.reduced.scene import ReducedScene
+from pinbore.reduced.scene import GROUND, ReducedScene
+from pinbore.reduced.spatial_scene import SpatialScene
+
+
+def scene_model(data: dict) -> type[ReducedScene] | type[SpatialScene]:
+    """The scene model of a planar (kind = "reduced") or spatial (kind = "spatial") scene."""
+    return SpatialScene if data.get("kind") == "spatial" else ReducedScene
 
 
 def with_parameter(data: dict, parameter: str, value: float, source: str) -> dict:
@@ -69,9 +75,12 @@ def require_drive(scene: ReducedScene, source: str) -> None:
                          "analyses (a drive that stands still has no revolution to sample)")
 
 
-def mechanism_flow(data: dict, base: Path, source: str) -> dynamics.MechanismFlow:
-    scene = ReducedScene.model_validate(data)
+def mechanism_flow(data: dict, base: Path, source: str):
+    """The flow (dynamics.MechanismFlow or SpatialMechanismFlow) of a driven scene's data."""
+    scene = scene_model(data).model_validate(data)
     require_drive(scene, source)
+    if isinstance(scene, SpatialScene):
+        return dynamics.SpatialMechanismFlow(spatial_model.build(scene, source, base))
     return dynamics.MechanismFlow(build(scene, source, base))
 
 
@@ -219,25 +228,49 @@ class DesignPoint:
         flow = mechanism_flow(data, self.base, self.source)
         state = flow.advance(flow.start(), self.transient)
         flow.advance(state, self.periods)
-        cols = per_step(flow.model, flow.last)[0]
-        ideal = mechanism_flow(ideal_twin(ReducedScene.model_validate(data)).model_dump(),
+        cols = per_step_of(flow)
+        twin_of = spatial_model.ideal_twin if isinstance(flow.model.scene, SpatialScene) else ideal_twin
+        ideal = mechanism_flow(twin_of(scene_model(data).model_validate(data)).model_dump(),
                                self.base, self.source)
         ideal.advance(ideal.start(), 1)
-        ideal_cols = per_step(ideal.model, ideal.last)[0]
-        slider = next(j for j in flow.model.scene.joints if j.type == "prismatic").body
-        drive = flow.model.scene.drive.body
-        angle = np.mod(cols[f"{drive}_angle_rad"], 2 * math.pi)
-        ideal_angle = np.mod(ideal_cols[f"{drive}_angle_rad"], 2 * math.pi)
+        ideal_cols = per_step_of(ideal)
+        angle, acceleration = slider_motion(flow, cols)
+        ideal_angle, ideal_acceleration = slider_motion(ideal, ideal_cols)
         order = np.argsort(ideal_angle)
-        reference = np.interp(angle, ideal_angle[order], ideal_cols[f"{slider}_ax_m_per_s2"][order],
+        reference = np.interp(angle, ideal_angle[order], ideal_acceleration[order],
                               period=2 * math.pi)
-        deviation = math.sqrt(np.mean((cols[f"{slider}_ax_m_per_s2"] - reference) ** 2)
-                              / np.mean(ideal_cols[f"{slider}_ax_m_per_s2"] ** 2))
+        deviation = math.sqrt(np.mean((acceleration - reference) ** 2)
+                              / np.mean(ideal_acceleration ** 2))
         forces = [cols[f"{c.name}_normal_force_N"] for c in flow.model.scene.clearance_joints]
         return {"clearance_m": clearance, "speed_rpm": speed,
                 "peak_force_N": float(max(np.max(f) for f in forces)),
                 "impacts_per_revolution": float(flow.last.counters[3]) / self.periods,
                 "acceleration_deviation": deviation}
+
+
+def per_step_of(flow) -> dict:
+    """The columns of the flow's last advance (reduced.outputs or reduced.spatial_outputs)."""
+    spatial = isinstance(flow.model.scene, SpatialScene)
+    return (spatial_outputs.per_step if spatial else per_step)(flow.model, flow.last)[0]
+
+
+def slider_motion(flow, cols) -> tuple[np.ndarray, np.ndarray]:
+    """At each step of the flow's last advance: the drive's angle in [0, 2 pi) and the
+    slider's acceleration along its guide (the first prismatic joint; planar: along x;
+    spatial: along the guide's axis at the start, exact for a guide on the ground)."""
+    scene = flow.model.scene
+    guide = next(j for j in scene.joints if j.type == "prismatic")
+    if not isinstance(scene, SpatialScene):
+        angle = cols[f"{scene.drive.body}_angle_rad"]
+        return np.mod(angle, 2 * math.pi), cols[f"{guide.body}_ax_m_per_s2"]
+    body_i = {b.name: b for b in scene.bodies}.get(guide.body_i)
+    axis = np.asarray(guide.axis_i, float) / np.linalg.norm(guide.axis_i)
+    if body_i is not None:
+        axis = spatial_model.rotation_matrix(body_i.parameters()) @ axis
+    slider = guide.body_i if guide.body_j == GROUND else guide.body_j
+    acceleration = sum(axis[k] * cols[f"{slider}_a{c}_m_per_s2"] for k, c in enumerate("xyz"))
+    # the drive's relative angle is angle0 + omega t, t restarting at 0 on a whole period
+    return np.mod(flow.omega * cols["time_s"], 2 * math.pi), acceleration
 
 
 def design_band(rows, speeds, max_force, max_deviation) -> dict:
@@ -256,7 +289,7 @@ def run(scene_file: str | Path, analysis: str, options: Analysis) -> int:
     options; outputs in options.out (replaced when complete). 1 if shooting did not
     converge (its outputs are written, marked)."""
     path = Path(scene_file)
-    scene = scenes.load(ReducedScene, path)   # validates, one-line errors
+    scene = scenes.load(scene_model(scenes.read_toml(path)), path)   # validates, one-line errors
     target = SceneFile(path, scene.model_dump(exclude_none=True))
     check_scene(scene, target, options)
     _, analyse = ANALYSES[analysis]
@@ -287,7 +320,7 @@ def check_scene(scene: ReducedScene, target: SceneFile, options: Analysis) -> No
     require_drive(scene, target.source)
     for option, parameter, span in options.swept():
         for value in (span.low, span.high):
-            scenes.validate(ReducedScene, with_parameter(target.data, parameter, value, target.source),
+            scenes.validate(type(scene), with_parameter(target.data, parameter, value, target.source),
                             f"--{option}: {target.source} with {parameter} {value:g}")
     if isinstance(options, DesignOptions) and not any(j.type == "prismatic" for j in scene.joints):
         raise InputError(f"{target.source}: joints: the design study measures a prismatic body's "
