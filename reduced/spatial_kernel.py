@@ -87,7 +87,8 @@ from pinbore.reduced.layout import (
     TORSION_BODY_J, TORSION_FREE_ANGLE, TORSION_KIND, WORK_IN, Contacts)
 from pinbore.reduced.spatial_layout import (
     ANGLE, AXIAL, CHANNELS, CYLINDER, DOT1, DOT2, POINT, PRIM_A_I, PRIM_ANGLE0, PRIM_B_J,
-    PRIM_BODY_I, PRIM_BODY_J, PRIM_C_I, PRIM_KIND, PRIM_S_I, PRIM_S_J, PRIM_SPEED, RADIAL,
+    PRIM_BODY_I, PRIM_BODY_J, PRIM_C_I, PRIM_KIND, PRIM_S_I, PRIM_S_J, PRIM_SPEED,
+    PRIMITIVE_ROWS, RADIAL, SJ_COMPLIANCE,
     SJ_AXIAL_CLEARANCE, SJ_AXIAL_STIFFNESS, SJ_BEARING_AXIS, SJ_BEARING_BODY, SJ_BEARING_POINT,
     SJ_END_LENGTH, SJ_JOURNAL_AXIS, SJ_JOURNAL_BODY, SJ_JOURNAL_POINT, SJ_KIND, SJ_LENGTH,
     SJ_SCALE, SJ_SLICES, TORSION_A_I, TORSION_B_J, TORSION_C_I, Depth, SpatialArgs, SpatialWork)
@@ -191,8 +192,13 @@ def body_states(y, args, work):
             vel[b, k] = y[nq + 7 * b + k]
         w = matvec(rot[b], w_body)
         omega[b, 0], omega[b, 1], omega[b, 2] = w
-        a = rot[b]
-        jinv[b] = a @ inertia_inv[b] @ a.T
+        a, inv = rot[b], inertia_inv[b]
+        for r in range(3):       # A J'^-1 A^T written out: a 3 x 3 matmul allocates
+            t0 = a[r, 0] * inv[0, 0] + a[r, 1] * inv[1, 0] + a[r, 2] * inv[2, 0]
+            t1 = a[r, 0] * inv[0, 1] + a[r, 1] * inv[1, 1] + a[r, 2] * inv[2, 1]
+            t2 = a[r, 0] * inv[0, 2] + a[r, 1] * inv[1, 2] + a[r, 2] * inv[2, 2]
+            for c in range(r + 1):
+                jinv[b, r, c] = jinv[b, c, r] = t0 * a[c, 0] + t1 * a[c, 1] + t2 * a[c, 2]
 
 
 @numba.njit(cache=True)
@@ -260,12 +266,14 @@ def constraint_count(primitives):
 def fill_constraints(t, work, primitives, alpha):
     """Jacobian D (against (r'_k, w_k)), Phi, Phi_t and gamma - 2 a Phi' - a^2 Phi into the
     workspace (body states current). Returns the number of rows."""
-    jac, phi, phi_t, rhs_c = work.jac, work.phi, work.phi_t, work.rhs_c
+    jac, phi, phi_t, rhs_c, row_bodies = work.jac, work.phi, work.phi_t, work.rhs_c, work.row_bodies
     jac[:] = 0.0
     row = 0
     for k in range(primitives.shape[0]):
         r = primitives[k]
         kind, bi, bj = int(r[PRIM_KIND]), int(r[PRIM_BODY_I]), int(r[PRIM_BODY_J])
+        for c in range(PRIMITIVE_ROWS[kind]):
+            row_bodies[row + c, 0], row_bodies[row + c, 1] = bi, bj if bj != bi else -1
         if kind == POINT:
             pi, _, ci, si = point_state(work, bi, vec(r, PRIM_S_I))
             pj, _, cj, sj = point_state(work, bj, vec(r, PRIM_S_J))
@@ -303,63 +311,139 @@ def fill_constraints(t, work, primitives, alpha):
             phi_t[row] = -r[PRIM_SPEED]
             rhs_c[row] = -(c_ * sacc - s_ * cacc) / rho2 + 2 * rate * (s_ * sd + c_ * cd) / rho2
         row += 1
-    vel, omega = work.vel, work.omega
     for i in range(row):
-        rate = phi_t[i]
-        for b in range(vel.shape[0]):
-            for c in range(3):
-                rate += jac[i, 6 * b + c] * vel[b, c] + jac[i, 6 * b + 3 + c] * omega[b, c]
-        rhs_c[i] -= 2 * alpha * rate + alpha * alpha * phi[i]
+        rhs_c[i] -= 2 * alpha * constraint_rate(work, i) + alpha * alpha * phi[i]
     return row
 
 
 @numba.njit(cache=True)
-def apply_inverse_mass(args, work, x, out):
-    """out = M^-1 x for a vector of 6 a body (masses; global inverse inertias)."""
-    masses, jinv = args.masses, work.jinv
-    for b in range(masses.size):
-        for c in range(3):
-            out[6 * b + c] = x[6 * b + c] / masses[b]
-            out[6 * b + 3 + c] = (jinv[b, c, 0] * x[6 * b + 3] + jinv[b, c, 1] * x[6 * b + 4]
-                                  + jinv[b, c, 2] * x[6 * b + 5])
+def constraint_rate(work, i):
+    """Phi' of constraint row i: D_i v + Phi_t (the row's two bodies only)."""
+    jac, vel, omega = work.jac, work.vel, work.omega
+    rate = work.phi_t[i]
+    for side in range(2):
+        b = work.row_bodies[i, side]
+        if b >= 0:
+            for c in range(3):
+                rate += jac[i, 6 * b + c] * vel[b, c] + jac[i, 6 * b + 3 + c] * omega[b, c]
+    return rate
 
 
 @numba.njit(cache=True)
 def fill_schur(args, work, m):
-    """M^-1 D^T (rows of work.mjac) and the Schur matrix D M^-1 D^T of the first m rows."""
-    jac, mjac, schur = work.jac, work.mjac, work.schur
-    n = jac.shape[1]
+    """M^-1 D^T (rows of work.mjac) and the Schur matrix D M^-1 D^T of the first m rows. A row
+    has nonzero columns for its two bodies only (work.row_bodies), so M^-1 (block-diagonal:
+    m I and the global inverse inertia) acts on those, and two rows couple only through a body
+    they share."""
+    jac, mjac, schur, jinv, bodies = work.jac, work.mjac, work.schur, work.jinv, work.row_bodies
+    masses = args.masses
     for i in range(m):
-        apply_inverse_mass(args, work, jac[i], mjac[i])
+        mjac[i, :] = 0.0
+        for side in range(2):
+            b = bodies[i, side]
+            if b < 0:
+                continue
+            for c in range(3):
+                mjac[i, 6 * b + c] = jac[i, 6 * b + c] / masses[b]
+                mjac[i, 6 * b + 3 + c] = (jinv[b, c, 0] * jac[i, 6 * b + 3]
+                                          + jinv[b, c, 1] * jac[i, 6 * b + 4]
+                                          + jinv[b, c, 2] * jac[i, 6 * b + 5])
     for i in range(m):
         for k in range(i + 1):
             v = 0.0
-            for c in range(n):
-                v += jac[i, c] * mjac[k, c]
+            for side in range(2):
+                b = bodies[i, side]
+                if b >= 0 and (b == bodies[k, 0] or b == bodies[k, 1]):
+                    for c in range(6 * b, 6 * b + 6):
+                        v += jac[i, c] * mjac[k, c]
             schur[i, k] = v
             schur[k, i] = v
 
 
 # ---- clearance joints
 @numba.njit(cache=True)
-def slice_kinematics(work, joint, i):
-    """Slice i of a cylindrical joint: (delta_i, rate, n_i, X_i on the journal axis, B_i on the
-    bore axis, weight w_i) (module docstring)."""
+def perpendicular(u):
+    """A unit vector normal to the unit vector u."""
+    a0, a1, a2 = abs(u[0]), abs(u[1]), abs(u[2])
+    helper = (1.0, 0.0, 0.0) if a0 <= a1 and a0 <= a2 else \
+        ((0.0, 1.0, 0.0) if a1 <= a2 else (0.0, 0.0, 1.0))
+    f = cross(u, helper)
+    return scaled(f, 1.0 / math.sqrt(dot(f, f)))
+
+
+@numba.njit(cache=True)
+def bore_section(work, joint):
+    """A cylindrical joint in its bore's section (module docstring): (P_j, u_j, the
+    mid-plane eccentricity a0 = perp(P_j - P_b), the lean a1 = perp(u_j - u_b)), perp the part
+    normal to u_b: the journal's axis point X(z) = P_j + z u_j is off the bore's axis by
+    a0 + z a1 across it."""
     bb, bj = int(joint[SJ_BEARING_BODY]), int(joint[SJ_JOURNAL_BODY])
     pb = point_state(work, bb, vec(joint, SJ_BEARING_POINT))[0]
     ub = vector_state(work, bb, vec(joint, SJ_BEARING_AXIS))[0]
     pj = point_state(work, bj, vec(joint, SJ_JOURNAL_POINT))[0]
     uj = vector_state(work, bj, vec(joint, SJ_JOURNAL_AXIS))[0]
-    offset, _, weight = sliced.slice_geometry(i, joint[SJ_LENGTH], int(joint[SJ_SLICES]),
-                                              joint[SJ_END_LENGTH])
-    x = add(pj, scaled(uj, offset))
-    e = sub(x, add(pb, scaled(ub, offset)))
-    across = sub(e, scaled(ub, dot(e, ub)))
-    size = math.sqrt(dot(across, across))
-    n = scaled(across, 1.0 / size) if size > 0.0 else (1.0, 0.0, 0.0)
-    b = sub(x, across)
-    rate = dot(n, sub(material_velocity(work, bj, x), material_velocity(work, bb, b)))
-    return size - joint[JOINT_CLEARANCE], rate, n, x, b, weight
+    e, lean = sub(pj, pb), sub(uj, ub)
+    return pj, uj, ub, sub(e, scaled(ub, dot(e, ub))), sub(lean, scaled(ub, dot(lean, ub)))
+
+
+@numba.njit(cache=True)
+def end_offset(joint):
+    """The offset z' of the last slice from the mid-plane (m; the first's is -z')."""
+    slices = int(joint[SJ_SLICES])
+    return sliced.slice_geometry(slices - 1, joint[SJ_LENGTH], slices, 0.0)[0]
+
+
+@numba.njit(cache=True)
+def slice_rate(work, joint, n, x, b):
+    """The approach rate n . (v_journal(x) - v_bore(b)) of the material points x, b (m/s)."""
+    return dot(n, sub(material_velocity(work, int(joint[SJ_JOURNAL_BODY]), x),
+                      material_velocity(work, int(joint[SJ_BEARING_BODY]), b)))
+
+
+@numba.njit(cache=True)
+def radial_depth(work, joint):
+    """The deepest slice of a cylindrical joint with the bore unmoved (layout.Depth). Across
+    the bore the journal's axis is off by |a0 + z' a1|, convex in z', so the deepest slice
+    is an end slice: two slices are looked at, whatever the slicing."""
+    pj, uj, _, a0, a1 = bore_section(work, joint)
+    z = end_offset(joint)
+    plus, minus = add(a0, scaled(a1, z)), sub(a0, scaled(a1, z))
+    if dot(minus, minus) > dot(plus, plus):
+        z, plus = -z, minus
+    size = math.sqrt(dot(plus, plus))
+    n = scaled(plus, 1.0 / size) if size > 0.0 else (1.0, 0.0, 0.0)
+    x = add(pj, scaled(uj, z))
+    return Depth(size - joint[JOINT_CLEARANCE], slice_rate(work, joint, n, x, sub(x, plus)))
+
+
+@numba.njit(cache=True)
+def cylinder_slices(work, joint, table, grid_log0, grid_step, approaches, weights):
+    """The slices of a cylindrical joint with the bore moved by its bulk compliance
+    (laws.sliced.bore_displacement; 0 without): each slice's approach delta_i into
+    `approaches` (m) and its weight a w_i into `weights` (m); returns the bore's displacement
+    (3, global; NaN beyond the law's table). For the outputs."""
+    _, _, ub, a0, a1 = bore_section(work, joint)
+    f, g, ax, ay, bx, by = section_frame(ub, a0, a1)
+    length, slices, clearance = joint[SJ_LENGTH], int(joint[SJ_SLICES]), joint[JOINT_CLEARANCE]
+    dx, dy = sliced.bore_displacement(ax, ay, bx, by, clearance, False, length, slices,
+                                      grid_log0, grid_step, table, 0.0, 0.0, joint[SJ_END_LENGTH],
+                                      joint[SJ_SCALE], joint[SJ_COMPLIANCE])
+    for i in range(slices):
+        approaches[i] = sliced.slice_contact(i, dx, dy, ax, ay, bx, by, clearance, False, length,
+                                             slices, grid_log0, grid_step, table, 0.0, 0.0)[1]
+        weights[i] = joint[SJ_SCALE] * sliced.slice_geometry(i, length, slices,
+                                                             joint[SJ_END_LENGTH])[2]
+    return add(scaled(f, dx), scaled(g, dy))
+
+
+@numba.njit(cache=True)
+def section_frame(ub, a0, a1):
+    """The bore's section in 2D: unit f, g = u_b x f across the bore (f along a0 where the
+    journal is off centre) and a0, a1 in them: (f, g, a0_f, a0_g, a1_f, a1_g)."""
+    size = math.sqrt(dot(a0, a0))
+    f = scaled(a0, 1.0 / size) if size > 0.0 else perpendicular(ub)
+    g = cross(ub, f)
+    return f, g, dot(a0, f), dot(a0, g), dot(a1, f), dot(a1, g)
 
 
 @numba.njit(cache=True)
@@ -402,12 +486,7 @@ def channel_depth(work, joint, channel):
     if int(joint[SJ_KIND]) != CYLINDER:
         delta, rate, _, _, _ = sphere_kinematics(work, joint)
         return Depth(delta, rate)
-    deepest, deepest_rate = -math.inf, 0.0
-    for i in range(int(joint[SJ_SLICES])):
-        delta, rate, _, _, _, _ = slice_kinematics(work, joint, i)
-        if delta > deepest:
-            deepest, deepest_rate = delta, rate
-    return Depth(deepest, deepest_rate)
+    return radial_depth(work, joint)
 
 
 @numba.njit(cache=True)
@@ -423,15 +502,13 @@ def push(force, work, b, f, x):
 
 
 @numba.njit(cache=True)
-def contact_force(force, work, joint, table, grid_log0, grid_step, impact_speed, delta, rate, n,
-                  x_journal, x_bearing, weight):
-    """One contact element (a slice, or the ball) in contact (delta > 0): the normal force
-    weight (f_el (1 + chi rate/v0)) pushes the journal at x_journal along -n and the bearing at
-    x_bearing along +n; friction acts at the contact point x_bearing + R_b n on both against
-    the slip. Returns (normal force N, elastic force N, friction force N, dissipated power W);
-    NaN forces beyond the law's table."""
+def contact_force(force, work, joint, f_el, impact_speed, rate, n, x_journal, x_bearing):
+    """One contact element (a slice, or the ball) in contact, its elastic force f_el (N; NaN
+    beyond the law's table): the normal force f_el (1 + chi rate/v0) pushes the journal at
+    x_journal along -n and the bearing at x_bearing along +n; friction acts at the contact
+    point x_bearing + R_b n on both against the slip. Returns (normal force N, elastic force
+    N, friction force N, dissipated power W)."""
     bb, bj = int(joint[SJ_BEARING_BODY]), int(joint[SJ_JOURNAL_BODY])
-    f_el = tables.table_force(delta, grid_log0, grid_step, table) * weight
     f_n = dissipative.hysteresis_force(f_el, rate, impact_speed, joint[JOINT_CHI])
     push(force, work, bj, scaled(n, -f_n), x_journal)
     push(force, work, bb, scaled(n, f_n), x_bearing)
@@ -453,14 +530,34 @@ def contact_force(force, work, joint, table, grid_log0, grid_step, impact_speed,
 def joint_forces(force, work, joint, table, grid_log0, grid_step, radial_speed, axial_speed):
     """All the forces of a clearance joint into `force`: (radial or spherical normal force N,
     axial force N, friction force N, dissipated power W); NaN beyond the law's table."""
-    scale = joint[SJ_SCALE]
     normal = tangential = power = axial = 0.0
     if int(joint[SJ_KIND]) == CYLINDER:
-        for i in range(int(joint[SJ_SLICES])):
-            delta, rate, n, x, b, weight = slice_kinematics(work, joint, i)
-            if delta > 0.0:
-                f_n, _, f_t, p = contact_force(force, work, joint, table, grid_log0, grid_step,
-                                               radial_speed, delta, rate, n, x, b, scale * weight)
+        pj, uj, ub, a0, a1 = bore_section(work, joint)
+        z = end_offset(joint)
+        plus, minus = add(a0, scaled(a1, z)), sub(a0, scaled(a1, z))
+        clearance = joint[JOINT_CLEARANCE]
+        # the deepest slice is an end slice (radial_depth): skip the slices when it is free
+        if max(dot(plus, plus), dot(minus, minus)) > clearance * clearance:
+            f, g, ax, ay, bx, by = section_frame(ub, a0, a1)
+            length, slices, scale = joint[SJ_LENGTH], int(joint[SJ_SLICES]), joint[SJ_SCALE]
+            dx, dy = sliced.bore_displacement(ax, ay, bx, by, clearance, False, length, slices,
+                                              grid_log0, grid_step, table, 0.0, 0.0,
+                                              joint[SJ_END_LENGTH], scale, joint[SJ_COMPLIANCE])
+            if not math.isfinite(dx):
+                return math.nan, math.nan, math.nan, math.nan
+            for i in range(slices):
+                offset, approach, nx, ny, _, f_loc, _ = sliced.slice_contact(
+                    i, dx, dy, ax, ay, bx, by, clearance, False, length, slices, grid_log0,
+                    grid_step, table, 0.0, 0.0)
+                if approach <= 0.0:
+                    continue
+                weight = sliced.slice_geometry(i, length, slices, joint[SJ_END_LENGTH])[2]
+                n = add(scaled(f, nx), scaled(g, ny))
+                x = add(pj, scaled(uj, offset))
+                b = sub(x, scaled(n, approach + clearance))   # the bore's (moved) axis
+                f_n, _, f_t, p = contact_force(force, work, joint, scale * weight * f_loc,
+                                               radial_speed, slice_rate(work, joint, n, x, b),
+                                               n, x, b)
                 normal += f_n
                 tangential += f_t
                 power += p
@@ -474,9 +571,9 @@ def joint_forces(force, work, joint, table, grid_log0, grid_step, radial_speed, 
     else:
         delta, rate, n, pj, ps = sphere_kinematics(work, joint)
         if delta > 0.0:
-            normal, _, tangential, power = contact_force(force, work, joint, table, grid_log0,
-                                                         grid_step, radial_speed, delta, rate, n,
-                                                         pj, ps, 1.0)
+            normal, _, tangential, power = contact_force(
+                force, work, joint, tables.table_force(delta, grid_log0, grid_step, table),
+                radial_speed, rate, n, pj, ps)
     return normal, axial, tangential, power
 
 
@@ -510,7 +607,8 @@ def workspace(args):
     return SpatialWork(np.zeros((nb, 3)), np.zeros((nb, 3, 3)), np.zeros((nb, 3)),
                        np.zeros((nb, 3)), np.zeros((nb, 3, 3)), np.zeros((m, 6 * nb)),
                        np.zeros(m), np.zeros(m), np.zeros(m), np.zeros((m, m)),
-                       np.zeros(6 * nb), np.zeros(max(CHANNELS * nj, 1)), np.zeros((m, 6 * nb)))
+                       np.zeros(6 * nb), np.zeros(max(CHANNELS * nj, 1)), np.zeros((m, 6 * nb)),
+                       np.full((m, 2), -1, np.int64))
 
 
 @numba.njit(cache=True)
@@ -563,18 +661,22 @@ def rhs(t, y, dy, args, work):
     work_in = 0.0
     if m > 0:
         fill_schur(args, work, m)
+        mjac, bodies = work.mjac, work.row_bodies
         for i in range(m):   # (D M^-1 D^T) lambda = D M^-1 Q - gamma~
             v = -rhs_c[i]
-            for c in range(force.size):
-                v += work.mjac[i, c] * force[c]
+            for side in range(2):
+                b = bodies[i, side]
+                if b >= 0:
+                    for c in range(6 * b, 6 * b + 6):
+                        v += mjac[i, c] * force[c]
             rhs_c[i] = v
         cholesky_solve(work.schur, rhs_c, m)
-        for c in range(force.size):
-            v = force[c]
-            for i in range(m):
-                v -= jac[i, c] * rhs_c[i]
-            force[c] = v
-        for i in range(m):
+        for i in range(m):   # Q - D^T lambda
+            for side in range(2):
+                b = bodies[i, side]
+                if b >= 0:
+                    for c in range(6 * b, 6 * b + 6):
+                        force[c] -= jac[i, c] * rhs_c[i]
             work_in += rhs_c[i] * work.phi_t[i]
     alpha = args.baumgarte
     for b in range(masses.size):
@@ -652,11 +754,7 @@ def project_onto_constraints(t, y, args, work, tolerance, rate_tolerance):
             if level == 0:
                 rhs_c[i] = work.phi[i]
             else:
-                v = work.phi_t[i]
-                for b in range(nb):
-                    for c in range(3):
-                        v += work.jac[i, 6 * b + c] * work.vel[b, c] + work.jac[i, 6 * b + 3 + c] * work.omega[b, c]
-                rhs_c[i] = v
+                rhs_c[i] = constraint_rate(work, i)
             largest = max(largest, abs(rhs_c[i]))
         if largest <= (tolerance if level == 0 else rate_tolerance):
             continue

@@ -8,7 +8,7 @@ from pinbore.reduced import outputs, spatial_kernel
 from pinbore.reduced.layout import DISSIPATED, LATCH, LOG_JOINT, LOG_RATE, SPRING, STOP, WORK_IN
 from pinbore.reduced.layout import TORSION_KIND, TORSION_STIFFNESS
 from pinbore.reduced.spatial_layout import (AXIAL, CHANNELS, CYLINDER, RADIAL, SJ_AXIAL_STIFFNESS,
-                                            SJ_KIND, SJ_SCALE, SJ_SLICES)
+                                            SJ_COMPLIANCE, SJ_KIND, SJ_LENGTH, SJ_SLICES)
 
 
 def per_step(model, run):
@@ -49,9 +49,15 @@ def per_step(model, run):
             axial = spatial_kernel.channel_depth(work, row, AXIAL).delta
             energy = 0.0
             if int(row[SJ_KIND]) == CYLINDER:
-                for i in range(int(row[SJ_SLICES])):
-                    delta, _, _, _, _, weight = spatial_kernel.slice_kinematics(work, row, i)
-                    energy += row[SJ_SCALE] * weight * model.elastic_energy(j, delta)
+                # the slices' local law, the far field's spring L |d|^2 / (2 c_b) (laws.sliced)
+                approaches, weights = np.empty((2, int(row[SJ_SLICES])))
+                moved = np.array(spatial_kernel.cylinder_slices(
+                    work, row, model.tables[j], model.grid_log0, model.grid_step, approaches,
+                    weights))
+                for delta, weight in zip(approaches, weights):
+                    energy += weight * model.elastic_energy(j, delta)
+                if row[SJ_COMPLIANCE] > 0:
+                    energy += row[SJ_LENGTH] * (moved @ moved) / (2 * row[SJ_COMPLIANCE])
                 energy += 0.5 * row[SJ_AXIAL_STIFFNESS] * max(axial, 0.0) ** 2
             else:
                 energy = model.elastic_energy(j, depth)

@@ -173,7 +173,8 @@ def test_slice_sum_equals_the_sliced_law(end_length, scale):
     work = spatial_kernel.SpatialWork(np.array([[1e-4 + delta, 0, 0]]), rot[None], np.zeros((1, 3)),
                                       np.zeros((1, 3)), np.eye(3)[None], np.zeros((0, 6)),
                                       np.zeros(0), np.zeros(0), np.zeros(0), np.zeros((0, 0)),
-                                      np.zeros(6), np.zeros(2), np.zeros((0, 6)))
+                                      np.zeros(6), np.zeros(2), np.zeros((0, 6)),
+                                      np.zeros((0, 2), np.int64))
     force = np.zeros(6)
     f_n, _, _, _ = spatial_kernel.joint_forces(force, work, joint, table, grid_log0, grid_step,
                                                1.0, 1.0)
