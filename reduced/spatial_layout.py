@@ -59,15 +59,16 @@ SpatialArgs = namedtuple("SpatialArgs", [
     "nq", "masses", "inertia", "inertia_inv", "gravity", "primitives", "baumgarte", "joints",
     "speeds", "grid_log0", "grid_step", "tables", "torsion", "latched", "mode"])
 
-# The buffers of the right-hand side: per body its position, rotation matrix, velocity,
-# angular velocity (global) and inverse inertia (global); the constraint rows (Jacobian
-# against (r', omega) of each body, Phi, Phi_t, gamma then the multipliers), the Schur matrix,
-# the applied forces and torques (6 a body), the normal force of each channel, the rows of
-# M^-1 D^T (6 a body each) and the two bodies of each constraint row (-1: the ground; a row
-# has nonzero columns for these only).
+# The buffers of the right-hand side: a row per body (BODY_*: its position, rotation matrix
+# and inverse inertia (row-major, global), velocity, angular velocity (global)); the
+# constraint rows (Jacobian against (r', omega) of each body, Phi, Phi_t, gamma then the
+# multipliers), the Schur matrix, the applied forces and torques (6 a body), the normal force
+# of each channel, the rows of M^-1 D^T (6 a body each) and the two bodies of each constraint
+# row (-1: the ground; a row has nonzero columns for these only).
 SpatialWork = namedtuple("SpatialWork", [
-    "pos", "rot", "vel", "omega", "jinv", "jac", "phi", "phi_t", "rhs_c", "schur", "force",
-    "normal", "mjac", "row_bodies"])
+    "bodies", "jac", "phi", "phi_t", "rhs_c", "schur", "force", "normal", "mjac", "row_bodies"])
+BODY_POS, BODY_ROT, BODY_VEL, BODY_OMEGA, BODY_JINV = 0, 3, 12, 15, 18
+BODY_COLUMNS = 27
 
 # A contact channel's deepest penetration (m) and its approach rate there (m/s).
 Depth = namedtuple("Depth", ["delta", "rate"])
