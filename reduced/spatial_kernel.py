@@ -101,6 +101,12 @@ def vec(a, i):
 
 
 @numba.njit(cache=True)
+def vec2(a, k, i):
+    """Three entries of row k of a 2D array from column i."""
+    return (a[k, i], a[k, i + 1], a[k, i + 2])
+
+
+@numba.njit(cache=True)
 def add(a, b):
     return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
 
@@ -308,13 +314,14 @@ def fill_constraints(t, work, primitives, alpha):
     jac[:] = 0.0
     row = 0
     for k in range(primitives.shape[0]):
-        r = primitives[k]
-        kind, bi, bj = int(r[PRIM_KIND]), int(r[PRIM_BODY_I]), int(r[PRIM_BODY_J])
+        # entries read in place: a row view of `primitives` would count its references
+        kind, bi, bj = (int(primitives[k, PRIM_KIND]), int(primitives[k, PRIM_BODY_I]),
+                        int(primitives[k, PRIM_BODY_J]))
         for c in range(PRIMITIVE_ROWS[kind]):
             row_bodies[row + c, 0], row_bodies[row + c, 1] = bi, bj if bj != bi else -1
         if kind == POINT:
-            pi, _, ci, si = point_state(bodies, bi, vec(r, PRIM_S_I))
-            pj, _, cj, sj = point_state(bodies, bj, vec(r, PRIM_S_J))
+            pi, _, ci, si = point_state(bodies, bi, vec2(primitives, k, PRIM_S_I))
+            pj, _, cj, sj = point_state(bodies, bj, vec2(primitives, k, PRIM_S_J))
             for c in range(3):
                 unit = (1.0 if c == 0 else 0.0, 1.0 if c == 1 else 0.0, 1.0 if c == 2 else 0.0)
                 put(jac, row + c, bi, unit, cross(si, unit), 1.0)
@@ -323,30 +330,30 @@ def fill_constraints(t, work, primitives, alpha):
             row += 3
             continue
         if kind == DOT1:
-            value, coefficient, _, acc = dot1(bodies, bi, vec(r, PRIM_A_I), bj, vec(r, PRIM_B_J))
+            value, coefficient, _, acc = dot1(bodies, bi, vec2(primitives, k, PRIM_A_I), bj, vec2(primitives, k, PRIM_B_J))
             put(jac, row, bi, ZERO, coefficient, 1.0)
             put(jac, row, bj, ZERO, coefficient, -1.0)
             phi[row], phi_t[row], rhs_c[row] = value, 0.0, -acc
         elif kind == DOT2:
-            a, ad, ac = vector_state(bodies, bi, vec(r, PRIM_A_I))
-            pi, vi, ci, si = point_state(bodies, bi, vec(r, PRIM_S_I))
-            pj, vj, cj, sj = point_state(bodies, bj, vec(r, PRIM_S_J))
+            a, ad, ac = vector_state(bodies, bi, vec2(primitives, k, PRIM_A_I))
+            pi, vi, ci, si = point_state(bodies, bi, vec2(primitives, k, PRIM_S_I))
+            pj, vj, cj, sj = point_state(bodies, bj, vec2(primitives, k, PRIM_S_J))
             d, dd = sub(pj, pi), sub(vj, vi)
             put(jac, row, bi, scaled(a, -1.0), cross(a, add(d, si)), 1.0)
             put(jac, row, bj, a, cross(sj, a), 1.0)
             phi[row], phi_t[row] = dot(a, d), 0.0
             rhs_c[row] = -(dot(ac, d) + 2 * dot(ad, dd) + dot(a, sub(cj, ci)))
         else:   # ANGLE: theta = atan2(s, c) = angle0 + speed t
-            c_, kc, cd, cacc = dot1(bodies, bi, vec(r, PRIM_A_I), bj, vec(r, PRIM_B_J))
-            s_, ks, sd, sacc = dot1(bodies, bi, vec(r, PRIM_C_I), bj, vec(r, PRIM_B_J))
+            c_, kc, cd, cacc = dot1(bodies, bi, vec2(primitives, k, PRIM_A_I), bj, vec2(primitives, k, PRIM_B_J))
+            s_, ks, sd, sacc = dot1(bodies, bi, vec2(primitives, k, PRIM_C_I), bj, vec2(primitives, k, PRIM_B_J))
             rho2 = s_ * s_ + c_ * c_
             coefficient = scaled(sub(scaled(ks, c_), scaled(kc, s_)), 1.0 / rho2)
             put(jac, row, bi, ZERO, coefficient, 1.0)
             put(jac, row, bj, ZERO, coefficient, -1.0)
             rate = (c_ * sd - s_ * cd) / rho2
-            gap = math.atan2(s_, c_) - r[PRIM_ANGLE0] - r[PRIM_SPEED] * t
+            gap = math.atan2(s_, c_) - primitives[k, PRIM_ANGLE0] - primitives[k, PRIM_SPEED] * t
             phi[row] = gap - 2 * math.pi * math.floor(gap / (2 * math.pi) + 0.5)
-            phi_t[row] = -r[PRIM_SPEED]
+            phi_t[row] = -primitives[k, PRIM_SPEED]
             rhs_c[row] = -(c_ * sacc - s_ * cacc) / rho2 + 2 * rate * (s_ * sd + c_ * cd) / rho2
         row += 1
     for i in range(row):
