@@ -101,12 +101,6 @@ def vec(a, i):
 
 
 @numba.njit(cache=True)
-def vec2(a, k, i):
-    """Three entries of row k of a 2D array from column i."""
-    return (a[k, i], a[k, i + 1], a[k, i + 2])
-
-
-@numba.njit(cache=True)
 def add(a, b):
     return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
 
@@ -136,14 +130,6 @@ def matvec(m, a):
     return (m[0, 0] * a[0] + m[0, 1] * a[1] + m[0, 2] * a[2],
             m[1, 0] * a[0] + m[1, 1] * a[1] + m[1, 2] * a[2],
             m[2, 0] * a[0] + m[2, 1] * a[1] + m[2, 2] * a[2])
-
-
-@numba.njit(cache=True)
-def tmatvec(m, a):
-    """m^T a."""
-    return (m[0, 0] * a[0] + m[1, 0] * a[1] + m[2, 0] * a[2],
-            m[0, 1] * a[0] + m[1, 1] * a[1] + m[2, 1] * a[2],
-            m[0, 2] * a[0] + m[1, 2] * a[1] + m[2, 2] * a[2])
 
 
 # ---- Euler parameters
@@ -216,16 +202,22 @@ def body_states(y, args, work):
 
 
 @numba.njit(cache=True)
-def row3(bodies, b, k):
-    """Three entries of body b's row from column k."""
-    return (bodies[b, k], bodies[b, k + 1], bodies[b, k + 2])
+def row3(rows, b, k):
+    """Three entries of row b of a 2D array from column k."""
+    return (rows[b, k], rows[b, k + 1], rows[b, k + 2])
+
+
+@numba.njit(cache=True)
+def block_times(bodies, b, k, a):
+    """The 3 x 3 block of body b's row from column k (row-major) times a."""
+    return (dot(row3(bodies, b, k), a), dot(row3(bodies, b, k + 3), a),
+            dot(row3(bodies, b, k + 6), a))
 
 
 @numba.njit(cache=True)
 def turned(bodies, b, a):
     """A a: a body-frame vector of body b in global axes."""
-    return (dot(row3(bodies, b, BODY_ROT), a), dot(row3(bodies, b, BODY_ROT + 3), a),
-            dot(row3(bodies, b, BODY_ROT + 6), a))
+    return block_times(bodies, b, BODY_ROT, a)
 
 
 @numba.njit(cache=True)
@@ -238,8 +230,7 @@ def unturned(bodies, b, a):
 @numba.njit(cache=True)
 def inverse_inertia_times(bodies, b, a):
     """A J'^-1 A^T a (global)."""
-    return (dot(row3(bodies, b, BODY_JINV), a), dot(row3(bodies, b, BODY_JINV + 3), a),
-            dot(row3(bodies, b, BODY_JINV + 6), a))
+    return block_times(bodies, b, BODY_JINV, a)
 
 
 @numba.njit(cache=True)
@@ -320,8 +311,8 @@ def fill_constraints(t, work, primitives, alpha):
         for c in range(PRIMITIVE_ROWS[kind]):
             row_bodies[row + c, 0], row_bodies[row + c, 1] = bi, bj if bj != bi else -1
         if kind == POINT:
-            pi, _, ci, si = point_state(bodies, bi, vec2(primitives, k, PRIM_S_I))
-            pj, _, cj, sj = point_state(bodies, bj, vec2(primitives, k, PRIM_S_J))
+            pi, _, ci, si = point_state(bodies, bi, row3(primitives, k, PRIM_S_I))
+            pj, _, cj, sj = point_state(bodies, bj, row3(primitives, k, PRIM_S_J))
             for c in range(3):
                 unit = (1.0 if c == 0 else 0.0, 1.0 if c == 1 else 0.0, 1.0 if c == 2 else 0.0)
                 put(jac, row + c, bi, unit, cross(si, unit), 1.0)
@@ -330,22 +321,22 @@ def fill_constraints(t, work, primitives, alpha):
             row += 3
             continue
         if kind == DOT1:
-            value, coefficient, _, acc = dot1(bodies, bi, vec2(primitives, k, PRIM_A_I), bj, vec2(primitives, k, PRIM_B_J))
+            value, coefficient, _, acc = dot1(bodies, bi, row3(primitives, k, PRIM_A_I), bj, row3(primitives, k, PRIM_B_J))
             put(jac, row, bi, ZERO, coefficient, 1.0)
             put(jac, row, bj, ZERO, coefficient, -1.0)
             phi[row], phi_t[row], rhs_c[row] = value, 0.0, -acc
         elif kind == DOT2:
-            a, ad, ac = vector_state(bodies, bi, vec2(primitives, k, PRIM_A_I))
-            pi, vi, ci, si = point_state(bodies, bi, vec2(primitives, k, PRIM_S_I))
-            pj, vj, cj, sj = point_state(bodies, bj, vec2(primitives, k, PRIM_S_J))
+            a, ad, ac = vector_state(bodies, bi, row3(primitives, k, PRIM_A_I))
+            pi, vi, ci, si = point_state(bodies, bi, row3(primitives, k, PRIM_S_I))
+            pj, vj, cj, sj = point_state(bodies, bj, row3(primitives, k, PRIM_S_J))
             d, dd = sub(pj, pi), sub(vj, vi)
             put(jac, row, bi, scaled(a, -1.0), cross(a, add(d, si)), 1.0)
             put(jac, row, bj, a, cross(sj, a), 1.0)
             phi[row], phi_t[row] = dot(a, d), 0.0
             rhs_c[row] = -(dot(ac, d) + 2 * dot(ad, dd) + dot(a, sub(cj, ci)))
         else:   # ANGLE: theta = atan2(s, c) = angle0 + speed t
-            c_, kc, cd, cacc = dot1(bodies, bi, vec2(primitives, k, PRIM_A_I), bj, vec2(primitives, k, PRIM_B_J))
-            s_, ks, sd, sacc = dot1(bodies, bi, vec2(primitives, k, PRIM_C_I), bj, vec2(primitives, k, PRIM_B_J))
+            c_, kc, cd, cacc = dot1(bodies, bi, row3(primitives, k, PRIM_A_I), bj, row3(primitives, k, PRIM_B_J))
+            s_, ks, sd, sacc = dot1(bodies, bi, row3(primitives, k, PRIM_C_I), bj, row3(primitives, k, PRIM_B_J))
             rho2 = s_ * s_ + c_ * c_
             coefficient = scaled(sub(scaled(ks, c_), scaled(kc, s_)), 1.0 / rho2)
             put(jac, row, bi, ZERO, coefficient, 1.0)
