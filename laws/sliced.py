@@ -31,14 +31,30 @@ uniform displacement c_b F / L:
 r(z) the bore's edge relief (pinbore.laws.relief; none when its length or depth is 0), a a
 stiffness factor and e = `end_length` (m, may be negative): each end adds e metres of the law
 at its end slice's approach, moment arm that of the end slice (with n = 1 the one slice gets
-both). F is implicit in delta_i: the shared approach x = delta - c_b F(x) / L is the root of
-x + c_b F(x) / L - delta, increasing in x, found by Newton's method kept inside its bracket
-[delta - c_b F(delta) / L, delta]. With c_b = 0 the slices are independent. A straight pin
-(theta = 0, no relief) with a = 1, e = 0 carries f(delta) L for any c_b: the split leaves the
-plane-section law whole where the load is uniform, so the long-pin limit is the 2D law. Under
+both). F is implicit in delta_i. With c_b = 0 the slices are independent. A straight pin
+(theta = 0, no relief) with a = 1, e = 0 carries f(delta) L for any c_b: the split
+leaves the plane-section law whole where the load is uniform, so the long-pin limit is the 2D law. Under
 tilt the far field takes the resultant's part of the approach only; the tilt goes into the
 local compression, so a tilted pin carries more moment, nearer its loaded end, than
 independent slices of the whole section law give (what the 3D FE shows: calibration/sliced.py).
+
+The section in 2D. In space the journal's axis meets slice i's plane at P_i = A + z'_i B
+(m, in the bore's section, from the bore's axis: A the eccentricity at the mid-plane, B the
+tilt's lean per metre), and the far field moves the bore by a vector d. The slice's approach
+is delta_i = |P_i - d| - c - r(z_i) (c the radial clearance) along n_i = (P_i - d)/|P_i - d|,
+and the slices' resultant F = a sum_i f_loc(delta_i) w_i n_i moves the bore by
+d = c_b F / L. The root of g(d) = d - c_b F(d) / L is the minimum of
+
+    Psi(d) = |d|^2 / 2 + (c_b / L) a sum_i w_i U(delta_i(d)),   U' = f_loc,
+
+strongly convex (U is convex and increasing, delta_i convex in d), so it is unique,
+|d| <= c_b |F(0)| / L, and Newton's method on g, whose Jacobian I + (c_b / L) K is symmetric
+positive definite, K = a sum_i w_i [f'_i n_i n_i^T + f_i / |P_i - d| (I - n_i n_i^T)], finds it
+when every step that overshoots the minimum along its direction is cut back to it
+(bore_displacement). The plane law above is the in-plane case: P_i = (delta + theta z'_i) along
+x, c = 0, the approach taken along x (no curvature term), d = (c_b F / L, 0), so
+x = delta - d_x; the spatial kernel (pinbore.reduced.spatial_kernel) takes the general one.
+This section geometry and its potential are the project's own construction.
 
 F and M are the generalised forces conjugate to delta and theta (the virtual work of the
 slices is sum_i f_i w_i d(delta_i) = F d(delta) + M d(theta) plus the far field's, whose
@@ -71,81 +87,132 @@ def slice_geometry(i, length, slices, end_length):
 
 
 @numba.njit(cache=True)
-def slice_state(i, shared, theta, length, slices, grid_log0, grid_step, table, relief_length,
-                relief_depth):
-    """Slice i of `slices` at the shared approach `shared` (m, the hub's approach less the
-    bore's uniform displacement): its offset z_i - z_mid (m), approach delta_i (m), local
-    per-length force f_i (N/m; 0 when delta_i <= 0) and df_i/d delta_i (N/m^2)."""
+def slice_contact(i, dx, dy, ax, ay, bx, by, clearance, planar, length, slices, grid_log0,
+                  grid_step, table, relief_length, relief_depth):
+    """Slice i of `slices` in the bore's section (module docstring, "The section in 2D"): the
+    journal's axis at P_i = (ax, ay) + z'_i (bx, by) (m) against the bore moved by (dx, dy)
+    (m). planar: the section's in-plane case, approach P_ix - dx - clearance - r(z_i) along
+    x; else the approach |P_i - d| - clearance - r(z_i) along n_i = (P_i - d) / |P_i - d|.
+    Returns (z'_i = z_i - z_mid (m), approach delta_i (m), n_ix, n_iy, the curvature
+    1/|P_i - d| of the approach across n_i (1/m; 0 in plane), local per-length force f_i (N/m;
+    0 when delta_i <= 0), df_i/d delta_i (N/m^2))."""
     offset = slice_geometry(i, length, slices, 0.0)[0]
-    approach = shared + theta * offset
+    px, py = ax + bx * offset - dx, ay + by * offset - dy
+    if planar:
+        rho, nx, ny, curvature = px, 1.0, 0.0, 0.0
+    else:
+        rho = math.sqrt(px * px + py * py)
+        nx, ny, curvature = (px / rho, py / rho, 1.0 / rho) if rho > 0.0 else (1.0, 0.0, 0.0)
+    approach = rho - clearance
     if relief_length > 0.0 and relief_depth > 0.0:
         approach -= relief.relief_at(0.5 * length + offset, 0.0, length, relief_length,
                                      relief_depth)[0]
     if approach <= 0.0:
-        return offset, approach, 0.0, 0.0
+        return offset, approach, nx, ny, curvature, 0.0, 0.0
     force, slope = tables.table_force_slope(approach, grid_log0, grid_step, table)
-    return offset, approach, force, slope
+    return offset, approach, nx, ny, curvature, force, slope
 
 
 @numba.njit(cache=True)
-def slice_sums(shared, theta, length, slices, grid_log0, grid_step, table, relief_length,
-               relief_depth, end_length, scale):
-    """(F (N), M (N m), dF/d shared (N/m), contact length (m)) of the slices at the shared
-    approach `shared` (module docstring: F = a sum_i f_i w_i, M = a sum_i f_i z'_i w_i)."""
-    force = moment = stiffness = contact = 0.0
+def section_sums(dx, dy, ax, ay, bx, by, clearance, planar, length, slices, grid_log0,
+                 grid_step, table, relief_length, relief_depth, end_length, scale):
+    """The slices' resultants at the bore displacement (dx, dy) (slice_contact's geometry):
+    (F_x, F_y (N), M_x, M_y (N m: sum of f_i z'_i w_i n_i), the stiffness -dF/dd (N/m, 2 x 2:
+    K_xx, K_xy, K_yy), contact length (m)), F = a sum_i f_i w_i n_i and
+    K = a sum_i w_i [f'_i n_i n_i^T + f_i / |P_i - d| (I - n_i n_i^T)]."""
+    fx = fy = mx = my = kxx = kxy = kyy = contact = 0.0
     for i in range(slices):
-        offset, approach, f, slope = slice_state(i, shared, theta, length, slices, grid_log0,
-                                                 grid_step, table, relief_length, relief_depth)
+        offset, approach, nx, ny, curvature, f, slope = slice_contact(
+            i, dx, dy, ax, ay, bx, by, clearance, planar, length, slices, grid_log0, grid_step,
+            table, relief_length, relief_depth)
         if approach <= 0.0:
             continue
         _, width, weight = slice_geometry(i, length, slices, end_length)
         weight *= scale
-        force += f * weight
-        moment += f * offset * weight
-        stiffness += slope * weight
+        fx += f * weight * nx
+        fy += f * weight * ny
+        mx += f * offset * weight * nx
+        my += f * offset * weight * ny
+        across = f * curvature
+        kxx += weight * (slope * nx * nx + across * (1.0 - nx * nx))
+        kxy += weight * (slope - across) * nx * ny
+        kyy += weight * (slope * ny * ny + across * (1.0 - ny * ny))
         contact += width
-    return force, moment, stiffness, contact
+    return fx, fy, mx, my, kxx, kxy, kyy, contact
+
+
+@numba.njit(cache=True)
+def bore_displacement(ax, ay, bx, by, clearance, planar, length, slices, grid_log0, grid_step,
+                      table, relief_length, relief_depth, end_length, scale, compliance):
+    """The bore's uniform displacement d (m, 2: d_x, d_y) under its bulk compliance (m^2/N):
+    the root of g(d) = d - compliance F(d) / L (module docstring, "The section in 2D"), the
+    minimum of the strongly convex potential Psi(d) = |d|^2/2 + (compliance / L) sum_i a w_i
+    U(delta_i(d)), U' = f_loc. Newton's method with the Jacobian I + (compliance / L) K (SPD)
+    from d = 0; a step that overshoots the minimum along its direction (g(d + s) . s > 0) is
+    cut back to it by regula falsi (Illinois) on the monotone g(d + t s) . s, so Psi falls at
+    every step. |d| <= compliance |F(0)| / L (strong convexity) sets the scale of the
+    tolerance, 1e-12 of it plus the section's size |P|. (0, 0) without compliance or contact
+    at d = 0; NaN when F is NaN."""
+    if compliance == 0.0:
+        return 0.0, 0.0
+    c = compliance / length
+    size = math.sqrt(ax * ax + ay * ay) + 0.5 * length * math.sqrt(bx * bx + by * by)
+    dx = dy = 0.0
+    fx, fy, _, _, kxx, kxy, kyy, _ = section_sums(
+        dx, dy, ax, ay, bx, by, clearance, planar, length, slices, grid_log0, grid_step, table,
+        relief_length, relief_depth, end_length, scale)
+    if not (math.isfinite(fx) and math.isfinite(fy)):
+        return math.nan, math.nan
+    if fx == 0.0 and fy == 0.0:
+        return 0.0, 0.0
+    tolerance = 1e-12 * (size + c * math.sqrt(fx * fx + fy * fy))
+    gx, gy = -c * fx, -c * fy
+    for _ in range(100):
+        jxx, jxy, jyy = 1.0 + c * kxx, c * kxy, 1.0 + c * kyy
+        det = jxx * jyy - jxy * jxy
+        sx, sy = -(jyy * gx - jxy * gy) / det, -(jxx * gy - jxy * gx) / det
+        if math.sqrt(sx * sx + sy * sy) <= tolerance:
+            return dx + sx, dy + sy
+        low, slope_low = 0.0, gx * sx + gy * sy      # < 0: s is a descent direction of Psi
+        high, slope_high = 1.0, 0.0
+        t, side = 1.0, 0
+        for search in range(60):
+            fx, fy, _, _, kxx, kxy, kyy, _ = section_sums(
+                dx + t * sx, dy + t * sy, ax, ay, bx, by, clearance, planar, length, slices,
+                grid_log0, grid_step, table, relief_length, relief_depth, end_length, scale)
+            if not (math.isfinite(fx) and math.isfinite(fy)):
+                return math.nan, math.nan
+            gx, gy = dx + t * sx - c * fx, dy + t * sy - c * fy
+            slope = gx * sx + gy * sy
+            if slope <= 0.0 and search == 0:
+                break                                 # the full Newton step
+            if slope > 0.0:
+                high, slope_high = t, slope
+                if side > 0:
+                    slope_low *= 0.5                  # Illinois: the stale end's weight halved
+                side = 1
+            else:
+                low, slope_low = t, slope
+                if side < 0:
+                    slope_high *= 0.5
+                side = -1
+            if (high - low) * math.sqrt(sx * sx + sy * sy) <= tolerance or slope == 0.0 \
+                    or search == 59:
+                break
+            t = (low * slope_high - high * slope_low) / (slope_high - slope_low)
+        dx, dy = dx + t * sx, dy + t * sy
+    return dx, dy
 
 
 @numba.njit(cache=True)
 def shared_approach(delta, theta, length, slices, grid_log0, grid_step, table, relief_length,
                     relief_depth, end_length, scale, compliance):
-    """The root x of x + compliance F(x) / L - delta (module docstring): the approach the
-    slices share once the bore has moved by its bulk compliance (m^2/N) times F / L. Newton's
-    method inside the bracket [delta - compliance F(delta) / L, delta] (bisection where a
-    Newton step leaves it), to 1e-12 of the bracket's scale; NaN when F is NaN."""
-    if compliance == 0.0:
-        return delta
-    c = compliance / length
-    high = delta
-    f_high = slice_sums(high, theta, length, slices, grid_log0, grid_step, table,
-                        relief_length, relief_depth, end_length, scale)[0]
-    if not math.isfinite(f_high):
-        return math.nan
-    if f_high == 0.0:
-        return delta
-    low = delta - c * f_high
-    tolerance = 1e-12 * (abs(delta) + c * f_high)
-    x = low
-    for _ in range(200):
-        force, _, stiffness, _ = slice_sums(x, theta, length, slices, grid_log0, grid_step,
-                                            table, relief_length, relief_depth, end_length,
-                                            scale)
-        if not math.isfinite(force):
-            return math.nan
-        g = x + c * force - delta
-        if g > 0.0:
-            high = x
-        else:
-            low = x
-        step = g / (1.0 + c * stiffness)
-        x_new = x - step
-        if not low < x_new < high:
-            x_new = 0.5 * (low + high)
-        if abs(x_new - x) <= tolerance or high - low <= tolerance:
-            return x_new
-        x = x_new
-    return x
+    """The approach x = delta - compliance F(x) / L the slices share once the bore has moved
+    by its bulk compliance (m^2/N) times F / L (module docstring): the in-plane case of
+    bore_displacement. NaN when F is NaN."""
+    return delta - bore_displacement(delta, 0.0, theta, 0.0, 0.0, True, length, slices,
+                                     grid_log0, grid_step, table, relief_length, relief_depth,
+                                     end_length, scale, compliance)[0]
 
 
 @numba.njit(cache=True)
@@ -164,12 +231,14 @@ def sliced(delta, theta, length, slices, grid_log0, grid_step, table, relief_len
 
     (module docstring; [Johnson1985] for the elastic-foundation idealisation). z_F is NaN
     when F = 0; F, M, z_F are NaN when a slice is beyond the table."""
-    shared = shared_approach(delta, theta, length, slices, grid_log0, grid_step, table,
-                             relief_length, relief_depth, end_length, scale, compliance)
-    if not math.isfinite(shared):
+    shift = bore_displacement(delta, 0.0, theta, 0.0, 0.0, True, length, slices, grid_log0,
+                              grid_step, table, relief_length, relief_depth, end_length, scale,
+                              compliance)[0]
+    if not math.isfinite(shift):
         return math.nan, math.nan, math.nan, math.nan
-    force, moment, _, contact = slice_sums(shared, theta, length, slices, grid_log0, grid_step,
-                                           table, relief_length, relief_depth, end_length, scale)
+    force, _, moment, _, _, _, _, contact = section_sums(
+        shift, 0.0, delta, 0.0, theta, 0.0, 0.0, True, length, slices, grid_log0, grid_step,
+        table, relief_length, relief_depth, end_length, scale)
     resultant = 0.5 * length + moment / force if force != 0.0 else math.nan
     return force, moment, resultant, contact
 
@@ -180,12 +249,14 @@ def sliced_profile(delta, theta, length, slices, grid_log0, grid_step, table, re
     """The slices of `sliced` (same arguments): arrays of their midpoints z_i (m),
     approaches delta_i (m) and per-length forces a f_loc(delta_i) (N/m), the line load along
     the pin as the law sees it (the end lengths' share not included)."""
-    shared = shared_approach(delta, theta, length, slices, grid_log0, grid_step, table,
-                             relief_length, relief_depth, end_length, scale, compliance)
+    shift = bore_displacement(delta, 0.0, theta, 0.0, 0.0, True, length, slices, grid_log0,
+                              grid_step, table, relief_length, relief_depth, end_length, scale,
+                              compliance)[0]
     z, approach, force = np.empty(slices), np.empty(slices), np.empty(slices)
     for i in range(slices):
-        offset, approach[i], f, _ = slice_state(i, shared, theta, length, slices, grid_log0,
-                                                grid_step, table, relief_length, relief_depth)
+        offset, approach[i], _, _, _, f, _ = slice_contact(
+            i, shift, 0.0, delta, 0.0, theta, 0.0, 0.0, True, length, slices, grid_log0,
+            grid_step, table, relief_length, relief_depth)
         force[i] = scale * f
         z[i] = 0.5 * length + offset
     return z, approach, force

@@ -38,7 +38,8 @@ SJ_END_LENGTH = JOINT_COLUMNS + 17       # end length e of a sliced law (m)
 SJ_SCALE = JOINT_COLUMNS + 18            # stiffness factor a of a sliced law
 SJ_AXIAL_CLEARANCE = JOINT_COLUMNS + 19  # m; <= 0: no shoulders
 SJ_AXIAL_STIFFNESS = JOINT_COLUMNS + 20  # N/m of the shoulder penalty
-SPATIAL_JOINT_COLUMNS = JOINT_COLUMNS + 21
+SJ_COMPLIANCE = JOINT_COLUMNS + 21       # bulk compliance c_b of a sliced law (m^2/N; 0: none)
+SPATIAL_JOINT_COLUMNS = JOINT_COLUMNS + 22
 # contact channels: each clearance joint has two (radial or spherical, then axial), each with
 # its own onset and impact speed
 CHANNELS = 2
@@ -58,14 +59,16 @@ SpatialArgs = namedtuple("SpatialArgs", [
     "nq", "masses", "inertia", "inertia_inv", "gravity", "primitives", "baumgarte", "joints",
     "speeds", "grid_log0", "grid_step", "tables", "torsion", "latched", "mode"])
 
-# The buffers of the right-hand side: per body its position, rotation matrix, velocity,
-# angular velocity (global) and inverse inertia (global); the constraint rows (Jacobian
-# against (r', omega) of each body, Phi, Phi_t, gamma then the multipliers), the Schur matrix,
-# the applied forces and torques (6 a body), the normal force of each channel, and a
-# the rows of M^-1 D^T (6 a body each).
+# The buffers of the right-hand side: a row per body (BODY_*: its position, rotation matrix
+# and inverse inertia (row-major, global), velocity, angular velocity (global)); the
+# constraint rows (Jacobian against (r', omega) of each body, Phi, Phi_t, gamma then the
+# multipliers), the Schur matrix, the applied forces and torques (6 a body), the normal force
+# of each channel, the rows of M^-1 D^T (6 a body each) and the two bodies of each constraint
+# row (-1: the ground; a row has nonzero columns for these only).
 SpatialWork = namedtuple("SpatialWork", [
-    "pos", "rot", "vel", "omega", "jinv", "jac", "phi", "phi_t", "rhs_c", "schur", "force",
-    "normal", "mjac"])
+    "bodies", "jac", "phi", "phi_t", "rhs_c", "schur", "force", "normal", "mjac", "row_bodies"])
+BODY_POS, BODY_ROT, BODY_VEL, BODY_OMEGA, BODY_JINV = 0, 3, 12, 15, 18
+BODY_COLUMNS = 27
 
 # A contact channel's deepest penetration (m) and its approach rate there (m/s).
 Depth = namedtuple("Depth", ["delta", "rate"])

@@ -11,7 +11,7 @@ import numpy as np
 
 from pinbore.core.errors import InputError
 from pinbore.laws import dissipative, elastic
-from pinbore.laws.tables import log_grid
+from pinbore.laws.tables import log_grid, split_compliance
 from pinbore.reduced import spatial_kernel
 from pinbore.reduced.layout import (ENERGY_STATES, JOINT_BEARING_RADIUS, JOINT_CHI,
                                     JOINT_CLEARANCE, JOINT_FRICTION_LAW, TORSION_BODY_I,
@@ -25,6 +25,7 @@ from pinbore.reduced.spatial_layout import (
     ANGLE, CHANNELS, CYLINDER, DOT1, DOT2, POINT, PRIM_A_I, PRIM_ANGLE0, PRIM_B_J, PRIM_BODY_I,
     PRIM_BODY_J, PRIM_C_I, PRIM_KIND, PRIM_S_I, PRIM_S_J, PRIM_SPEED, PRIMITIVE_COLUMNS,
     SJ_AXIAL_CLEARANCE, SJ_AXIAL_STIFFNESS, SJ_BEARING_AXIS, SJ_BEARING_BODY, SJ_BEARING_POINT,
+    SJ_COMPLIANCE,
     SJ_END_LENGTH, SJ_JOURNAL_AXIS, SJ_JOURNAL_BODY, SJ_JOURNAL_POINT, SJ_KIND, SJ_LENGTH,
     SJ_SCALE, SJ_SLICES, SPATIAL_JOINT_COLUMNS, SPATIAL_TORSION_COLUMNS, SPHERE, TORSION_A_I,
     TORSION_B_J, TORSION_C_I, SpatialArgs)
@@ -124,26 +125,27 @@ def joint_primitives(kind, bi, bj, s_i, s_j, u_i, u_j, a_i, a_j, source) -> list
 
 
 def per_length_table(c, deltas, laws_data, source):
-    """(scale a, end length e, per-length force f (N/m) at deltas) of a cylindrical joint, or
-    (1, 0, F (N)) of a spherical one."""
+    """(scale a, end length e, bulk compliance c_b (m^2/N), the per-length force f (N/m) the
+    slices carry at deltas: a sliced law's local law f_loc, laws.sliced) of a cylindrical
+    joint, or (1, 0, 0, F (N)) of a spherical one."""
     joint = elastic.Joint(c.bearing_radius, c.journal_radius, c.E, c.nu, c.E, c.nu, c.length)
     if c.type == "spherical":
-        return 1.0, 0.0, elastic.hertz_point(deltas, joint)
+        return 1.0, 0.0, 0.0, elastic.hertz_point(deltas, joint)
     if c.normal_law == "hertz_point":   # the point law spread evenly over the length
-        return 1.0, 0.0, elastic.hertz_point(deltas, joint) / c.length
+        return 1.0, 0.0, 0.0, elastic.hertz_point(deltas, joint) / c.length
     if c.normal_law.startswith("sliced:"):
         law, per_length = sliced_parts(c, deltas, laws_data, source)
-        if law.bulk_compliance_m2_per_N > 0:
-            # the shared bulk compliance moves the bore axis by c_b F / L along the slices'
-            # resultant: an implicit 2D displacement per evaluation the spatial kernel does
-            # not solve yet; without it the law would not be the calibrated one
-            raise InputError(f"{source}: clearance_joints.normal_law: {c.normal_law!r} has a "
-                             "bulk compliance (laws.json: bulk_compliance_m2_per_N > 0), which "
-                             "the spatial model does not take yet; use a per-length law "
-                             "(published or calibrated:<law>) cut into slices")
-        return law.scale, law.end_length_m, per_length
-    return 1.0, 0.0, per_length_force(c.normal_law, laws_data, deltas, joint,
-                                      f"{source}: clearance_joints.normal_law")
+        bulk = law.bulk_compliance_m2_per_N
+        if bulk > 0:   # the slices carry the local law; the kernel moves the bore (laws.sliced)
+            grid_log0, grid_step = math.log(deltas[0]), math.log(deltas[1] / deltas[0])
+            local_log0, local_step, local_table = split_compliance(
+                grid_log0, grid_step, np.log(per_length), bulk)
+            per_length = np.exp(np.interp(   # on the model's grid: log-log, as the lookup
+                np.log(deltas), local_log0 + local_step * np.arange(local_table.size),
+                local_table, right=np.nan))
+        return law.scale, law.end_length_m, bulk, per_length
+    return 1.0, 0.0, 0.0, per_length_force(c.normal_law, laws_data, deltas, joint,
+                                           f"{source}: clearance_joints.normal_law")
 
 
 def build(scene: SpatialScene, source: str, base: Path) -> SpatialModel:
@@ -174,7 +176,7 @@ def build(scene: SpatialScene, source: str, base: Path) -> SpatialModel:
     for c in scene.clearance_joints:
         chi = 0.0 if c.damping_law == "none" else dissipative.HYSTERESIS[c.damping_law](c.restitution)
         code, parameters, _ = friction_block(c.friction)
-        scale, end, force = per_length_table(c, deltas, laws_data, source)
+        scale, end, bulk, force = per_length_table(c, deltas, laws_data, source)
         force = np.array(force, float)
         force[deltas > BLOW_UP_FRACTION * c.journal_radius] = np.nan
         values = {SJ_KIND: CYLINDER if c.type == "cylindrical" else SPHERE,
@@ -182,7 +184,7 @@ def build(scene: SpatialScene, source: str, base: Path) -> SpatialModel:
                   JOINT_CLEARANCE: c.bearing_radius - c.journal_radius,
                   JOINT_BEARING_RADIUS: c.bearing_radius, JOINT_CHI: chi, JOINT_FRICTION_LAW: code,
                   SJ_LENGTH: c.length or 0.0, SJ_SLICES: c.slices, SJ_END_LENGTH: end,
-                  SJ_SCALE: scale, SJ_AXIAL_CLEARANCE: c.axial_clearance or 0.0,
+                  SJ_SCALE: scale, SJ_COMPLIANCE: bulk, SJ_AXIAL_CLEARANCE: c.axial_clearance or 0.0,
                   SJ_AXIAL_STIFFNESS: c.axial_stiffness or 0.0} | parameters
         out = row(SPATIAL_JOINT_COLUMNS, values)
         out[SJ_BEARING_POINT:SJ_BEARING_POINT + 3] = c.bearing_point

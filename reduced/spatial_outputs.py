@@ -7,8 +7,8 @@ from pinbore.core.figures import plt, save_png
 from pinbore.reduced import outputs, spatial_kernel
 from pinbore.reduced.layout import DISSIPATED, LATCH, LOG_JOINT, LOG_RATE, SPRING, STOP, WORK_IN
 from pinbore.reduced.layout import TORSION_KIND, TORSION_STIFFNESS
-from pinbore.reduced.spatial_layout import (AXIAL, CHANNELS, CYLINDER, RADIAL, SJ_AXIAL_STIFFNESS,
-                                            SJ_KIND, SJ_SCALE, SJ_SLICES)
+from pinbore.reduced.spatial_layout import (AXIAL, BODY_OMEGA, BODY_ROT, CHANNELS, CYLINDER, RADIAL, SJ_AXIAL_STIFFNESS,
+                                            SJ_COMPLIANCE, SJ_KIND, SJ_LENGTH, SJ_SLICES)
 
 
 def per_step(model, run):
@@ -32,10 +32,11 @@ def per_step(model, run):
         m = spatial_kernel.fill_constraints(times[k], work, model.primitives, 0.0)
         drift[k] = np.max(np.abs(work.phi[:m]), initial=0.0)
         for b in range(nb):
-            w = work.omega[b]
+            w = work.bodies[b, BODY_OMEGA:BODY_OMEGA + 3]
+            rot = work.bodies[b, BODY_ROT:BODY_ROT + 9].reshape(3, 3)
             motion[k, b] = [*y[7 * b:7 * b + 7], *y[nq + 7 * b:nq + 7 * b + 3], *w,
                             *dy[nq + 7 * b:nq + 7 * b + 3], 0, 0, 0]
-            inertia = work.rot[b] @ model.inertia[b] @ work.rot[b].T
+            inertia = rot @ model.inertia[b] @ rot.T
             kinetic[k] += 0.5 * model.masses[b] * y[nq + 7 * b:nq + 7 * b + 3] @ y[nq + 7 * b:nq + 7 * b + 3]
             kinetic[k] += 0.5 * w @ inertia @ w
             potential[k] -= model.masses[b] * np.asarray(model.scene.gravity) @ y[7 * b:7 * b + 3]
@@ -43,21 +44,27 @@ def per_step(model, run):
         for j in range(nj):
             row = model.joints[j]
             f_n, f_a, f_t, _ = spatial_kernel.joint_forces(
-                force, work, row, model.tables[j], model.grid_log0, model.grid_step,
+                force, work.bodies, row, model.tables[j], model.grid_log0, model.grid_step,
                 args.speeds[CHANNELS * j + RADIAL], args.speeds[CHANNELS * j + AXIAL])
-            depth = spatial_kernel.channel_depth(work, row, RADIAL).delta
-            axial = spatial_kernel.channel_depth(work, row, AXIAL).delta
+            depth = spatial_kernel.channel_depth(work.bodies, row, RADIAL).delta
+            axial = spatial_kernel.channel_depth(work.bodies, row, AXIAL).delta
             energy = 0.0
             if int(row[SJ_KIND]) == CYLINDER:
-                for i in range(int(row[SJ_SLICES])):
-                    delta, _, _, _, _, weight = spatial_kernel.slice_kinematics(work, row, i)
-                    energy += row[SJ_SCALE] * weight * model.elastic_energy(j, delta)
+                # the slices' local law, the far field's spring L |d|^2 / (2 c_b) (laws.sliced)
+                approaches, weights = np.empty((2, int(row[SJ_SLICES])))
+                moved = np.array(spatial_kernel.cylinder_slices(
+                    work.bodies, row, model.tables[j], model.grid_log0, model.grid_step, approaches,
+                    weights))
+                for delta, weight in zip(approaches, weights):
+                    energy += weight * model.elastic_energy(j, delta)
+                if row[SJ_COMPLIANCE] > 0:
+                    energy += row[SJ_LENGTH] * (moved @ moved) / (2 * row[SJ_COMPLIANCE])
                 energy += 0.5 * row[SJ_AXIAL_STIFFNESS] * max(axial, 0.0) ** 2
             else:
                 energy = model.elastic_energy(j, depth)
             joint[k, j] = (depth, f_n, axial, f_a, f_t, energy)
         for r, row in enumerate(model.torsion):
-            angle = spatial_kernel.relative_angle(work, row)[0]
+            angle = spatial_kernel.relative_angle(work.bodies, row)[0]
             engaged = {SPRING: True, STOP: angle > 0,
                        LATCH: run.latched[k, r] > 0}[int(row[TORSION_KIND])]
             potential[k] += 0.5 * row[TORSION_STIFFNESS] * angle**2 if engaged else 0.0

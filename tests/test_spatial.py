@@ -19,10 +19,11 @@ from pinbore.reduced.model import build as build_planar
 from pinbore.reduced.outputs import per_step as planar_per_step
 from pinbore.reduced.run import simulate
 from pinbore.reduced.scene import ReducedScene
-from pinbore.reduced.spatial_layout import (CYLINDER, SJ_BEARING_AXIS, SJ_BEARING_BODY,
-                                            SJ_BEARING_POINT, SJ_END_LENGTH, SJ_JOURNAL_AXIS,
-                                            SJ_JOURNAL_BODY, SJ_JOURNAL_POINT, SJ_KIND, SJ_LENGTH,
-                                            SJ_SCALE, SJ_SLICES, SPATIAL_JOINT_COLUMNS)
+from pinbore.reduced.spatial_layout import (BODY_COLUMNS, BODY_JINV, BODY_POS, BODY_ROT,
+                                            CYLINDER, SJ_BEARING_AXIS, SJ_BEARING_BODY,
+                                            SJ_COMPLIANCE, SJ_END_LENGTH, SJ_JOURNAL_AXIS,
+                                            SJ_JOURNAL_BODY, SJ_KIND, SJ_LENGTH, SJ_SCALE,
+                                            SJ_SLICES, SPATIAL_JOINT_COLUMNS)
 from pinbore.reduced.layout import JOINT_BEARING_RADIUS, JOINT_CLEARANCE
 from pinbore.reduced.spatial_model import build
 from pinbore.reduced.spatial_outputs import per_step
@@ -147,40 +148,58 @@ def test_intermediate_axis_flip_has_the_closed_form_period():
     assert w.size > 0
 
 
-def cylinder(length=0.02, slices=16, end_length=0.0, scale=1.0):
+def cylinder(length=0.02, slices=16, end_length=0.0, scale=1.0, compliance=0.0):
     joint = np.zeros(SPATIAL_JOINT_COLUMNS)
     joint[SJ_KIND], joint[SJ_BEARING_BODY], joint[SJ_JOURNAL_BODY] = CYLINDER, -1, 0
     joint[SJ_BEARING_AXIS:SJ_BEARING_AXIS + 3] = joint[SJ_JOURNAL_AXIS:SJ_JOURNAL_AXIS + 3] = (0, 0, 1)
     joint[SJ_LENGTH], joint[SJ_SLICES], joint[SJ_END_LENGTH], joint[SJ_SCALE] = length, slices, end_length, scale
+    joint[SJ_COMPLIANCE] = compliance
     joint[JOINT_CLEARANCE], joint[JOINT_BEARING_RADIUS] = 1e-4, 0.01
     return joint
 
 
-@pytest.mark.parametrize("end_length,scale", [(0.0, 1.0), (1.5e-3, 0.8), (-1e-3, 1.2)])
-def test_slice_sum_equals_the_sliced_law(end_length, scale):
+def journal(position, parameters):
+    """The body rows (reduced.spatial_layout.BODY_*) of one journal at rest: its centre and
+    Euler parameters (unit inverse inertia)."""
+    bodies = np.zeros((1, BODY_COLUMNS))
+    rot = np.empty((3, 3))
+    spatial_kernel.rotation(np.asarray(parameters, float), rot)
+    bodies[0, BODY_POS:BODY_POS + 3] = position
+    bodies[0, BODY_ROT:BODY_ROT + 9] = rot.ravel()
+    bodies[0, BODY_JINV:BODY_JINV + 9] = np.eye(3).ravel()
+    return bodies
+
+
+def tilted_journal_forces(joint, table, delta, theta):
+    """Forces and torques (6) on a journal whose centre sits c + delta off the bore's axis
+    along x and whose axis is tilted by theta about y (leaning towards +x for z > 0), with
+    the radial normal force joint_forces returns."""
+    bodies = journal([joint[JOINT_CLEARANCE] + delta, 0, 0],
+                     [math.cos(theta / 2), 0, math.sin(theta / 2), 0])
+    force = np.zeros(6)
+    f_n = spatial_kernel.joint_forces(force, bodies, joint, table[2], table[0], table[1], 1.0,
+                                      1.0)[0]
+    return force, f_n
+
+
+@pytest.mark.parametrize("end_length,scale,compliance", [
+    (0.0, 1.0, 0.0), (1.5e-3, 0.8, 0.0), (-1e-3, 1.2, 0.0), (0.0, 1.0, 2e-11), (1e-3, 0.9, 1e-11)])
+def test_slice_sum_equals_the_sliced_law(end_length, scale, compliance):
     """A journal tilted by theta in the plane of its eccentricity (about y, eccentricity
     along x): the kernel's slice sum of the force and of its moment about the bore's centre
-    equal laws.sliced.sliced(delta, sin theta, ..., scale, no bulk compliance) to round-off
-    (1e-12): the same
-    slices, weights and law (module docstring of reduced.spatial_kernel)."""
+    equal laws.sliced.sliced(delta, sin theta, ..., scale, compliance) to round-off (1e-12;
+    with a bulk compliance both solve for the bore's displacement to 1e-12 of its scale, the
+    kernel by the 2D Newton across the section, the law along the load): the same slices,
+    weights and law (module docstring of reduced.spatial_kernel)."""
     grid_log0, grid_step, table = tabulate(lambda d: 3e10 * d**1.1, 1e-12, 1e-3, 400)
-    joint = cylinder(end_length=end_length, scale=scale)
+    joint = cylinder(end_length=end_length, scale=scale, compliance=compliance)
     delta, theta = 2e-6, 1.5e-4
-    rot = np.empty((3, 3))
-    spatial_kernel.rotation(np.array([math.cos(theta / 2), 0, math.sin(theta / 2), 0]), rot)
-    # journal body 0: centre at the bore centre shifted by c + delta along x, tilted by theta
-    # about y (its axis leans towards +x for z > 0)
-    work = spatial_kernel.SpatialWork(np.array([[1e-4 + delta, 0, 0]]), rot[None], np.zeros((1, 3)),
-                                      np.zeros((1, 3)), np.eye(3)[None], np.zeros((0, 6)),
-                                      np.zeros(0), np.zeros(0), np.zeros(0), np.zeros((0, 0)),
-                                      np.zeros(6), np.zeros(2), np.zeros((0, 6)))
-    force = np.zeros(6)
-    f_n, _, _, _ = spatial_kernel.joint_forces(force, work, joint, table, grid_log0, grid_step,
-                                               1.0, 1.0)
+    force, f_n = tilted_journal_forces(joint, (grid_log0, grid_step, table), delta, theta)
     expected = sliced.sliced(delta, math.sin(theta), 0.02, 16, grid_log0, grid_step, table, 0.0,
-                             0.0, end_length, scale, 0.0)
+                             0.0, end_length, scale, compliance)
     assert -force[0] == pytest.approx(expected[0], rel=1e-12)
     assert f_n == pytest.approx(expected[0], rel=1e-12)
+    assert abs(force[1]) < 1e-12 * expected[0]
     # the moment on the journal about its centre: the slice forces act at X_i = z_i u_j, whose
     # arm across the force is z_i cos theta (the law's z_i measured along the tilted axis)
     assert -force[4] == pytest.approx(expected[1] * math.cos(theta), rel=1e-12)
