@@ -36,7 +36,7 @@ from pinbore.reduced.layout import (
 from pinbore.reduced.model import Model, project
 from pinbore.reduced.run import simulate
 from pinbore.reduced.spatial_layout import (
-    ANGLE, CYLINDER, PRIM_BODY_I, PRIM_BODY_J, PRIM_KIND, PRIM_SPEED, SJ_BEARING_AXIS,
+    ANGLE, BODY_POS, BODY_ROT, BODY_VEL, CYLINDER, PRIM_BODY_I, PRIM_BODY_J, PRIM_KIND, PRIM_SPEED, SJ_BEARING_AXIS,
     SJ_BEARING_BODY, SJ_BEARING_POINT, SJ_JOURNAL_BODY, SJ_JOURNAL_POINT, SJ_KIND)
 
 MAX_PERIOD = 16
@@ -217,15 +217,17 @@ class SpatialMechanismFlow:
         work = spatial_kernel.workspace(args)
         spatial_kernel.body_states(state.y, args, work)
         if not self.model.joints.shape[0]:
-            return np.array([*work.pos[self._free_body(), :2], *work.vel[self._free_body(), :2]])
+            b = self._free_body()
+            return np.array([*work.bodies[b, BODY_POS:BODY_POS + 2],
+                             *work.bodies[b, BODY_VEL:BODY_VEL + 2]])
         row, f, g = self._frame()
         bb, bj = int(row[SJ_BEARING_BODY]), int(row[SJ_JOURNAL_BODY])
-        pj = spatial_kernel.point_state(work, bj, tuple(row[SJ_JOURNAL_POINT:SJ_JOURNAL_POINT + 3]))[0]
-        pb = spatial_kernel.point_state(work, bb, tuple(row[SJ_BEARING_POINT:SJ_BEARING_POINT + 3]))[0]
+        pj = spatial_kernel.point_state(work.bodies, bj, tuple(row[SJ_JOURNAL_POINT:SJ_JOURNAL_POINT + 3]))[0]
+        pb = spatial_kernel.point_state(work.bodies, bb, tuple(row[SJ_BEARING_POINT:SJ_BEARING_POINT + 3]))[0]
         e = np.subtract(pj, pb)
-        v = np.subtract(spatial_kernel.material_velocity(work, bj, pj),
-                        spatial_kernel.material_velocity(work, bb, pj))
-        a = work.rot[bb] if bb >= 0 else np.eye(3)
+        v = np.subtract(spatial_kernel.material_velocity(work.bodies, bj, pj),
+                        spatial_kernel.material_velocity(work.bodies, bb, pj))
+        a = work.bodies[bb, BODY_ROT:BODY_ROT + 9].reshape(3, 3) if bb >= 0 else np.eye(3)
         return np.array([e @ (a @ f), e @ (a @ g), v @ (a @ f), v @ (a @ g)])
 
     def _free_body(self) -> int:
