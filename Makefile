@@ -23,6 +23,7 @@ STUDY_CURVES := $(filter build/fem/study_%,$(FEM_CURVES))
 STUDY3D_CURVES := $(filter build/fem/study3d_%,$(FEM_CURVES))
 IMPACT_SCENES := $(basename $(notdir $(wildcard scenes/impact/*.toml)))
 IMPACT_RUNS := $(IMPACT_SCENES:%=build/impact/%/impact.json)
+STUDY_IMPACTS := $(filter build/impact/study_%,$(IMPACT_RUNS))
 REDUCED_SCENES := $(basename $(notdir $(wildcard scenes/reduced/*.toml)))
 REDUCED_RUNS := $(REDUCED_SCENES:%=build/reduced/%/summary.json)
 STAGE_CODE := $(wildcard pinbore/cli.py core/*.py laws/*.py meshes/*.py fem/*.py)
@@ -68,10 +69,10 @@ impact: $(IMPACT_RUNS) ## run the dynamic impacts of scenes/impact/ (build/impac
 build/impact/%/impact.json: scenes/impact/%.toml $(STAGE_CODE) $(STAMP)
 	$(PINBORE) impact $< --out build/impact/$*
 
-calibration: build/calibration/laws.json ## fit and rank the contact laws on the study curves (2D and 3D)
+calibration: build/calibration/laws.json ## fit and rank the contact laws on the study curves (2D and 3D), the restitution on the study impacts
 
-build/calibration/laws.json: $(STUDY_CURVES) $(STUDY3D_CURVES) fem/scene.py fem/curve.py $(wildcard core/*.py laws/*.py meshes/*.py calibration/*.py) $(STAMP)
-	$(PINBORE) calibrate $(STUDY_CURVES) $(STUDY3D_CURVES) --out build/calibration
+build/calibration/laws.json: $(STUDY_CURVES) $(STUDY3D_CURVES) $(STUDY_IMPACTS) fem/scene.py fem/curve.py fem/impact_file.py $(wildcard core/*.py laws/*.py meshes/*.py calibration/*.py) $(STAMP)
+	$(PINBORE) calibrate $(STUDY_CURVES) $(STUDY3D_CURVES) --impacts $(STUDY_IMPACTS) --out build/calibration
 
 reduced: $(REDUCED_RUNS) ## run the mechanisms with clearance joints (build/reduced/<scene>/)
 

@@ -1,15 +1,17 @@
 """Figures of a calibration: every law over every FE curve; error maps; the 3D curves beside
-the sliced law."""
+the sliced law; the restitution e(v0) of FE impacts beside the published hysteresis laws."""
 
 from pathlib import Path
 
 import numpy as np
+from scipy.optimize import brentq
 
 from pinbore.core.figures import plt, save_png
 
 from pinbore.calibration import sliced
 from pinbore.calibration.lawsfile import law_force
 from pinbore.fem.curve import read_pressure
+from pinbore.laws import dissipative
 from pinbore.laws import sliced as sliced_law
 from pinbore.laws import tables
 
@@ -137,3 +139,28 @@ def line_load_panel(ax, c, law, force) -> None:
     ax.set_title(f"at tilt {np.degrees(c.tilt[last]):.3g} deg", fontsize=8)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
+
+
+def restitution(path, law) -> None:
+    """e(v0): the FE impacts, the fitted law over its speed range (held beyond it, dashed),
+    and what each published hysteresis law rebounds with when given the fitted e as its
+    target (the exact e of its chi, laws.dissipative.hysteresis_for_restitution inverted)."""
+    low, high = law.speed_range_m_per_s
+    v = np.geomspace(low / 3, high * 3, 80)
+    inside = (v >= low) & (v <= high)
+    e = np.array([law.restitution(x) for x in v])
+    fig, ax = plt.subplots(figsize=(7.5, 4.8))
+    for name, chi_of in dissipative.HYSTERESIS.items():
+        delivered = [brentq(lambda r, c=chi_of(t): dissipative.hysteresis_for_restitution(r) - c,
+                            1e-6, 1.0) for t in e[inside]]
+        ax.semilogx(v[inside], delivered, lw=0.9, label=f"{name} (given the fit's e)")
+    ax.semilogx(v, np.where(inside, e, np.nan), "k-", lw=2, label="fit e(v0) (calibrated)")
+    ax.semilogx(v, np.where(inside, np.nan, e), "k--", lw=1, label="held outside the range")
+    ax.plot([q.speed_m_per_s for q in law.impacts], [q.restitution for q in law.impacts], "ro",
+            ms=6, label="FE impacts")
+    ax.set_xlabel("impact speed v0 (m/s)")
+    ax.set_ylabel("coefficient of restitution e")
+    ax.set_title(f"restitution from FE impacts (fit error {law.max_fit_error:.2g})")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=7, ncol=2)
+    save_png(fig, path, layout=True)

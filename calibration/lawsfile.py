@@ -26,7 +26,7 @@ import numpy as np
 import pydantic
 
 from pinbore.core.scene import Record, read_json
-from pinbore.laws import elastic
+from pinbore.laws import dissipative, elastic
 
 Range = Annotated[list[float], pydantic.Field(min_length=2, max_length=2)]   # [low, high]
 MODEL = "P = scale * P_law(d) * (d / reference_approach_m)^exponent_correction"
@@ -193,6 +193,47 @@ class SlicedLaw(Record):
     fitted_to: list[str]
 
 
+RESTITUTION_MODEL = ("e(v0) = sum_k coefficients[k] ln(v0 / 1 m/s)^k inside speed_range_m_per_s, "
+                     "held at the nearer end outside it; chi(v0): the Hunt-Crossley factor that "
+                     "rebounds with e(v0)")
+
+
+class ImpactPoint(Record):
+    """One FE impact (impact.json of `pinbore impact`) the restitution law was fitted on."""
+
+    name: str
+    speed_m_per_s: float
+    restitution: float
+    fitted: float                  # e(v0) of the law at this speed
+    contact_duration_s: float
+    peak_force_N_per_m: float
+    max_approach_m: float
+    pin_mass_kg_per_m: float
+    clearance_m: float
+    effective_modulus_Pa: float
+    plastic: bool                  # a body was elasto-plastic
+
+
+class RestitutionLaw(Record):
+    """The calibrated dissipative law (`damping_law = "calibrated"` of the multibody model):
+    the restitution of FE impacts fitted against the impact speed, e(v0)
+    (pinbore.laws.dissipative.restitution_of_speed), valid over the impacts' speeds; the
+    multibody contact takes at each onset the Hunt-Crossley factor chi that rebounds with
+    e(v_impact) (pinbore.laws.dissipative.hysteresis_for_restitution, exact for any elastic
+    law)."""
+
+    model: Literal[RESTITUTION_MODEL]
+    coefficients: list[float] = pydantic.Field(min_length=3, max_length=3)   # a0, a1, a2
+    speed_range_m_per_s: Range
+    max_fit_error: float           # largest |e_fit - e_FE|
+    impacts: list[ImpactPoint]
+
+    def restitution(self, speed: float) -> float:
+        """e at the impact speed v0 (m/s)."""
+        return float(dissipative.restitution_of_speed(speed, *self.coefficients,
+                                                      *self.speed_range_m_per_s))
+
+
 class Units(Record):
     approach: str
     force: str
@@ -208,6 +249,7 @@ class LawsFile(Record):
     curves: list[CurveEntry]
     laws: dict[str, Law]
     sliced: dict[str, SlicedLaw]   # 3D: by kind of ends and materials (empty: no 3D curves)
+    restitution: RestitutionLaw | None = None   # from FE impacts; None: none given
     warnings: list[str]
     fit_seconds: float
 

@@ -11,7 +11,7 @@ import warnings
 
 import numpy as np
 
-from pinbore.calibration import figures, lawsfile, sliced
+from pinbore.calibration import figures, lawsfile, restitution, sliced
 from pinbore.calibration.curves import Curve
 from pinbore.calibration.curves import read as read_any
 from pinbore.calibration.fit import NotFitted, errors, fit
@@ -153,8 +153,9 @@ def per_length(name: str | None, table, curves, curves_3d) -> sliced.PerLength:
     return sliced.PerLength(name, lambda d, c: law_force(name, d, c.joint), lambda c: None)
 
 
-def run(paths, out, length=None, per_length_name=None) -> int:
+def run(paths, out, length=None, per_length_name=None, impacts=()) -> int:
     read = [read_any(p, length) for p in paths]
+    restitution_law = restitution.fit(restitution.read_impacts(impacts)) if impacts else None
     curves = [c for c in read if isinstance(c, Curve)]
     curves_3d = [c for c in read if not isinstance(c, Curve)]
     if not curves:
@@ -172,7 +173,7 @@ def run(paths, out, length=None, per_length_name=None) -> int:
     seconds = time.perf_counter() - start
     with atomic_directory(out) as tmp:
         lawsfile.write(tmp / "laws.json", laws_json(curves, table, length, caught, seconds)
-                       .model_copy(update={"sliced": sliced_laws}))
+                       .model_copy(update={"sliced": sliced_laws, "restitution": restitution_law}))
         header = list(rows[0])
         lines = [",".join(header)] + [",".join(_cell(r[h]) for h in header) for r in rows]
         (tmp / "ranking.csv").write_text("\n".join(lines) + "\n")
@@ -180,6 +181,8 @@ def run(paths, out, length=None, per_length_name=None) -> int:
         figures.error_maps(tmp / "errors.png", curves, table, LAWS)
         if curves_3d:
             figures.sliced_curves(tmp / "sliced.png", curves_3d, sliced_laws, chosen.force)
+        if restitution_law is not None:
+            figures.restitution(tmp / "restitution.png", restitution_law)
     return 0
 
 

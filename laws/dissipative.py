@@ -13,6 +13,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 from scipy.integrate import solve_ivp
+from scipy.optimize import brentq
 
 from pinbore.laws.elastic import warn_once
 
@@ -157,3 +158,42 @@ def restitution(force, mass, speed):
     meets the contact at speed v0 and leaves it when d returns to 0; e = |d'_out| / v0
     (`impact`)."""
     return impact(force, mass, speed).restitution
+
+
+
+@numba.njit(cache=True)
+def hysteresis_for_restitution(e):
+    """chi of the Hunt-Crossley force F = F_el(d) (1 + chi d'/v0) [HuntCrossley1975] that
+    rebounds with exactly e, for any elastic law F_el (ours). With u = d'/v0 and the elastic
+    work W = int F_el dd / (m v0^2), m d'' = -F gives u du = -(1 + chi u) dW: F_el drops out.
+    Loading (u: 1 -> 0) and unloading (u: 0 -> -e) span the same W, so
+    int_0^1 u / (1 + chi u) du = int_0^e w / (1 - chi w) dw, i.e.
+    chi (1 + e) = ln((1 + chi) / (1 - chi e)), whose one root in (0, 1/e) is found by
+    bisection to 1e-14 relative (chi e < 1: the force never falls to zero before
+    separation). Near e = 1 it gives 1 - e^2 = 4 chi / 3 (Lankarani-Nikravesh's first
+    order)."""
+    if not 0.0 < e <= 1.0:
+        raise ValueError("coefficient of restitution e must be in (0, 1]")
+    if e == 1.0:
+        return 0.0
+    low, high = 0.0, 1.0 / e   # g(chi) = ln(1 + chi) - ln(1 - chi e) - chi (1 + e): < 0, then > 0
+    chi = 0.5 * high
+    for _ in range(200):
+        chi = 0.5 * (low + high)
+        if math.log1p(chi) - math.log1p(-chi * e) - chi * (1.0 + e) < 0.0:
+            low = chi
+        else:
+            high = chi
+        if high - low <= 1e-14 * high:
+            break
+    return chi
+
+
+@numba.njit(cache=True)
+def restitution_of_speed(speed, a0, a1, a2, low, high):
+    """e(v0) = a0 + a1 x + a2 x^2, x = ln(v0 / 1 m/s): the restitution of FE impacts fitted
+    against the impact speed (ours; calibration.restitution). Outside [low, high] (m/s), where
+    no FE impact was run, e is held at its value at the nearer end (the caller warns); e is
+    kept in [1e-6, 1]."""
+    x = math.log(min(max(speed, low), high))
+    return min(max(a0 + a1 * x + a2 * x * x, 1e-6), 1.0)

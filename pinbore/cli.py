@@ -48,7 +48,7 @@ def _impact(args) -> int:
 def _calibrate(args) -> int:
     from pinbore.calibration import run as calibration_run
 
-    return calibration_run.run(args.curves, args.out, args.length, args.per_length)
+    return calibration_run.run(args.curves, args.out, args.length, args.per_length, args.impacts)
 
 
 def _reduced(args) -> int:
@@ -175,8 +175,10 @@ def parser() -> argparse.ArgumentParser:
                        description="Fit every contact law to FE load-approach curves (2D, per "
                                    "unit length; each curve.csv with its result.json beside it) "
                                    "and rank them; 3D curves (force and tilting moment) calibrate "
-                                   "the sliced law of a finite pin on the 2D law; write DIR/laws.json, DIR/ranking.csv, "
-                                   "DIR/curves.png, DIR/errors.png.")
+                                   "the sliced law of a finite pin on the 2D law; FE impacts "
+                                   "(--impacts) give the restitution e(v0) of damping_law = "
+                                   "\"calibrated\"; write DIR/laws.json, DIR/ranking.csv, "
+                                   "DIR/curves.png, DIR/errors.png [, DIR/restitution.png].")
     c.add_argument("curves", nargs="+", help="curve.csv files written by `pinbore fem`")
     c.add_argument("--out", required=True, metavar="DIR", help="output directory (replaced when complete)")
     c.add_argument("--length", type=positive_length, default=None,
@@ -186,6 +188,9 @@ def parser() -> argparse.ArgumentParser:
                         "3D curves' own plane section), a published law or calibrated:<law>; "
                         "default: section when every 3D curve's section is among the 2D "
                         "curves, else the 2D-fitted law of least RMS error")
+    c.add_argument("--impacts", nargs="+", default=[], metavar="IMPACT_JSON",
+                   help="impact.json files written by `pinbore impact` (one per impact speed): "
+                        "fit the restitution e(v0) into laws.json")
     c.set_defaults(func=_calibrate)
     _scene_command(sub, "reduced", _reduced,
                    "integrate a mechanism with clearance joints: timeseries.csv, summary.json",

@@ -66,7 +66,8 @@ from pinbore.reduced.layout import (
     CONTINUOUS, COULOMB, COULOMB_MU, DAHL_MU, DAHL_SIGMA, DISSIPATED, DRIVE_ANGLE, DRIVE_BODY,
     DRIVE_SPEED, ENERGY_STATES, IWAN, IWAN_K1, IWAN_K2, IWAN_MU, JOINT_BEARING_BODY,
     JOINT_BEARING_RADIUS, JOINT_BEARING_X, JOINT_BEARING_Y, JOINT_CHI, JOINT_CLEARANCE,
-    JOINT_COLUMNS, JOINT_FRICTION_LAW, JOINT_IMPACT, JOINT_JOURNAL_BODY, JOINT_JOURNAL_X,
+    JOINT_COLUMNS, CHI_POINTS, JOINT_CHI_LOG_SPEED, JOINT_CHI_STEP, JOINT_CHI_TABLE,
+    JOINT_FRICTION_LAW, JOINT_IMPACT, JOINT_JOURNAL_BODY, JOINT_JOURNAL_X,
     JOINT_JOURNAL_Y, JOINT_RESTITUTION, JOINT_REST_SPEED, JOINT_STATE, LATCH, LINEAR, LINEAR_ALPHA,
     LINEAR_MU_STATIC, LOG_COLUMNS, LOG_IMPULSE, LOG_JOINT, LOG_RATE, LOG_TIME, LUGRE,
     LUGRE_MU_COULOMB, LUGRE_MU_STATIC, LUGRE_SIGMA0, LUGRE_SIGMA1, LUGRE_SIGMA2,
@@ -303,6 +304,24 @@ def joint_friction(joint, f_n, slip, state):
 
 
 @numba.njit(cache=True)
+def joint_chi(joint, impact_speed):
+    """The hysteresis factor chi of a joint for the impact speed v0 of its contact: the damping
+    law's constant, or (damping_law = "calibrated") the tabulated chi(v0) interpolated linearly
+    in ln v0, held at the table's ends."""
+    step = joint[JOINT_CHI_STEP]
+    if step == 0.0:
+        return joint[JOINT_CHI]
+    x = (math.log(impact_speed) - joint[JOINT_CHI_LOG_SPEED]) / step
+    if x <= 0.0:
+        return joint[JOINT_CHI_TABLE]
+    if x >= CHI_POINTS - 1:
+        return joint[JOINT_CHI_TABLE + CHI_POINTS - 1]
+    i = int(x)
+    f = x - i
+    return (1.0 - f) * joint[JOINT_CHI_TABLE + i] + f * joint[JOINT_CHI_TABLE + i + 1]
+
+
+@numba.njit(cache=True)
 def joint_forces(q, qd, joint, impact_speed, grid_log0, grid_step, table, y):
     """The forces of a clearance joint with a continuous contact law (layout.JointForces):
     penetration, F_n, F_t, F_el, the power into damping and friction, the normal, the contact
@@ -312,7 +331,7 @@ def joint_forces(q, qd, joint, impact_speed, grid_log0, grid_step, table, y):
     if kin.delta <= 0.0:
         return JointForces(kin.delta, 0.0, 0.0, 0.0, 0.0, kin.nx, kin.ny, kin.cx, kin.cy, 0.0, 0.0)
     f_el = tables.table_force(kin.delta, grid_log0, grid_step, table)
-    f_n = dissipative.hysteresis_force(f_el, kin.rate, impact_speed, joint[JOINT_CHI])
+    f_n = dissipative.hysteresis_force(f_el, kin.rate, impact_speed, joint_chi(joint, impact_speed))
     index = int(joint[JOINT_STATE])
     if int(joint[JOINT_FRICTION_LAW]) == IWAN:
         f_t, rate0, rate1 = friction.iwan_bilinear(y[index + STATE_TRAVEL], y[index + STATE_STRETCH],

@@ -29,7 +29,14 @@ JOINT_STATE = 17           # index in y of the joint's first friction state (-1:
 JOINT_IMPACT = 18          # contact model: CONTINUOUS, NEWTON, POISSON
 JOINT_RESTITUTION = 19     # e of the impulse models
 JOINT_REST_SPEED = 20      # m/s: an impulse joint approaching slower is held in contact
-JOINT_COLUMNS = 21
+# the calibrated damping law (damping_law = "calibrated"): chi against the impact speed v0,
+# tabulated at CHI_POINTS speeds equally spaced in ln v0 from JOINT_CHI_LOG_SPEED by
+# JOINT_CHI_STEP (0: no table, chi is JOINT_CHI), in JOINT_CHI_TABLE .. + CHI_POINTS - 1
+JOINT_CHI_LOG_SPEED = 21
+JOINT_CHI_STEP = 22
+JOINT_CHI_TABLE = 23
+CHI_POINTS = 33
+JOINT_COLUMNS = JOINT_CHI_TABLE + CHI_POINTS
 
 # friction laws (column JOINT_FRICTION_LAW) and their parameter columns
 NO_FRICTION, COULOMB, STRIBECK, LINEAR, LUGRE, DAHL, IWAN = 0, 1, 2, 3, 4, 5, 6

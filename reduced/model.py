@@ -18,6 +18,7 @@ from pinbore.reduced.layout import (
     CONTINUOUS, COULOMB, COULOMB_MU, DAHL, DAHL_MU, DAHL_SIGMA, DRIVE_ANGLE, DRIVE_BODY, DRIVE_COLUMNS,
     DRIVE_SPEED, ENERGY_STATES, IWAN, IWAN_K1, IWAN_K2, IWAN_MU, JOINT_BEARING_BODY,
     JOINT_BEARING_RADIUS, JOINT_BEARING_X, JOINT_BEARING_Y, JOINT_CHI, JOINT_CLEARANCE, JOINT_COLUMNS,
+    CHI_POINTS, JOINT_CHI_LOG_SPEED, JOINT_CHI_STEP, JOINT_CHI_TABLE,
     JOINT_FRICTION_LAW, JOINT_IMPACT, JOINT_JOURNAL_BODY, JOINT_JOURNAL_X, JOINT_JOURNAL_Y,
     JOINT_REST_SPEED, JOINT_RESTITUTION, JOINT_STATE, LATCH, LINEAR, LINEAR_ALPHA, LINEAR_MU_STATIC,
     LUGRE, LUGRE_MU_COULOMB, LUGRE_MU_STATIC, LUGRE_SIGMA0, LUGRE_SIGMA1, LUGRE_SIGMA2,
@@ -170,8 +171,8 @@ def build(scene: ReducedScene, source: str, base: Path) -> Model:
     top = max((BLOW_UP_FRACTION * c.journal_radius for c in scene.clearance_joints), default=1.0)
     grid_log0, grid_step, deltas = log_grid(GRID_LOW, top, GRID_POINTS)
     for c in scene.clearance_joints:
-        chi = 0.0 if c.damping_law == "none" else dissipative.HYSTERESIS[c.damping_law](c.restitution)
         code, parameters, states = friction_block(c.friction)
+        parameters |= damping_block(c, laws_data, source)
         state = -1
         if states:
             state = 2 * len(minv) + ENERGY_STATES + friction_states
@@ -182,7 +183,7 @@ def build(scene: ReducedScene, source: str, base: Path) -> Model:
             JOINT_BEARING_Y: bearing_y, JOINT_JOURNAL_BODY: index[c.journal_body],
             JOINT_JOURNAL_X: journal_x, JOINT_JOURNAL_Y: journal_y,
             JOINT_CLEARANCE: c.bearing_radius - c.journal_radius,
-            JOINT_BEARING_RADIUS: c.bearing_radius, JOINT_CHI: chi, JOINT_FRICTION_LAW: code,
+            JOINT_BEARING_RADIUS: c.bearing_radius, JOINT_FRICTION_LAW: code,
             JOINT_STATE: state, JOINT_IMPACT: IMPACT[c.impact], JOINT_RESTITUTION: c.restitution,
             JOINT_REST_SPEED: c.rest_speed} | parameters))
         if c.impact == "continuous":
@@ -199,6 +200,27 @@ def build(scene: ReducedScene, source: str, base: Path) -> Model:
     if scene.integrator.method == "dopri5_fixed":
         fixed_step(model, source)   # refuses a default step that cannot finish, before any work
     return model
+
+
+def damping_block(c, laws_data, source) -> dict:
+    """The damping columns of a clearance joint's row: chi of a published hysteresis law for
+    the joint's restitution, or (damping_law = "calibrated") the table of chi(v0) over the
+    speed range of the laws file's restitution law: at CHI_POINTS speeds equally spaced in
+    ln v0, chi = laws.dissipative.hysteresis_for_restitution(e(v0)) (kernel.joint_chi
+    interpolates it, held at the ends)."""
+    if c.damping_law != "calibrated":
+        chi = 0.0 if c.damping_law == "none" else dissipative.HYSTERESIS[c.damping_law](c.restitution)
+        return {JOINT_CHI: chi}
+    law = laws_data.restitution if laws_data is not None else None
+    if law is None:
+        raise InputError(f"{source}: clearance_joints.damping_law: 'calibrated' needs a laws_file "
+                         "with a restitution law (pinbore calibrate --impacts IMPACT.json ...)")
+    low, high = (math.log(v) for v in law.speed_range_m_per_s)
+    speeds = np.exp(np.linspace(low, high, CHI_POINTS))
+    chis = [dissipative.hysteresis_for_restitution(law.restitution(v)) for v in speeds]
+    block = {JOINT_CHI: chis[0], JOINT_CHI_LOG_SPEED: low,
+             JOINT_CHI_STEP: (high - low) / (CHI_POINTS - 1) if high > low else 1.0}
+    return block | {JOINT_CHI_TABLE + i: chi for i, chi in enumerate(chis)}
 
 
 IMPACT = {"continuous": CONTINUOUS, "newton": NEWTON, "poisson": POISSON}

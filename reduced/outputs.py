@@ -11,7 +11,7 @@ from pinbore.laws import tables
 from pinbore.laws.dissipative import hysteresis_force
 from pinbore.reduced import kernel
 from pinbore.reduced.layout import (
-    CONTINUOUS, DISSIPATED, JOINT_BEARING_BODY, JOINT_BEARING_X, JOINT_BEARING_Y, JOINT_CHI,
+    CONTINUOUS, DISSIPATED, JOINT_BEARING_BODY, JOINT_BEARING_X, JOINT_BEARING_Y,
     JOINT_IMPACT, JOINT_JOURNAL_BODY, JOINT_JOURNAL_X, JOINT_JOURNAL_Y, LATCH, LOG_IMPULSE, LOG_JOINT,
     LOG_RATE, SPRING, STOP, TORSION_KIND, TORSION_STIFFNESS, WORK_IN)
 from pinbore.reduced.summary import Summary
@@ -81,7 +81,7 @@ def refined_peak(model, j, run, k):
     of each step): (peak force N, its time s)."""
     times, states, speeds = run.times, run.states, run.speeds
     nq, row = model.nq, model.joints[j]
-    chi, best = row[JOINT_CHI], (0.0, float(times[k]))
+    best = (0.0, float(times[k]))
     for a in range(max(k - 1, 0), min(k + 1, times.size - 1)):
         h = times[a + 1] - times[a]
         ends = [kernel.joint_kinematics(states[i, :nq], states[i, nq:2 * nq], row) for i in (a, a + 1)]
@@ -91,7 +91,7 @@ def refined_peak(model, j, run, k):
         rate = ((6 * x**2 - 6 * x) * d0 + (3 * x**2 - 4 * x + 1) * r0 + (-6 * x**2 + 6 * x) * d1 + (3 * x**2 - 2 * x) * r1) / h
         for i in np.flatnonzero(delta > 0):
             f_el = tables.table_force(delta[i], model.grid_log0, model.grid_step, model.tables[j])
-            force = hysteresis_force(f_el, rate[i], speeds[a + 1, j], chi)
+            force = hysteresis_force(f_el, rate[i], speeds[a + 1, j], kernel.joint_chi(row, speeds[a + 1, j]))
             if force > best[0]:
                 best = (force, float(times[a] + x[i] * h))
     return best
@@ -118,7 +118,9 @@ def write_timeseries(path, series) -> None:
 
 def summary(model, series, run, status_text, scene_file) -> Summary:
     """The run's summary (reduced/summary.py) from its series (`sample`) and the Trajectory."""
-    return summary_of(model, series, run, status_text, scene_file, joint_peaks(model, series, run))
+    return summary_of(model, series, run, status_text, scene_file, joint_peaks(model, series, run),
+                      {c.name: list(run.impacts[run.impacts[:, LOG_JOINT] == j, LOG_RATE])
+                       for j, c in enumerate(model.scene.clearance_joints)})
 
 
 def joint_peaks(model, series, run) -> dict:
@@ -141,8 +143,9 @@ def joint_peaks(model, series, run) -> dict:
     return joints
 
 
-def summary_of(model, series, run, status_text, scene_file, joints) -> Summary:
-    """The summary of a run (planar or spatial) from its series, Trajectory and joint peaks."""
+def summary_of(model, series, run, status_text, scene_file, joints, impact_speeds=None) -> Summary:
+    """The summary of a run (planar or spatial) from its series, Trajectory and joint peaks
+    (and the impact speeds per joint, m/s, that a calibrated restitution is checked on)."""
     counters, status = run.counters, run.status
     e = series["energy"]
     total = e["kinetic"] + e["potential"] + e["elastic"] + e["dissipated"] - e["work_in"]
@@ -162,15 +165,25 @@ def summary_of(model, series, run, status_text, scene_file, joints) -> Summary:
                            "dissipated_J": float(e["dissipated"][-1]),
                            "work_in_J": float(e["work_in"][-1])},
         "constraint_drift_max": float(np.max(series["drift"])),
-        "warnings": validity_warnings(model, joints),
+        "warnings": validity_warnings(model, joints, impact_speeds or {}),
         "scene_file": scene_file,
     })
 
 
-def validity_warnings(model, joints) -> list[str]:
-    """Calibrated laws used beyond the approaches they were calibrated on."""
+def validity_warnings(model, joints, impact_speeds) -> list[str]:
+    """Calibrated laws used beyond the approaches they were calibrated on, a calibrated
+    restitution beyond the impact speeds it was fitted on (one line per joint)."""
     out = []
     for c in model.scene.clearance_joints:
+        if getattr(c, "damping_law", None) == "calibrated" and model.calibration is not None:
+            low, high = model.calibration.restitution.speed_range_m_per_s
+            speeds = impact_speeds.get(c.name, [])
+            outside = [v for v in speeds if not low * (1 - 1e-9) <= v <= high * (1 + 1e-9)]
+            if outside:
+                out.append(f"{c.name}: {len(outside)} of {len(speeds)} impact speeds "
+                           f"({min(outside):.3g}-{max(outside):.3g} m/s) outside the speeds "
+                           f"({low:.3g}-{high:.3g} m/s) the calibrated restitution was fitted "
+                           "on: e held at the nearer end")
         kind, _, name = (c.normal_law or "").partition(":")
         if kind in ("calibrated", "sliced") and model.calibration is not None:
             laws = model.calibration.laws if kind == "calibrated" else model.calibration.sliced

@@ -21,7 +21,7 @@ GROUND = "ground"
 MAX_STEPS = 5_000_000
 MAX_SAMPLES = 2_000_000
 ELASTIC_LAWS = ["hertz_point"] + sorted(PUBLISHED)
-DAMPING_LAWS = ["none"] + sorted(HYSTERESIS)
+DAMPING_LAWS = ["none"] + sorted(HYSTERESIS) + ["calibrated"]   # calibrated: laws file
 
 Vector = Annotated[list[float], pydantic.Field(min_length=2, max_length=2)]
 
@@ -185,7 +185,7 @@ class ClearanceJoint(Strict):
             return self
         if self.normal_law is None:
             raise ValueError("normal_law is required by impact = 'continuous'")
-        if self.restitution == 0 and self.damping_law != "none":
+        if self.restitution == 0 and self.damping_law not in ("none", "calibrated"):
             raise ValueError("restitution must be > 0 for a continuous damping law")
         if not (self.normal_law in ELASTIC_LAWS or self.normal_law.startswith(FILE_LAWS)):
             raise ValueError(f"normal_law {self.normal_law!r} is unknown; valid: "
@@ -247,6 +247,8 @@ def check_body_names(scene, used) -> None:
     if any((c.normal_law or "").startswith(FILE_LAWS) for c in scene.clearance_joints) \
             and scene.laws_file is None:
         raise ValueError("laws_file is required by a calibrated:<law> or sliced:<law> normal law")
+    if any(c.damping_law == "calibrated" for c in scene.clearance_joints) and scene.laws_file is None:
+        raise ValueError("laws_file is required by damping_law = 'calibrated'")
 
 
 class Integrator(Strict):

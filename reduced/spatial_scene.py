@@ -195,9 +195,10 @@ class ClearanceJoint(Strict):
             raise ValueError(f"normal_law {self.normal_law!r} is unknown; valid: "
                              f"{', '.join(ELASTIC_LAWS)}, calibrated:<law in laws.json>, "
                              "sliced:<3D law in laws.json>")
-        if self.damping_law not in DAMPING_LAWS:
-            raise ValueError(f"damping_law {self.damping_law!r} is unknown; valid: "
-                             f"{', '.join(DAMPING_LAWS)}")
+        if self.damping_law not in DAMPING_LAWS or self.damping_law == "calibrated":
+            raise ValueError(f"damping_law {self.damping_law!r} is unknown to the spatial model; "
+                             f"valid: {', '.join(d for d in DAMPING_LAWS if d != 'calibrated')} "
+                             "(the calibrated restitution is planar only)")
         return self
 
 

@@ -139,6 +139,7 @@ def test_a_row_layout_names_every_column_once(prefix, columns):
     named = [v for k, v in vars(layout).items() if k.startswith(prefix) and k != f"{prefix}COLUMNS"]
     if prefix == "JOINT_":
         named += range(layout.JOINT_FRICTION + 1, layout.JOINT_FRICTION + layout.FRICTION_PARAMETERS)
+        named += range(layout.JOINT_CHI_TABLE + 1, layout.JOINT_CHI_TABLE + layout.CHI_POINTS)
     assert sorted(named) == list(range(columns))
 
 
