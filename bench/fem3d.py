@@ -12,7 +12,11 @@ OUT/fem3d.png:
   extrapolation of the three finest levels with their observed order when they converge
   monotonically (column reference_order), else against the finest level ("finest");
 - the finest level again on 2 MPI ranks (speed-up), and level 2 with Coulomb friction
-  (mu = 0.2, the same push: the cost of friction).
+  (mu = 0.2, the same push: the cost of friction);
+- LU factorisations against linear solves (Newton iterations): the solver keeps its factors
+  while they serve (fem.solver);
+- a (delta, theta) path of 20 points on 2 ranks: the shipped 3D study's 20 mm steel lug and
+  its mesh, pushed in 10 steps and tilted in 10 (the load programme a calibration runs).
 
 --large adds a level of about 200k dofs on 2 ranks (some 7 minutes).
 """
@@ -21,6 +25,7 @@ import argparse
 import json
 import math
 import tempfile
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -41,6 +46,16 @@ SCENE = {
 LEVELS = [(6e-4, 4), (4.2e-4, 6), (3e-4, 8), (2.1e-4, 11), (1.5e-4, 16)]
 LARGE = (1.06e-4, 23)
 REFINEMENT = math.sqrt(2)   # of the element sizes from level to level
+PATH_SCENE = ROOT / "scenes" / "fem" / "study3d_steel_steel_L20mm.toml"
+PATH_STEPS = 10             # push steps, and as many tilt steps
+
+
+def path_scene() -> dict:
+    """The study scene with a (delta, theta) path of 2 PATH_STEPS points."""
+    scene = tomllib.loads(PATH_SCENE.read_text())
+    scene["load"].update(steps=PATH_STEPS, tilt_steps=PATH_STEPS)
+    scene["output"] = {"picture": False}
+    return scene
 
 
 def scene_at(level, friction=0.0) -> dict:
@@ -61,6 +76,8 @@ def main(out: Path, large: bool) -> None:
         for i, (name, level, ranks, mu) in enumerate(cases):
             print(f"[{i + 1}/{len(cases)}] {name}, {ranks} rank(s)", flush=True)
             records.append((name, level, ranks, mu, run(scene_at(level, mu), Path(tmp), f"case{i}", ranks)))
+        print(f"(delta, theta) path of {2 * PATH_STEPS} points, 2 ranks", flush=True)
+        path = run(path_scene(), Path(tmp), "path", 2)
     levels = {r[1]: r[4]["force"][-1] for r in records if r[3] == 0.0}   # any ranks
     f1, f2, f3 = [levels[level] for level in sorted(levels, reverse=True)][-3:]
     order = math.log(abs(f1 - f2) / abs(f2 - f3)) / math.log(REFINEMENT)
@@ -74,13 +91,20 @@ def main(out: Path, large: bool) -> None:
         speedup = walls[(level, 1, mu)] / r["wall"] if ranks > 1 and (level, 1, mu) in walls else None
         cost = r["wall"] / walls[(level, 1, 0.0)] if mu else None
         rows.append([name, level[0], level[1], ranks, mu, r["result"]["dofs"], f"{r['wall']:.1f}",
-                     sum(its), f"{np.median(its):g}", f"{r['force'][-1]:.6e}",
+                     sum(its), f"{np.median(its):g}", sum(r["result"]["factorizations"]),
+                     f"{r['force'][-1]:.6e}",
                      "" if mu else f"{abs(r['force'][-1] / limit - 1):.2e}",
                      f"{order:.2f}" if monotone else "finest",
                      "" if speedup is None else f"{speedup:.2f}", "" if cost is None else f"{cost:.2f}"])
+    mesh = path["result"]["scene"]["mesh"]
+    its = path["result"]["newton_iterations"]
+    rows.append([f"path of {2 * PATH_STEPS} (delta, theta) points", mesh["contact_size"],
+                 mesh["layers"], 2, 0.0, path["result"]["dofs"], f"{path['wall']:.1f}", sum(its),
+                 f"{np.median(its):g}", sum(path["result"]["factorizations"]),
+                 f"{path['force'][-1]:.6e}", "", "", "", ""])
     header = ["case", "contact_size_m", "layers", "ranks", "friction", "dofs", "wall_time_s",
-              "newton_total", "newton_per_step_median", "force_N", "force_error_rel",
-              "reference_order", "speedup_vs_1_rank", "cost_vs_frictionless"]
+              "newton_total", "newton_per_step_median", "factorizations", "force_N",
+              "force_error_rel", "reference_order", "speedup_vs_1_rank", "cost_vs_frictionless"]
     write_table(out, "fem3d", header, rows, plot)
 
 
@@ -92,7 +116,8 @@ def plot(path: Path, header, rows) -> None:
     for ranks, marker in ((1, "o"), (2, "s")):
         label = f"{ranks} rank{'s' if ranks > 1 else ''}"
         line = "-" if ranks == 1 else ""
-        sel = [r for r in rows if r[col["ranks"]] == ranks and not r[col["friction"]]]
+        sel = [r for r in rows if r[col["ranks"]] == ranks and not r[col["friction"]]
+               and r[col["force_error_rel"]] != ""]
         bx.loglog([r[col["dofs"]] for r in sel], [float(r[col["wall_time_s"]]) for r in sel],
                   marker, ls=line, label=label)
         shown = [r for r in sel if float(r[col["force_error_rel"]]) > 0]

@@ -17,8 +17,11 @@ Why not always refactor: in 3D the contact couplings double the factors of K_bc 
 entries at 88k dofs against 6.7e7), and a factorisation costs 20-30 triangular solves
 (serial: 0.7 s against 0.02 s at 28k dofs, 5.3 s against 0.25 s at 88k). Measured on the 3D
 push of bench/fem3d.py: the same Newton iterations and forces (to 1e-9), with 10 of 17 (28k
-dofs) and 13 of 20 (88k dofs) linear solves refactored. The starting guess extrapolates the last two converged states by
-half a secant step: the contact arc grows sub-linearly with the approach, so a full secant
+dofs) and 13 of 20 (88k dofs) linear solves refactored; 88k dofs in 82 s serial (116 s when
+every Jacobian was factorised) and 51 s on 2 ranks (66 s). With friction the stick/slip
+flips leave little to keep (18 of 25 refactored, the same time as refactoring all).
+
+The starting guess extrapolates the last two converged states by half a secant step: the contact arc grows sub-linearly with the approach, so a full secant
 step over-predicts the arc and Newton spends its iterations releasing nodes. Measured on
 10-step curves for clearances 1e-6 to 5e-4 m: 3 Newton iterations per step with half a
 step, 5-7 with a full one.
