@@ -1,6 +1,7 @@
 """Figures of a calibration: every law over every FE curve; error maps; the 3D curves beside
 the sliced law; the restitution e(v0) of FE impacts beside the published hysteresis laws."""
 
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -151,8 +152,10 @@ def restitution(path, law) -> None:
     e = np.array([law.restitution(x) for x in v])
     fig, ax = plt.subplots(figsize=(7.5, 4.8))
     for name, chi_of in dissipative.HYSTERESIS.items():
-        delivered = [brentq(lambda r, c=chi_of(t): dissipative.hysteresis_for_restitution(r) - c,
-                            1e-6, 1.0) for t in e[inside]]
+        with warnings.catch_warnings():   # the point of the figure: laws derived for e near 1
+            warnings.simplefilter("ignore")   # (and their range warnings) used at the FE's e
+            delivered = [brentq(lambda r, c=chi_of(t): dissipative.hysteresis_for_restitution(r) - c,
+                                1e-6, 1.0) for t in e[inside]]
         ax.semilogx(v[inside], delivered, lw=0.9, label=f"{name} (given the fit's e)")
     ax.semilogx(v, np.where(inside, e, np.nan), "k-", lw=2, label="fit e(v0) (calibrated)")
     ax.semilogx(v, np.where(inside, np.nan, e), "k--", lw=1, label="held outside the range")
