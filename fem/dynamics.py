@@ -53,20 +53,31 @@ At rho_inf = 1 the scheme conserves energy exactly up to the contact: with beta 
 gamma = 1/2, q_{n+1} - q_n = dt (v_n + v_{n+1}) / 2, so the kinetic energy changes by
 (q_{n+1} - q_n) . M_q (a_n + a_{n+1}) / 2 = -(q_{n+1} - q_n) . (F_n + F_{n+1}) / 2, and
 
-    E_0 = K + U + W_c + D_num,
+    E_0 = K + U + W_p + W_c + D_num,
 
-K = v . M_q v / 2 the kinetic energy, U = u . K u / 2 the strain energy, W_c the work the
+K = v . M_q v / 2 the kinetic energy, U the stored elastic energy (u . K u / 2 for linear
+elasticity; int sigma : C^-1 : sigma / 2 dx for an elasto-plastic body, fem.plasticity),
+W_p the plastic work (0 for an elastic body), W_c the work the
 bodies did on the contact, summed by the same trapezoidal rule, (u_{n+1} - u_n) .
 (f_c,n + f_c,n+1) / 2, and D_num the scheme's dissipation (0 at rho_inf = 1 up to Newton's
 tolerance). The penalty contact stores Pi_c = sum_i w_i eps <-g_i>^2 / 2 (the augmented
 Lagrangian, which holds the penetration below its gap tolerance, next to nothing): W_c -
 Pi_c is the energy the contact's time integration lost or made. The book's residual is
-E_0 - K - U - Pi_c, the whole error of an elastic impact, which conserves energy. After
-separation the pin flies off with the momentum p of its mass m, so
+E_0 - K - U - W_p - Pi_c, the whole error of the impact. The book holds for plastic bodies
+too because both sides use the trapezoidal rule: the internal work of a step,
+(u_{n+1} - u_n) . (f_int,n + f_int,n+1) / 2, is exactly the change of U plus the plastic
+work of the step as fem.plasticity integrates it (one quadrature point per P1 cell, C^-1
+linear). After separation the pin flies off with the momentum p of its mass m, so
 
     e = -p . d / (m v_0),    E_wave = K + U - |p|^2 / (2 m),
 
-the energy left in the two bodies as vibration and waves; e^2 = 1 - (E_wave + residual)/E_0.
+the energy left in the two bodies as vibration, waves and (plastic bodies) locked residual
+stress; e^2 = 1 - (E_wave + W_p + residual)/E_0.
+
+The bodies' material is the shared interface of fem.elasticity.Elasticity and
+fem.plasticity.ElastoPlastic (internal_force, tangent, elastic_energy, commit(x) -> plastic
+work, snapshot / restore). An elastic material's tangent is constant, so A below is built
+once per time step size; an elasto-plastic one's is rebuilt at every Newton iterate.
 
 Steps and failures
 ------------------
@@ -99,35 +110,6 @@ def generalized_alpha(rho_inf: float) -> tuple[float, float, float]:
     alpha_m = (rho_inf - 1)/(rho_inf + 1), gamma = 1/2 - alpha_m, beta = (1 - alpha_m)^2 / 4."""
     alpha_m = (rho_inf - 1) / (rho_inf + 1)
     return alpha_m, 0.5 - alpha_m, 0.25 * (1 - alpha_m) ** 2
-
-
-class ElasticBodies:
-    """The material interface of the integrator: internal force f(u), its tangent, the
-    stored energy, and commit / restore of the history (none for linear elasticity: f = K u,
-    the tangent K is constant)."""
-
-    constant_tangent = True
-
-    def __init__(self, elasticity: Elasticity):
-        self.el = elasticity
-        self.work = elasticity.K.createVecRight()
-
-    def internal_force(self, u: PETSc.Vec, out: PETSc.Vec) -> None:
-        self.el.internal_force(u, out)
-
-    def tangent(self, u: PETSc.Vec) -> PETSc.Mat:
-        return self.el.K
-
-    def strain_energy(self, u: PETSc.Vec) -> float:
-        """u . K u / 2 (J/m)."""
-        self.el.K.mult(u, self.work)
-        return 0.5 * self.work.dot(u)
-
-    def commit(self) -> None:
-        """The converged step becomes the start of the next (no history: nothing to do)."""
-
-    def restore(self) -> None:
-        """Back to the last committed state (no history: nothing to do)."""
 
 
 def mass_matrix(elasticity: Elasticity, cell_tags, rho_pin: float, rho_bore: float,
@@ -195,7 +177,9 @@ class Record:
     half_angle: float           # rad
     min_gap: float              # m, smallest gap over the pin's nodes (< 0: penetration)
     kinetic: float              # J/m
-    strain: float               # J/m
+    strain: float               # J/m, stored elastic energy
+    plastic_work: float         # J/m, dissipated by plastic flow so far
+    max_plastic_strain: float   # the largest equivalent plastic strain
     contact_energy: float       # J/m, stored by the penalty (Pi_c)
     contact_work: float         # J/m, done on the contact so far (W_c)
     newton_iterations: int
@@ -221,7 +205,7 @@ class ImpactStepper:
                  method, gap_tolerance, newton_max_it, uzawa_max_it, max_cutbacks, force_atol,
                  couplings, massless_surfaces=True, material=None):
         self.el, self.contact = elasticity, contact
-        self.material = material or ElasticBodies(elasticity)
+        self.material = elasticity if material is None else material
         self.direction = np.asarray(direction, dtype=float)
         self.clearance, self.speed, self.dt, self.t_end = clearance, speed, dt, t_end
         self.initial_gap = initial_gap
@@ -240,7 +224,7 @@ class ImpactStepper:
         self.M.setValues(self.master, self.master, self.hub_mass * np.eye(len(self.master)),
                          addv=PETSc.InsertMode.ADD_VALUES)
         self.M.assemble()
-        self.K = self.material.tangent(None).PtAP(self.T) if self.material.constant_tangent else None
+        self.K = None if self.material.plastic else self.material.tangent(None).PtAP(self.T)
         rows = np.setdiff1d(elasticity.prescribed_rows(), self.master)
         self.prescribed = rows.astype(PETSc.IntType)
 
@@ -248,6 +232,7 @@ class ImpactStepper:
         self.q, self.v, self.a = vec(), vec(), vec()            # state at t_n (reduced)
         self.q0, self.v0, self.a0 = vec(), vec(), vec()
         self.x, self.u, self.f, self.work = vec(), vec(), vec(), vec()
+        self.u.set(0.0)
         self.fc, self.fc0, self.u0, self.inertia = vec(), vec(), vec(), vec()
         # d on every pin node: u-space (the contact resultant) and q-space (the momentum)
         self.along_pin = elasticity.pin_rigid_motion(self.direction)
@@ -273,12 +258,16 @@ class ImpactStepper:
         """A = (1 - alpha_m)/(beta dt^2) M_q + K_q, the Jacobian without the
         contact (cached for the last dt when the material's tangent is constant; else with
         T^T K_t(u) T at the current u)."""
-        if self.A_dt != dt or not self.material.constant_tangent:
+        if self.A_dt != dt or self.material.plastic:
             c = (1 - self.alpha_m) / (self.beta * dt**2)
+            if self.A is not None:
+                self.A.destroy()
             self.A = self.M.copy()
             self.A.scale(c)
             K = self.K if self.K is not None else self.material.tangent(self.u).PtAP(self.T)
             self.A.axpy(1.0, K, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+            if K is not self.K:
+                K.destroy()
             self.A_dt = dt
         return self.A
 
@@ -312,8 +301,8 @@ class ImpactStepper:
 
     def _jacobian(self, snes, x, J, P):
         J.zeroEntries()
-        J.axpy(1.0, self._effective(self.h), structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
         self.T.mult(x, self.u)
+        J.axpy(1.0, self._effective(self.h), structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
         self.contact.add_tangent(self.u, J)
         J.assemble()
         J.zeroRows(self.prescribed, diag=1.0)
@@ -322,7 +311,8 @@ class ImpactStepper:
 
     def start(self) -> None:
         """t = 0: the pin (and hub) shifted to `initial_gap` short of touching, moving at v0
-        along d; the housing at rest; no force, so no acceleration."""
+        along d; the housing at rest; no force, so no acceleration; no contact or plastic
+        work yet."""
         shift = self.el.pin_rigid_motion((self.clearance - self.initial_gap) * self.direction)
         self.q.set(0.0)
         self.q.axpy(1.0, shift)
@@ -332,6 +322,7 @@ class ImpactStepper:
         self.a.set(0.0)
         self.T.mult(self.q, self.u)
         self.contact_force(self.u, self.fc)
+        self.t, self.contact_work, self.plastic_work = 0.0, 0.0, 0.0
 
     def _q_mask(self) -> PETSc.Vec:
         """1 on the reduced unknowns, 0 on the unused hub dofs."""
@@ -357,14 +348,15 @@ class ImpactStepper:
         for a, b in ((self.q, self.q0), (self.v, self.v0), (self.a, self.a0),
                      (self.fc, self.fc0)):
             a.copy(b)
-        return self.contact.snapshot()
+        return self.contact.snapshot(), self.material.snapshot()
 
     def _load(self, snapshot) -> None:
         for a, b in ((self.q0, self.q), (self.v0, self.v), (self.a0, self.a),
                      (self.fc0, self.fc)):
             a.copy(b)
-        self.contact.restore(snapshot)
-        self.material.restore()
+        contact, material = snapshot
+        self.contact.restore(contact)
+        self.material.restore(material)
 
     def step(self, h: float) -> "Record | str":
         """Advance by h: the Record of the new state, or why the step failed (the state is
@@ -391,7 +383,7 @@ class ImpactStepper:
         self.T.mult(self.q, self.u)
         self.contact_force(self.u, self.fc)
         self.contact.commit(state)
-        self.material.commit()
+        self.plastic_work += self.material.commit(self.u)
         self.t += h
         self.contact_work += 0.5 * self._increment_dot()
         return self.record(self.t, newton, state)
@@ -412,7 +404,8 @@ class ImpactStepper:
             half_angle=half_angle(angle_from(np.degrees(np.arctan2(d[1], d[0])), state.angle),
                                   state.pressure),
             min_gap=float(np.min(state.gap)), kinetic=kinetic,
-            strain=self.material.strain_energy(self.u),
+            strain=self.material.elastic_energy(self.u), plastic_work=self.plastic_work,
+            max_plastic_strain=self.material.max_plastic_strain(),
             contact_energy=float(np.sum(self.contact.weights * self.contact.penalty / 2
                                         * penetration**2)),
             contact_work=self.contact_work, newton_iterations=newton, time_step=self.h)
@@ -434,7 +427,6 @@ class ImpactStepper:
         max_cutbacks times."""
         start = time.perf_counter()
         self.start()
-        self.t, self.contact_work = 0.0, 0.0
         run = ImpactRun()
         run.records.append(self.record(0.0, 0, self.contact.state(self.u)))
         touched, after = False, 0
