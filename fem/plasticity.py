@@ -295,6 +295,7 @@ class ElastoPlastic:
         self.stress = np.zeros((n, 6))
         self.committed = 0          # commits and restores so far (a key of evaluate's cache)
         self._key = self._last = None
+        self._elastic = True        # no point flowed at the last evaluated iterate
 
     # --- evaluation at an iterate ----------------------------------------------------------
 
@@ -318,10 +319,23 @@ class ElastoPlastic:
             self._last = radial_return(self.strain_at_points(x), self.plastic_strain,
                                        self.equivalent, self.shear_modulus, self.bulk_modulus,
                                        self.curve, *self.tables)
+            mine = bool(np.any(self.plastic_strain) or np.any(self._last[2] > self.equivalent))
+            self._elastic = not self.comm.allreduce(mine, op=MPI.LOR)
         return self._last
+
+    def elastic_everywhere(self, x: PETSc.Vec) -> bool:
+        """Whether no point has flowed, in the committed state or at x: sigma = C : eps
+        everywhere, so f_int = K x and K_t = K, the elastic stiffness assembled once
+        (fem.elasticity), which internal_force and the tangents then use: an impact or a load
+        step that stays below the yield stress is the elastic one to the last bit."""
+        self.evaluate(x)
+        return self._elastic
 
     def internal_force(self, x: PETSc.Vec, out: PETSc.Vec) -> None:
         """out = f_int(x) = int sigma(x) : eps(v) dx (N/m per dof in 2D, N in 3D)."""
+        if self.elastic_everywhere(x):
+            self.el.internal_force(x, out)
+            return
         stress = self.evaluate(x)[0]
         self.stress_q.x.array.reshape(-1, self.components)[self.dofs] = stress[:, self.taken]
         with self.b.localForm() as local:
@@ -333,12 +347,18 @@ class ElastoPlastic:
     def add_tangent(self, x: PETSc.Vec, J: PETSc.Mat) -> None:
         """J += K_t(x), the consistent tangent, with the prescribed rows and columns replaced
         by the identity (like Elasticity.K_bc; J's pattern holds K_t's)."""
+        if self.elastic_everywhere(x):
+            self.el.add_tangent(x, J)
+            return
         J.axpy(1.0, self._assemble_tangent(x, self.K_t, self.el.bcs),
                structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
 
     def tangent(self, x: PETSc.Vec) -> PETSc.Mat:
         """K_t(x) with no rows replaced (a time integrator that reduces the hub to a rigid
-        body, fem.dynamics); the matrix is overwritten by the next call."""
+        body, fem.dynamics): the elastic stiffness K itself while no point flows, else a
+        matrix the next call overwrites."""
+        if self.elastic_everywhere(x):
+            return self.el.tangent(x)
         if self.K_free is None:
             self.K_free = dolfinx.fem.petsc.create_matrix(self.tangent_form)
         return self._assemble_tangent(x, self.K_free, [])
