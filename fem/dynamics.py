@@ -53,23 +53,43 @@ At rho_inf = 1 the scheme conserves energy exactly up to the contact: with beta 
 gamma = 1/2, q_{n+1} - q_n = dt (v_n + v_{n+1}) / 2, so the kinetic energy changes by
 (q_{n+1} - q_n) . M_q (a_n + a_{n+1}) / 2 = -(q_{n+1} - q_n) . (F_n + F_{n+1}) / 2, and
 
-    E_0 = K + U + W_c + D_num,
+    E_0 = K + U + W_p + W_c + D_num,
 
-K = v . M_q v / 2 the kinetic energy, U = u . K u / 2 the strain energy, W_c the work the
+K = v . M_q v / 2 the kinetic energy, U the stored elastic energy (u . K u / 2 for linear
+elasticity; int sigma : C^-1 : sigma / 2 dx for an elasto-plastic body, fem.plasticity),
+W_p the plastic work (0 for an elastic body), W_c the work the
 bodies did on the contact, summed by the same trapezoidal rule, (u_{n+1} - u_n) .
 (f_c,n + f_c,n+1) / 2, and D_num the scheme's dissipation (0 at rho_inf = 1 up to Newton's
 tolerance). The penalty contact stores Pi_c = sum_i w_i eps <-g_i>^2 / 2 (the augmented
 Lagrangian, which holds the penetration below its gap tolerance, next to nothing): W_c -
 Pi_c is the energy the contact's time integration lost or made. The book's residual is
-E_0 - K - U - Pi_c, the whole error of an elastic impact, which conserves energy. After
-separation the pin flies off with the momentum p of its mass m, so
+E_0 - K - U - W_p - Pi_c, the whole error of the impact. The book holds for plastic bodies
+too because both sides use the trapezoidal rule: the internal work of a step,
+(u_{n+1} - u_n) . (f_int,n + f_int,n+1) / 2, is exactly the change of U plus the plastic
+work of the step as fem.plasticity integrates it (one quadrature point per P1 cell, C^-1
+linear). After separation the pin flies off with the momentum p of its mass m, so
 
     e = -p . d / (m v_0),    E_wave = K + U - |p|^2 / (2 m),
 
-the energy left in the two bodies as vibration and waves; e^2 = 1 - (E_wave + residual)/E_0.
+the energy left in the two bodies as vibration, waves and (plastic bodies) locked residual
+stress; e^2 = 1 - (E_wave + W_p + residual)/E_0.
+
+The bodies' material is the shared interface of fem.elasticity.Elasticity and
+fem.plasticity.ElastoPlastic (internal_force, tangent, elastic_energy, commit(x) -> plastic
+work, snapshot / restore). An elastic material's tangent is constant, so A below is built
+once per time step size; an elasto-plastic one's is rebuilt at every Newton iterate once a
+point flows (before that it is the elastic K: below the yield stress the impact is the
+elastic one to the last bit).
 
 Steps and failures
 ------------------
+With an elasto-plastic body, a Newton iterate far from the solution (nodes entering contact
+under the stiff penalty) can reach the yield stress where the converged state does not, and
+the soft plastic tangent sends the next iterate further (measured: a perfectly plastic bore
+at Y = 175 MPa, never reached by a converged step, failed its first steps in contact with
+full Newton steps); such a step is solved again with a backtracking line search (as the
+quasi-static stepper does, fem.solver) before it is cut. A step that full Newton steps solve
+is left alone, so a plastic body that never yields is the elastic one to the last bit.
 A step whose Newton (or Uzawa) iteration fails is replaced by two of half the size, up to
 solver.max_cutbacks halvings; if that fails too, the run stops, keeps every converged step
 and says where and why (an incomplete run).
@@ -99,35 +119,6 @@ def generalized_alpha(rho_inf: float) -> tuple[float, float, float]:
     alpha_m = (rho_inf - 1)/(rho_inf + 1), gamma = 1/2 - alpha_m, beta = (1 - alpha_m)^2 / 4."""
     alpha_m = (rho_inf - 1) / (rho_inf + 1)
     return alpha_m, 0.5 - alpha_m, 0.25 * (1 - alpha_m) ** 2
-
-
-class ElasticBodies:
-    """The material interface of the integrator: internal force f(u), its tangent, the
-    stored energy, and commit / restore of the history (none for linear elasticity: f = K u,
-    the tangent K is constant)."""
-
-    constant_tangent = True
-
-    def __init__(self, elasticity: Elasticity):
-        self.el = elasticity
-        self.work = elasticity.K.createVecRight()
-
-    def internal_force(self, u: PETSc.Vec, out: PETSc.Vec) -> None:
-        self.el.internal_force(u, out)
-
-    def tangent(self, u: PETSc.Vec) -> PETSc.Mat:
-        return self.el.K
-
-    def strain_energy(self, u: PETSc.Vec) -> float:
-        """u . K u / 2 (J/m)."""
-        self.el.K.mult(u, self.work)
-        return 0.5 * self.work.dot(u)
-
-    def commit(self) -> None:
-        """The converged step becomes the start of the next (no history: nothing to do)."""
-
-    def restore(self) -> None:
-        """Back to the last committed state (no history: nothing to do)."""
 
 
 def mass_matrix(elasticity: Elasticity, cell_tags, rho_pin: float, rho_bore: float,
@@ -195,7 +186,9 @@ class Record:
     half_angle: float           # rad
     min_gap: float              # m, smallest gap over the pin's nodes (< 0: penetration)
     kinetic: float              # J/m
-    strain: float               # J/m
+    strain: float               # J/m, stored elastic energy
+    plastic_work: float         # J/m, dissipated by plastic flow so far
+    max_plastic_strain: float   # the largest equivalent plastic strain
     contact_energy: float       # J/m, stored by the penalty (Pi_c)
     contact_work: float         # J/m, done on the contact so far (W_c)
     newton_iterations: int
@@ -221,7 +214,7 @@ class ImpactStepper:
                  method, gap_tolerance, newton_max_it, uzawa_max_it, max_cutbacks, force_atol,
                  couplings, massless_surfaces=True, material=None):
         self.el, self.contact = elasticity, contact
-        self.material = material or ElasticBodies(elasticity)
+        self.material = elasticity if material is None else material
         self.direction = np.asarray(direction, dtype=float)
         self.clearance, self.speed, self.dt, self.t_end = clearance, speed, dt, t_end
         self.initial_gap = initial_gap
@@ -240,7 +233,7 @@ class ImpactStepper:
         self.M.setValues(self.master, self.master, self.hub_mass * np.eye(len(self.master)),
                          addv=PETSc.InsertMode.ADD_VALUES)
         self.M.assemble()
-        self.K = self.material.tangent(None).PtAP(self.T) if self.material.constant_tangent else None
+        self.K = elasticity.K.PtAP(self.T)    # the elastic stiffness, reduced once
         rows = np.setdiff1d(elasticity.prescribed_rows(), self.master)
         self.prescribed = rows.astype(PETSc.IntType)
 
@@ -248,6 +241,7 @@ class ImpactStepper:
         self.q, self.v, self.a = vec(), vec(), vec()            # state at t_n (reduced)
         self.q0, self.v0, self.a0 = vec(), vec(), vec()
         self.x, self.u, self.f, self.work = vec(), vec(), vec(), vec()
+        self.u.set(0.0)
         self.fc, self.fc0, self.u0, self.inertia = vec(), vec(), vec(), vec()
         # d on every pin node: u-space (the contact resultant) and q-space (the momentum)
         self.along_pin = elasticity.pin_rigid_motion(self.direction)
@@ -258,7 +252,7 @@ class ImpactStepper:
         self.mass = self.work.dot(self.along_pin_q)   # the FE pin's mass (kg/m)
         self.impact_energy = 0.5 * self.mass * speed**2  # E_0 (J/m)
         self.mask = self._q_mask()
-        self.A, self.A_dt = None, None
+        self.A, self.A_dt, self.A_elastic = None, None, True
         # the unused hub rows are empty after the reduction: their diagonal is kept for the
         # identity rows of the prescribed dofs
         unused = np.stack([slaves, slaves], axis=1)
@@ -271,15 +265,21 @@ class ImpactStepper:
 
     def _effective(self, dt) -> PETSc.Mat:
         """A = (1 - alpha_m)/(beta dt^2) M_q + K_q, the Jacobian without the
-        contact (cached for the last dt when the material's tangent is constant; else with
-        T^T K_t(u) T at the current u)."""
-        if self.A_dt != dt or not self.material.constant_tangent:
+        contact: with the elastic stiffness (cached for the last dt) while the material's
+        tangent is K, else with T^T K_t(u) T at the current u."""
+        tangent = self.material.tangent(self.u)
+        elastic = tangent is self.el.K
+        if self.A_dt != dt or not (elastic and self.A_elastic):
             c = (1 - self.alpha_m) / (self.beta * dt**2)
+            if self.A is not None:
+                self.A.destroy()
             self.A = self.M.copy()
             self.A.scale(c)
-            K = self.K if self.K is not None else self.material.tangent(self.u).PtAP(self.T)
+            K = self.K if elastic else tangent.PtAP(self.T)
             self.A.axpy(1.0, K, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
-            self.A_dt = dt
+            if not elastic:
+                K.destroy()
+            self.A_dt, self.A_elastic = dt, elastic
         return self.A
 
     def _acceleration(self, q: PETSc.Vec, out: PETSc.Vec) -> None:
@@ -312,8 +312,8 @@ class ImpactStepper:
 
     def _jacobian(self, snes, x, J, P):
         J.zeroEntries()
-        J.axpy(1.0, self._effective(self.h), structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
         self.T.mult(x, self.u)
+        J.axpy(1.0, self._effective(self.h), structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
         self.contact.add_tangent(self.u, J)
         J.assemble()
         J.zeroRows(self.prescribed, diag=1.0)
@@ -322,7 +322,8 @@ class ImpactStepper:
 
     def start(self) -> None:
         """t = 0: the pin (and hub) shifted to `initial_gap` short of touching, moving at v0
-        along d; the housing at rest; no force, so no acceleration."""
+        along d; the housing at rest; no force, so no acceleration; no contact or plastic
+        work yet."""
         shift = self.el.pin_rigid_motion((self.clearance - self.initial_gap) * self.direction)
         self.q.set(0.0)
         self.q.axpy(1.0, shift)
@@ -332,6 +333,7 @@ class ImpactStepper:
         self.a.set(0.0)
         self.T.mult(self.q, self.u)
         self.contact_force(self.u, self.fc)
+        self.t, self.contact_work, self.plastic_work = 0.0, 0.0, 0.0
 
     def _q_mask(self) -> PETSc.Vec:
         """1 on the reduced unknowns, 0 on the unused hub dofs."""
@@ -357,14 +359,15 @@ class ImpactStepper:
         for a, b in ((self.q, self.q0), (self.v, self.v0), (self.a, self.a0),
                      (self.fc, self.fc0)):
             a.copy(b)
-        return self.contact.snapshot()
+        return self.contact.snapshot(), self.material.snapshot()
 
     def _load(self, snapshot) -> None:
         for a, b in ((self.q0, self.q), (self.v0, self.v), (self.a0, self.a),
                      (self.fc0, self.fc)):
             a.copy(b)
-        self.contact.restore(snapshot)
-        self.material.restore()
+        contact, material = snapshot
+        self.contact.restore(contact)
+        self.material.restore(material)
 
     def step(self, h: float) -> "Record | str":
         """Advance by h: the Record of the new state, or why the step failed (the state is
@@ -372,14 +375,18 @@ class ImpactStepper:
         self.h = h
         snapshot = self._save()
         self.T.mult(self.q, self.u0)
-        # predictor: constant acceleration (exact in free flight)
-        self.q.copy(self.x)
-        self.x.axpy(h, self.v)
-        self.x.axpy(0.5 * h * h, self.a)
-        solved = contact_solve(self.snes, self.x, self.contact, self.augmented,
-                               self.uzawa_max_it, self.gap_tolerance)
-        if isinstance(solved, str):
+        for search in ("basic", "bt") if self.material.plastic else ("basic",):
+            # predictor: constant acceleration (exact in free flight)
+            self.q.copy(self.x)
+            self.x.axpy(h, self.v)
+            self.x.axpy(0.5 * h * h, self.a)
+            self.snes.getLineSearch().setType(search)
+            solved = contact_solve(self.snes, self.x, self.contact, self.augmented,
+                                   self.uzawa_max_it, self.gap_tolerance)
+            if not isinstance(solved, str):
+                break
             self._load(snapshot)
+        if isinstance(solved, str):
             return solved
         newton, _, _, state, _ = solved
         a_new = self.work
@@ -391,7 +398,7 @@ class ImpactStepper:
         self.T.mult(self.q, self.u)
         self.contact_force(self.u, self.fc)
         self.contact.commit(state)
-        self.material.commit()
+        self.plastic_work += self.material.commit(self.u)
         self.t += h
         self.contact_work += 0.5 * self._increment_dot()
         return self.record(self.t, newton, state)
@@ -412,7 +419,8 @@ class ImpactStepper:
             half_angle=half_angle(angle_from(np.degrees(np.arctan2(d[1], d[0])), state.angle),
                                   state.pressure),
             min_gap=float(np.min(state.gap)), kinetic=kinetic,
-            strain=self.material.strain_energy(self.u),
+            strain=self.material.elastic_energy(self.u), plastic_work=self.plastic_work,
+            max_plastic_strain=self.material.max_plastic_strain(),
             contact_energy=float(np.sum(self.contact.weights * self.contact.penalty / 2
                                         * penetration**2)),
             contact_work=self.contact_work, newton_iterations=newton, time_step=self.h)
@@ -434,7 +442,6 @@ class ImpactStepper:
         max_cutbacks times."""
         start = time.perf_counter()
         self.start()
-        self.t, self.contact_work = 0.0, 0.0
         run = ImpactRun()
         run.records.append(self.record(0.0, 0, self.contact.state(self.u)))
         touched, after = False, 0

@@ -133,8 +133,9 @@ class Elasticity:
         """F = 0 at the prescribed dofs (their values are set, not solved for)."""
         dolfinx.fem.petsc.set_bc(F, self.bcs, alpha=0.0)
 
-    # --- the material interface of the load stepper (fem.solver), shared with
-    # fem.plasticity.ElastoPlastic; linear elasticity has a constant tangent and no state
+    # --- the material interface of the load stepper (fem.solver) and of the impact's time
+    # integrator (fem.dynamics), shared with fem.plasticity.ElastoPlastic; linear elasticity
+    # has a constant tangent and no state
 
     plastic = False
 
@@ -146,6 +147,19 @@ class Elasticity:
         """J += K_bc (the stiffness with identity rows and columns at the prescribed dofs;
         J's pattern holds K_bc's)."""
         J.axpy(1.0, self.K_bc, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+
+    def tangent(self, x: PETSc.Vec) -> PETSc.Mat:
+        """d f_int / d x with no rows replaced (a time integrator that reduces the hub to a
+        rigid body, fem.dynamics): the stiffness K, constant."""
+        return self.K
+
+    def elastic_energy(self, x: PETSc.Vec) -> float:
+        """The stored elastic energy x . K x / 2 (J/m in 2D, J in 3D)."""
+        Kx = self.K.createVecLeft()
+        self.K.mult(x, Kx)
+        energy = 0.5 * Kx.dot(x)
+        Kx.destroy()
+        return energy
 
     def commit(self, x: PETSc.Vec) -> float:
         """No state to keep; the plastic work of the step: 0 (J/m)."""

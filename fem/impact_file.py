@@ -33,10 +33,11 @@ class History:
     half_angle: np.ndarray       # deg, contact half-angle
     min_gap: np.ndarray          # m, smallest gap of the pin's nodes (< 0: penetration)
     kinetic: np.ndarray          # J/m
-    strain: np.ndarray           # J/m
+    strain: np.ndarray           # J/m, stored elastic energy
+    plastic_work: np.ndarray     # J/m, dissipated by plastic flow so far
     contact_energy: np.ndarray   # J/m, stored by the penalty
     contact_work: np.ndarray     # J/m, done by the bodies on the contact so far
-    residual: np.ndarray         # J/m, E_0 - kinetic - strain - contact_energy
+    residual: np.ndarray         # J/m, E_0 - kinetic - strain - plastic_work - contact_energy
     newton_iterations: np.ndarray
     time_step: np.ndarray        # s
 
@@ -49,6 +50,7 @@ COLUMNS = {
     "half_angle": _float("half_angle_deg", "deg", ".6f"), "min_gap": _float("min_gap_m", "m"),
     "kinetic": _float("kinetic_energy_J_per_m", "J/m"),
     "strain": _float("strain_energy_J_per_m", "J/m"),
+    "plastic_work": Column("plastic_work_J_per_m", "J/m", float, ".9e", absent=0.0),
     "contact_energy": _float("contact_energy_J_per_m", "J/m"),
     "contact_work": _float("contact_work_J_per_m", "J/m"),
     "residual": _float("energy_residual_J_per_m", "J/m"),
@@ -75,13 +77,14 @@ class EnergyBook(Record):
 
     impact_J_per_m: float
     kinetic_J_per_m: float
-    strain_J_per_m: float
+    strain_J_per_m: float            # stored elastic energy
+    plastic_J_per_m: float = 0.0     # plastic work (0: elastic bodies)
     contact_J_per_m: float           # stored by the penalty
     contact_work_J_per_m: float      # done on the contact (trapezoidal rule)
     rebound_J_per_m: float           # |p|^2 / (2 m): the pin's flight after separation
-    wave_J_per_m: float              # kinetic + strain - rebound: vibration and waves
-    residual_J_per_m: float          # impact - kinetic - strain - contact
-    scheme_residual_J_per_m: float   # impact - kinetic - strain - contact work
+    wave_J_per_m: float              # kinetic + strain - rebound: vibration, waves, locked stress
+    residual_J_per_m: float          # impact - kinetic - strain - plastic - contact
+    scheme_residual_J_per_m: float   # impact - kinetic - strain - plastic - contact work
     max_relative_residual: float     # max over the run of |residual| / impact
 
 
@@ -100,6 +103,7 @@ class ImpactSummary(Record):
     approach_at_peak_m: float
     max_approach_m: float
     energy: EnergyBook
+    max_plastic_strain: float = 0.0  # the largest equivalent plastic strain at the end
     estimate: dict                   # Liu's law before the run: duration, max approach
     time_step_s: float
     spectral_radius: float

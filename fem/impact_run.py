@@ -40,7 +40,7 @@ def build(scene: ImpactScene, comm=MPI.COMM_WORLD):
         max_cutbacks=scene.solver.max_cutbacks,
         force_atol=model.residual_tolerance(fem_scene, contact.penalty * sizing.contact_size),
         couplings=contact.couplings(np.asarray(impact.direction), sizing.arc_half_angle),
-        massless_surfaces=impact.surface_mass == "redistributed")
+        massless_surfaces=impact.surface_mass == "redistributed", material=static.material)
     return stepper, el, contact, sizing
 
 
@@ -85,10 +85,15 @@ def history_rows(result, impact_energy):
         yield {"time": r.time, "approach": r.approach, "force": r.force,
                "hub_velocity": r.hub_velocity, "pin_velocity": r.pin_velocity,
                "half_angle": np.degrees(r.half_angle), "min_gap": r.min_gap,
-               "kinetic": r.kinetic, "strain": r.strain, "contact_energy": r.contact_energy,
-               "contact_work": r.contact_work,
-               "residual": impact_energy - r.kinetic - r.strain - r.contact_energy,
+               "kinetic": r.kinetic, "strain": r.strain, "plastic_work": r.plastic_work,
+               "contact_energy": r.contact_energy, "contact_work": r.contact_work,
+               "residual": book_residual(impact_energy, r),
                "newton_iterations": r.newton_iterations, "time_step": r.time_step}
+
+
+def book_residual(impact_energy: float, r) -> float:
+    """E_0 - K - U - W_p - Pi_c (J/m): what the energy book misses at the record r."""
+    return impact_energy - r.kinetic - r.strain - r.plastic_work - r.contact_energy
 
 
 def contact_window(records) -> tuple[float, float] | None:
@@ -121,13 +126,14 @@ def summarise(scene, scene_path, result, stepper, el, sizing, contact, wall):
     p = result.momentum
     rebound = float(p @ p) / (2 * stepper.mass)
     peak = max(records, key=lambda r: r.force)
-    residuals = [abs(e0 - r.kinetic - r.strain - r.contact_energy) / e0 for r in records]
+    residuals = [abs(book_residual(e0, r)) / e0 for r in records]
     book = impact_file.EnergyBook(
         impact_J_per_m=e0, kinetic_J_per_m=last.kinetic, strain_J_per_m=last.strain,
+        plastic_J_per_m=last.plastic_work,
         contact_J_per_m=last.contact_energy, contact_work_J_per_m=last.contact_work,
         rebound_J_per_m=rebound, wave_J_per_m=last.kinetic + last.strain - rebound,
-        residual_J_per_m=e0 - last.kinetic - last.strain - last.contact_energy,
-        scheme_residual_J_per_m=e0 - last.kinetic - last.strain - last.contact_work,
+        residual_J_per_m=book_residual(e0, last),
+        scheme_residual_J_per_m=e0 - last.kinetic - last.strain - last.plastic_work - last.contact_work,
         max_relative_residual=max(residuals))
     est = scene.estimate
     return impact_file.ImpactSummary(
@@ -140,6 +146,7 @@ def summarise(scene, scene_path, result, stepper, el, sizing, contact, wall):
         contact_duration_s=window[1] - window[0] if separated else None,
         peak_force_N_per_m=peak.force, approach_at_peak_m=peak.approach,
         max_approach_m=max(r.approach for r in records), energy=book,
+        max_plastic_strain=last.max_plastic_strain,
         estimate={"law": "liu", "contact_duration_s": est.duration,
                   "max_approach_m": est.max_approach},
         time_step_s=scene.dt, spectral_radius=scene.impact.spectral_radius,
@@ -174,8 +181,9 @@ def figure(path, result, scene, summary) -> None:
     ax.grid(alpha=0.3)
     e0 = summary.energy.impact_J_per_m
     for name, values in (("kinetic", [x.kinetic for x in r]), ("strain", [x.strain for x in r]),
+                         ("plastic work", [x.plastic_work for x in r]),
                          ("contact (penalty)", [x.contact_energy for x in r]),
-                         ("residual", [e0 - x.kinetic - x.strain - x.contact_energy for x in r])):
+                         ("residual", [book_residual(e0, x) for x in r])):
         bx.plot(t, np.asarray(values) / e0, label=name, lw=1)
     bx.set_xlabel("time (us)")
     bx.set_ylabel("energy / impact energy")

@@ -13,6 +13,10 @@ tables, materials with a density. What moves:
 - the housing: an elastic annulus of density `materials.bore.density`, clamped at its outer
   edge as in the quasi-static runs.
 
+Either body yields where its material has a `yield_stress` (von Mises, isotropic hardening:
+`hardening_modulus` or a `hardening` table, exactly as in the FE scene; fem.plasticity); the
+plastic work then enters the energy book.
+
 At t = 0 the pin sits `impact.initial_gap` short of touching the bore along
 `impact.direction_deg` and moves at `impact.speed` (m/s, v0 > 0) along it; nothing else moves
 and nothing is loaded.
@@ -42,7 +46,8 @@ INITIAL_GAP_STEPS = 5          # default flight before contact, in time steps
 
 
 class DynamicMaterial(Material):
-    """Linear elastic, isotropic, with a mass density."""
+    """The FE scene's material (linear elastic, or elasto-plastic with `yield_stress` and
+    `hardening_modulus` or a `hardening` table, validated alike), with a mass density."""
 
     density: float = pydantic.Field(gt=0, description="mass density (kg/m^3)")
 
@@ -147,7 +152,7 @@ class ImpactScene(Strict):
         """The quasi-static FE scene of the same bodies, contact and mesh, pushed along the
         impact direction to APPROACH_MARGIN times the estimated largest approach: it sizes
         the mesh (`pinbore fem` on it meshes alike) and gives the quasi-static curve."""
-        materials = {name: {"E": m.E, "nu": m.nu}
+        materials = {name: m.model_dump(exclude_none=True, exclude={"density"})
                      for name, m in (("pin", self.materials.pin), ("bore", self.materials.bore))}
         return FemScene.model_validate({
             "kind": "fem", "geometry": self.geometry.model_dump(exclude_defaults=True),

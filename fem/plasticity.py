@@ -219,7 +219,8 @@ class ElastoPlastic:
 
     The material interface of the load stepper (fem.solver) and of a time integrator,
     shared with the purely elastic fem.elasticity.Elasticity:
-    internal_force(x, out), add_tangent(x, J), commit(x) -> plastic work of the step,
+    internal_force(x, out), add_tangent(x, J) (prescribed rows replaced) or tangent(x) (the
+    matrix itself), elastic_energy(x), commit(x) -> plastic work of the step,
     snapshot() / restore(s) (the committed state), and the equivalent plastic strain.
     """
 
@@ -263,6 +264,7 @@ class ElastoPlastic:
         self.tangent_form = dolfinx.fem.form(ufl.inner(ufl.dot(self.tangent_q, eps_du), eps_v) * dx)
         self.b = dolfinx.fem.petsc.create_vector(el.V)
         self.K_t = dolfinx.fem.petsc.create_matrix(self.tangent_form)
+        self.K_free = None          # the tangent without boundary rows (tangent), on demand
         # the weight of each point (quadrature weight x |det J|; 2D: m^2, the forms per unit length)
         volume = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(ufl.TestFunction(Ws) * dx))
         self.volume = volume.array[Ws.dofmap.list[self.cells].ravel()].copy()
@@ -293,6 +295,7 @@ class ElastoPlastic:
         self.stress = np.zeros((n, 6))
         self.committed = 0          # commits and restores so far (a key of evaluate's cache)
         self._key = self._last = None
+        self._elastic = True        # no point flowed at the last evaluated iterate
 
     # --- evaluation at an iterate ----------------------------------------------------------
 
@@ -316,10 +319,23 @@ class ElastoPlastic:
             self._last = radial_return(self.strain_at_points(x), self.plastic_strain,
                                        self.equivalent, self.shear_modulus, self.bulk_modulus,
                                        self.curve, *self.tables)
+            mine = bool(np.any(self.plastic_strain) or np.any(self._last[2] > self.equivalent))
+            self._elastic = not self.comm.allreduce(mine, op=MPI.LOR)
         return self._last
+
+    def elastic_everywhere(self, x: PETSc.Vec) -> bool:
+        """Whether no point has flowed, in the committed state or at x: sigma = C : eps
+        everywhere, so f_int = K x and K_t = K, the elastic stiffness assembled once
+        (fem.elasticity), which internal_force and the tangents then use: an impact or a load
+        step that stays below the yield stress is the elastic one to the last bit."""
+        self.evaluate(x)
+        return self._elastic
 
     def internal_force(self, x: PETSc.Vec, out: PETSc.Vec) -> None:
         """out = f_int(x) = int sigma(x) : eps(v) dx (N/m per dof in 2D, N in 3D)."""
+        if self.elastic_everywhere(x):
+            self.el.internal_force(x, out)
+            return
         stress = self.evaluate(x)[0]
         self.stress_q.x.array.reshape(-1, self.components)[self.dofs] = stress[:, self.taken]
         with self.b.localForm() as local:
@@ -331,13 +347,32 @@ class ElastoPlastic:
     def add_tangent(self, x: PETSc.Vec, J: PETSc.Mat) -> None:
         """J += K_t(x), the consistent tangent, with the prescribed rows and columns replaced
         by the identity (like Elasticity.K_bc; J's pattern holds K_t's)."""
+        if self.elastic_everywhere(x):
+            self.el.add_tangent(x, J)
+            return
+        J.axpy(1.0, self._assemble_tangent(x, self.K_t, self.el.bcs),
+               structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+
+    def tangent(self, x: PETSc.Vec) -> PETSc.Mat:
+        """K_t(x) with no rows replaced (a time integrator that reduces the hub to a rigid
+        body, fem.dynamics): the elastic stiffness K itself while no point flows, else a
+        matrix the next call overwrites."""
+        if self.elastic_everywhere(x):
+            return self.el.tangent(x)
+        if self.K_free is None:
+            self.K_free = dolfinx.fem.petsc.create_matrix(self.tangent_form)
+        return self._assemble_tangent(x, self.K_free, [])
+
+    def _assemble_tangent(self, x: PETSc.Vec, K: PETSc.Mat, bcs) -> PETSc.Mat:
+        """K = int eps(du) : C(x) : eps(v) dx, the consistent tangent at x (bcs: rows and
+        columns replaced by the identity)."""
         tangent = self.evaluate(x)[3][:, self.taken][:, :, self.taken]
         self.tangent_q.x.array.reshape(-1, self.components ** 2)[self.dofs_T] = \
             tangent.reshape(-1, self.components ** 2)
-        self.K_t.zeroEntries()
-        dolfinx.fem.petsc.assemble_matrix(self.K_t, self.tangent_form, bcs=self.el.bcs)
-        self.K_t.assemble()
-        J.axpy(1.0, self.K_t, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        K.zeroEntries()
+        dolfinx.fem.petsc.assemble_matrix(K, self.tangent_form, bcs=bcs)
+        K.assemble()
+        return K
 
     # --- the committed state ---------------------------------------------------------------
 
@@ -361,8 +396,10 @@ class ElastoPlastic:
     def _integral(self, density: np.ndarray) -> float:
         return float(self.comm.allreduce(float(density @ self.volume), op=MPI.SUM))
 
-    def elastic_energy(self) -> float:
-        """Elastic energy of the committed state (J/m in 2D, J in 3D, the modelled part)."""
+    def elastic_energy(self, x: PETSc.Vec | None = None) -> float:
+        """The stored elastic energy int sigma : C^-1 : sigma / 2 dx of the committed state
+        (J/m in 2D, J in 3D, the modelled part); x, the committed displacement, is not
+        needed: the committed stresses hold it."""
         return self._integral(elastic_energy(self.stress, self.shear_modulus, self.bulk_modulus))
 
     def max_plastic_strain(self) -> float:

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 import pytest
-from conftest import Solved, pinbore, scene_dict
+from conftest import Solved, effective_modulus, pinbore, scene_dict
 
 def _impact_base() -> dict:
     """The FE test scene as an impact: steel with its density, penalty, 1 m/s along -y."""
@@ -129,6 +129,81 @@ def test_restitution_converges_with_the_time_step():
     assert 0.7 < order < 1.5
 
 
+# Plastic impacts: a clearance of 0.5 mm (pin radius 9.5 mm), where the contact stays narrow
+# (half-angle about 8 degrees at 2 m/s) and Hertz's line contact describes it: with
+# 1/R = 1/R_pin - 1/R_bore and E* the contact modulus, a force F (N/m) has the peak pressure
+# p0 = sqrt(F E* / (pi R)) [Johnson1985] (4.45), and the von Mises stress first reaches Y
+# below the surface at p0 = 1.79 Y (nu = 0.3; Johnson1985 §6.2). Both bodies steel, linear
+# hardening H = 10 GPa (a perfectly plastic body converges too, but at 3 to 4 times the cost).
+PLASTIC_CLEARANCE = 5e-4
+HARDENING = 1e10
+
+
+def plastic_impact(speed: float, yield_stress: float | None) -> dict:
+    data = impact_scene(impact={"speed": speed})
+    data["geometry"]["pin_radius"] = data["geometry"]["bore_radius"] - PLASTIC_CLEARANCE
+    if yield_stress is not None:
+        for body in data["materials"].values():
+            body |= {"yield_stress": yield_stress, "hardening_modulus": HARDENING}
+    return data
+
+
+def hertz_first_yield_stress(force: float, data: dict) -> float:
+    """The yield stress Y that a Hertzian line contact under the force (N/m) just reaches:
+    p0 / 1.79 [Johnson1985]."""
+    g = data["geometry"]
+    radius = 1 / (1 / g["pin_radius"] - 1 / g["bore_radius"])
+    return math.sqrt(force * effective_modulus(data) / (math.pi * radius)) / 1.79
+
+
+def test_a_yield_stress_never_reached_is_the_elastic_impact():
+    """Y = 2 GPa, fourteen times the first-yield stress of the peak force (Hertz, Johnson):
+    no point flows in any converged step and the plastic body's impact is the elastic one:
+    e to 1e-8, no plastic work. Newton iterates far from the solution do reach 2 GPa; the
+    steps they fail are solved again with a line search, so the two runs agree to Newton's
+    tolerance, not to the bit: the peak force, a sum of penalty forces over some fifty
+    nodes, to 1e-7 (measured 3.3e-8; e 4e-10)."""
+    elastic = Impact(plastic_impact(1.0, None)).summary
+    assert hertz_first_yield_stress(elastic.peak_force_N_per_m, IMPACT) < 2e9 / 10
+    plastic = Impact(plastic_impact(1.0, 2e9)).summary
+    assert plastic.energy.plastic_J_per_m == 0.0 and plastic.max_plastic_strain == 0.0
+    assert plastic.restitution == pytest.approx(elastic.restitution, rel=1e-8)
+    assert plastic.peak_force_N_per_m == pytest.approx(elastic.peak_force_N_per_m, rel=1e-7)
+
+
+@pytest.mark.slow
+def test_plastic_impact_loses_energy_above_first_yield():
+    """The elastic impact at 1 m/s puts its peak force F1 on the Hertz line contact; its
+    first-yield stress Y1 = p0(F1) / 1.79 [Johnson1985] brackets yield onset: a body with
+    Y = 1.25 Y1 does not yield at 1 m/s (no plastic work), one with Y = 0.86 Y1 does. With
+    Y = 0.86 Y1 the restitution falls with the speed (elastic 1 m/s > 1 m/s > 2 m/s) as the
+    plastic work grows faster than the impact energy, and the energy book
+    E_0 = K + U + W_p + Pi_c closes to 1e-3 E_0 at every step (the contact's time
+    integration, as for the elastic impact), while the scheme's own book
+    E_0 = K + U + W_p + W_c closes to Newton's tolerance: the trapezoidal plastic work is
+    exactly the dissipated internal work (fem.dynamics)."""
+    elastic = Impact(plastic_impact(1.0, None)).summary
+    y1 = hertz_first_yield_stress(elastic.peak_force_N_per_m, plastic_impact(1.0, None))
+    below = Impact(plastic_impact(1.0, 1.25 * y1)).summary
+    assert below.energy.plastic_J_per_m == 0.0
+    runs = [Impact(plastic_impact(v, 0.86 * y1)) for v in (1.0, 2.0)]
+    e = [elastic.restitution] + [r.summary.restitution for r in runs]
+    work = [r.summary.energy.plastic_J_per_m / r.summary.energy.impact_J_per_m for r in runs]
+    print("Y1", y1, "e", e, "W_p / E_0", work)
+    assert e[0] > e[1] > e[2]
+    assert 0 < work[0] < work[1]
+    for r in runs:
+        e0 = r.stepper.impact_energy
+        assert r.summary.energy.max_relative_residual < 1e-3
+        scheme = (e0 - r.column("kinetic") - r.column("strain") - r.column("plastic_work")
+                  - r.column("contact_work"))
+        assert np.abs(scheme).max() < 1e-6 * e0
+        # e^2 = 1 - (E_wave + W_p + residual) / E_0
+        book = r.summary.energy
+        assert r.summary.restitution**2 == pytest.approx(
+            1 - (book.wave_J_per_m + book.plastic_J_per_m + book.residual_J_per_m) / e0, rel=1e-6)
+
+
 @pytest.mark.parametrize("table, key, value, rule", [
     ("impact", "speed", 0.0, "greater than 0"),
     ("impact", "speed", -1.0, "greater than 0"),
@@ -155,6 +230,24 @@ def test_density_must_be_positive(write_scene, tmp_path, body):
     done = pinbore("impact", write_scene(data), "--out", out)
     assert done.returncode == 2 and f"materials.{body}.density" in done.stderr
     assert len(done.stderr.strip().splitlines()) == 1 and not out.exists()
+
+
+@pytest.mark.parametrize("values, key, rule", [
+    ({"yield_stress": 0.0}, "yield_stress", "greater than 0"),
+    ({"hardening_modulus": 1e9}, "hardening_modulus", "needs yield_stress"),
+    ({"yield_stress": 2e8, "hardening": [[0.0, 2e8], [0.0, 3e8]]}, "hardening",
+     "must increase strictly"),
+])
+def test_bad_plastic_impact_material(write_scene, tmp_path, values, key, rule):
+    """The impact scene's materials take the FE scene's plastic keys with its checks."""
+    data = impact_scene()
+    data["materials"]["bore"] |= values
+    out = tmp_path / "out"
+    done = pinbore("impact", write_scene(data), "--out", out)
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 2 and len(lines) == 1, done.stderr
+    assert f"materials.bore.{key}" in lines[0] and rule in lines[0], lines
+    assert not out.exists()
 
 
 def test_a_run_that_fails_keeps_what_it_computed(write_scene, tmp_path):
