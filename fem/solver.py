@@ -161,7 +161,8 @@ class LoadStepper:
         ksp = snes.getKSP()
         changed = np.inf if self.factored is None else np.count_nonzero(kind != self.factored)
         refactor = (self.material.plastic or changed > REUSE_NODES
-                    or ksp.getIterationNumber() > REFACTOR_ITERATIONS)
+                    or ksp.getIterationNumber() > REFACTOR_ITERATIONS
+                    or ksp.getConvergedReason() < 0)   # e.g. the kept factors had failed
         if self.el.mesh.comm.allreduce(refactor, op=MPI.LOR):
             self.lu.factor(J)
             self.factored = kind
