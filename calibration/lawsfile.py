@@ -227,7 +227,7 @@ class ImpactJoint(Record):
     bore_density_kg_per_m3: float
     pin_radius_m: float
     bore_radius_m: float
-    pin_mass_kg_per_m: float
+    pin_mass_kg_per_m: float       # rho_pin pi r_pin^2 + the hub's added mass
 
     def key(self) -> str:
         """The law's key in laws.json: materials, radii, mass per length (4 digits)."""
