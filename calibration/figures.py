@@ -142,28 +142,46 @@ def line_load_panel(ax, c, law, force) -> None:
     ax.legend(fontsize=7)
 
 
-def restitution(path, law) -> None:
-    """e(v0): the FE impacts, the fitted law over its speed range (held beyond it, dashed),
-    and what each published hysteresis law rebounds with when given the fitted e as its
-    target (the exact e of its chi, laws.dissipative.hysteresis_for_restitution inverted)."""
-    low, high = law.speed_range_m_per_s
-    v = np.geomspace(low / 3, high * 3, 80)
-    inside = (v >= low) & (v <= high)
-    e = np.array([law.restitution(x) for x in v])
-    fig, ax = plt.subplots(figsize=(7.5, 4.8))
-    for name, chi_of in dissipative.HYSTERESIS.items():
-        with warnings.catch_warnings():   # the point of the figure: laws derived for e near 1
-            warnings.simplefilter("ignore")   # (and their range warnings) used at the FE's e
-            delivered = [brentq(lambda r, c=chi_of(t): dissipative.hysteresis_for_restitution(r) - c,
-                                1e-6, 1.0) for t in e[inside]]
-        ax.semilogx(v[inside], delivered, lw=0.9, label=f"{name} (given the fit's e)")
-    ax.semilogx(v, np.where(inside, e, np.nan), "k-", lw=2, label="fit e(v0) (calibrated)")
-    ax.semilogx(v, np.where(inside, np.nan, e), "k--", lw=1, label="held outside the range")
-    ax.plot([q.speed_m_per_s for q in law.impacts], [q.restitution for q in law.impacts], "ro",
-            ms=6, label="FE impacts")
-    ax.set_xlabel("impact speed v0 (m/s)")
-    ax.set_ylabel("coefficient of restitution e")
-    ax.set_title(f"restitution from FE impacts (fit error {law.max_fit_error:.2g})")
-    ax.grid(alpha=0.3, which="both")
-    ax.legend(fontsize=7, ncol=2)
+def restitution(path, laws) -> None:
+    """e(v0) of every joint's restitution law (laws.json `restitution`, by key): left, the
+    FE impacts and the fits of all joints together (held beyond their speeds, dashed); then
+    one panel per joint with what each published hysteresis law rebounds with when given
+    the fitted e as its target (the exact e of its chi,
+    laws.dissipative.hysteresis_for_restitution inverted)."""
+    fig, axes = plt.subplots(1, 1 + len(laws), figsize=(5.2 * (1 + len(laws)), 4.8), squeeze=False)
+    for k, (key, law) in enumerate(laws.items()):
+        low, high = law.speed_range_m_per_s
+        v = np.geomspace(low / 3, high * 3, 80)
+        inside = (v >= low) & (v <= high)
+        e = np.array([law.restitution(x) for x in v])
+        label = _joint_label(law)
+        for ax, colour in ((axes[0, 0], f"C{k}"), (axes[0, 1 + k], "k")):
+            ax.semilogx(v, np.where(inside, e, np.nan), "-", color=colour, lw=2,
+                        label=f"fit e(v0), {label}")
+            ax.semilogx(v, np.where(inside, np.nan, e), "--", color=colour, lw=1)
+            ax.plot([q.speed_m_per_s for q in law.impacts], [q.restitution for q in law.impacts],
+                    "o", color=colour, ms=6, label=f"FE impacts, {label}")
+        ax = axes[0, 1 + k]
+        for name, chi_of in dissipative.HYSTERESIS.items():
+            with warnings.catch_warnings():   # the point of the figure: laws derived for e near 1
+                warnings.simplefilter("ignore")   # (and their range warnings) used at the FE's e
+                delivered = [brentq(lambda r, c=chi_of(t): dissipative.hysteresis_for_restitution(r) - c,
+                                    1e-6, 1.0) for t in e[inside]]
+            ax.semilogx(v[inside], delivered, lw=0.9, label=f"{name} (given the fit's e)")
+        ax.set_title(f"{label} (fit error {law.max_fit_error:.2g})", fontsize=9)
+    axes[0, 0].set_title("restitution from FE impacts (dashed: held outside the range)", fontsize=9)
+    for ax in axes[0]:
+        ax.set_xlabel("impact speed v0 (m/s)")
+        ax.set_ylabel("coefficient of restitution e")
+        ax.grid(alpha=0.3, which="both")
+        ax.legend(fontsize=6, ncol=1 if ax is axes[0, 0] else 2)
     save_png(fig, path, layout=True)
+
+
+def _joint_label(law) -> str:
+    """A short name of a restitution law's joint: pin / bore moduli and the clearance."""
+    j = law.joint
+    if j is None:
+        return "older laws.json"
+    return (f"pin {j.pin_E_Pa / 1e9:.3g} / bore {j.bore_E_Pa / 1e9:.3g} GPa, "
+            f"c = {(j.bore_radius_m - j.pin_radius_m) * 1e6:.3g} um")

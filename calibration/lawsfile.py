@@ -214,6 +214,38 @@ class ImpactPoint(Record):
     plastic: bool                  # a body was elasto-plastic
 
 
+class ImpactJoint(Record):
+    """The joint a restitution law holds for: what an FE impact's e depends on besides v0
+    (the pin's and the bore's elastic constants and densities, the radii, the pin's mass per
+    length with the hub's added mass). Impacts of one joint are fitted together."""
+
+    pin_E_Pa: float
+    pin_nu: float
+    pin_density_kg_per_m3: float
+    bore_E_Pa: float
+    bore_nu: float
+    bore_density_kg_per_m3: float
+    pin_radius_m: float
+    bore_radius_m: float
+    pin_mass_kg_per_m: float       # rho_pin pi r_pin^2 + the hub's added mass
+
+    def key(self) -> str:
+        """The law's key in laws.json: materials, radii, mass per length (4 digits)."""
+        return (f"pin E={self.pin_E_Pa:.4g} Pa nu={self.pin_nu:.4g} "
+                f"rho={self.pin_density_kg_per_m3:.4g} kg/m3 | bore E={self.bore_E_Pa:.4g} Pa "
+                f"nu={self.bore_nu:.4g} rho={self.bore_density_kg_per_m3:.4g} kg/m3 | "
+                f"r_pin={self.pin_radius_m:.6g} m r_bore={self.bore_radius_m:.6g} m | "
+                f"m={self.pin_mass_kg_per_m:.4g} kg/m")
+
+    def matches(self, r_bore, r_pin, E_pin, nu_pin, E_bore, nu_bore, rel=1e-6) -> bool:
+        """Whether a multibody joint of these radii (m) and elastic constants (Pa) is this
+        joint (the densities and mass per length are not known to the multibody joint)."""
+        pairs = ((r_bore, self.bore_radius_m), (r_pin, self.pin_radius_m),
+                 (E_pin, self.pin_E_Pa), (nu_pin, self.pin_nu), (E_bore, self.bore_E_Pa),
+                 (nu_bore, self.bore_nu))
+        return all(math.isclose(a, b, rel_tol=rel) for a, b in pairs)
+
+
 class RestitutionLaw(Record):
     """The calibrated dissipative law (`damping_law = "calibrated"` of the multibody model):
     the restitution of FE impacts fitted against the impact speed, e(v0)
@@ -223,6 +255,8 @@ class RestitutionLaw(Record):
     law)."""
 
     model: Literal[RESTITUTION_MODEL]
+    joint: ImpactJoint | None = None   # None: a file of an older pinbore (one law, matched on
+    #                                    its impacts' clearance and effective modulus)
     coefficients: list[float] = pydantic.Field(min_length=3, max_length=3)   # a0, a1, a2
     speed_range_m_per_s: Range
     max_fit_error: float           # largest |e_fit - e_FE|
@@ -232,6 +266,16 @@ class RestitutionLaw(Record):
         """e at the impact speed v0 (m/s)."""
         return float(dissipative.restitution_of_speed(speed, *self.coefficients,
                                                       *self.speed_range_m_per_s))
+
+    def matches(self, r_bore, r_pin, E_pin, nu_pin, E_bore, nu_bore, rel=1e-6) -> bool:
+        """Whether this law holds for a joint of these radii (m) and elastic constants (Pa);
+        a law of an older file, without its joint, by its impacts' clearance and E*."""
+        if self.joint is not None:
+            return self.joint.matches(r_bore, r_pin, E_pin, nu_pin, E_bore, nu_bore, rel)
+        e_star = 1 / ((1 - nu_pin**2) / E_pin + (1 - nu_bore**2) / E_bore)
+        return all(math.isclose(q.clearance_m, r_bore - r_pin, rel_tol=1e-4)
+                   and math.isclose(q.effective_modulus_Pa, e_star, rel_tol=1e-4)
+                   for q in self.impacts)
 
 
 class Units(Record):
@@ -249,9 +293,26 @@ class LawsFile(Record):
     curves: list[CurveEntry]
     laws: dict[str, Law]
     sliced: dict[str, SlicedLaw]   # 3D: by kind of ends and materials (empty: no 3D curves)
-    restitution: RestitutionLaw | None = None   # from FE impacts; None: none given
+    # from FE impacts, one law per joint (ImpactJoint.key); empty: no impacts given
+    restitution: dict[str, RestitutionLaw] = {}
     warnings: list[str]
     fit_seconds: float
+
+    @pydantic.field_validator("restitution", mode="before")
+    @classmethod
+    def _one_law_of_older_files(cls, value):
+        """An older file's single law (or null) is read as a file of that one law."""
+        if value is None:
+            return {}
+        if isinstance(value, dict) and "model" in value:
+            return {"unkeyed (older laws.json)": value}
+        return value
+
+    def restitution_for(self, r_bore, r_pin, E_pin, nu_pin, E_bore, nu_bore) -> dict[str, RestitutionLaw]:
+        """The restitution laws (by key) that hold for a joint of these radii (m) and
+        elastic constants (Pa)."""
+        return {key: law for key, law in self.restitution.items()
+                if law.matches(r_bore, r_pin, E_pin, nu_pin, E_bore, nu_bore)}
 
     def fitted(self) -> dict[str, Fit]:
         """The calibrated laws by name (those the curves could fit)."""

@@ -80,7 +80,7 @@ def section(build_dir: Path, bench_dir: Path) -> str:
           f"{r['best_fitted']} ({_pct(float(r['best_fitted_rms']))})"] for r in ranking]))
     if data.sliced:
         parts.append(sliced_section(data, folder))
-    if data.restitution is not None:
+    if data.restitution:
         parts.append(restitution_section(data.restitution, folder))
     bench = bench_dir / "calibration.csv"
     if bench.exists():
@@ -127,23 +127,27 @@ def sliced_section(data: lawsfile.LawsFile, folder: Path) -> str:
     return "".join(parts)
 
 
-def restitution_section(law: lawsfile.RestitutionLaw, folder: Path) -> str:
-    """The restitution e(v0) of the FE impacts and its fit (damping_law = "calibrated")."""
-    low, high = law.speed_range_m_per_s
-    rows = [[f"{q.speed_m_per_s:.3g}", f"{q.restitution:.4f}", f"{q.fitted:.4f}",
-             f"{q.contact_duration_s * 1e6:.1f}", f"{q.peak_force_N_per_m / 1e3:.4g}",
-             "plastic" if q.plastic else "elastic"] for q in law.impacts]
+def restitution_section(laws: dict[str, lawsfile.RestitutionLaw], folder: Path) -> str:
+    """The restitution e(v0) of the FE impacts and its fit per joint (damping_law =
+    "calibrated")."""
     parts = ["<h3>Restitution from FE impacts (damping_law = \"calibrated\")</h3>",
-             f"<p>e(v0) = {law.coefficients[0]:.4f} {law.coefficients[1]:+.4f} x "
-             f"{law.coefficients[2]:+.5f} x<sup>2</sup>, x = ln(v0 / 1 m/s), valid for "
-             f"{low:.3g}-{high:.3g} m/s (largest fit error {law.max_fit_error:.3g}); the "
-             "multibody contact takes the Hunt-Crossley factor that rebounds with e(v0) at "
-             "each onset.</p>",
-             table(["v0 (m/s)", "e (FE)", "e (fit)", "contact (us)", "peak force (kN/m)",
-                    "material"], rows)]
+             "<p>One law per joint (materials, radii, mass per length); the multibody contact "
+             "takes the Hunt-Crossley factor that rebounds with e(v0) at each onset, from the "
+             "law of its own radii and materials.</p>"]
+    for key, law in laws.items():
+        low, high = law.speed_range_m_per_s
+        rows = [[f"{q.speed_m_per_s:.3g}", f"{q.restitution:.4f}", f"{q.fitted:.4f}",
+                 f"{q.contact_duration_s * 1e6:.1f}", f"{q.peak_force_N_per_m / 1e3:.4g}",
+                 "plastic" if q.plastic else "elastic"] for q in law.impacts]
+        parts += [f"<p><code>{key}</code>: e(v0) = {law.coefficients[0]:.4f} "
+                  f"{law.coefficients[1]:+.4f} x {law.coefficients[2]:+.5f} x<sup>2</sup>, "
+                  f"x = ln(v0 / 1 m/s), valid for {low:.3g}-{high:.3g} m/s (largest fit error "
+                  f"{law.max_fit_error:.3g}).</p>",
+                  table(["v0 (m/s)", "e (FE)", "e (fit)", "contact (us)", "peak force (kN/m)",
+                         "material"], rows)]
     if (folder / "restitution.png").exists():
         parts.append(figure(png_data(folder / "restitution.png"),
-                            "e(v0) of the FE impacts (points), the fit (black) and what each "
-                            "published hysteresis law rebounds with when given the fit's e "
-                            "(build/calibration/restitution.png)."))
+                            "e(v0) of the FE impacts (points) and the fits of every joint "
+                            "(left); per joint, what each published hysteresis law rebounds "
+                            "with when given the fit's e (build/calibration/restitution.png)."))
     return "".join(parts)

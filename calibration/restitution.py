@@ -12,7 +12,16 @@ degree min(2, impacts - 2) (at least one point more than coefficients, so the fi
 says something; one or two impacts give a constant). The valid range is the impacts'
 speeds; outside it e is held at the nearer end (laws.dissipative.restitution_of_speed) and
 the multibody summary warns.
+
+One law per joint: e depends on the materials (elastic constants and densities of pin and
+bore), the radii and the pin's mass per length as much as on v0 (a steel pin rebounds
+from an aluminium-alloy bore with a different e than from a steel one), so the impacts are
+grouped by their joint (lawsfile.ImpactJoint, its key) and each group is fitted alone;
+laws.json holds the laws by key and the multibody joint takes the one of its materials and
+radii.
 """
+
+import math
 
 import numpy as np
 
@@ -21,10 +30,14 @@ from pinbore.core.errors import InputError
 from pinbore.fem import impact_file
 
 
-def read_impacts(paths) -> list[lawsfile.ImpactPoint]:
-    """The impacts of impact.json files (or their folders), sorted by speed; an impact that
-    did not rebound (incomplete, no restitution) is one InputError line."""
-    points = []
+MIN_IMPACTS = 2   # per joint: one more than the coefficients of the lowest degree (a constant)
+
+
+def read_impacts(paths) -> dict[str, tuple[lawsfile.ImpactJoint, list[lawsfile.ImpactPoint]]]:
+    """The impacts of impact.json files (or their folders) grouped by joint (key: joint and
+    its impacts sorted by speed); an impact that did not rebound (incomplete, no
+    restitution), or a joint with fewer than MIN_IMPACTS impacts, is one InputError line."""
+    groups = {}
     for p in paths:
         summary = impact_file.read_summary(p)
         if summary.status != "complete" or summary.restitution is None:
@@ -36,28 +49,47 @@ def read_impacts(paths) -> list[lawsfile.ImpactPoint]:
         e_star = 1 / ((1 - m["pin"]["nu"] ** 2) / m["pin"]["E"]
                       + (1 - m["bore"]["nu"] ** 2) / m["bore"]["E"])
         plastic = any(m[b].get("yield_stress") is not None for b in ("pin", "bore"))
-        points.append(lawsfile.ImpactPoint(
+        joint = lawsfile.ImpactJoint(
+            pin_E_Pa=m["pin"]["E"], pin_nu=m["pin"]["nu"], pin_density_kg_per_m3=m["pin"]["density"],
+            bore_E_Pa=m["bore"]["E"], bore_nu=m["bore"]["nu"],
+            bore_density_kg_per_m3=m["bore"]["density"], pin_radius_m=g["pin_radius"],
+            bore_radius_m=g["bore_radius"],   # the nominal mass (the FE mesh's is within 0.4 %)
+            pin_mass_kg_per_m=m["pin"]["density"] * math.pi * g["pin_radius"] ** 2
+            + scene["impact"]["hub_mass"])
+        groups.setdefault(joint.key(), (joint, []))[1].append(lawsfile.ImpactPoint(
             name=str(p), speed_m_per_s=summary.speed_m_per_s, restitution=summary.restitution,
             fitted=float("nan"), contact_duration_s=summary.contact_duration_s,
             peak_force_N_per_m=summary.peak_force_N_per_m,
             max_approach_m=summary.max_approach_m, pin_mass_kg_per_m=summary.pin_mass_kg_per_m,
             clearance_m=g["bore_radius"] - g["pin_radius"], effective_modulus_Pa=e_star,
             plastic=plastic))
-    return sorted(points, key=lambda q: q.speed_m_per_s)
+    for key, (_, points) in groups.items():
+        if len(points) < MIN_IMPACTS:
+            raise InputError(f"--impacts: {len(points)} impact of the joint {key} ({points[0].name}); "
+                             f"a restitution law needs at least {MIN_IMPACTS} impacts per joint "
+                             "(materials, radii, mass per length), at different speeds")
+        points.sort(key=lambda q: q.speed_m_per_s)
+    return groups
 
 
-def fit(points: list[lawsfile.ImpactPoint]) -> lawsfile.RestitutionLaw:
-    """The restitution law of the impacts (module docstring)."""
+def fit_all(paths) -> dict[str, lawsfile.RestitutionLaw]:
+    """The restitution law of every joint among the impacts (impact.json files), by key."""
+    return {key: fit(points, joint) for key, (joint, points) in read_impacts(paths).items()}
+
+
+def fit(points: list[lawsfile.ImpactPoint], joint: lawsfile.ImpactJoint) -> lawsfile.RestitutionLaw:
+    """The restitution law of the impacts of one joint (module docstring)."""
     speeds = np.array([q.speed_m_per_s for q in points])
     if np.unique(speeds).size != speeds.size:
-        raise InputError("--impacts: two impacts at the same speed; give one impact per speed")
+        raise InputError(f"--impacts: two impacts at the same speed for the joint {joint.key()}; "
+                         "give one impact per speed")
     e = np.array([q.restitution for q in points])
     x = np.log(speeds)
     degree = max(0, min(2, len(points) - 2))
     coefficients = np.zeros(3)
     coefficients[:degree + 1] = np.polynomial.polynomial.polyfit(x, e, degree)
     law = lawsfile.RestitutionLaw(
-        model=lawsfile.RESTITUTION_MODEL, coefficients=[float(a) for a in coefficients],
+        model=lawsfile.RESTITUTION_MODEL, joint=joint, coefficients=[float(a) for a in coefficients],
         speed_range_m_per_s=[float(speeds.min()), float(speeds.max())],
         max_fit_error=0.0, impacts=points)
     fitted = [law.restitution(v) for v in speeds]

@@ -155,7 +155,7 @@ def per_length(name: str | None, table, curves, curves_3d) -> sliced.PerLength:
 
 def run(paths, out, length=None, per_length_name=None, impacts=()) -> int:
     read = [read_any(p, length) for p in paths]
-    restitution_law = restitution.fit(restitution.read_impacts(impacts)) if impacts else None
+    restitution_laws = restitution.fit_all(impacts) if impacts else {}
     curves = [c for c in read if isinstance(c, Curve)]
     curves_3d = [c for c in read if not isinstance(c, Curve)]
     if not curves:
@@ -173,7 +173,7 @@ def run(paths, out, length=None, per_length_name=None, impacts=()) -> int:
     seconds = time.perf_counter() - start
     with atomic_directory(out) as tmp:
         lawsfile.write(tmp / "laws.json", laws_json(curves, table, length, caught, seconds)
-                       .model_copy(update={"sliced": sliced_laws, "restitution": restitution_law}))
+                       .model_copy(update={"sliced": sliced_laws, "restitution": restitution_laws}))
         header = list(rows[0])
         lines = [",".join(header)] + [",".join(_cell(r[h]) for h in header) for r in rows]
         (tmp / "ranking.csv").write_text("\n".join(lines) + "\n")
@@ -181,8 +181,8 @@ def run(paths, out, length=None, per_length_name=None, impacts=()) -> int:
         figures.error_maps(tmp / "errors.png", curves, table, LAWS)
         if curves_3d:
             figures.sliced_curves(tmp / "sliced.png", curves_3d, sliced_laws, chosen.force)
-        if restitution_law is not None:
-            figures.restitution(tmp / "restitution.png", restitution_law)
+        if restitution_laws:
+            figures.restitution(tmp / "restitution.png", restitution_laws)
     return 0
 
 

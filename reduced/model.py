@@ -211,16 +211,33 @@ def damping_block(c, laws_data, source) -> dict:
     if c.damping_law != "calibrated":
         chi = 0.0 if c.damping_law == "none" else dissipative.HYSTERESIS[c.damping_law](c.restitution)
         return {JOINT_CHI: chi}
-    law = laws_data.restitution if laws_data is not None else None
-    if law is None:
-        raise InputError(f"{source}: clearance_joints.damping_law: 'calibrated' needs a laws_file "
-                         "with a restitution law (pinbore calibrate --impacts IMPACT.json ...)")
+    law = calibrated_restitution(c, laws_data, source)
     low, high = (math.log(v) for v in law.speed_range_m_per_s)
     speeds = np.exp(np.linspace(low, high, CHI_POINTS))
     chis = [dissipative.hysteresis_for_restitution(law.restitution(v)) for v in speeds]
     block = {JOINT_CHI: chis[0], JOINT_CHI_LOG_SPEED: low,
              JOINT_CHI_STEP: (high - low) / (CHI_POINTS - 1) if high > low else 1.0}
     return block | {JOINT_CHI_TABLE + i: chi for i, chi in enumerate(chis)}
+
+
+def calibrated_restitution(c, laws_data, source) -> lawsfile.RestitutionLaw:
+    """The laws file's restitution law for the clearance joint c (damping_law =
+    "calibrated"): the one fitted on impacts of its radii and of its journal's and bearing's
+    E and nu; none, or several (joints differing only in densities or mass per length, which
+    the multibody joint does not know), is one InputError line."""
+    j = c.elastic_joint()
+    where = f"{source}: clearance_joints.{c.name}.damping_law: 'calibrated'"
+    if laws_data is None or not laws_data.restitution:
+        raise InputError(f"{where} needs a laws_file with a restitution law "
+                         "(pinbore calibrate --impacts IMPACT.json ...)")
+    found = laws_data.restitution_for(j.r_bore, j.r_pin, j.E_pin, j.nu_pin, j.E_bore, j.nu_bore)
+    if len(found) != 1:
+        what = "no restitution law" if not found else f"{len(found)} restitution laws"
+        raise InputError(f"{where}: {what} of the laws file fits the joint (bearing_radius "
+                         f"{j.r_bore:.6g} m, journal_radius {j.r_pin:.6g} m, journal E {j.E_pin:.4g} "
+                         f"Pa nu {j.nu_pin:.4g}, bearing E {j.E_bore:.4g} Pa nu {j.nu_bore:.4g}); "
+                         f"the file has: {'; '.join(laws_data.restitution)}")
+    return next(iter(found.values()))
 
 
 IMPACT = {"continuous": CONTINUOUS, "newton": NEWTON, "poisson": POISSON}
@@ -279,7 +296,7 @@ def normal_force(c, deltas, laws_data, source) -> np.ndarray:
     """Elastic normal force (N) of a clearance joint at the penetrations `deltas`; a
     calibrated law is that of the laws file (`laws_data`, calibration/lawsfile.py) times
     the joint's length."""
-    joint = elastic.Joint(c.bearing_radius, c.journal_radius, c.E, c.nu, c.E, c.nu, c.length)
+    joint = c.elastic_joint()
     if c.normal_law == "hertz_point":
         return elastic.hertz_point(deltas, joint)
     if c.normal_law.startswith("calibrated:"):

@@ -10,6 +10,7 @@ from pinbore.core.figures import plt, save_png
 from pinbore.laws import tables
 from pinbore.laws.dissipative import hysteresis_force
 from pinbore.reduced import kernel
+from pinbore.reduced.model import calibrated_restitution
 from pinbore.reduced.layout import (
     CONTINUOUS, DISSIPATED, JOINT_BEARING_BODY, JOINT_BEARING_X, JOINT_BEARING_Y,
     JOINT_IMPACT, JOINT_JOURNAL_BODY, JOINT_JOURNAL_X, JOINT_JOURNAL_Y, LATCH, LOG_IMPULSE, LOG_JOINT,
@@ -176,7 +177,7 @@ def validity_warnings(model, joints, impact_speeds) -> list[str]:
     out = []
     for c in model.scene.clearance_joints:
         if getattr(c, "damping_law", None) == "calibrated" and model.calibration is not None:
-            low, high = model.calibration.restitution.speed_range_m_per_s
+            low, high = calibrated_restitution(c, model.calibration, "").speed_range_m_per_s
             speeds = impact_speeds.get(c.name, [])
             outside = [v for v in speeds if not low * (1 - 1e-9) <= v <= high * (1 + 1e-9)]
             if outside:

@@ -12,6 +12,7 @@ import pydantic
 
 from pinbore.core.scene import Strict
 from pinbore.laws.dissipative import HYSTERESIS
+from pinbore.laws import elastic
 from pinbore.laws.elastic import PUBLISHED
 
 GROUND = "ground"
@@ -159,8 +160,11 @@ class ClearanceJoint(Strict):
     journal_radius: float = pydantic.Field(gt=0)
     length: float | None = pydantic.Field(default=None, gt=0,
                                           description="axial length (m): per-length laws x L")
-    E: float = pydantic.Field(gt=0)
+    E: float = pydantic.Field(gt=0, description="Pa, the journal's (and the bearing's unless "
+                                               "bearing_E is given)")
     nu: float = pydantic.Field(gt=-1, lt=0.5)
+    bearing_E: float | None = pydantic.Field(default=None, gt=0, description="Pa; default E")
+    bearing_nu: float | None = pydantic.Field(default=None, gt=-1, lt=0.5, description="default nu")
     normal_law: str | None = None
     damping_law: str = "none"
     restitution: float = pydantic.Field(default=1.0, ge=0, le=1)
@@ -173,6 +177,13 @@ class ClearanceJoint(Strict):
     # rest_speed (approach rate x restitution) the contact is held until it would pull
     impact: Literal["continuous", "newton", "poisson"] = "continuous"
     rest_speed: float = pydantic.Field(default=1e-3, gt=0, description="m/s")
+
+    def elastic_joint(self) -> elastic.Joint:
+        """The joint of the elastic laws: radii, the bearing's and the journal's E and nu."""
+        return elastic.Joint(self.bearing_radius, self.journal_radius,
+                             self.E if self.bearing_E is None else self.bearing_E,
+                             self.nu if self.bearing_nu is None else self.bearing_nu,
+                             self.E, self.nu, self.length)
 
     @pydantic.model_validator(mode="after")
     def _consistent(self):

@@ -22,6 +22,9 @@ from pinbore.reduced.scene import ReducedScene
 # over the contact (e within 1e-3 of its 200-step value at 1 m/s, test_impact), four speeds
 # across the range of the Flores slider-crank's impacts: about 2 s each.
 SPEEDS = (0.1, 0.3, 1.0, 3.0)
+# The same steel pin in an aluminium-alloy bore, three of the speeds: another joint, fitted alone
+ALUMINIUM = {"E": 70e9, "nu": 0.33, "density": 2700.0}
+ALUMINIUM_SPEEDS = (0.1, 1.0, 3.0)
 
 
 @pytest.mark.parametrize("e", [0.05, 0.3, 0.6, 0.9, 0.999])
@@ -44,39 +47,78 @@ def test_hysteresis_for_restitution_near_one_is_lankarani_nikravesh():
         dissipative.lankarani_nikravesh(e), rel=2e-3)
 
 
-@pytest.fixture(scope="module")
-def fe_impacts(tmp_path_factory):
-    """impact.json of the FE impacts at SPEEDS, written through fem.impact_file."""
-    folder = tmp_path_factory.mktemp("impacts")
+def _write_impacts(folder, speeds, bore=None) -> list:
+    """impact.json of FE impacts at `speeds` (steel bore, or the `bore` material), written
+    through fem.impact_file."""
     paths = []
-    for v in SPEEDS:
-        run = Impact(impact_scene(impact={"speed": v, "steps_per_contact": 50}))
-        path = folder / f"v{v:g}.json"
-        impact_file.write_summary(path, run.summary)
+    for v in speeds:
+        data = impact_scene(impact={"speed": v, "steps_per_contact": 50})
+        data["materials"]["bore"].update(bore or {})
+        path = folder / f"{'al' if bore else 'steel'}_v{v:g}.json"
+        impact_file.write_summary(path, Impact(data).summary)
         paths.append(path)
     return paths
 
 
 @pytest.fixture(scope="module")
-def law(fe_impacts):
-    return restitution.fit(restitution.read_impacts(fe_impacts))
+def fe_impacts(tmp_path_factory):
+    """The steel/steel FE impacts at SPEEDS."""
+    return _write_impacts(tmp_path_factory.mktemp("impacts"), SPEEDS)
 
 
-def test_fit_of_the_fe_restitution(law):
-    """The quadratic in ln v0 follows the four FE values within 0.01 (one degree of freedom
-    left), over the impacts' speeds; e decreases with v0 (shorter contacts excite more of
-    the bodies' vibrations)."""
-    e = [q.restitution for q in law.impacts]
+@pytest.fixture(scope="module")
+def al_impacts(tmp_path_factory):
+    """The steel-in-aluminium FE impacts at ALUMINIUM_SPEEDS."""
+    return _write_impacts(tmp_path_factory.mktemp("al_impacts"), ALUMINIUM_SPEEDS, ALUMINIUM)
+
+
+@pytest.fixture(scope="module")
+def laws(fe_impacts, al_impacts):
+    """Both joints' impacts given mixed, in one list: one law per joint."""
+    mixed = [p for pair in zip(fe_impacts, al_impacts) for p in pair] + fe_impacts[len(al_impacts):]
+    return restitution.fit_all(mixed)
+
+
+def _of(laws, bore_E):
+    return next(law for law in laws.values() if law.joint.bore_E_Pa == bore_E)
+
+
+@pytest.fixture(scope="module")
+def law(laws):
+    """The steel/steel law."""
+    return _of(laws, 210e9)
+
+
+def test_fit_of_the_fe_restitution(laws, law, fe_impacts, al_impacts):
+    """Mixed impacts are grouped by joint and each group fitted alone: the steel law is the
+    fit of the steel impacts only. The quadratic in ln v0 follows the four FE values within
+    0.01 (one degree of freedom left), over the impacts' speeds; e decreases with v0 in both
+    joints (shorter contacts excite more of the bodies' vibrations)."""
+    assert len(laws) == 2
+    alone = restitution.fit_all(fe_impacts)
+    assert list(alone) == [law.joint.key()]
+    assert alone[law.joint.key()].coefficients == pytest.approx(law.coefficients, rel=1e-12)
     assert law.speed_range_m_per_s == [min(SPEEDS), max(SPEEDS)]
     assert law.max_fit_error < 0.01
-    assert all(a > b for a, b in zip(e, e[1:]))
-    assert 0.4 < e[-1] < e[0] < 0.95
+    aluminium = _of(laws, 70e9)
+    assert [q.name for q in aluminium.impacts] == [str(p) for p in al_impacts]
+    for group in laws.values():
+        e = [q.restitution for q in group.impacts]
+        assert all(a > b for a, b in zip(e, e[1:]))
+        assert 0.4 < e[-1] < e[0] < 0.95
 
 
-def journal_impact(laws_path, speed, duration):
+def test_a_joint_with_one_impact_is_one_line(fe_impacts, al_impacts):
+    """A joint given a single impact cannot be fitted: one InputError naming the joint."""
+    from pinbore.core.errors import InputError
+    with pytest.raises(InputError, match="1 impact of the joint pin E=2.1e\\+11.*at least 2"):
+        restitution.fit_all(al_impacts + fe_impacts[:1])
+
+
+def journal_impact(laws_path, speed, duration, bearing=None):
     """The multibody model's single impact: the FE pin (its mass per length times the joint
-    length) thrown at `speed` against a fixed bearing of the FE joint's radii and material,
-    Liu's law per length, damping_law = "calibrated"."""
+    length) thrown at `speed` against a fixed bearing of the FE joint's radii and materials
+    (steel, or `bearing`: E, nu), Liu's law per length, damping_law = "calibrated"."""
     length, mass_per_length = 0.02, 7850 * math.pi * 9.99e-3**2
     data = {"kind": "reduced", "duration": duration, "laws_file": str(laws_path),
             "bodies": [{"name": "journal", "mass": mass_per_length * length, "inertia": 1e-5,
@@ -86,7 +128,7 @@ def journal_impact(laws_path, speed, duration):
                                   "bearing_radius": 10e-3, "journal_radius": 9.99e-3,
                                   "length": length, "E": 210e9, "nu": 0.3,
                                   "normal_law": "liu", "damping_law": "calibrated",
-                                  "start": "free"}],
+                                  "start": "free"} | (bearing or {})],
             "integrator": {"rtol": 1e-9, "atol": 1e-13, "max_step": 1e-6},
             "output": {"sample_time": duration / 50}}
     model = build(ReducedScene.model_validate(data), "test", ROOT)
@@ -96,25 +138,32 @@ def journal_impact(laws_path, speed, duration):
     return model, run, cols
 
 
-def laws_file(tmp_path, law) -> str:
+def laws_file(tmp_path, laws) -> str:
+    """laws.json of the restitution laws `laws` (by key) only."""
     path = tmp_path / "laws.json"
     lawsfile.write(path, lawsfile.LawsFile(
         units=lawsfile.UNITS, length_m=None, length_note="", curves=[], laws={}, sliced={},
-        warnings=[], fit_seconds=0.0, restitution=law))
+        warnings=[], fit_seconds=0.0, restitution=laws))
     return path
 
 
-@pytest.mark.parametrize("index", [0, 2, 3])
-def test_multibody_impact_reproduces_the_fe_restitution(tmp_path, law, index):
-    """One journal impact with the calibrated law rebounds with the FE's e at its speed
-    within 5 % (the fit's error, 0.01 at most, and the table of chi(v0): 1e-4)."""
+BEARINGS = {"steel": None, "aluminium": {"bearing_E": ALUMINIUM["E"], "bearing_nu": ALUMINIUM["nu"]}}
+
+
+@pytest.mark.parametrize("bearing,index", [("steel", 0), ("steel", 2), ("steel", 3),
+                                           ("aluminium", 0), ("aluminium", 2)])
+def test_multibody_impact_reproduces_the_fe_restitution(tmp_path, laws, bearing, index):
+    """One journal impact with the calibrated law, the laws file holding both joints' laws,
+    rebounds with its own joint's FE e at its speed within 5 % (the fit's error, 0.01 at
+    most, and the table of chi(v0): 1e-4)."""
+    law = _of(laws, 210e9 if bearing == "steel" else ALUMINIUM["E"])
     point = law.impacts[index]
     v = point.speed_m_per_s
     # the flight across the clearance c, the contact (the FE's duration, give or take a
     # tenth), and half the way back (the other side is 2 c away)
     c = 10e-6
     duration = c / v + 1.1 * point.contact_duration_s + c / (point.restitution * v)
-    _, run, cols = journal_impact(laws_file(tmp_path, law), v, duration)
+    _, run, cols = journal_impact(laws_file(tmp_path, laws), v, duration, BEARINGS[bearing])
     assert run.counters[3] == 1
     rebound = cols["journal_vy_m_per_s"][-1] / v
     assert rebound == pytest.approx(point.restitution, rel=0.05)
@@ -124,7 +173,7 @@ def test_multibody_impact_reproduces_the_fe_restitution(tmp_path, law, index):
 def test_an_impact_beyond_the_range_warns_once(tmp_path, law):
     """At 10 m/s (above the FE's 3 m/s) e is held at its 3 m/s value and the summary says
     so in one line."""
-    model, run, _ = journal_impact(laws_file(tmp_path, law), 10.0, 1e-6 + 1.5e-5)
+    model, run, _ = journal_impact(laws_file(tmp_path, {law.joint.key(): law}), 10.0, 1e-6 + 1.5e-5)
     from pinbore.reduced.outputs import sample
     text = summary(model, sample(model, run), run, "ok", "test").warnings
     assert len([w for w in text if "restitution" in w]) == 1
@@ -146,12 +195,37 @@ def test_calibrate_writes_the_restitution(tmp_path, fe_impacts):
                    *map(str, fe_impacts), "--out", str(out))
     assert done.returncode == 0, done.stderr
     written = lawsfile.read(out / "laws.json")
-    assert written.restitution.coefficients == pytest.approx(
-        restitution.fit(restitution.read_impacts(fe_impacts)).coefficients, rel=1e-12)
+    (key, law), = restitution.fit_all(fe_impacts).items()
+    assert written.restitution[key].coefficients == pytest.approx(law.coefficients, rel=1e-12)
     assert (out / "restitution.png").stat().st_size > 0
     plain = pinbore("calibrate", str(tmp_path / "fem" / "curve.csv"), "--out", str(tmp_path / "c2"))
     assert plain.returncode == 0
     data = json.loads((tmp_path / "c2" / "laws.json").read_text())
-    assert data["restitution"] is None
+    assert data["restitution"] == {}
     with pytest.raises(Exception, match="restitution law"):
         journal_impact(tmp_path / "c2" / "laws.json", 1.0, 1e-4)
+
+
+def test_a_joint_without_its_law_is_one_line(tmp_path, law):
+    """A bearing of another material than the laws file's impacts: refused in one line
+    that names the joint and the laws the file has."""
+    from pinbore.core.errors import InputError
+    with pytest.raises(InputError, match="no restitution law of the laws file fits the joint") as err:
+        journal_impact(laws_file(tmp_path, {law.joint.key(): law}), 1.0, 1e-4,
+                       BEARINGS["aluminium"])
+    assert "\n" not in str(err.value) and law.joint.key() in str(err.value)
+
+
+def test_an_older_laws_file_with_one_law_is_read(tmp_path, law):
+    """A laws.json of an older pinbore (one law, no joint) is read as that one law and
+    taken by the joint of its impacts' clearance and E*."""
+    older = law.model_dump()
+    older.pop("joint")
+    path = laws_file(tmp_path, {})
+    data = json.loads(path.read_text()) | {"restitution": older}
+    path.write_text(json.dumps(data))
+    read = lawsfile.read(path)
+    assert len(read.restitution) == 1 and next(iter(read.restitution.values())).joint is None
+    _, run, cols = journal_impact(path, 1.0, 1e-5 + 1.1 * law.impacts[2].contact_duration_s + 2e-5)
+    assert run.counters[3] == 1
+    assert cols["journal_vy_m_per_s"][-1] == pytest.approx(law.restitution(1.0), rel=1e-3)
