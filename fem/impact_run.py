@@ -24,7 +24,7 @@ def build(scene: ImpactScene, comm=MPI.COMM_WORLD):
     """The stepper of an impact scene on the mesh of its equivalent quasi-static scene:
     (stepper, elasticity, contact, sizing)."""
     fem_scene = scene.equivalent_fem_scene
-    static, el, contact, sizing, data = model.build(fem_scene, comm)
+    el, contact, material, sizing, data = model.bodies(fem_scene, comm)
     impact = scene.impact
     estimate = scene.estimate
     flight = scene.initial_gap / impact.speed
@@ -35,12 +35,12 @@ def build(scene: ImpactScene, comm=MPI.COMM_WORLD):
         direction=np.asarray(impact.direction), speed=impact.speed, dt=scene.dt,
         rho_inf=impact.spectral_radius, initial_gap=scene.initial_gap,
         t_end=flight + impact.max_contact_durations * estimate.duration,
-        method=scene.contact.method, gap_tolerance=static.gap_tolerance,
+        method=scene.contact.method, gap_tolerance=model.gap_tolerance(fem_scene),
         newton_max_it=scene.solver.newton_max_it, uzawa_max_it=scene.solver.uzawa_max_it,
         max_cutbacks=scene.solver.max_cutbacks,
         force_atol=model.residual_tolerance(fem_scene, contact.penalty * sizing.contact_size),
         couplings=contact.couplings(np.asarray(impact.direction), sizing.arc_half_angle),
-        massless_surfaces=impact.surface_mass == "redistributed", material=static.material)
+        massless_surfaces=impact.surface_mass == "redistributed", material=material)
     return stepper, el, contact, sizing
 
 

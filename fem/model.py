@@ -61,8 +61,9 @@ def first_touch(pin_X: np.ndarray, direction, geometry) -> float:
     return float(np.min(-along + np.sqrt(along**2 - np.sum(pin_X[:, :2]**2, axis=1) + radius**2)))
 
 
-def build(scene: FemScene, comm=MPI.COMM_WORLD):
-    """Everything needed to solve the scene: (stepper, elasticity, contact, sizing, mesh data)."""
+def bodies(scene: FemScene, comm=MPI.COMM_WORLD):
+    """The mesh, the bodies and their contact, without a solver: (elasticity, contact,
+    material (None: the elasticity's constant stiffness alone), sizing, mesh data)."""
     data, sizing = mesh_of(scene, comm)
     el = Elasticity(data.mesh, data.cell_tags, data.facet_tags, scene.materials.pin,
                     scene.materials.bore,
@@ -77,12 +78,24 @@ def build(scene: FemScene, comm=MPI.COMM_WORLD):
     contact = PinBoreContact(el.V, *surface, g.bore_radius, penalty_of(scene, sizing.contact_size),
                              el.K.createVecRight(), friction=scene.contact.friction, **three_d)
     material = (ElastoPlastic(el, data.cell_tags, scene.materials.pin, scene.materials.bore)
-                if scene.materials.plastic else None)   # elastic: the constant stiffness alone
+                if scene.materials.plastic else None)
+    return el, contact, material, sizing, data
+
+
+def gap_tolerance(scene: FemScene) -> float:
+    """The augmented Lagrangian's penetration tolerance (m)."""
+    return scene.contact.gap_tolerance or DEFAULT_GAP_TOLERANCE * scene.load.max_approach
+
+
+def build(scene: FemScene, comm=MPI.COMM_WORLD):
+    """Everything needed to solve the scene: (stepper, elasticity, contact, sizing, mesh data)."""
+    el, contact, material, sizing, data = bodies(scene, comm)
+    g = scene.geometry
     direction = np.append(scene.load.direction, [0.0] * (g.dim - 2))
-    tolerance = scene.contact.gap_tolerance or DEFAULT_GAP_TOLERANCE * scene.load.max_approach
     stepper = LoadStepper(el, contact, clearance=first_touch(contact.pin_X, direction, g),
                           direction=direction, method=scene.contact.method,
-                          gap_tolerance=tolerance, newton_max_it=scene.solver.newton_max_it,
+                          gap_tolerance=gap_tolerance(scene),
+                          newton_max_it=scene.solver.newton_max_it,
                           uzawa_max_it=scene.solver.uzawa_max_it,
                           max_cutbacks=scene.solver.max_cutbacks,
                           force_atol=residual_tolerance(scene, contact.penalty * sizing.contact_size),
