@@ -47,8 +47,9 @@ Clearance joints (continuous contact only):
   small-angle tilt read as sin(theta). Each slice carries a (f_el(delta_i) (1 + chi
   delta_i'/v0)) w_i, a the law's stiffness factor, f_el the per-length law (N/m, a table of
   pinbore.laws.tables), chi the hysteresis factor ([LankaraniNikravesh1990] and the Hunt-
-  Crossley family of pinbore.laws.dissipative, hysteresis_force), v0 the approach rate when
-  the joint's radial contact began. The force -f n_i acts on the journal at X_i and +f n_i on
+  Crossley family of pinbore.laws.dissipative, hysteresis_force; damping_law = "calibrated":
+  the chi that rebounds with the laws file's e(v0) at the channel's impact speed, the
+  planar kernel's joint_chi), v0 the approach rate when the joint's radial contact began. The force -f n_i acts on the journal at X_i and +f n_i on
   the bore at B_i = X_i - e_i^perp, its point on the bore's axis: delta_i' = n_i . (v_J(X_i)
   - v_B(B_i)) exactly, so the forces do the work of the law, and X_i - B_i is along n_i, so
   the pair has no moment. Friction of the static laws of pinbore.laws.friction (the
@@ -68,7 +69,9 @@ Clearance joints (continuous contact only):
   Shoulders (the project's own law; no source is cited for it): with an axial clearance c_a
   the journal point's axial offset s = (P_j - P_b) . u_b is free within |s| <= c_a; beyond,
   a linear penalty k_a (|s| - c_a) with the joint's hysteresis factor pushes it back along
-  u_b, acting at P_j on both bodies (again exactly the work of the law, no moment).
+  u_b, acting at P_j on both bodies (again exactly the work of the law, no moment); a
+  calibrated joint's shoulders take chi of its e(v0) at the axial impact speed (the FE
+  impacts were radial: for the shoulders' faces that e is unverified).
 - spherical: a ball (centre P_j) in a socket (centre P_s), delta = |P_j - P_s| - c, the Hertz
   point law of pinbore.laws.elastic (hertz_point) with the damping and friction above
   ([FloresLankarani2010]; [Tian2009]), acting at the contact point P_s + R_b n.
@@ -96,9 +99,9 @@ from pinbore.core.compiled import follow_compiled_in
 from pinbore.laws import dissipative, friction, sliced, tables
 from pinbore.reduced import integrator, kernel, layout, spatial_layout
 from pinbore.reduced.integrator import log_impact
-from pinbore.reduced.kernel import LATCH_TOL, cholesky_solve, joint_friction, torsion_law
+from pinbore.reduced.kernel import LATCH_TOL, cholesky_solve, joint_chi, joint_friction, torsion_law
 from pinbore.reduced.layout import (
-    DISSIPATED, JOINT_BEARING_RADIUS, JOINT_CHI, JOINT_CLEARANCE, LATCH, TORSION_BODY_I,
+    DISSIPATED, JOINT_BEARING_RADIUS, JOINT_CLEARANCE, LATCH, TORSION_BODY_I,
     TORSION_BODY_J, TORSION_FREE_ANGLE, TORSION_KIND, WORK_IN, Contacts)
 from pinbore.reduced.spatial_layout import (
     ANGLE, AXIAL, BODY_COLUMNS, BODY_JINV, BODY_OMEGA, BODY_POS, BODY_ROT, BODY_VEL, CHANNELS, CYLINDER, DOT1, DOT2, POINT, PRIM_A_I, PRIM_ANGLE0, PRIM_B_J,
@@ -561,7 +564,7 @@ def contact_force(force, bodies, joint, f_el, impact_speed, rate, n, x_journal, 
     point x_bearing + R_b n on both against the slip. Returns (normal force N, elastic force
     N, friction force N, dissipated power W)."""
     bb, bj = int(joint[SJ_BEARING_BODY]), int(joint[SJ_JOURNAL_BODY])
-    f_n = dissipative.hysteresis_force(f_el, rate, impact_speed, joint[JOINT_CHI])
+    f_n = dissipative.hysteresis_force(f_el, rate, impact_speed, joint_chi(joint, impact_speed))
     push(force, bodies, bj, scaled(n, -f_n), x_journal)
     push(force, bodies, bb, scaled(n, f_n), x_bearing)
     power = (f_n - f_el) * rate
@@ -616,7 +619,7 @@ def joint_forces(force, bodies, joint, table, grid_log0, grid_step, radial_speed
         delta, rate, u, pj = axial_kinematics(bodies, joint)
         if delta > 0.0:
             f_el = joint[SJ_AXIAL_STIFFNESS] * delta
-            axial = dissipative.hysteresis_force(f_el, rate, axial_speed, joint[JOINT_CHI])
+            axial = dissipative.hysteresis_force(f_el, rate, axial_speed, joint_chi(joint, axial_speed))
             push(force, bodies, int(joint[SJ_JOURNAL_BODY]), scaled(u, -axial), pj)
             push(force, bodies, int(joint[SJ_BEARING_BODY]), scaled(u, axial), pj)
             power += (axial - f_el) * rate

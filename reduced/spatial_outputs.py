@@ -105,7 +105,8 @@ def summary(model, series, run, status_text, scene_file):
                                                           np.max(steps[f"{c.name}_axial_penetration_m"], initial=0.0), 0.0)),
                           "peak_friction_force_N": float(np.max(np.abs(steps[f"{c.name}_friction_force_N"]), initial=0.0)),
                           "clearance_m": c.bearing_radius - c.journal_radius}
-    return outputs.summary_of(model, series, run, status_text, scene_file, joints)
+    return outputs.summary_of(model, series, run, status_text, scene_file, joints,
+                              outputs.impact_speeds(model, run))
 
 
 def plots(folder, model, series, twin) -> None:
