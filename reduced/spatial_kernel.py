@@ -320,14 +320,17 @@ def fill_constraints(t, work, primitives, alpha):
     workspace (body states current). Returns the number of rows."""
     jac, phi, phi_t, rhs_c, row_bodies = work.jac, work.phi, work.phi_t, work.rhs_c, work.row_bodies
     bodies = work.bodies
-    jac[:] = 0.0
+    for i in range(jac.shape[0]):   # the rows' bodies' columns (the others stay zero)
+        for side in range(2):
+            b = row_bodies[i, side]
+            if b >= 0:
+                for c in range(6 * b, 6 * b + 6):
+                    jac[i, c] = 0.0
     row = 0
     for k in range(primitives.shape[0]):
         # entries read in place: a row view of `primitives` would count its references
         kind, bi, bj = (int(primitives[k, PRIM_KIND]), int(primitives[k, PRIM_BODY_I]),
                         int(primitives[k, PRIM_BODY_J]))
-        for c in range(PRIMITIVE_ROWS[kind]):
-            row_bodies[row + c, 0], row_bodies[row + c, 1] = bi, bj if bj != bi else -1
         if kind == POINT:
             pi, _, ci, si = point_state(bodies, bi, row3(primitives, k, PRIM_S_I))
             pj, _, cj, sj = point_state(bodies, bj, row3(primitives, k, PRIM_S_J))
@@ -386,14 +389,14 @@ def constraint_rate(work, i):
 
 @numba.njit(cache=True)
 def fill_schur(args, work, m):
-    """M^-1 D^T (rows of work.mjac) and the Schur matrix D M^-1 D^T of the first m rows. A row
+    """M^-1 D^T (rows of work.mjac) and the lower triangle of the Schur matrix D M^-1 D^T of
+    the first m rows, within its envelope (work.first: what kernel.cholesky_solve reads). A row
     has nonzero columns for its two bodies only (work.row_bodies), so M^-1 (block-diagonal:
     m I and the global inverse inertia) acts on those, and two rows couple only through a body
     they share."""
     jac, mjac, schur, states, bodies = work.jac, work.mjac, work.schur, work.bodies, work.row_bodies
     masses = args.masses
-    for i in range(m):
-        mjac[i, :] = 0.0
+    for i in range(m):   # columns of other bodies than the row's: zero since the workspace
         for side in range(2):
             b = bodies[i, side]
             if b < 0:
@@ -403,8 +406,9 @@ def fill_schur(args, work, m):
             for c in range(3):
                 mjac[i, 6 * b + c] = jac[i, 6 * b + c] / masses[b]
                 mjac[i, 6 * b + 3 + c] = angular[c]
+    first = work.first
     for i in range(m):
-        for k in range(i + 1):
+        for k in range(first[i], i + 1):   # the envelope (constraint_pattern); left of it: 0
             v = 0.0
             for side in range(2):
                 b = bodies[i, side]
@@ -412,7 +416,6 @@ def fill_schur(args, work, m):
                     for c in range(6 * b, 6 * b + 6):
                         v += jac[i, c] * mjac[k, c]
             schur[i, k] = v
-            schur[k, i] = v
 
 
 # ---- clearance joints
@@ -659,10 +662,45 @@ def torsion_axis(bodies, row):
 def workspace(args):
     nb, nj = args.masses.size, args.joints.shape[0]
     m = constraint_count(args.primitives)
+    row_bodies, first = constraint_pattern(args.primitives, m)
     return SpatialWork(np.zeros((nb, BODY_COLUMNS)), np.zeros((m, 6 * nb)), np.zeros(m),
                        np.zeros(m), np.zeros(m), np.zeros((m, m)), np.zeros(6 * nb),
-                       np.zeros(max(CHANNELS * nj, 1)), np.zeros((m, 6 * nb)),
-                       np.full((m, 2), -1, np.int64))
+                       np.zeros(max(CHANNELS * nj, 1)), np.zeros((m, 6 * nb)), row_bodies, first)
+
+
+@numba.njit(cache=True)
+def constraint_pattern(primitives, m):
+    """The fixed sparsity of the constraints: the two bodies of each row (-1: the ground or
+    none; a row has nonzero Jacobian columns for these only), and the envelope of the Schur
+    matrix D M^-1 D^T: first[i], the first row k <= i that shares a body with row i (rows
+    couple only through a shared body). In a chain (the slider-crank: ground-crank,
+    crank-rod, slider-ground, the drive) the envelope leaves out the blocks of bodies that
+    share no joint, and kernel.cholesky_solve factors within it."""
+    row_bodies = np.full((m, 2), -1, np.int64)
+    row = 0
+    for k in range(primitives.shape[0]):
+        kind, bi, bj = (int(primitives[k, PRIM_KIND]), int(primitives[k, PRIM_BODY_I]),
+                        int(primitives[k, PRIM_BODY_J]))
+        for c in range(PRIMITIVE_ROWS[kind]):
+            row_bodies[row + c, 0], row_bodies[row + c, 1] = bi, bj if bj != bi else -1
+        row += PRIMITIVE_ROWS[kind]
+    first = np.arange(m)
+    for i in range(m):
+        for k in range(i):
+            if shares_body(row_bodies, i, k):
+                first[i] = k
+                break
+    return row_bodies, first
+
+
+@numba.njit(cache=True)
+def shares_body(row_bodies, i, k):
+    """Whether constraint rows i and k act on a common (moving) body."""
+    for side in range(2):
+        b = row_bodies[i, side]
+        if b >= 0 and (b == row_bodies[k, 0] or b == row_bodies[k, 1]):
+            return True
+    return False
 
 
 @numba.njit(cache=True)
@@ -723,7 +761,7 @@ def rhs(t, y, dy, args, work):
                     for c in range(6 * b, 6 * b + 6):
                         v += mjac[i, c] * force[c]
             rhs_c[i] = v
-        cholesky_solve(work.schur, rhs_c, m)
+        cholesky_solve(work.schur, rhs_c, m, work.first)
         for i in range(m):   # Q - D^T lambda
             for side in range(2):
                 b = row_bodies[i, side]
@@ -799,9 +837,11 @@ def project_onto_constraints(t, y, args, work, tolerance, rate_tolerance):
     rhs_c, mjac = work.rhs_c, work.mjac
     normalise(y, nq, nb)
     changed = False
+    m = 0
     for level in range(2):
-        body_states(y, args, work)
-        m = fill_constraints(t, work, args.primitives, 0.0)
+        if level == 0 or changed:   # positions unmoved: the Jacobian of level 0 holds
+            body_states(y, args, work)
+            m = fill_constraints(t, work, args.primitives, 0.0)
         largest = 0.0
         for i in range(m):
             if level == 0:
@@ -813,7 +853,7 @@ def project_onto_constraints(t, y, args, work, tolerance, rate_tolerance):
             continue
         changed = True
         fill_schur(args, work, m)
-        cholesky_solve(work.schur, rhs_c, m)
+        cholesky_solve(work.schur, rhs_c, m, work.first)
         step = np.zeros(6)
         for b in range(nb):
             step[:] = 0.0
