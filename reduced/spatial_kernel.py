@@ -101,7 +101,7 @@ from pinbore.reduced import integrator, kernel, layout, spatial_layout
 from pinbore.reduced.integrator import log_impact
 from pinbore.reduced.kernel import LATCH_TOL, cholesky_solve, joint_chi, joint_friction, torsion_law
 from pinbore.reduced.layout import (
-    DISSIPATED, JOINT_BEARING_RADIUS, JOINT_CLEARANCE, LATCH, TORSION_BODY_I,
+    DISSIPATED, JOINT_BEARING_RADIUS, JOINT_CLEARANCE, JOINT_FRICTION_LAW, LATCH, NO_FRICTION, TORSION_BODY_I,
     TORSION_BODY_J, TORSION_FREE_ANGLE, TORSION_KIND, WORK_IN, Contacts)
 from pinbore.reduced.spatial_layout import (
     ANGLE, AXIAL, BODY_COLUMNS, BODY_JINV, BODY_OMEGA, BODY_POS, BODY_ROT, BODY_VEL, CHANNELS, CYLINDER, DOT1, DOT2, POINT, PRIM_A_I, PRIM_ANGLE0, PRIM_B_J,
@@ -144,10 +144,11 @@ def cross(a, b):
 
 
 @numba.njit(cache=True)
-def matvec(m, a):
-    return (m[0, 0] * a[0] + m[0, 1] * a[1] + m[0, 2] * a[2],
-            m[1, 0] * a[0] + m[1, 1] * a[1] + m[1, 2] * a[2],
-            m[2, 0] * a[0] + m[2, 1] * a[1] + m[2, 2] * a[2])
+def matvec(m, b, a):
+    """m[b] a, the 3 x 3 matrix b of a stack m read in place (a view would count references)."""
+    return (m[b, 0, 0] * a[0] + m[b, 0, 1] * a[1] + m[b, 0, 2] * a[2],
+            m[b, 1, 0] * a[0] + m[b, 1, 1] * a[1] + m[b, 1, 2] * a[2],
+            m[b, 2, 0] * a[0] + m[b, 2, 1] * a[1] + m[b, 2, 2] * a[2])
 
 
 # ---- Euler parameters
@@ -571,6 +572,8 @@ def contact_force(force, bodies, joint, f_el, impact_speed, rate, n, x_journal, 
     push(force, bodies, bj, scaled(n, -f_n), x_journal)
     push(force, bodies, bb, scaled(n, f_n), x_bearing)
     power = (f_n - f_el) * rate
+    if int(joint[JOINT_FRICTION_LAW]) == NO_FRICTION:
+        return f_n, f_el, 0.0, power
     contact = add(x_bearing, scaled(n, joint[JOINT_BEARING_RADIUS]))
     v = sub(material_velocity(bodies, bj, contact), material_velocity(bodies, bb, contact))
     slip = sub(v, scaled(n, dot(v, n)))
@@ -712,7 +715,7 @@ def applied_forces(t, y, args, work):
     force, normal, speeds, bodies = work.force, work.normal, args.speeds, work.bodies
     for b in range(masses.size):
         w = row3(bodies, b, BODY_OMEGA)
-        jw = turned(bodies, b, matvec(args.inertia[b], unturned(bodies, b, w)))
+        jw = turned(bodies, b, matvec(args.inertia, b, unturned(bodies, b, w)))
         gyro = cross(w, jw)
         for c in range(3):
             force[6 * b + c] = masses[b] * gravity[c]
@@ -872,7 +875,7 @@ def project_onto_constraints(t, y, args, work, tolerance, rate_tolerance):
                 for c in range(4):
                     y[nq + 7 * b + 3 + c] = pd[c]
         normalise(y, nq, nb)
-    return changed
+    return changed   # False: y normalised only, the body states of y in the workspace
 
 
 # ---- the spatial mechanism's hooks of the integrator (reduced.integrator)
@@ -935,7 +938,8 @@ def after_step(t, y, args, work, contacts, latches, onset_tol, speed_floor, rate
     """Accepted step: projection; each channel's depth, its onset (impact speed v0 at least
     speed_floor, logged) or separation; latches. Returns (changed, impacts, log)."""
     changed = project_onto_constraints(t, y, args, work, onset_tol, rate_tol)
-    body_states(y, args, work)
+    if changed:
+        body_states(y, args, work)
     speeds = args.speeds
     for c in range(contacts.depth.size):
         depth = channel_depth(work.bodies, args.joints[c // CHANNELS], c % CHANNELS)
