@@ -120,8 +120,14 @@ def write_timeseries(path, series) -> None:
 def summary(model, series, run, status_text, scene_file) -> Summary:
     """The run's summary (reduced/summary.py) from its series (`sample`) and the Trajectory."""
     return summary_of(model, series, run, status_text, scene_file, joint_peaks(model, series, run),
-                      {c.name: list(run.impacts[run.impacts[:, LOG_JOINT] == j, LOG_RATE])
-                       for j, c in enumerate(model.scene.clearance_joints)})
+                      impact_speeds(model, run))
+
+
+def impact_speeds(model, run) -> dict:
+    """The impact speeds (m/s) of each clearance joint's logged onsets (a spatial joint's
+    radial and axial), by joint name."""
+    return {c.name: list(run.impacts[run.impacts[:, LOG_JOINT] == j, LOG_RATE])
+            for j, c in enumerate(model.scene.clearance_joints)}
 
 
 def joint_peaks(model, series, run) -> dict:

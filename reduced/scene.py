@@ -147,15 +147,11 @@ Friction = Annotated[CoulombFriction | StribeckFriction | LinearFriction | LuGre
 FILE_LAWS = ("calibrated:", "sliced:")   # normal laws read from the scene's laws file
 
 
-class ClearanceJoint(Strict):
-    """A revolute joint with radial clearance: the journal (on journal_body) moves freely
-    inside the bearing (on bearing_body) and meets its wall through the contact laws."""
+class JointMaterials(Strict):
+    """The radii and elastic constants of a clearance joint, planar or spatial: what its
+    elastic law and its calibrated restitution (damping_law = "calibrated", matched on these
+    in the laws file) are chosen by."""
 
-    name: str
-    bearing_body: str
-    bearing_point: Vector
-    journal_body: str
-    journal_point: Vector
     bearing_radius: float = pydantic.Field(gt=0)
     journal_radius: float = pydantic.Field(gt=0)
     length: float | None = pydantic.Field(default=None, gt=0,
@@ -165,6 +161,24 @@ class ClearanceJoint(Strict):
     nu: float = pydantic.Field(gt=-1, lt=0.5)
     bearing_E: float | None = pydantic.Field(default=None, gt=0, description="Pa; default E")
     bearing_nu: float | None = pydantic.Field(default=None, gt=-1, lt=0.5, description="default nu")
+
+    def elastic_joint(self) -> elastic.Joint:
+        """The joint of the elastic laws: radii, the bearing's and the journal's E and nu."""
+        return elastic.Joint(self.bearing_radius, self.journal_radius,
+                             self.E if self.bearing_E is None else self.bearing_E,
+                             self.nu if self.bearing_nu is None else self.bearing_nu,
+                             self.E, self.nu, self.length)
+
+
+class ClearanceJoint(JointMaterials):
+    """A revolute joint with radial clearance: the journal (on journal_body) moves freely
+    inside the bearing (on bearing_body) and meets its wall through the contact laws."""
+
+    name: str
+    bearing_body: str
+    bearing_point: Vector
+    journal_body: str
+    journal_point: Vector
     normal_law: str | None = None
     damping_law: str = "none"
     restitution: float = pydantic.Field(default=1.0, ge=0, le=1)
@@ -177,13 +191,6 @@ class ClearanceJoint(Strict):
     # rest_speed (approach rate x restitution) the contact is held until it would pull
     impact: Literal["continuous", "newton", "poisson"] = "continuous"
     rest_speed: float = pydantic.Field(default=1e-3, gt=0, description="m/s")
-
-    def elastic_joint(self) -> elastic.Joint:
-        """The joint of the elastic laws: radii, the bearing's and the journal's E and nu."""
-        return elastic.Joint(self.bearing_radius, self.journal_radius,
-                             self.E if self.bearing_E is None else self.bearing_E,
-                             self.nu if self.bearing_nu is None else self.bearing_nu,
-                             self.E, self.nu, self.length)
 
     @pydantic.model_validator(mode="after")
     def _consistent(self):

@@ -47,8 +47,9 @@ Clearance joints (continuous contact only):
   small-angle tilt read as sin(theta). Each slice carries a (f_el(delta_i) (1 + chi
   delta_i'/v0)) w_i, a the law's stiffness factor, f_el the per-length law (N/m, a table of
   pinbore.laws.tables), chi the hysteresis factor ([LankaraniNikravesh1990] and the Hunt-
-  Crossley family of pinbore.laws.dissipative, hysteresis_force), v0 the approach rate when
-  the joint's radial contact began. The force -f n_i acts on the journal at X_i and +f n_i on
+  Crossley family of pinbore.laws.dissipative, hysteresis_force; damping_law = "calibrated":
+  the chi that rebounds with the laws file's e(v0) at the channel's impact speed, the
+  planar kernel's joint_chi), v0 the approach rate when the joint's radial contact began. The force -f n_i acts on the journal at X_i and +f n_i on
   the bore at B_i = X_i - e_i^perp, its point on the bore's axis: delta_i' = n_i . (v_J(X_i)
   - v_B(B_i)) exactly, so the forces do the work of the law, and X_i - B_i is along n_i, so
   the pair has no moment. Friction of the static laws of pinbore.laws.friction (the
@@ -68,7 +69,9 @@ Clearance joints (continuous contact only):
   Shoulders (the project's own law; no source is cited for it): with an axial clearance c_a
   the journal point's axial offset s = (P_j - P_b) . u_b is free within |s| <= c_a; beyond,
   a linear penalty k_a (|s| - c_a) with the joint's hysteresis factor pushes it back along
-  u_b, acting at P_j on both bodies (again exactly the work of the law, no moment).
+  u_b, acting at P_j on both bodies (again exactly the work of the law, no moment); a
+  calibrated joint's shoulders take chi of its e(v0) at the axial impact speed (the FE
+  impacts were radial: for the shoulders' faces that e is unverified).
 - spherical: a ball (centre P_j) in a socket (centre P_s), delta = |P_j - P_s| - c, the Hertz
   point law of pinbore.laws.elastic (hertz_point) with the damping and friction above
   ([FloresLankarani2010]; [Tian2009]), acting at the contact point P_s + R_b n.
@@ -96,9 +99,9 @@ from pinbore.core.compiled import follow_compiled_in
 from pinbore.laws import dissipative, friction, sliced, tables
 from pinbore.reduced import integrator, kernel, layout, spatial_layout
 from pinbore.reduced.integrator import log_impact
-from pinbore.reduced.kernel import LATCH_TOL, cholesky_solve, joint_friction, torsion_law
+from pinbore.reduced.kernel import LATCH_TOL, cholesky_solve, joint_chi, joint_friction, torsion_law
 from pinbore.reduced.layout import (
-    DISSIPATED, JOINT_BEARING_RADIUS, JOINT_CHI, JOINT_CLEARANCE, LATCH, TORSION_BODY_I,
+    DISSIPATED, JOINT_BEARING_RADIUS, JOINT_CLEARANCE, JOINT_FRICTION_LAW, LATCH, NO_FRICTION, TORSION_BODY_I,
     TORSION_BODY_J, TORSION_FREE_ANGLE, TORSION_KIND, WORK_IN, Contacts)
 from pinbore.reduced.spatial_layout import (
     ANGLE, AXIAL, BODY_COLUMNS, BODY_JINV, BODY_OMEGA, BODY_POS, BODY_ROT, BODY_VEL, CHANNELS, CYLINDER, DOT1, DOT2, POINT, PRIM_A_I, PRIM_ANGLE0, PRIM_B_J,
@@ -141,10 +144,11 @@ def cross(a, b):
 
 
 @numba.njit(cache=True)
-def matvec(m, a):
-    return (m[0, 0] * a[0] + m[0, 1] * a[1] + m[0, 2] * a[2],
-            m[1, 0] * a[0] + m[1, 1] * a[1] + m[1, 2] * a[2],
-            m[2, 0] * a[0] + m[2, 1] * a[1] + m[2, 2] * a[2])
+def matvec(m, b, a):
+    """m[b] a, the 3 x 3 matrix b of a stack m read in place (a view would count references)."""
+    return (m[b, 0, 0] * a[0] + m[b, 0, 1] * a[1] + m[b, 0, 2] * a[2],
+            m[b, 1, 0] * a[0] + m[b, 1, 1] * a[1] + m[b, 1, 2] * a[2],
+            m[b, 2, 0] * a[0] + m[b, 2, 1] * a[1] + m[b, 2, 2] * a[2])
 
 
 # ---- Euler parameters
@@ -317,14 +321,17 @@ def fill_constraints(t, work, primitives, alpha):
     workspace (body states current). Returns the number of rows."""
     jac, phi, phi_t, rhs_c, row_bodies = work.jac, work.phi, work.phi_t, work.rhs_c, work.row_bodies
     bodies = work.bodies
-    jac[:] = 0.0
+    for i in range(jac.shape[0]):   # the rows' bodies' columns (the others stay zero)
+        for side in range(2):
+            b = row_bodies[i, side]
+            if b >= 0:
+                for c in range(6 * b, 6 * b + 6):
+                    jac[i, c] = 0.0
     row = 0
     for k in range(primitives.shape[0]):
         # entries read in place: a row view of `primitives` would count its references
         kind, bi, bj = (int(primitives[k, PRIM_KIND]), int(primitives[k, PRIM_BODY_I]),
                         int(primitives[k, PRIM_BODY_J]))
-        for c in range(PRIMITIVE_ROWS[kind]):
-            row_bodies[row + c, 0], row_bodies[row + c, 1] = bi, bj if bj != bi else -1
         if kind == POINT:
             pi, _, ci, si = point_state(bodies, bi, row3(primitives, k, PRIM_S_I))
             pj, _, cj, sj = point_state(bodies, bj, row3(primitives, k, PRIM_S_J))
@@ -383,14 +390,14 @@ def constraint_rate(work, i):
 
 @numba.njit(cache=True)
 def fill_schur(args, work, m):
-    """M^-1 D^T (rows of work.mjac) and the Schur matrix D M^-1 D^T of the first m rows. A row
+    """M^-1 D^T (rows of work.mjac) and the lower triangle of the Schur matrix D M^-1 D^T of
+    the first m rows, within its envelope (work.first: what kernel.cholesky_solve reads). A row
     has nonzero columns for its two bodies only (work.row_bodies), so M^-1 (block-diagonal:
     m I and the global inverse inertia) acts on those, and two rows couple only through a body
     they share."""
     jac, mjac, schur, states, bodies = work.jac, work.mjac, work.schur, work.bodies, work.row_bodies
     masses = args.masses
-    for i in range(m):
-        mjac[i, :] = 0.0
+    for i in range(m):   # columns of other bodies than the row's: zero since the workspace
         for side in range(2):
             b = bodies[i, side]
             if b < 0:
@@ -400,8 +407,9 @@ def fill_schur(args, work, m):
             for c in range(3):
                 mjac[i, 6 * b + c] = jac[i, 6 * b + c] / masses[b]
                 mjac[i, 6 * b + 3 + c] = angular[c]
+    first = work.first
     for i in range(m):
-        for k in range(i + 1):
+        for k in range(first[i], i + 1):   # the envelope (constraint_pattern); left of it: 0
             v = 0.0
             for side in range(2):
                 b = bodies[i, side]
@@ -409,7 +417,6 @@ def fill_schur(args, work, m):
                     for c in range(6 * b, 6 * b + 6):
                         v += jac[i, c] * mjac[k, c]
             schur[i, k] = v
-            schur[k, i] = v
 
 
 # ---- clearance joints
@@ -561,10 +568,12 @@ def contact_force(force, bodies, joint, f_el, impact_speed, rate, n, x_journal, 
     point x_bearing + R_b n on both against the slip. Returns (normal force N, elastic force
     N, friction force N, dissipated power W)."""
     bb, bj = int(joint[SJ_BEARING_BODY]), int(joint[SJ_JOURNAL_BODY])
-    f_n = dissipative.hysteresis_force(f_el, rate, impact_speed, joint[JOINT_CHI])
+    f_n = dissipative.hysteresis_force(f_el, rate, impact_speed, joint_chi(joint, impact_speed))
     push(force, bodies, bj, scaled(n, -f_n), x_journal)
     push(force, bodies, bb, scaled(n, f_n), x_bearing)
     power = (f_n - f_el) * rate
+    if int(joint[JOINT_FRICTION_LAW]) == NO_FRICTION:
+        return f_n, f_el, 0.0, power
     contact = add(x_bearing, scaled(n, joint[JOINT_BEARING_RADIUS]))
     v = sub(material_velocity(bodies, bj, contact), material_velocity(bodies, bb, contact))
     slip = sub(v, scaled(n, dot(v, n)))
@@ -616,7 +625,7 @@ def joint_forces(force, bodies, joint, table, grid_log0, grid_step, radial_speed
         delta, rate, u, pj = axial_kinematics(bodies, joint)
         if delta > 0.0:
             f_el = joint[SJ_AXIAL_STIFFNESS] * delta
-            axial = dissipative.hysteresis_force(f_el, rate, axial_speed, joint[JOINT_CHI])
+            axial = dissipative.hysteresis_force(f_el, rate, axial_speed, joint_chi(joint, axial_speed))
             push(force, bodies, int(joint[SJ_JOURNAL_BODY]), scaled(u, -axial), pj)
             push(force, bodies, int(joint[SJ_BEARING_BODY]), scaled(u, axial), pj)
             power += (axial - f_el) * rate
@@ -656,10 +665,45 @@ def torsion_axis(bodies, row):
 def workspace(args):
     nb, nj = args.masses.size, args.joints.shape[0]
     m = constraint_count(args.primitives)
+    row_bodies, first = constraint_pattern(args.primitives, m)
     return SpatialWork(np.zeros((nb, BODY_COLUMNS)), np.zeros((m, 6 * nb)), np.zeros(m),
                        np.zeros(m), np.zeros(m), np.zeros((m, m)), np.zeros(6 * nb),
-                       np.zeros(max(CHANNELS * nj, 1)), np.zeros((m, 6 * nb)),
-                       np.full((m, 2), -1, np.int64))
+                       np.zeros(max(CHANNELS * nj, 1)), np.zeros((m, 6 * nb)), row_bodies, first)
+
+
+@numba.njit(cache=True)
+def constraint_pattern(primitives, m):
+    """The fixed sparsity of the constraints: the two bodies of each row (-1: the ground or
+    none; a row has nonzero Jacobian columns for these only), and the envelope of the Schur
+    matrix D M^-1 D^T: first[i], the first row k <= i that shares a body with row i (rows
+    couple only through a shared body). In a chain (the slider-crank: ground-crank,
+    crank-rod, slider-ground, the drive) the envelope leaves out the blocks of bodies that
+    share no joint, and kernel.cholesky_solve factors within it."""
+    row_bodies = np.full((m, 2), -1, np.int64)
+    row = 0
+    for k in range(primitives.shape[0]):
+        kind, bi, bj = (int(primitives[k, PRIM_KIND]), int(primitives[k, PRIM_BODY_I]),
+                        int(primitives[k, PRIM_BODY_J]))
+        for c in range(PRIMITIVE_ROWS[kind]):
+            row_bodies[row + c, 0], row_bodies[row + c, 1] = bi, bj if bj != bi else -1
+        row += PRIMITIVE_ROWS[kind]
+    first = np.arange(m)
+    for i in range(m):
+        for k in range(i):
+            if shares_body(row_bodies, i, k):
+                first[i] = k
+                break
+    return row_bodies, first
+
+
+@numba.njit(cache=True)
+def shares_body(row_bodies, i, k):
+    """Whether constraint rows i and k act on a common (moving) body."""
+    for side in range(2):
+        b = row_bodies[i, side]
+        if b >= 0 and (b == row_bodies[k, 0] or b == row_bodies[k, 1]):
+            return True
+    return False
 
 
 @numba.njit(cache=True)
@@ -671,7 +715,7 @@ def applied_forces(t, y, args, work):
     force, normal, speeds, bodies = work.force, work.normal, args.speeds, work.bodies
     for b in range(masses.size):
         w = row3(bodies, b, BODY_OMEGA)
-        jw = turned(bodies, b, matvec(args.inertia[b], unturned(bodies, b, w)))
+        jw = turned(bodies, b, matvec(args.inertia, b, unturned(bodies, b, w)))
         gyro = cross(w, jw)
         for c in range(3):
             force[6 * b + c] = masses[b] * gravity[c]
@@ -720,7 +764,7 @@ def rhs(t, y, dy, args, work):
                     for c in range(6 * b, 6 * b + 6):
                         v += mjac[i, c] * force[c]
             rhs_c[i] = v
-        cholesky_solve(work.schur, rhs_c, m)
+        cholesky_solve(work.schur, rhs_c, m, work.first)
         for i in range(m):   # Q - D^T lambda
             for side in range(2):
                 b = row_bodies[i, side]
@@ -796,9 +840,11 @@ def project_onto_constraints(t, y, args, work, tolerance, rate_tolerance):
     rhs_c, mjac = work.rhs_c, work.mjac
     normalise(y, nq, nb)
     changed = False
+    m = 0
     for level in range(2):
-        body_states(y, args, work)
-        m = fill_constraints(t, work, args.primitives, 0.0)
+        if level == 0 or changed:   # positions unmoved: the Jacobian of level 0 holds
+            body_states(y, args, work)
+            m = fill_constraints(t, work, args.primitives, 0.0)
         largest = 0.0
         for i in range(m):
             if level == 0:
@@ -810,7 +856,7 @@ def project_onto_constraints(t, y, args, work, tolerance, rate_tolerance):
             continue
         changed = True
         fill_schur(args, work, m)
-        cholesky_solve(work.schur, rhs_c, m)
+        cholesky_solve(work.schur, rhs_c, m, work.first)
         step = np.zeros(6)
         for b in range(nb):
             step[:] = 0.0
@@ -829,7 +875,7 @@ def project_onto_constraints(t, y, args, work, tolerance, rate_tolerance):
                 for c in range(4):
                     y[nq + 7 * b + 3 + c] = pd[c]
         normalise(y, nq, nb)
-    return changed
+    return changed   # False: y normalised only, the body states of y in the workspace
 
 
 # ---- the spatial mechanism's hooks of the integrator (reduced.integrator)
@@ -892,7 +938,8 @@ def after_step(t, y, args, work, contacts, latches, onset_tol, speed_floor, rate
     """Accepted step: projection; each channel's depth, its onset (impact speed v0 at least
     speed_floor, logged) or separation; latches. Returns (changed, impacts, log)."""
     changed = project_onto_constraints(t, y, args, work, onset_tol, rate_tol)
-    body_states(y, args, work)
+    if changed:
+        body_states(y, args, work)
     speeds = args.speeds
     for c in range(contacts.depth.size):
         depth = channel_depth(work.bodies, args.joints[c // CHANNELS], c % CHANNELS)

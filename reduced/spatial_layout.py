@@ -62,11 +62,13 @@ SpatialArgs = namedtuple("SpatialArgs", [
 # The buffers of the right-hand side: a row per body (BODY_*: its position, rotation matrix
 # and inverse inertia (row-major, global), velocity, angular velocity (global)); the
 # constraint rows (Jacobian against (r', omega) of each body, Phi, Phi_t, gamma then the
-# multipliers), the Schur matrix, the applied forces and torques (6 a body), the normal force
-# of each channel, the rows of M^-1 D^T (6 a body each) and the two bodies of each constraint
-# row (-1: the ground; a row has nonzero columns for these only).
+# multipliers), the Schur matrix (lower triangle), the applied forces and torques (6 a body),
+# the normal force of each channel, the rows of M^-1 D^T (6 a body each), the two bodies of
+# each constraint row (-1: the ground; a row has nonzero columns for these only) and the
+# envelope of the Schur matrix (first coupled row of each row), the last two fixed.
 SpatialWork = namedtuple("SpatialWork", [
-    "bodies", "jac", "phi", "phi_t", "rhs_c", "schur", "force", "normal", "mjac", "row_bodies"])
+    "bodies", "jac", "phi", "phi_t", "rhs_c", "schur", "force", "normal", "mjac", "row_bodies",
+    "first"])
 BODY_POS, BODY_ROT, BODY_VEL, BODY_OMEGA, BODY_JINV = 0, 3, 12, 15, 18
 BODY_COLUMNS = 27
 

@@ -10,15 +10,15 @@ from pathlib import Path
 import numpy as np
 
 from pinbore.core.errors import InputError
-from pinbore.laws import dissipative, elastic
+from pinbore.laws import elastic
 from pinbore.laws.tables import log_grid, split_compliance
 from pinbore.reduced import spatial_kernel
-from pinbore.reduced.layout import (ENERGY_STATES, JOINT_BEARING_RADIUS, JOINT_CHI,
-                                    JOINT_CLEARANCE, JOINT_FRICTION_LAW, TORSION_BODY_I,
+from pinbore.reduced.layout import (ENERGY_STATES, JOINT_BEARING_RADIUS, JOINT_CLEARANCE, JOINT_FRICTION_LAW, TORSION_BODY_I,
                                     TORSION_BODY_J, TORSION_DAMPING, TORSION_FREE_ANGLE,
                                     TORSION_KIND, TORSION_STIFFNESS, row)
 from pinbore.reduced.model import (BLOW_UP_FRACTION, GRID_LOW, GRID_POINTS, SPEED_FLOOR,
-                                   TORSION_KINDS, friction_block, laws_path, per_length_force,
+                                   TORSION_KINDS, damping_block, friction_block, laws_path,
+                                   per_length_force,
                                    sliced_parts, table_energy)
 from pinbore.core import scene as scenes
 from pinbore.reduced.spatial_layout import (
@@ -128,7 +128,7 @@ def per_length_table(c, deltas, laws_data, source):
     """(scale a, end length e, bulk compliance c_b (m^2/N), the per-length force f (N/m) the
     slices carry at deltas: a sliced law's local law f_loc, laws.sliced) of a cylindrical
     joint, or (1, 0, 0, F (N)) of a spherical one."""
-    joint = elastic.Joint(c.bearing_radius, c.journal_radius, c.E, c.nu, c.E, c.nu, c.length)
+    joint = c.elastic_joint()
     if c.type == "spherical":
         return 1.0, 0.0, 0.0, elastic.hertz_point(deltas, joint)
     if c.normal_law == "hertz_point":   # the point law spread evenly over the length
@@ -174,15 +174,15 @@ def build(scene: SpatialScene, source: str, base: Path) -> SpatialModel:
     grid_log0, grid_step, deltas = log_grid(GRID_LOW, top, GRID_POINTS)
     joints, tables = [], []
     for c in scene.clearance_joints:
-        chi = 0.0 if c.damping_law == "none" else dissipative.HYSTERESIS[c.damping_law](c.restitution)
         code, parameters, _ = friction_block(c.friction)
+        parameters |= damping_block(c, laws_data, source)   # chi, or the calibrated chi(v0)
         scale, end, bulk, force = per_length_table(c, deltas, laws_data, source)
         force = np.array(force, float)
         force[deltas > BLOW_UP_FRACTION * c.journal_radius] = np.nan
         values = {SJ_KIND: CYLINDER if c.type == "cylindrical" else SPHERE,
                   SJ_BEARING_BODY: index[c.bearing_body], SJ_JOURNAL_BODY: index[c.journal_body],
                   JOINT_CLEARANCE: c.bearing_radius - c.journal_radius,
-                  JOINT_BEARING_RADIUS: c.bearing_radius, JOINT_CHI: chi, JOINT_FRICTION_LAW: code,
+                  JOINT_BEARING_RADIUS: c.bearing_radius, JOINT_FRICTION_LAW: code,
                   SJ_LENGTH: c.length or 0.0, SJ_SLICES: c.slices, SJ_END_LENGTH: end,
                   SJ_SCALE: scale, SJ_COMPLIANCE: bulk, SJ_AXIAL_CLEARANCE: c.axial_clearance or 0.0,
                   SJ_AXIAL_STIFFNESS: c.axial_stiffness or 0.0} | parameters

@@ -84,6 +84,32 @@ def per_step(model, run):
     return cols, energy, drift
 
 
+def refined_peak(model, j, run, k, points=201):
+    """The peak radial normal force of clearance joint j near accepted step k, refined
+    between the steps k-1..k+1 (the planar model's reduced.outputs.refined_peak, for a state
+    of any size): on each step the state is the cubic Hermite interpolant of y and f(y) at its
+    two ends (third order, as the planar model's interpolant of the penetration), and the
+    force is the kernel's at `points` interpolated states. (peak force N, its time s)"""
+    times, states = run.times, run.states
+    best = (0.0, float(times[k]))
+    x = np.linspace(0.0, 1.0, points)
+    basis = np.array([2 * x**3 - 3 * x**2 + 1, x**3 - 2 * x**2 + x, -2 * x**3 + 3 * x**2, x**3 - x**2])
+    for a in range(max(k - 1, 0), min(k + 1, times.size - 1)):
+        args = model.kernel_args(run.speeds[a + 1, :CHANNELS * model.joints.shape[0]],
+                                 run.latched[a + 1, :model.torsion.shape[0]])
+        h = times[a + 1] - times[a]
+        f0 = spatial_kernel.rhs_value(times[a], states[a], args)[0]
+        f1 = spatial_kernel.rhs_value(times[a + 1], states[a + 1], args)[0]
+        ys = np.outer(basis[0], states[a]) + np.outer(basis[1], h * f0) + \
+            np.outer(basis[2], states[a + 1]) + np.outer(basis[3], h * f1)
+        for i in range(points):
+            t = times[a] + x[i] * h
+            force = spatial_kernel.rhs_value(t, ys[i], args)[1][CHANNELS * j + RADIAL]
+            if force > best[0]:
+                best = (float(force), float(t))
+    return best
+
+
 def sample(model, run):
     return outputs.sample(model, run, per_step)
 
@@ -105,7 +131,8 @@ def summary(model, series, run, status_text, scene_file):
                                                           np.max(steps[f"{c.name}_axial_penetration_m"], initial=0.0), 0.0)),
                           "peak_friction_force_N": float(np.max(np.abs(steps[f"{c.name}_friction_force_N"]), initial=0.0)),
                           "clearance_m": c.bearing_radius - c.journal_radius}
-    return outputs.summary_of(model, series, run, status_text, scene_file, joints)
+    return outputs.summary_of(model, series, run, status_text, scene_file, joints,
+                              outputs.impact_speeds(model, run))
 
 
 def plots(folder, model, series, twin) -> None:

@@ -18,8 +18,8 @@ import pydantic
 
 from pinbore.core.scene import Strict
 from pinbore.reduced.scene import (DAMPING_LAWS, ELASTIC_LAWS, FILE_LAWS, GROUND,
-                                   CoulombFriction, Integrator, LinearFriction, Output,
-                                   StribeckFriction, check_body_names, check_run_size)
+                                   CoulombFriction, Integrator, JointMaterials, LinearFriction,
+                                   Output, StribeckFriction, check_body_names, check_run_size)
 
 Vector3 = Annotated[list[float], pydantic.Field(min_length=3, max_length=3)]
 Quaternion = Annotated[list[float], pydantic.Field(min_length=4, max_length=4)]
@@ -140,13 +140,14 @@ Friction = Annotated[CoulombFriction | StribeckFriction | LinearFriction,
                      pydantic.Field(discriminator="law")]
 
 
-class ClearanceJoint(Strict):
+class ClearanceJoint(JointMaterials):
     """cylindrical: a journal (axis journal_axis through journal_point) in a bore of `length`
     (axis bearing_axis through its mid-plane centre bearing_point), sliced into `slices`, with
     optional shoulders (axial_clearance, axial_stiffness); spherical: a ball (centre
     journal_point) in a socket (centre bearing_point). The normal law: a per-length law of
     pinbore.laws.elastic, hertz_point (cylindrical: spread evenly over the length), or
-    calibrated:/sliced: from the laws file."""
+    calibrated:/sliced: from the laws file. Radii, length, E, nu, bearing_E, bearing_nu: as
+    in the planar joint (reduced.scene.JointMaterials)."""
 
     name: str
     type: Literal["cylindrical", "spherical"]
@@ -156,14 +157,9 @@ class ClearanceJoint(Strict):
     journal_body: str
     journal_point: Vector3
     journal_axis: Vector3 | None = None
-    bearing_radius: float = pydantic.Field(gt=0)
-    journal_radius: float = pydantic.Field(gt=0)
-    length: float | None = pydantic.Field(default=None, gt=0, description="m, bore length")
     slices: int = pydantic.Field(default=8, ge=1, le=256)
     axial_clearance: float | None = pydantic.Field(default=None, gt=0, description="m")
     axial_stiffness: float | None = pydantic.Field(default=None, gt=0, description="N/m")
-    E: float = pydantic.Field(gt=0)
-    nu: float = pydantic.Field(gt=-1, lt=0.5)
     normal_law: str
     damping_law: str = "none"
     restitution: float = pydantic.Field(default=1.0, gt=0, le=1)
@@ -195,10 +191,15 @@ class ClearanceJoint(Strict):
             raise ValueError(f"normal_law {self.normal_law!r} is unknown; valid: "
                              f"{', '.join(ELASTIC_LAWS)}, calibrated:<law in laws.json>, "
                              "sliced:<3D law in laws.json>")
-        if self.damping_law not in DAMPING_LAWS or self.damping_law == "calibrated":
-            raise ValueError(f"damping_law {self.damping_law!r} is unknown to the spatial model; "
-                             f"valid: {', '.join(d for d in DAMPING_LAWS if d != 'calibrated')} "
-                             "(the calibrated restitution is planar only)")
+        if self.damping_law not in DAMPING_LAWS:
+            raise ValueError(f"damping_law {self.damping_law!r} is unknown; valid: "
+                             f"{', '.join(DAMPING_LAWS)}")
+        if self.damping_law == "calibrated" and self.type == "spherical":
+            # the laws file's e(v0) comes from plane-strain impacts of a pin in a bore (a line
+            # contact per unit length); a ball's point contact is another impact
+            raise ValueError("damping_law 'calibrated' is for cylindrical joints: the laws file's "
+                             "e(v0) is fitted on line-contact impacts of a pin in a bore, not of "
+                             "a ball in a socket")
         return self
 
 
