@@ -10,9 +10,14 @@ with PETSc SNES: Newton, full steps, the tangent J = K_bc + K_c (fem.contact say
 of K_c are kept). The linear solver is GMRES on J, preconditioned by the MUMPS LU factors of
 an earlier J. K_bc never changes and K_c changes only at the pin nodes whose contact state
 changed (in or out of contact, stick or slip): a change of low rank at each such node, which
-costs GMRES a few iterations on the kept factors. So the factors are kept while at most
-REUSE_NODES nodes differ from the factorised state and the last linear solve took at most
-REFACTOR_ITERATIONS iterations, else J is refactored (fresh factors solve in one iteration).
+costs GMRES about one iteration on the kept factors (measured at 48k dofs: 19, 22 and 48
+changed nodes took 19, 22 and 33 iterations). So the factors are kept while the GMRES
+iterations spent on them, with those the next solve is expected to take (one per changed
+node, or the last solve's), stay within what a factorisation costs in applications of the
+factors (KeptLU times both: about 30 at 17k dofs, 40 at 88k in 3D; never fewer than
+MIN_WORTH); then J is refactored (fresh factors solve in one iteration). Spending on the
+kept factors what a factorisation would cost before paying for one costs at most twice the
+best choice made knowing the iterations to come.
 Why not always refactor: in 3D the contact couplings double the factors of K_bc (1.3e8
 entries at 88k dofs against 6.7e7), and a factorisation costs 20-30 triangular solves
 (serial: 0.7 s against 0.02 s at 28k dofs, 5.3 s against 0.25 s at 88k). Measured on the 3D
@@ -64,9 +69,8 @@ from pinbore.fem.scene import Reload, Unload
 
 PREDICTOR_RATIO = 0.5
 LINEAR_RTOL = 1e-8            # of each Newton step's linear solve (relative)
-REUSE_NODES = 8               # pin nodes whose contact terms may differ from the factorised ones
-REFACTOR_ITERATIONS = 20      # a linear solve that took more: refactor at the next one
-REUSE_MAX_ITERATIONS = 40     # GMRES iterations on a kept factorisation before giving up
+MIN_WORTH = 8                 # GMRES iterations a factorisation is always worth
+REUSE_MAX_ITERATIONS = 80     # GMRES iterations on a kept factorisation before giving up
 UNLOAD_FORCE_TOLERANCE = 1e-4   # of the force at the top: the unloading has reached zero force
 UNLOAD_SEARCH_STEPS = 20        # steps of the search for zero force before it gives up
 SNES_REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
@@ -137,6 +141,7 @@ class LoadStepper:
         self.x = elasticity.K.createVecRight()
         self.work = self.x.duplicate()
         self.factorizations, self.factored = 0, None   # and the contact terms they factorised
+        self.spent = 0      # GMRES iterations on the present factors
         self.snes = self._make_snes(newton_max_it, force_atol, couplings)
         if self.material.plastic and contact.friction is None:
             # A point at the edge of the plastic zone, beside a node entering contact, can
@@ -163,18 +168,23 @@ class LoadStepper:
         kind = self.contact.add_tangent(x, J)
         J.assemble()
         J.zeroRows(self.prescribed, diag=1.0)  # contact terms on a plane of symmetry
-        # Keep the factors of an earlier Jacobian as GMRES's preconditioner while the contact
-        # terms differ from their own at no more than REUSE_NODES pin nodes and they served
-        # the last linear solve; else refactor (module docstring). A plastic material's
-        # tangent changes wherever a point yields: always refactor. The decision is collective.
+        # Keep the factors of an earlier Jacobian as GMRES's preconditioner while the GMRES
+        # iterations spent on them and expected of the next solve (about one per pin node
+        # whose contact terms differ from the factorised ones, or the last solve's) stay
+        # within a factorisation's worth; else refactor (module docstring). A plastic
+        # material's tangent changes wherever a point yields: always refactor. The decision
+        # is collective.
         ksp = snes.getKSP()
         changed = np.inf if self.factored is None else np.count_nonzero(kind != self.factored)
-        refactor = (self.material.plastic or changed > REUSE_NODES
-                    or ksp.getIterationNumber() > REFACTOR_ITERATIONS
+        worth = max(self.lu.worth_iterations(), MIN_WORTH)
+        if self.factored is not None:
+            self.spent += ksp.getIterationNumber()
+        expected = max(changed, ksp.getIterationNumber())
+        refactor = (self.material.plastic or self.spent + expected > worth
                     or ksp.getConvergedReason() < 0)   # e.g. the kept factors had failed
         if self.el.mesh.comm.allreduce(refactor, op=MPI.LOR):
             self.lu.factor(J)
-            self.factored = kind
+            self.factored, self.spent = kind, 0
             self.factorizations += 1
 
     def run(self, programme, progress=None, on_step=None) -> Run:
@@ -405,7 +415,8 @@ def newton_solver(comm, J: PETSc.Mat, residual, jacobian, template: PETSc.Vec, m
 class KeptLU:
     """A PETSc preconditioner (type "python") that applies the MUMPS LU factors of a copy of
     the Jacobian taken when the stepper calls factor(J); PETSc's own set-up, called whenever
-    the Jacobian changes, keeps them. A failed factorisation fails the linear solve."""
+    the Jacobian changes, keeps them. A failed factorisation fails the linear solve. It times
+    its last factorisation and its applications (worth_iterations)."""
 
     def __init__(self, comm):
         self.ksp = PETSc.KSP().create(comm)
@@ -416,14 +427,23 @@ class KeptLU:
         pc.setFactorSolverType("mumps")
         self.ksp.setFromOptions()
         self.P = None
+        self.factor_time, self.apply_time, self.applies = 0.0, 0.0, 0
+
+    def worth_iterations(self) -> float:
+        """Applications of the factors that cost as much as the last factorisation (0 before
+        both were measured)."""
+        return self.factor_time * self.applies / self.apply_time if self.applies else 0.0
 
     def factor(self, J: PETSc.Mat) -> None:
+        start = time.perf_counter()
         if self.P is not None and self.P.getInfo()["nz_used"] == J.getInfo()["nz_used"]:
             J.copy(self.P, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
         else:   # the first, or J gained entries (its pattern only grows): factorise anew
             self.P = J.copy()
             self.ksp.setOperators(self.P)
         self.ksp.setUp()
+        self.ksp.getPC().setUp()   # factorise now (else at the first application), timed
+        self.factor_time = time.perf_counter() - start
 
     def setUp(self, pc):
         pass
@@ -433,7 +453,10 @@ class KeptLU:
         if failed:
             pc.setFailedReason(failed)
             return
+        start = time.perf_counter()
         self.ksp.solve(x, y)
+        self.apply_time += time.perf_counter() - start
+        self.applies += 1
 
 
 def jacobian_matrix(K: PETSc.Mat, couplings: np.ndarray) -> PETSc.Mat:
