@@ -10,14 +10,16 @@ with PETSc SNES: Newton, full steps, the tangent J = K_bc + K_c (fem.contact say
 of K_c are kept). The linear solver is GMRES on J, preconditioned by the MUMPS LU factors of
 an earlier J. K_bc never changes and K_c changes only at the pin nodes whose contact state
 changed (in or out of contact, stick or slip): a change of low rank at each such node, which
-costs GMRES about one iteration on the kept factors (measured at 48k dofs: 19, 22 and 48
-changed nodes took 19, 22 and 33 iterations). So the factors are kept while the GMRES
-iterations spent on them, with those the next solve is expected to take (one per changed
-node, or the last solve's), stay within what a factorisation costs in applications of the
-factors (KeptLU times both: about 30 at 17k dofs, 40 at 88k in 3D; never fewer than
-MIN_WORTH); then J is refactored (fresh factors solve in one iteration). Spending on the
-kept factors what a factorisation would cost before paying for one costs at most twice the
-best choice made knowing the iterations to come.
+costs GMRES iterations on the kept factors: about one per node without friction (measured
+at 48k dofs: 19, 22 and 48 changed nodes took 19, 22 and 33 iterations), several per
+stick-slip flip (19 flips took 80). So the factors are kept while the GMRES iterations spent
+on them, with those the next solve is expected to take (the changed nodes times the
+iterations per changed node of the solves so far, or the last solve's), stay within what a
+factorisation costs in applications of the factors (KeptLU times both: about 30 at 17k-28k
+dofs, 50 at 88k in 3D; never fewer than MIN_WORTH); then J is refactored (fresh factors
+solve in one iteration). Spending on the kept factors what a factorisation would cost
+before paying for one costs at most twice the best choice made knowing the iterations to
+come.
 Why not always refactor: in 3D the contact couplings double the factors of K_bc (1.3e8
 entries at 88k dofs against 6.7e7), and a factorisation costs 20-30 triangular solves
 (serial: 0.7 s against 0.02 s at 28k dofs, 5.3 s against 0.25 s at 88k). Measured on the 3D
@@ -144,6 +146,8 @@ class LoadStepper:
         self.work = self.x.duplicate()
         self.factorizations, self.factored = 0, None   # and the contact terms they factorised
         self.spent = 0      # GMRES iterations on the present factors
+        self.changed = 0    # nodes whose terms differed from the factors' at the last solve
+        self.changes = np.zeros(2)  # changed nodes, GMRES iterations: sums over kept solves
         self.snes = self._make_snes(newton_max_it, force_atol, couplings)
         if self.material.plastic and contact.friction is None:
             # A point at the edge of the plastic zone, beside a node entering contact, can
@@ -171,23 +175,28 @@ class LoadStepper:
         J.assemble()
         J.zeroRows(self.prescribed, diag=1.0)  # contact terms on a plane of symmetry
         # Keep the factors of an earlier Jacobian as GMRES's preconditioner while the GMRES
-        # iterations spent on them and expected of the next solve (about one per pin node
-        # whose contact terms differ from the factorised ones, or the last solve's) stay
-        # within a factorisation's worth; else refactor (module docstring). A plastic
-        # tangent changes wherever points flow, which the last solve's iterations tell. The
-        # decision is collective.
+        # iterations spent on them and expected of the next solve (per pin node whose
+        # contact terms differ from the factorised ones, as many as the kept solves took so
+        # far; or the last solve's) stay within a factorisation's worth; else refactor
+        # (module docstring). A plastic tangent changes wherever points flow, which the last
+        # solve's iterations tell. The decision is collective.
         ksp = snes.getKSP()
         changed = np.inf if self.factored is None else np.count_nonzero(kind != self.factored)
         worth = max(self.lu.worth_iterations(), MIN_WORTH)
+        last = ksp.getIterationNumber()
         if self.factored is not None:
-            self.spent += ksp.getIterationNumber()
-        expected = max(changed, ksp.getIterationNumber())
+            self.spent += last
+            if self.changed > 0:
+                self.changes += (self.changed, last)
+        rate = max(1.0, self.changes[1] / self.changes[0]) if self.changes[0] else 1.0
+        expected = max(changed * rate, last)
         refactor = (self.spent + expected > worth
                     or ksp.getConvergedReason() < 0)   # e.g. the kept factors had failed
         if self.el.mesh.comm.allreduce(refactor, op=MPI.LOR):
             self.lu.factor(J)
             self.factored, self.spent = kind, 0
             self.factorizations += 1
+        self.changed = 0 if self.factored is kind else changed
 
     def run(self, programme, progress=None, on_step=None) -> Run:
         """Solve for each load point of the programme in turn (see the module docstring; an
