@@ -23,10 +23,9 @@ come.
 Why not always refactor: in 3D the contact couplings double the factors of K_bc (1.3e8
 entries at 88k dofs against 6.7e7), and a factorisation costs 20-30 triangular solves
 (serial: 0.7 s against 0.02 s at 28k dofs, 5.3 s against 0.25 s at 88k). Measured on the 3D
-push of bench/fem3d.py: the same Newton iterations and forces (to 1e-9), with 10 of 17 (28k
-dofs) and 13 of 20 (88k dofs) linear solves refactored; 88k dofs in 82 s serial (116 s when
-every Jacobian was factorised) and 51 s on 2 ranks (66 s). With friction the stick/slip
-flips leave little to keep (18 of 25 refactored, the same time as refactoring all). A
+push of bench/fem3d.py: the same Newton iterations and forces (to 1e-9); at 88k dofs 6 of 16
+linear solves refactored, 62 s serial and 37 s on 2 ranks (116 s and 66 s when every
+Jacobian was factorised); with friction at 28k dofs 14 of 23, 19.5 s (21 s). A
 plastic tangent changes wherever points flow; the same rule keeps its factors (2D, 32k dofs,
 a load-unload curve: 54 factorisations for 110 Newton iterations, the same time as one each).
 
