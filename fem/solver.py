@@ -10,18 +10,32 @@ with PETSc SNES: Newton, full steps, the tangent J = K_bc + K_c (fem.contact say
 of K_c are kept). The linear solver is GMRES on J, preconditioned by the MUMPS LU factors of
 an earlier J. K_bc never changes and K_c changes only at the pin nodes whose contact state
 changed (in or out of contact, stick or slip): a change of low rank at each such node, which
-costs GMRES a few iterations on the kept factors. So the factors are kept while at most
-REUSE_NODES nodes differ from the factorised state and the last linear solve took at most
-REFACTOR_ITERATIONS iterations, else J is refactored (fresh factors solve in one iteration).
+costs GMRES iterations on the kept factors: about one per node without friction (measured
+at 48k dofs: 19, 22 and 48 changed nodes took 19, 22 and 33 iterations), several per
+stick-slip flip (19 flips took 80). So the factors are kept while the GMRES iterations spent
+on them, with those the next solve is expected to take (the changed nodes times the
+iterations per changed node of the solves so far, or the last solve's), stay within what a
+factorisation costs in applications of the factors (KeptLU times both: about 30 at 17k-28k
+dofs, 50 at 88k in 3D; never fewer than MIN_WORTH); then J is refactored (fresh factors
+solve in one iteration). Spending on the kept factors what a factorisation would cost
+before paying for one costs at most twice the best choice made knowing the iterations to
+come.
 Why not always refactor: in 3D the contact couplings double the factors of K_bc (1.3e8
 entries at 88k dofs against 6.7e7), and a factorisation costs 20-30 triangular solves
 (serial: 0.7 s against 0.02 s at 28k dofs, 5.3 s against 0.25 s at 88k). Measured on the 3D
-push of bench/fem3d.py: the same Newton iterations and forces (to 1e-9), with 10 of 17 (28k
-dofs) and 13 of 20 (88k dofs) linear solves refactored; 88k dofs in 82 s serial (116 s when
-every Jacobian was factorised) and 51 s on 2 ranks (66 s). With friction the stick/slip
-flips leave little to keep (18 of 25 refactored, the same time as refactoring all).
+push of bench/fem3d.py: the same Newton iterations and forces (to 1e-9); at 88k dofs 6 of 16
+linear solves refactored, 62 s serial and 37 s on 2 ranks (116 s and 66 s when every
+Jacobian was factorised); with friction at 28k dofs 14 of 23, 19.5 s (21 s). A
+plastic tangent changes wherever points flow; the same rule keeps its factors (2D, 32k dofs,
+a load-unload curve: 54 factorisations for 110 Newton iterations, the same time as one each).
 
-The starting guess extrapolates the last two converged states by half a secant step: the contact arc grows sub-linearly with the approach, so a full secant
+The first step's guess moves the pin rigidly, but not by the whole push: by the travel at
+which its overlap with the bore spans the contact arc estimated for that push
+(fem.model.first_shift). The whole push overlaps an arc far wider than the contact's, and
+Newton spent its first iterations releasing nodes (88k dofs: 8 iterations and 7
+factorisations, now 4 and 3; the 2D shipped scenes 7-10 iterations, now 2-6).
+
+The later steps' starting guess extrapolates the last two converged states by half a secant step: the contact arc grows sub-linearly with the approach, so a full secant
 step over-predicts the arc and Newton spends its iterations releasing nodes. Measured on
 10-step curves for clearances 1e-6 to 5e-4 m: 3 Newton iterations per step with half a
 step, 5-7 with a full one.
@@ -58,9 +72,8 @@ from pinbore.fem.scene import Reload, Unload
 
 PREDICTOR_RATIO = 0.5
 LINEAR_RTOL = 1e-8            # of each Newton step's linear solve (relative)
-REUSE_NODES = 8               # pin nodes whose contact terms may differ from the factorised ones
-REFACTOR_ITERATIONS = 20      # a linear solve that took more: refactor at the next one
-REUSE_MAX_ITERATIONS = 40     # GMRES iterations on a kept factorisation before giving up
+MIN_WORTH = 8                 # GMRES iterations a factorisation is always worth
+REUSE_MAX_ITERATIONS = 80     # GMRES iterations on a kept factorisation before giving up
 UNLOAD_FORCE_TOLERANCE = 1e-4   # of the force at the top: the unloading has reached zero force
 UNLOAD_SEARCH_STEPS = 20        # steps of the search for zero force before it gives up
 SNES_REASONS = {v: k for k, v in vars(PETSc.SNES.ConvergedReason).items() if not k.startswith("_")}
@@ -110,12 +123,15 @@ class Run:
 class LoadStepper:
     def __init__(self, elasticity: Elasticity, contact: PinBoreContact, *, clearance, direction,
                  method, gap_tolerance, newton_max_it, uzawa_max_it, max_cutbacks, force_atol,
-                 couplings, material=None):
+                 couplings, material=None, first_shift=None):
         """material: the bodies' internal forces, tangent and state (internal_force,
         add_tangent, commit, snapshot, restore, max_plastic_strain): the Elasticity itself
-        (constant stiffness, no state) unless given (fem.plasticity.ElastoPlastic)."""
+        (constant stiffness, no state) unless given (fem.plasticity.ElastoPlastic).
+        first_shift(d): how far (m) the first step's guess moves the pin rigidly for a push
+        of the hub by d (module docstring; fem.model.first_shift); None: by d."""
         self.el, self.contact = elasticity, contact
         self.material = elasticity if material is None else material
+        self.first_shift = first_shift
         self.clearance, self.direction = clearance, np.asarray(direction, dtype=float)
         self.across = np.zeros_like(self.direction)      # e_z x direction
         self.across[:2] = -self.direction[1], self.direction[0]
@@ -128,6 +144,9 @@ class LoadStepper:
         self.x = elasticity.K.createVecRight()
         self.work = self.x.duplicate()
         self.factorizations, self.factored = 0, None   # and the contact terms they factorised
+        self.spent = 0      # GMRES iterations on the present factors
+        self.changed = 0    # nodes whose terms differed from the factors' at the last solve
+        self.changes = np.zeros(2)  # changed nodes, GMRES iterations: sums over kept solves
         self.snes = self._make_snes(newton_max_it, force_atol, couplings)
         if self.material.plastic and contact.friction is None:
             # A point at the edge of the plastic zone, beside a node entering contact, can
@@ -154,19 +173,29 @@ class LoadStepper:
         kind = self.contact.add_tangent(x, J)
         J.assemble()
         J.zeroRows(self.prescribed, diag=1.0)  # contact terms on a plane of symmetry
-        # Keep the factors of an earlier Jacobian as GMRES's preconditioner while the contact
-        # terms differ from their own at no more than REUSE_NODES pin nodes and they served
-        # the last linear solve; else refactor (module docstring). A plastic material's
-        # tangent changes wherever a point yields: always refactor. The decision is collective.
+        # Keep the factors of an earlier Jacobian as GMRES's preconditioner while the GMRES
+        # iterations spent on them and expected of the next solve (per pin node whose
+        # contact terms differ from the factorised ones, as many as the kept solves took so
+        # far; or the last solve's) stay within a factorisation's worth; else refactor
+        # (module docstring). A plastic tangent changes wherever points flow, which the last
+        # solve's iterations tell. The decision is collective.
         ksp = snes.getKSP()
         changed = np.inf if self.factored is None else np.count_nonzero(kind != self.factored)
-        refactor = (self.material.plastic or changed > REUSE_NODES
-                    or ksp.getIterationNumber() > REFACTOR_ITERATIONS
+        worth = max(self.lu.worth_iterations(), MIN_WORTH)
+        last = ksp.getIterationNumber()
+        if self.factored is not None:
+            self.spent += last
+            if self.changed > 0:
+                self.changes += (self.changed, last)
+        rate = max(1.0, self.changes[1] / self.changes[0]) if self.changes[0] else 1.0
+        expected = max(changed * rate, last)
+        refactor = (self.spent + expected > worth
                     or ksp.getConvergedReason() < 0)   # e.g. the kept factors had failed
         if self.el.mesh.comm.allreduce(refactor, op=MPI.LOR):
             self.lu.factor(J)
-            self.factored = kind
+            self.factored, self.spent = kind, 0
             self.factorizations += 1
+        self.changed = 0 if self.factored is kind else changed
 
     def run(self, programme, progress=None, on_step=None) -> Run:
         """Solve for each load point of the programme in turn (see the module docstring; an
@@ -289,7 +318,7 @@ class LoadStepper:
     def _predict(self, history, target):
         """Half-secant extrapolation of displacements and multipliers while the step
         continues the previous one; at a change of programme the last state (the hub alone
-        moves); at the first step the pin moved rigidly with the hub."""
+        moves); at the first step the pin moved rigidly towards the bore (first_shift)."""
         point, x, snapshot, _ = history[-1]
         self.contact.restore(snapshot)
         step = target - point
@@ -302,7 +331,8 @@ class LoadStepper:
                 self.contact.extrapolate(snapshot_0, ratio, self.augmented)
                 return x + ratio * (x - x_0)
             return x.copy()  # a new programme: only the hub moves (the pin is held by friction)
-        return x + self.el.pin_rigid_motion(step[0] * self.direction + step[2] * self.across,
+        shift = step[0] if self.first_shift is None else self.first_shift(step[0])
+        return x + self.el.pin_rigid_motion(shift * self.direction + step[2] * self.across,
                                             step[1], step[3])
 
     def _attempt(self, history, target) -> StepResult | str:
@@ -395,7 +425,8 @@ def newton_solver(comm, J: PETSc.Mat, residual, jacobian, template: PETSc.Vec, m
 class KeptLU:
     """A PETSc preconditioner (type "python") that applies the MUMPS LU factors of a copy of
     the Jacobian taken when the stepper calls factor(J); PETSc's own set-up, called whenever
-    the Jacobian changes, keeps them. A failed factorisation fails the linear solve."""
+    the Jacobian changes, keeps them. A failed factorisation fails the linear solve. It times
+    its last factorisation and its applications (worth_iterations)."""
 
     def __init__(self, comm):
         self.ksp = PETSc.KSP().create(comm)
@@ -406,14 +437,23 @@ class KeptLU:
         pc.setFactorSolverType("mumps")
         self.ksp.setFromOptions()
         self.P = None
+        self.factor_time, self.apply_time, self.applies = 0.0, 0.0, 0
+
+    def worth_iterations(self) -> float:
+        """Applications of the factors that cost as much as the last factorisation (0 before
+        both were measured)."""
+        return self.factor_time * self.applies / self.apply_time if self.applies else 0.0
 
     def factor(self, J: PETSc.Mat) -> None:
+        start = time.perf_counter()
         if self.P is not None and self.P.getInfo()["nz_used"] == J.getInfo()["nz_used"]:
             J.copy(self.P, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
         else:   # the first, or J gained entries (its pattern only grows): factorise anew
             self.P = J.copy()
             self.ksp.setOperators(self.P)
         self.ksp.setUp()
+        self.ksp.getPC().setUp()   # factorise now (else at the first application), timed
+        self.factor_time = time.perf_counter() - start
 
     def setUp(self, pc):
         pass
@@ -423,7 +463,10 @@ class KeptLU:
         if failed:
             pc.setFailedReason(failed)
             return
+        start = time.perf_counter()
         self.ksp.solve(x, y)
+        self.apply_time += time.perf_counter() - start
+        self.applies += 1
 
 
 def jacobian_matrix(K: PETSc.Mat, couplings: np.ndarray) -> PETSc.Mat:
