@@ -185,3 +185,37 @@ def _joint_label(law) -> str:
         return "older laws.json"
     return (f"pin {j.pin_E_Pa / 1e9:.3g} / bore {j.bore_E_Pa / 1e9:.3g} GPa, "
             f"c = {(j.bore_radius_m - j.pin_radius_m) * 1e6:.3g} um")
+
+
+def force_histories(path, histories) -> None:
+    """The contact force per length against time of every impact, one row per joint
+    (`histories`: {joint key: (law, [(impact point, fem.impact_file.History)])}): left, the
+    force (kN/m, logarithmic) against the time from first touch (us); right, the force over
+    its peak against the time over the contact duration, t / t_c, which shows how the pulse's
+    shape changes with the speed (a Hertzian pulse of a rigid pin would be one curve)."""
+    fig, axes = plt.subplots(len(histories), 2, figsize=(11.5, 3.9 * len(histories)),
+                             squeeze=False)
+    for (ax, bx), (key, (law, runs)) in zip(axes, histories.items()):
+        colours = plt.cm.viridis(np.linspace(0, 0.9, len(runs)))
+        for colour, (q, h) in zip(colours, runs):
+            first = np.flatnonzero(h.approach >= 0)[0]   # first touch: the hub's travel beyond
+            start = np.interp(0.0, h.approach[first - 1:first + 1], h.time[first - 1:first + 1])
+            t = h.time - start                          # it crosses 0 (free flight before it)
+            label = f"v0 = {q.speed_m_per_s:.3g} m/s, e = {q.restitution:.3f}"
+            ax.semilogy(t * 1e6, np.where(h.force > 0, h.force / 1e3, np.nan), "-", color=colour,
+                        lw=1.2, label=label)
+            bx.plot(t / q.contact_duration_s, h.force / q.peak_force_N_per_m, "-", color=colour,
+                    lw=1.2, label=label)
+        ax.set_xlabel("time from first touch (us)")
+        ax.set_ylabel("contact force per length (kN/m)")
+        peaks = [q.peak_force_N_per_m / 1e3 for q, _ in runs]
+        ax.set_ylim(0.03 * min(peaks), 2 * max(peaks))
+        bx.set_xlabel("t / t_contact")
+        bx.set_ylabel("force / peak force")
+        bx.set_xlim(-0.05, 1.3)
+        ax.set_title(_joint_label(law), fontsize=9)
+        bx.set_title("normalised: shape of the pulse", fontsize=9)
+        for a in (ax, bx):
+            a.grid(alpha=0.3, which="both")
+            a.legend(fontsize=7)
+    save_png(fig, path, layout=True)

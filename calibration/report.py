@@ -150,4 +150,10 @@ def restitution_section(laws: dict[str, lawsfile.RestitutionLaw], folder: Path) 
                             "e(v0) of the FE impacts (points) and the fits of every joint "
                             "(left); per joint, what each published hysteresis law rebounds "
                             "with when given the fit's e (build/calibration/restitution.png)."))
+    if (folder / "impact_force.png").exists():
+        parts.append(figure(png_data(folder / "impact_force.png"),
+                            "Contact force per length against time of the FE impacts, one row "
+                            "per joint: against the time from first touch (left) and, over its "
+                            "peak, against the time over the contact duration (right) "
+                            "(build/calibration/impact_force.png)."))
     return "".join(parts)

@@ -96,3 +96,16 @@ def fit(points: list[lawsfile.ImpactPoint], joint: lawsfile.ImpactJoint) -> laws
     return law.model_copy(update={
         "max_fit_error": float(np.max(np.abs(np.asarray(fitted) - e))),
         "impacts": [q.model_copy(update={"fitted": f}) for q, f in zip(points, fitted)]})
+
+
+def histories(laws: dict[str, lawsfile.RestitutionLaw]):
+    """The force histories of each law's impacts, {key: (law, [(impact, History)])}, from
+    the history.csv beside each impact.json (fem.impact_file); impacts without one (a summary
+    copied alone) are left out, and so is a joint with none."""
+    found = {}
+    for key, law in laws.items():
+        runs = [(q, impact_file.read_history(impact_file.history_beside(q.name)))
+                for q in law.impacts if impact_file.history_beside(q.name).is_file()]
+        if runs:
+            found[key] = (law, runs)
+    return found

@@ -183,6 +183,9 @@ def run(paths, out, length=None, per_length_name=None, impacts=()) -> int:
             figures.sliced_curves(tmp / "sliced.png", curves_3d, sliced_laws, chosen.force)
         if restitution_laws:
             figures.restitution(tmp / "restitution.png", restitution_laws)
+            histories = restitution.histories(restitution_laws)
+            if histories:
+                figures.force_histories(tmp / "impact_force.png", histories)
     return 0
 
 

@@ -18,6 +18,8 @@ from pinbore.core.scene import Record, read_json
 from pinbore.fem.curve import Column, _float, _read, _write
 
 COMMAND = "impact"
+HISTORY = "history.csv"   # the two files of one impact's output directory
+SUMMARY = "impact.json"
 
 
 @dataclass(frozen=True)
@@ -116,6 +118,12 @@ class ImpactSummary(Record):
     contact: dict
     wall_time_s: dict
     platform: dict
+
+
+def history_beside(summary_path) -> Path:
+    """The history.csv of the run whose impact.json (or output directory) is given."""
+    path = Path(summary_path)
+    return (path if path.is_dir() else path.parent) / HISTORY
 
 
 def write_summary(path: Path, summary: ImpactSummary) -> None:

@@ -68,11 +68,11 @@ def run(scene_path, out, scene: ImpactScene | None = None, comm=MPI.COMM_WORLD) 
         summary = summarise(scene, scene_path, result, stepper, el, sizing, contact,
                             {"setup": setup, "solve": solve})
         rows = list(history_rows(result, stepper.impact_energy))
-        impact_file.write_history(tmp / "history.csv", rows)
+        impact_file.write_history(tmp / impact_file.HISTORY, rows)
         if scene.output.picture:
             figure(tmp / "force_time.png", result, scene, summary)
         summary.wall_time_s["total"] = time.perf_counter() - start
-        impact_file.write_summary(tmp / "impact.json", summary)
+        impact_file.write_summary(tmp / impact_file.SUMMARY, summary)
     if result.stop is not None:
         print(f"pinbore impact: {scene_path}: stopped early: {result.stop}; kept "
               f"{len(result.records)} time points in {out} (marked incomplete)", file=sys.stderr)

@@ -48,14 +48,19 @@ def test_hysteresis_for_restitution_near_one_is_lankarani_nikravesh():
 
 
 def _write_impacts(folder, speeds, bore=None) -> list:
-    """impact.json of FE impacts at `speeds` (steel bore, or the `bore` material), written
-    through fem.impact_file."""
+    """impact.json and history.csv of FE impacts at `speeds` (steel bore, or the `bore`
+    material), one folder each, written through fem.impact_file."""
+    from pinbore.fem.impact_run import history_rows
     paths = []
     for v in speeds:
         data = impact_scene(impact={"speed": v, "steps_per_contact": 50})
         data["materials"]["bore"].update(bore or {})
-        path = folder / f"{'al' if bore else 'steel'}_v{v:g}.json"
-        impact_file.write_summary(path, Impact(data).summary)
+        path = folder / f"{'al' if bore else 'steel'}_v{v:g}" / impact_file.SUMMARY
+        path.parent.mkdir()
+        run = Impact(data)
+        impact_file.write_summary(path, run.summary)
+        impact_file.write_history(path.parent / impact_file.HISTORY,
+                                  history_rows(run.run, run.stepper.impact_energy))
         paths.append(path)
     return paths
 
@@ -198,6 +203,7 @@ def test_calibrate_writes_the_restitution(tmp_path, fe_impacts):
     (key, law), = restitution.fit_all(fe_impacts).items()
     assert written.restitution[key].coefficients == pytest.approx(law.coefficients, rel=1e-12)
     assert (out / "restitution.png").stat().st_size > 0
+    assert (out / "impact_force.png").stat().st_size > 0   # the force histories beside them
     plain = pinbore("calibrate", str(tmp_path / "fem" / "curve.csv"), "--out", str(tmp_path / "c2"))
     assert plain.returncode == 0
     data = json.loads((tmp_path / "c2" / "laws.json").read_text())
