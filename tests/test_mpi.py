@@ -46,7 +46,12 @@ def test_two_ranks_match_one(write_scene, tmp_path, name):
                                str(scene), "--out", str(tmp_path / "mpi")],
                               capture_output=True, text=True, timeout=600)
     assert parallel.returncode == 0, parallel.stderr
-    np.testing.assert_allclose(curve(tmp_path / "mpi" / "curve.csv"),
-                               curve(tmp_path / "serial" / "curve.csv"), rtol=1e-8)
+    # To 1e-8 of each column's largest value, not of each entry: the last unloading step's
+    # force is ~1e-5 of the top's, and the linear solves (GMRES to 1e-8 on kept factors,
+    # refactorised when a timed cost rule says so, fem.solver) may take the two runs along
+    # different paths to the same Newton tolerance.
+    mpi, one = curve(tmp_path / "mpi" / "curve.csv"), curve(tmp_path / "serial" / "curve.csv")
+    scale = np.broadcast_to(np.abs(one).max(axis=0), one.shape)
+    np.testing.assert_array_less(np.abs(mpi - one), 1e-8 * scale + 1e-300)
     picture = "contact.png" if name.startswith("2D") else "pressure_map.png"
     assert (tmp_path / "mpi" / picture).exists() and (tmp_path / "mpi" / "fields.xdmf").exists()
