@@ -425,8 +425,9 @@ def newton_solver(comm, J: PETSc.Mat, residual, jacobian, template: PETSc.Vec, m
 class KeptLU:
     """A PETSc preconditioner (type "python") that applies the MUMPS LU factors of a copy of
     the Jacobian taken when the stepper calls factor(J); PETSc's own set-up, called whenever
-    the Jacobian changes, keeps them. A failed factorisation fails the linear solve. It times
-    its last factorisation and its applications (worth_iterations)."""
+    the Jacobian changes, keeps them. A failed factorisation fails the linear solve (its
+    application returns NaN and the failure, which GMRES reads). It times its last
+    factorisation and its applications (worth_iterations)."""
 
     def __init__(self, comm):
         self.ksp = PETSc.KSP().create(comm)
@@ -460,8 +461,9 @@ class KeptLU:
 
     def apply(self, pc, x, y):
         failed = self.ksp.getPC().getFailedReason()
-        if failed:
+        if failed:   # no factors: NaN, and GMRES reads the failure; Newton fails, cut back
             pc.setFailedReason(failed)
+            y.set(np.nan)
             return
         start = time.perf_counter()
         self.ksp.solve(x, y)

@@ -68,3 +68,32 @@ def test_first_guess_changes_the_path_not_the_solution(clearance):
     guessed, whole = Solved(data), Solved(data, hook=WholePush())
     np.testing.assert_allclose(guessed.forces, whole.forces, rtol=1e-7)
     assert guessed.run.steps[0].newton_iterations < whole.run.steps[0].newton_iterations
+
+
+def test_a_failed_factorisation_fails_the_linear_solve():
+    """A Jacobian that MUMPS cannot factorise (a zero pivot) fails GMRES on the kept factors
+    (their application returns NaN, and GMRES reads the preconditioner's failure), so Newton
+    fails and the load step is cut back. Before, GMRES called a direction it never computed
+    converged (CONVERGED_ATOL)."""
+    import dolfinx_solver  # noqa: F401
+    from mpi4py import MPI
+    from petsc4py import PETSc
+
+    from pinbore.fem.solver import KeptLU
+
+    singular = PETSc.Mat().createAIJ([3, 3], nnz=1, comm=MPI.COMM_SELF)
+    for i, value in enumerate([1.0, 0.0, 1.0]):
+        singular.setValue(i, i, value)
+    singular.assemble()
+    lu = KeptLU(MPI.COMM_SELF)
+    lu.factor(singular)
+    ksp = PETSc.KSP().create(MPI.COMM_SELF)
+    ksp.setType("gmres")
+    ksp.setOperators(singular)
+    ksp.getPC().setType("python")
+    ksp.getPC().setPythonContext(lu)
+    b = singular.createVecLeft()
+    b.set(1.0)
+    x = b.duplicate()
+    ksp.solve(b, x)
+    assert ksp.getConvergedReason() == PETSc.KSP.ConvergedReason.DIVERGED_PCSETUP_FAILED
