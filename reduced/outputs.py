@@ -76,6 +76,15 @@ def per_step(model, run):
     return cols, energy, drift
 
 
+def hermite_basis(x: np.ndarray):
+    """The cubic Hermite basis on [0, 1] at the points x, and its slopes: two (4, n) arrays
+    whose rows weigh y0, h y0', y1, h y1' (a step of size h from y0 to y1)."""
+    values = np.array([2 * x**3 - 3 * x**2 + 1, x**3 - 2 * x**2 + x, -2 * x**3 + 3 * x**2,
+                       x**3 - x**2])
+    slopes = np.array([6 * x**2 - 6 * x, 3 * x**2 - 4 * x + 1, -6 * x**2 + 6 * x, 3 * x**2 - 2 * x])
+    return values, slopes
+
+
 def refined_peak(model, j, run, k):
     """The peak normal force of joint j near accepted step k, refined between the steps
     k-1..k+1 by cubic Hermite interpolation of the penetration (delta and its rate at both ends
@@ -83,13 +92,13 @@ def refined_peak(model, j, run, k):
     times, states, speeds = run.times, run.states, run.speeds
     nq, row = model.nq, model.joints[j]
     best = (0.0, float(times[k]))
+    x = np.linspace(0, 1, 201)
+    values, slopes = hermite_basis(x)
     for a in range(max(k - 1, 0), min(k + 1, times.size - 1)):
         h = times[a + 1] - times[a]
         ends = [kernel.joint_kinematics(states[i, :nq], states[i, nq:2 * nq], row) for i in (a, a + 1)]
-        d0, r0, d1, r1 = ends[0].delta, ends[0].rate * h, ends[1].delta, ends[1].rate * h
-        x = np.linspace(0, 1, 201)
-        delta = (2 * x**3 - 3 * x**2 + 1) * d0 + (x**3 - 2 * x**2 + x) * r0 + (-2 * x**3 + 3 * x**2) * d1 + (x**3 - x**2) * r1
-        rate = ((6 * x**2 - 6 * x) * d0 + (3 * x**2 - 4 * x + 1) * r0 + (-6 * x**2 + 6 * x) * d1 + (3 * x**2 - 2 * x) * r1) / h
+        weights = np.array([ends[0].delta, ends[0].rate * h, ends[1].delta, ends[1].rate * h])
+        delta, rate = weights @ values, weights @ slopes / h
         for i in np.flatnonzero(delta > 0):
             f_el = tables.table_force(delta[i], model.grid_log0, model.grid_step, model.tables[j])
             force = hysteresis_force(f_el, rate[i], speeds[a + 1, j], kernel.joint_chi(row, speeds[a + 1, j]))

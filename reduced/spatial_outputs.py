@@ -93,15 +93,14 @@ def refined_peak(model, j, run, k, points=201):
     times, states = run.times, run.states
     best = (0.0, float(times[k]))
     x = np.linspace(0.0, 1.0, points)
-    basis = np.array([2 * x**3 - 3 * x**2 + 1, x**3 - 2 * x**2 + x, -2 * x**3 + 3 * x**2, x**3 - x**2])
+    basis, _ = outputs.hermite_basis(x)
     for a in range(max(k - 1, 0), min(k + 1, times.size - 1)):
         args = model.kernel_args(run.speeds[a + 1, :CHANNELS * model.joints.shape[0]],
                                  run.latched[a + 1, :model.torsion.shape[0]])
         h = times[a + 1] - times[a]
         f0 = spatial_kernel.rhs_value(times[a], states[a], args)[0]
         f1 = spatial_kernel.rhs_value(times[a + 1], states[a + 1], args)[0]
-        ys = np.outer(basis[0], states[a]) + np.outer(basis[1], h * f0) + \
-            np.outer(basis[2], states[a + 1]) + np.outer(basis[3], h * f1)
+        ys = basis.T @ np.array([states[a], h * f0, states[a + 1], h * f1])
         for i in range(points):
             t = times[a] + x[i] * h
             force = spatial_kernel.rhs_value(t, ys[i], args)[1][CHANNELS * j + RADIAL]
