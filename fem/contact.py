@@ -430,6 +430,15 @@ class ContactState:
         >= 0."""
         return float(np.sum(weights * np.einsum("np,np->n", self.shear, self.slip)))
 
+    def stored(self, weights, penalty: float, tangential_penalty: float = 0.0) -> float:
+        """Energy held by the penalty springs (J/m in 2D, J in 3D): sum w (eps <-g>^2 +
+        |sigma|^2 / eps_T) / 2, the normal penetration and the regularised stick (its shear
+        sigma = eps_T times the elastic part of the tangential displacement)."""
+        normal = penalty * np.maximum(-self.gap, 0.0) ** 2
+        if tangential_penalty > 0:
+            normal = normal + np.einsum("np,np->n", self.shear, self.shear) / tangential_penalty
+        return float(np.sum(weights * normal) / 2)
+
 
 class PinBoreContact:
     """Contact terms between the pin-surface and bore-surface nodes of a P1 vector space.

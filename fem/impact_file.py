@@ -39,7 +39,9 @@ class History:
     plastic_work: np.ndarray     # J/m, dissipated by plastic flow so far
     contact_energy: np.ndarray   # J/m, stored by the penalty
     contact_work: np.ndarray     # J/m, done by the bodies on the contact so far
+    friction_work: np.ndarray    # J/m, dissipated by friction so far
     residual: np.ndarray         # J/m, E_0 - kinetic - strain - plastic_work - contact_energy
+                                 #      - friction_work
     newton_iterations: np.ndarray
     time_step: np.ndarray        # s
 
@@ -55,6 +57,7 @@ COLUMNS = {
     "plastic_work": Column("plastic_work_J_per_m", "J/m", float, ".9e", absent=0.0),
     "contact_energy": _float("contact_energy_J_per_m", "J/m"),
     "contact_work": _float("contact_work_J_per_m", "J/m"),
+    "friction_work": Column("friction_work_J_per_m", "J/m", float, ".9e", absent=0.0),
     "residual": _float("energy_residual_J_per_m", "J/m"),
     "newton_iterations": Column("newton_iterations", "1", int),
     "time_step": _float("time_step_s", "s"),
@@ -81,11 +84,12 @@ class EnergyBook(Record):
     kinetic_J_per_m: float
     strain_J_per_m: float            # stored elastic energy
     plastic_J_per_m: float = 0.0     # plastic work (0: elastic bodies)
-    contact_J_per_m: float           # stored by the penalty
+    contact_J_per_m: float           # stored by the penalty (normal and stick)
     contact_work_J_per_m: float      # done on the contact (trapezoidal rule)
+    friction_J_per_m: float = 0.0    # dissipated by friction
     rebound_J_per_m: float           # |p|^2 / (2 m): the pin's flight after separation
     wave_J_per_m: float              # kinetic + strain - rebound: vibration, waves, locked stress
-    residual_J_per_m: float          # impact - kinetic - strain - plastic - contact
+    residual_J_per_m: float          # impact - kinetic - strain - plastic - contact - friction
     scheme_residual_J_per_m: float   # impact - kinetic - strain - plastic - contact work
     max_relative_residual: float     # max over the run of |residual| / impact
 
@@ -107,11 +111,13 @@ class ImpactSummary(Record):
     energy: EnergyBook
     max_plastic_strain: float = 0.0  # the largest equivalent plastic strain at the end
     estimate: dict                   # Liu's law before the run: duration, max approach
-    time_step_s: float
+    time_step_s: float               # the step dt; steps in contact may be shorter
+    smallest_step_s: float | None = None   # the shortest step taken (energy control, cutbacks)
     spectral_radius: float
     steps: int
     steps_in_contact: int
     cutbacks: int
+    energy_rejections: int = 0       # steps repeated smaller by the energy control
     newton_iterations: int
     dofs: int
     mesh: dict

@@ -40,7 +40,9 @@ def build(scene: ImpactScene, comm=MPI.COMM_WORLD):
         max_cutbacks=scene.solver.max_cutbacks,
         force_atol=model.residual_tolerance(fem_scene, contact.penalty * sizing.contact_size),
         couplings=contact.couplings(np.asarray(impact.direction), sizing.arc_half_angle),
-        massless_surfaces=impact.surface_mass == "redistributed", material=material)
+        massless_surfaces=impact.surface_mass == "redistributed", material=material,
+        step_loss=impact.energy_tolerance * scene.dt / estimate.duration
+        if impact.adaptive_steps else None)
     return stepper, el, contact, sizing
 
 
@@ -87,13 +89,15 @@ def history_rows(result, impact_energy):
                "half_angle": np.degrees(r.half_angle), "min_gap": r.min_gap,
                "kinetic": r.kinetic, "strain": r.strain, "plastic_work": r.plastic_work,
                "contact_energy": r.contact_energy, "contact_work": r.contact_work,
+               "friction_work": r.friction_work,
                "residual": book_residual(impact_energy, r),
                "newton_iterations": r.newton_iterations, "time_step": r.time_step}
 
 
 def book_residual(impact_energy: float, r) -> float:
-    """E_0 - K - U - W_p - Pi_c (J/m): what the energy book misses at the record r."""
-    return impact_energy - r.kinetic - r.strain - r.plastic_work - r.contact_energy
+    """E_0 - K - U - W_p - Pi_c - W_f (J/m): what the energy book misses at the record r."""
+    return (impact_energy - r.kinetic - r.strain - r.plastic_work - r.contact_energy
+            - r.friction_work)
 
 
 def contact_window(records) -> tuple[float, float] | None:
@@ -131,6 +135,7 @@ def summarise(scene, scene_path, result, stepper, el, sizing, contact, wall):
         impact_J_per_m=e0, kinetic_J_per_m=last.kinetic, strain_J_per_m=last.strain,
         plastic_J_per_m=last.plastic_work,
         contact_J_per_m=last.contact_energy, contact_work_J_per_m=last.contact_work,
+        friction_J_per_m=last.friction_work,
         rebound_J_per_m=rebound, wave_J_per_m=last.kinetic + last.strain - rebound,
         residual_J_per_m=book_residual(e0, last),
         scheme_residual_J_per_m=e0 - last.kinetic - last.strain - last.plastic_work - last.contact_work,
@@ -151,7 +156,9 @@ def summarise(scene, scene_path, result, stepper, el, sizing, contact, wall):
                   "max_approach_m": est.max_approach},
         time_step_s=scene.dt, spectral_radius=scene.impact.spectral_radius,
         steps=len(records) - 1, steps_in_contact=result.steps_in_contact,
-        cutbacks=result.cutbacks, newton_iterations=sum(r.newton_iterations for r in records),
+        cutbacks=result.cutbacks, energy_rejections=result.energy_rejections,
+        smallest_step_s=min(r.time_step for r in records[1:]) if len(records) > 1 else None,
+        newton_iterations=sum(r.newton_iterations for r in records),
         dofs=el.num_dofs,
         mesh={"contact_size_m": sizing.contact_size,
               "cells": el.mesh.topology.index_map(2).size_global,
@@ -183,6 +190,7 @@ def figure(path, result, scene, summary) -> None:
     for name, values in (("kinetic", [x.kinetic for x in r]), ("strain", [x.strain for x in r]),
                          ("plastic work", [x.plastic_work for x in r]),
                          ("contact (penalty)", [x.contact_energy for x in r]),
+                         ("friction work", [x.friction_work for x in r]),
                          ("residual", [book_residual(e0, x) for x in r])):
         bx.plot(t, np.asarray(values) / e0, label=name, lw=1)
     bx.set_xlabel("time (us)")

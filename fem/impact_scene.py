@@ -64,7 +64,10 @@ class Impact(Strict):
     conserves the energy of the linear part exactly, below 1 damps the frequencies near
     1/dt), the time step (s) or the steps over the estimated contact duration, the flight
     before contact (m), how long (in estimated contact durations) the run may last before it
-    is called incomplete, and the mass of the contact surfaces' nodes (fem.dynamics)."""
+    is called incomplete, the energy control of the step (adaptive_steps: a step whose
+    contact integration loses or makes more than energy_tolerance E_0 / steps_per_contact is
+    repeated smaller, so the energy book closes to about energy_tolerance of E_0;
+    fem.dynamics) and the mass of the contact surfaces' nodes (fem.dynamics)."""
 
     speed: float = pydantic.Field(gt=0, description="impact speed v0 (m/s)")
     direction_deg: float = pydantic.Field(ge=-360, le=360)
@@ -74,6 +77,8 @@ class Impact(Strict):
     steps_per_contact: int = pydantic.Field(default=100, ge=MIN_STEPS_PER_CONTACT, le=100_000)
     initial_gap: float | None = pydantic.Field(default=None, ge=0)
     max_contact_durations: float = pydantic.Field(default=6.0, gt=1)
+    energy_tolerance: float = pydantic.Field(default=1e-3, gt=0, lt=1)
+    adaptive_steps: bool = True
     surface_mass: Literal["redistributed", "consistent"] = "redistributed"
 
     @property
