@@ -33,7 +33,8 @@ The first step's guess moves the pin rigidly, but not by the whole push: by the 
 which its overlap with the bore spans the contact arc estimated for that push
 (fem.model.first_shift). The whole push overlaps an arc far wider than the contact's, and
 Newton spent its first iterations releasing nodes (88k dofs: 8 iterations and 7
-factorisations, now 4 and 3; the 2D shipped scenes 7-10 iterations, now 2-6).
+factorisations, now 4 and 3 with a factorisation kept for 8 changed nodes, 4 and 2 with
+the factors kept by cost, above; the 2D shipped scenes 7-10 iterations, now 2-6).
 
 The later steps' starting guess extrapolates the last two converged states by half a secant step: the contact arc grows sub-linearly with the approach, so a full secant
 step over-predicts the arc and Newton spends its iterations releasing nodes. Measured on
