@@ -257,14 +257,14 @@ class RestitutionLaw(Record):
     model: Literal[RESTITUTION_MODEL]
     joint: ImpactJoint | None = None   # None: a file of an older pinbore (one law, matched on
     #                                    its impacts' clearance and effective modulus)
-    coefficients: list[float] = pydantic.Field(min_length=3, max_length=3)   # a0, a1, a2
+    coefficients: list[float] = pydantic.Field(min_length=1, max_length=4)   # a0, a1, ...
     speed_range_m_per_s: Range
     max_fit_error: float           # largest |e_fit - e_FE|
     impacts: list[ImpactPoint]
 
     def restitution(self, speed: float) -> float:
         """e at the impact speed v0 (m/s)."""
-        return float(dissipative.restitution_of_speed(speed, *self.coefficients,
+        return float(dissipative.restitution_of_speed(speed, np.asarray(self.coefficients, float),
                                                       *self.speed_range_m_per_s))
 
     def matches(self, r_bore, r_pin, E_pin, nu_pin, E_bore, nu_bore, rel=1e-6) -> bool:

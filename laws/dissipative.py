@@ -190,10 +190,13 @@ def hysteresis_for_restitution(e):
 
 
 @numba.njit(cache=True)
-def restitution_of_speed(speed, a0, a1, a2, low, high):
-    """e(v0) = a0 + a1 x + a2 x^2, x = ln(v0 / 1 m/s): the restitution of FE impacts fitted
-    against the impact speed (ours; calibration.restitution). Outside [low, high] (m/s), where
-    no FE impact was run, e is held at its value at the nearer end (the caller warns); e is
-    kept in [1e-6, 1]."""
+def restitution_of_speed(speed, coefficients, low, high):
+    """e(v0) = sum_k a_k x^k, x = ln(v0 / 1 m/s), coefficients (a_0, a_1, ...): the
+    restitution of FE impacts fitted against the impact speed (ours;
+    calibration.restitution). Outside [low, high] (m/s), where no FE impact was run, e is
+    held at its value at the nearer end (the caller warns); e is kept in [1e-6, 1]."""
     x = math.log(min(max(speed, low), high))
-    return min(max(a0 + a1 * x + a2 * x * x, 1e-6), 1.0)
+    e = 0.0
+    for k in range(len(coefficients) - 1, -1, -1):
+        e = e * x + coefficients[k]
+    return min(max(e, 1e-6), 1.0)

@@ -113,6 +113,27 @@ def test_fit_of_the_fe_restitution(laws, law, fe_impacts, al_impacts):
         assert 0.4 < e[-1] < e[0] < 0.95
 
 
+def test_fit_degree_grows_to_a_cubic_with_the_impacts(law):
+    """The fit keeps one impact more than coefficients: e(x) = a cubic in x = ln v0 sampled
+    at five speeds is reproduced to round-off everywhere in the range (its own cubic), at
+    four speeds by a quadratic, whose residual is the cubic term's least-squares remainder
+    (nonzero); e is held at the ends beyond the range."""
+    truth = np.array([0.60, -0.07, -0.006, 0.004])
+    speeds = np.array([0.1, 0.3, 1.0, 3.0, 5.0])
+
+    def points(vs):
+        e = np.polynomial.polynomial.polyval(np.log(vs), truth)
+        return [law.impacts[0].model_copy(update={"speed_m_per_s": float(v), "restitution": float(r)})
+                for v, r in zip(vs, e)]
+    cubic = restitution.fit(points(speeds), law.joint)
+    assert len(cubic.coefficients) == 4 and cubic.max_fit_error < 1e-12
+    for v in np.geomspace(0.1, 5.0, 17):
+        assert cubic.restitution(v) == pytest.approx(np.polynomial.polynomial.polyval(np.log(v), truth), abs=1e-12)
+    assert cubic.restitution(10.0) == pytest.approx(cubic.restitution(5.0), abs=1e-15)
+    quadratic = restitution.fit(points(speeds[:4]), law.joint)
+    assert len(quadratic.coefficients) == 3 and quadratic.max_fit_error > 1e-4
+
+
 def test_a_joint_with_one_impact_is_one_line(fe_impacts, al_impacts):
     """A joint given a single impact cannot be fitted: one InputError naming the joint."""
     from pinbore.core.errors import InputError
