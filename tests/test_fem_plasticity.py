@@ -181,7 +181,7 @@ def first_yield(mesh):
     # the cells of the pin that the load axis (x = 0, below the pin's centre) crosses
     mesh_ = solved.el.mesh
     cells = mesh_.topology.index_map(2).size_local
-    X = mesh_.geometry.x[mesh_.geometry.dofmap[:cells]][:, :, :2]
+    X = mesh_.geometry.x[mesh_.geometry.dofmaps[0][:cells]][:, :, :2]
     tags = np.zeros(cells, int)
     tags[solved.mesh_data.cell_tags.indices] = solved.mesh_data.cell_tags.values
     centre = X.mean(axis=1)
