@@ -116,6 +116,7 @@ bench: $(STUDY_CURVES) $(STAMP) ## run the benchmarks: bench/*.csv and plots (a 
 	$(PY) bench/fem2d.py --out bench
 	$(PY) bench/fem3d.py --out bench
 	$(PY) bench/plastic.py --out bench
+	$(PY) bench/first_yield.py --out bench
 	$(PY) bench/calibrate.py --out bench
 	$(PY) bench/multibody.py --out bench
 	$(PY) bench/sweep.py --out bench

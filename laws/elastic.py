@@ -276,3 +276,34 @@ def calibrated(d, published, scale, exponent_correction, reference_approach):
 PUBLISHED = {"hertz": hertz_per_length, "johnson": johnson, "liu": liu, "bai_zhao": bai_zhao,
              "pereira": pereira, "radzimovsky": radzimovsky,
              "dubowsky_freudenstein": dubowsky_freudenstein, "esdu_78035": esdu_78035}
+
+
+def hertz_line_subsurface(x, z, a, p0):
+    r"""Stresses (Pa) under a Hertzian line contact of half-width a (m) and peak pressure p0
+    (Pa) in an elastic half-space, at the lateral position x and the depth z >= 0 (m)
+    ([Johnson1985] §4.2, eqs 4.49-4.50, after McEwen):
+
+        sigma_x = -(p0/a) [m (1 + (z^2 + n^2)/(m^2 + n^2)) - 2 z],
+        sigma_z = -(p0/a) m (1 - (z^2 + n^2)/(m^2 + n^2)),
+        tau_xz  =  (p0/a) n (m^2 - z^2)/(m^2 + n^2),
+
+    m^2, n^2 = ([(a^2 - x^2 + z^2)^2 + 4 x^2 z^2]^(1/2) +- (a^2 - x^2 + z^2)) / 2, m >= 0, n
+    with the sign of x. On the axis x = 0: sigma_x = -p0 [(1 + 2 z^2/a^2)/sqrt(1 + z^2/a^2)
+    - 2 z/a], sigma_z = -p0 / sqrt(1 + z^2/a^2). Returns (sigma_x, sigma_z, tau_xz)."""
+    x, z = np.asarray(x, dtype=float), np.asarray(z, dtype=float)
+    A = a * a - x * x + z * z
+    S = np.sqrt(A * A + 4 * x * x * z * z)
+    m = np.sqrt(0.5 * (S + A))
+    n = np.sign(x) * np.sqrt(np.maximum(0.5 * (S - A), 0.0))
+    q = (z * z + n * n) / (m * m + n * n)
+    return (-(p0 / a) * (m * (1 + q) - 2 * z), -(p0 / a) * m * (1 - q),
+            (p0 / a) * n * (m * m - z * z) / (m * m + n * n))
+
+
+def hertz_line_von_mises(x, z, a, p0, nu):
+    """Von Mises stress (Pa) of hertz_line_subsurface in plane strain, sigma_y = nu (sigma_x +
+    sigma_z). Its largest value is on the axis, 0.5575 p0 at z = 0.704 a for nu = 0.3, that
+    is first yield at p0 = 1.794 Y ([Johnson1985] §6.2 rounds it to 1.79 Y = 3.1 k)."""
+    sx, sz, t = hertz_line_subsurface(x, z, a, p0)
+    sy = nu * (sx + sz)
+    return np.sqrt(0.5 * ((sx - sy) ** 2 + (sy - sz) ** 2 + (sz - sx) ** 2) + 3 * t * t)

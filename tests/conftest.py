@@ -55,7 +55,7 @@ class Solved:
         from pinbore.core.scene import validate
 
         self.scene = validate(FemScene, data, "test scene")
-        self.stepper, self.el, self.contact, self.sizing, _ = model.build(self.scene)
+        self.stepper, self.el, self.contact, self.sizing, self.mesh_data = model.build(self.scene)
         if hook is not None:
             hook["stepper"] = self.stepper
         programme = self.scene.load.programme if approaches is None else [(a, 0, 0, 0) for a in approaches]

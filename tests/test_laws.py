@@ -160,3 +160,27 @@ def test_yigit_with_the_energy_balance_coefficient():
 def test_restitution_rejects_impossible_e():
     with pytest.raises(ValueError, match="must be in"):
         dis.flores(1.2)
+
+
+def test_hertz_line_subsurface_field():
+    """McEwen's field: at the surface sigma_x = sigma_z = -p0 sqrt(1 - x^2/a^2) inside the
+    contact, zero outside, no shear; on the axis the closed forms of [Johnson1985] §4.2;
+    the plane-strain von Mises peak at nu = 0.3 is 0.5575 p0 at z = 0.70 a (Johnson's
+    p0 = 1.79 Y = 3.1 k)."""
+    a, p0 = 2e-4, 1e8
+    x = np.linspace(-1.5 * a, 1.5 * a, 31)
+    sx, sz, t = el.hertz_line_subsurface(x, 1e-12 * a, a, p0)
+    p = -p0 * np.sqrt(np.maximum(1 - (x / a) ** 2, 0))
+    np.testing.assert_allclose(sx, p, atol=1e-5 * p0)   # sqrt(z) at the edges
+    np.testing.assert_allclose(sz, p, atol=1e-5 * p0)
+    np.testing.assert_allclose(t, 0, atol=1e-6 * p0)
+    z = np.linspace(0.01, 3, 50) * a
+    sx, sz, t = el.hertz_line_subsurface(0.0, z, a, p0)
+    s = z / a
+    np.testing.assert_allclose(sx, -p0 * ((1 + 2 * s**2) / np.sqrt(1 + s**2) - 2 * s), rtol=1e-12)
+    np.testing.assert_allclose(sz, -p0 / np.sqrt(1 + s**2), rtol=1e-12)
+    X, Z = np.meshgrid(np.linspace(-2, 2, 201) * a, np.linspace(0.01, 2, 200) * a)
+    vm = el.hertz_line_von_mises(X, Z, a, p0, 0.3)
+    k = np.argmax(vm)
+    assert vm.flat[k] / p0 == pytest.approx(0.5575, abs=2e-4)
+    assert X.flat[k] == 0.0 and Z.flat[k] / a == pytest.approx(0.70, abs=0.02)
