@@ -289,7 +289,10 @@ def hertz_line_subsurface(x, z, a, p0):
 
     m^2, n^2 = ([(a^2 - x^2 + z^2)^2 + 4 x^2 z^2]^(1/2) +- (a^2 - x^2 + z^2)) / 2, m >= 0, n
     with the sign of x. On the axis x = 0: sigma_x = -p0 [(1 + 2 z^2/a^2)/sqrt(1 + z^2/a^2)
-    - 2 z/a], sigma_z = -p0 / sqrt(1 + z^2/a^2). Returns (sigma_x, sigma_z, tau_xz)."""
+    - 2 z/a], sigma_z = -p0 / sqrt(1 + z^2/a^2). Returns (sigma_x, sigma_z, tau_xz).
+    The axis forms and the surface z = 0 (sigma_z = -p(x), tau_xz = 0) are checked
+    (tests/test_laws.py); the off-axis field was written from the general form, not checked
+    against the printed page: off the axis, unverified."""
     x, z = np.asarray(x, dtype=float), np.asarray(z, dtype=float)
     A = a * a - x * x + z * z
     S = np.sqrt(A * A + 4 * x * x * z * z)
