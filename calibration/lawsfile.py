@@ -212,6 +212,7 @@ class ImpactPoint(Record):
     clearance_m: float
     effective_modulus_Pa: float
     plastic: bool                  # a body was elasto-plastic
+    plastic_work_share: float = 0.0   # W_p / E_0: the impact energy dissipated by plastic flow
 
 
 class ImpactJoint(Record):

@@ -62,7 +62,8 @@ def read_impacts(paths) -> dict[str, tuple[lawsfile.ImpactJoint, list[lawsfile.I
             peak_force_N_per_m=summary.peak_force_N_per_m,
             max_approach_m=summary.max_approach_m, pin_mass_kg_per_m=summary.pin_mass_kg_per_m,
             clearance_m=g["bore_radius"] - g["pin_radius"], effective_modulus_Pa=e_star,
-            plastic=plastic))
+            plastic=plastic,
+            plastic_work_share=summary.energy.plastic_J_per_m / summary.energy.impact_J_per_m))
     for key, (_, points) in groups.items():
         if len(points) < MIN_IMPACTS:
             raise InputError(f"--impacts: {len(points)} impact of the joint {key} ({points[0].name}); "
