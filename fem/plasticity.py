@@ -58,6 +58,19 @@ equals exactly the change of the elastic energy int sigma : C^-1 : sigma / 2 dx 
 (C^-1 is linear), so the work of the hub over a load-unload loop is the plastic work plus
 the elastic energy locked in the residual stresses (tests/test_fem_plasticity.py).
 
+While no point flows at an iterate (every point on the elastic branch of the return map
+from the committed state: elastic unloading, free flight, reloading below the reached
+yield stress), sigma = C : (eps - eps_p) at every point, so
+
+    f_int(u) = K u - int C : eps_p : eps(v) dx,        K_t = K,
+
+the elastic stiffness assembled once and a force of the committed plastic strains,
+assembled once per commit (exact: the consistent tangent of the elastic branch is C). The
+load stepper keeps K's factors and a time integrator its cached operator. Measured: in the
+study's load-unload-reload cycles (scenes/fem/steel_al6061o_c500um_cycles) 392 of 910
+tangents and 627 of 1827 internal forces take K; in a plastic impact almost every Newton
+iterate has a flowing point, and little is saved.
+
 P1 triangles and tetrahedra lock under fully plastic (isochoric) flow; a contained plastic
 zone under a contact, surrounded by elastic material, is little affected (the first-yield
 load is elastic and unaffected), but loads with a plastic zone that breaks through to a free
