@@ -212,6 +212,7 @@ class ImpactPoint(Record):
     clearance_m: float
     effective_modulus_Pa: float
     plastic: bool                  # a body was elasto-plastic
+    plastic_work_share: float = 0.0   # W_p / E_0: the impact energy dissipated by plastic flow
 
 
 class ImpactJoint(Record):
@@ -228,22 +229,41 @@ class ImpactJoint(Record):
     pin_radius_m: float
     bore_radius_m: float
     pin_mass_kg_per_m: float       # rho_pin pi r_pin^2 + the hub's added mass
+    # an elasto-plastic body's yield stress and hardening (plasticity_label); None: elastic
+    pin_plasticity: str | None = None
+    bore_plasticity: str | None = None
 
     def key(self) -> str:
-        """The law's key in laws.json: materials, radii, mass per length (4 digits)."""
+        """The law's key in laws.json: materials (with the plasticity of a plastic body),
+        radii, mass per length (4 digits)."""
+        pin = f" {self.pin_plasticity}" if self.pin_plasticity else ""
+        bore = f" {self.bore_plasticity}" if self.bore_plasticity else ""
         return (f"pin E={self.pin_E_Pa:.4g} Pa nu={self.pin_nu:.4g} "
-                f"rho={self.pin_density_kg_per_m3:.4g} kg/m3 | bore E={self.bore_E_Pa:.4g} Pa "
-                f"nu={self.bore_nu:.4g} rho={self.bore_density_kg_per_m3:.4g} kg/m3 | "
+                f"rho={self.pin_density_kg_per_m3:.4g} kg/m3{pin} | bore E={self.bore_E_Pa:.4g} Pa "
+                f"nu={self.bore_nu:.4g} rho={self.bore_density_kg_per_m3:.4g} kg/m3{bore} | "
                 f"r_pin={self.pin_radius_m:.6g} m r_bore={self.bore_radius_m:.6g} m | "
                 f"m={self.pin_mass_kg_per_m:.4g} kg/m")
 
     def matches(self, r_bore, r_pin, E_pin, nu_pin, E_bore, nu_bore, rel=1e-6) -> bool:
         """Whether a multibody joint of these radii (m) and elastic constants (Pa) is this
-        joint (the densities and mass per length are not known to the multibody joint)."""
+        joint (the densities, mass per length and plasticity are not known to the multibody
+        joint: two laws that differ only in those both match, which the model refuses)."""
         pairs = ((r_bore, self.bore_radius_m), (r_pin, self.pin_radius_m),
                  (E_pin, self.pin_E_Pa), (nu_pin, self.pin_nu), (E_bore, self.bore_E_Pa),
                  (nu_bore, self.bore_nu))
         return all(math.isclose(a, b, rel_tol=rel) for a, b in pairs)
+
+
+def plasticity_label(material: dict) -> str | None:
+    """A scene material's yield stress and hardening as a joint's key names them
+    ("Y=5.5e+07 Pa H=2.76e+08 Pa", or the hardening table's points), None for an elastic one."""
+    if material.get("yield_stress") is None:
+        return None
+    label = f"Y={material['yield_stress']:.4g} Pa"
+    if material.get("hardening") is not None:
+        points = ", ".join(f"({p:.4g}, {y:.4g} Pa)" for p, y in material["hardening"])
+        return f"{label} table [{points}]"
+    return f"{label} H={material.get('hardening_modulus') or 0.0:.4g} Pa"
 
 
 class RestitutionLaw(Record):

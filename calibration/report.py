@@ -138,14 +138,15 @@ def restitution_section(laws: dict[str, lawsfile.RestitutionLaw], folder: Path) 
         low, high = law.speed_range_m_per_s
         rows = [[f"{q.speed_m_per_s:.3g}", f"{q.restitution:.4f}", f"{q.fitted:.4f}",
                  f"{q.contact_duration_s * 1e6:.1f}", f"{q.peak_force_N_per_m / 1e3:.4g}",
-                 "plastic" if q.plastic else "elastic"] for q in law.impacts]
+                 f"{q.plastic_work_share:.3f}" if q.plastic else "elastic"]
+                for q in law.impacts]
         terms = "".join(f" {a:+.5f} x" + (f"<sup>{k}</sup>" if k > 1 else "")
                         for k, a in enumerate(law.coefficients) if k > 0)
         parts += [f"<p><code>{key}</code>: e(v0) = {law.coefficients[0]:.4f}{terms}, "
                   f"x = ln(v0 / 1 m/s), valid for {low:.3g}-{high:.3g} m/s (largest fit error "
                   f"{law.max_fit_error:.3g}).</p>",
                   table(["v0 (m/s)", "e (FE)", "e (fit)", "contact (us)", "peak force (kN/m)",
-                         "material"], rows)]
+                         "plastic work / impact energy"], rows)]
     if (folder / "restitution.png").exists():
         parts.append(figure(png_data(folder / "restitution.png"),
                             "e(v0) of the FE impacts (points) and the fits of every joint "

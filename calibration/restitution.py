@@ -58,14 +58,17 @@ def read_impacts(paths) -> dict[str, tuple[lawsfile.ImpactJoint, list[lawsfile.I
             bore_density_kg_per_m3=m["bore"]["density"], pin_radius_m=g["pin_radius"],
             bore_radius_m=g["bore_radius"],   # the nominal mass (the FE mesh's is within 0.4 %)
             pin_mass_kg_per_m=m["pin"]["density"] * math.pi * g["pin_radius"] ** 2
-            + scene["impact"]["hub_mass"])
+            + scene["impact"]["hub_mass"],
+            pin_plasticity=lawsfile.plasticity_label(m["pin"]),
+            bore_plasticity=lawsfile.plasticity_label(m["bore"]))
         groups.setdefault(joint.key(), (joint, []))[1].append(lawsfile.ImpactPoint(
             name=str(p), speed_m_per_s=summary.speed_m_per_s, restitution=summary.restitution,
             fitted=float("nan"), contact_duration_s=summary.contact_duration_s,
             peak_force_N_per_m=summary.peak_force_N_per_m,
             max_approach_m=summary.max_approach_m, pin_mass_kg_per_m=summary.pin_mass_kg_per_m,
             clearance_m=g["bore_radius"] - g["pin_radius"], effective_modulus_Pa=e_star,
-            plastic=plastic))
+            plastic=plastic,
+            plastic_work_share=summary.energy.plastic_J_per_m / summary.energy.impact_J_per_m))
     for key, (_, points) in groups.items():
         if len(points) < MIN_IMPACTS:
             raise InputError(f"--impacts: {len(points)} impact of the joint {key} ({points[0].name}); "
