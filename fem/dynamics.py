@@ -125,8 +125,12 @@ alternating 2.3e4 / 2.9e6 N/m for 25 iterations). Such a step is solved again wi
 line search (the step length that minimises |F|^2 along the Newton direction, from a secant
 of its slope: it breaks the cycle, and the slow impact converges at the default settings),
 then with a backtracking one (as the quasi-static stepper does, fem.solver; on the slow
-impact it crept and failed), before it is cut. A step that full Newton steps solve is left
-alone, so a plastic body that never yields is the elastic one to the last bit.
+impact it crept and failed), before it is cut. Until a point has yielded, a step that full
+Newton steps solve is left alone, so a plastic body that never yields is the elastic one to
+the last bit. Once one has, full steps are no longer tried: measured on the 5 m/s impact
+into the 6061-O bore (steel pin, c = 0.5 mm), full steps solved all 10 steps before the
+first flow; after it the l2 search solved 105 steps first, and of the 62 it failed, full
+steps solved none and the backtracking search 17.
 A step whose Newton (or Uzawa) iteration fails is halved, up to solver.max_cutbacks times in
 a row (the next steps grow back towards dt); if that fails too, the run stops, keeps every
 converged step and says where and why (an incomplete run).
@@ -420,7 +424,7 @@ class ImpactStepper:
         snapshot = self._save()
         before = (snapshot, self.t, self.contact_work, self.plastic_work, self.friction_work)
         self.T.mult(self.q, self.u0)
-        for search in ("basic", "l2", "bt") if self.material.plastic else ("basic",):
+        for search in self._line_searches():
             # predictor: constant acceleration (exact in free flight)
             self.q.copy(self.x)
             self.x.axpy(h, self.v)
@@ -450,6 +454,18 @@ class ImpactStepper:
         self.contact_work += 0.5 * self._increment_dot()
         self._before = before
         return self.record(self.t, newton, state)
+
+    def _line_searches(self) -> tuple[str, ...]:
+        """The line searches a step tries in turn (module docstring, steps and failures):
+        full Newton steps alone for an elastic body; for a plastic one, full steps first
+        while no point has yielded (so that it is the elastic body to the last bit), then the
+        l2 search and the backtracking one; once a point has yielded, full steps are left
+        out (they cycle there)."""
+        if not self.material.plastic:
+            return ("basic",)
+        if self.material.max_plastic_strain() > 0:
+            return ("l2", "bt")
+        return ("basic", "l2", "bt")
 
     def undo(self) -> None:
         """Back to the state before the last step that step() solved."""
