@@ -1,0 +1,176 @@
+"""Named layouts of the mechanism's compiled data: the columns of its row arrays, the codes
+stored in them, and the bundles it passes around, for planar and spatial mechanisms alike.
+
+Rows are float arrays (one row per element) addressed by the column names below: module
+integers, which numba freezes into the compiled code as constants. A vector in a row takes
+three columns, of which a planar mechanism reads two (reduced.mechanism.vectors.vec). The
+bundles are namedtuples, which numba compiles as plain structs and caches like tuples.
+
+The state vector y of the integrator holds the bodies' coordinates q (a body kind's own: x,
+y, phi of a planar body's centre of mass; the centre r and the Euler parameters p of a
+spatial one), their rates q', the energy dissipated in the contacts, the work of the
+constraint forces, then the friction states of the contacts (reduced.mechanism.engine).
+"""
+
+from collections import namedtuple
+
+# ---- contacts (Model.contacts): one row per contact of a clearance joint. A revolute
+# clearance joint of a planar mechanism and a spherical one have one contact (RADIAL); a
+# cylindrical one the journal along its bore (SLICED; with rigid impacts: its two ends,
+# AXIS_RADIAL) and its shoulders (PLANE, two-sided); a translational one
+# its slider's four corners (PLANE, each against the face on its side).
+# -- the contact law (the same for every contact of a joint)
+CONTACT_CHI = 0             # hysteresis factor chi of the damping law
+CONTACT_FRICTION_LAW = 1    # NO_FRICTION ... IWAN
+CONTACT_FRICTION = 2        # the law's parameters: FRICTION_PARAMETERS columns, named below
+FRICTION_PARAMETERS = 7
+CONTACT_STATE = 9           # index in y of the contact's first friction state (-1: none)
+CONTACT_IMPACT = 10         # contact model: CONTINUOUS, NEWTON, POISSON
+CONTACT_RESTITUTION = 11    # e of the impulse models
+CONTACT_REST_SPEED = 12     # m/s: an impulse contact approaching slower is held
+# the calibrated damping law (damping_law = "calibrated"): chi against the impact speed v0,
+# tabulated at CHI_POINTS speeds equally spaced in ln v0 from CONTACT_CHI_LOG_SPEED by
+# CONTACT_CHI_STEP (0: no table, chi is CONTACT_CHI), in CONTACT_CHI_TABLE .. + CHI_POINTS - 1
+CONTACT_CHI_LOG_SPEED = 13
+CONTACT_CHI_STEP = 14
+CONTACT_CHI_TABLE = 15
+CHI_POINTS = 33
+# -- the geometry
+CONTACT_KIND = CONTACT_CHI_TABLE + CHI_POINTS   # RADIAL, SLICED, PLANE
+CONTACT_JOINT = CONTACT_KIND + 1     # the clearance joint it belongs to (its index)
+CONTACT_TABLE = CONTACT_KIND + 2     # the row of Model.tables with its elastic law
+CONTACT_BEARING_BODY = CONTACT_KIND + 3   # body (-1: the ground) of the bearing (bore, guide)
+CONTACT_JOURNAL_BODY = CONTACT_KIND + 4   # body of the journal (pin, ball, slider)
+CONTACT_BEARING_POINT = CONTACT_KIND + 5  # (3) bore centre, socket centre, guide point (m, body frame)
+CONTACT_BEARING_AXIS = CONTACT_KIND + 8   # (3) bore axis (0: none), face normal of a PLANE
+CONTACT_JOURNAL_POINT = CONTACT_KIND + 11  # (3) journal centre, ball centre, slider corner
+CONTACT_JOURNAL_AXIS = CONTACT_KIND + 14   # (3) SLICED: the journal's axis
+CONTACT_CLEARANCE = CONTACT_KIND + 17   # m: c = R_b - R_j (RADIAL, SLICED); a PLANE's offset
+CONTACT_RADIUS = CONTACT_KIND + 18      # m: R_b, the contact point's distance from the bore's axis
+CONTACT_SIDE = CONTACT_KIND + 19        # PLANE: +1 / -1 one face; 0: both (the nearer)
+CONTACT_AT_CONTACT = CONTACT_KIND + 20  # 1: the normal force acts at the contact point on both
+#                                        bodies; 0: at the journal point and the bearing point
+CONTACT_STIFFNESS = CONTACT_KIND + 21   # N/m: > 0, a linear law (shoulders) instead of the table
+CONTACT_FRICTION_ON = CONTACT_KIND + 22  # 1: friction acts (0: a frictionless face)
+CONTACT_LENGTH = CONTACT_KIND + 23       # SLICED: bore length L (m)
+CONTACT_SLICES = CONTACT_KIND + 24       # SLICED: slices n
+CONTACT_END_LENGTH = CONTACT_KIND + 25   # SLICED: end length e of a sliced law (m)
+CONTACT_SCALE = CONTACT_KIND + 26        # SLICED: stiffness factor a of a sliced law
+CONTACT_COMPLIANCE = CONTACT_KIND + 27   # SLICED: bulk compliance c_b (m^2/N; 0: none)
+CONTACT_COLUMNS = CONTACT_KIND + 28
+RADIAL, SLICED, PLANE, AXIS_RADIAL = 0, 1, 2, 3   # AXIS_RADIAL: a journal point from the bore's axis
+
+# friction laws (column CONTACT_FRICTION_LAW) and their parameter columns
+NO_FRICTION, COULOMB, STRIBECK, LINEAR, LUGRE, DAHL, IWAN = 0, 1, 2, 3, 4, 5, 6
+COULOMB_MU = CONTACT_FRICTION
+STRIBECK_MU_STATIC, STRIBECK_MU_MIN, STRIBECK_V_MIN = (CONTACT_FRICTION, CONTACT_FRICTION + 1,
+                                                      CONTACT_FRICTION + 2)
+LINEAR_MU_STATIC, LINEAR_ALPHA = CONTACT_FRICTION, CONTACT_FRICTION + 1
+REGULARISATION_V0, REGULARISATION_V1 = CONTACT_FRICTION + 5, CONTACT_FRICTION + 6   # the static laws'
+LUGRE_MU_COULOMB, LUGRE_MU_STATIC, LUGRE_STRIBECK_SPEED = (CONTACT_FRICTION, CONTACT_FRICTION + 1,
+                                                           CONTACT_FRICTION + 2)
+LUGRE_SIGMA0, LUGRE_SIGMA1, LUGRE_SIGMA2 = (CONTACT_FRICTION + 3, CONTACT_FRICTION + 4,
+                                            CONTACT_FRICTION + 5)
+DAHL_MU, DAHL_SIGMA = CONTACT_FRICTION, CONTACT_FRICTION + 1
+IWAN_K1, IWAN_K2, IWAN_MU = CONTACT_FRICTION, CONTACT_FRICTION + 1, CONTACT_FRICTION + 2
+# friction states of a contact point: LuGre and Dahl one, Iwan two (travel, Jenkins stretch),
+# each of as many components as the contact has tangent directions (1 in the plane, 3 in
+# space: a vector in the bearing body's frame, of which the tangent part acts)
+STATE_TRAVEL, STATE_STRETCH = 0, 1
+
+# contact models (column CONTACT_IMPACT)
+CONTINUOUS, NEWTON, POISSON = 0, 1, 2
+
+# ---- primitive constraints (Model.primitives): every ideal joint and the drive are built of
+# them ([Nikravesh1988] ch. 7: the spherical, dot-1 and dot-2 constraints, and an angle)
+POINT, DOT1, DOT2, ANGLE = 0, 1, 2, 3      # rows: D (2 or 3), 1, 1, 1
+PRIM_KIND, PRIM_BODY_I, PRIM_BODY_J = 0, 1, 2
+PRIM_S_I, PRIM_S_J = 3, 6           # points s_i', s_j' (m, body frames; the ground: global)
+PRIM_A_I, PRIM_B_J = 9, 12          # unit vectors a_i' (body i), b_j' (body j)
+PRIM_C_I = 15                       # ANGLE: the second vector of body i, c_i' = u_i' x a_i'
+PRIM_SPEED, PRIM_ANGLE0 = 18, 19    # ANGLE: relative angle = angle0 + speed t (rad/s, rad)
+PRIMITIVE_COLUMNS = 20
+
+# ---- torsion spring, stop or latch (Model.torsion): a torque about body i's axis u_i' on
+# the relative angle from a_i' (body i) to b_j' (body j), measured like the ANGLE primitive
+TORSION_BODY_I, TORSION_BODY_J = 0, 1
+TORSION_STIFFNESS, TORSION_DAMPING = 2, 3    # N m/rad, N m s/rad
+TORSION_FREE_ANGLE = 4                       # rad, relative to the bodies' initial relative angle
+TORSION_KIND = 5                             # SPRING, STOP, LATCH
+TORSION_A_I, TORSION_B_J, TORSION_C_I = 6, 9, 12
+TORSION_COLUMNS = 15
+SPRING, STOP, LATCH = 0, 1, 2
+
+# ---- the state vector after q and q': the energy integrals, then the friction states
+DISSIPATED, WORK_IN = 0, 1
+ENERGY_STATES = 2
+
+# ---- impact log of the integrator: one row per impact or contact onset
+LOG_TIME, LOG_JOINT, LOG_RATE, LOG_IMPULSE = 0, 1, 2, 3   # s, joint, approach rate m/s, N s
+LOG_COLUMNS = 4
+
+# ---- bundles
+# The body kinds' markers: empty namedtuples, whose class numba chooses a kind's body
+# functions on (reduced.mechanism.bodies), at no cost.
+PlanarKind = namedtuple("PlanarKind", [])
+SpatialKind = namedtuple("SpatialKind", [])
+PLANAR, SPATIAL = PlanarKind(), SpatialKind()
+
+# The arguments of the right-hand side and of the integrator (reduced.mechanism.model.Model.
+# args), one set of fields for every body kind: `kind` its marker, `like` a zero vector of the
+# mechanism's dimension, on whose length numba chooses the vector functions, `project_first`
+# whether an accepted step is projected onto the constraints before its events are read
+# (spatial) or after (planar): each kind keeps the order it has always had, so that a run
+# gives the numbers it gave before to the last bit (in a chaotic mechanism a rounding apart
+# grows to another trajectory); both read the events within the onset tolerance of the
+# constraints. masses (per body), minv (per velocity column: planar 1/m, 1/m, 1/J), inertia
+# and its inverse (per body, 3 x 3 in the body frame; planar: J in [0, 0]), gravity (D,
+# m/s^2), offsets (per body its first velocity column; the last entry their number).
+# speeds: impact speed per contact; latched: a flag per torsion element; mode: per contact 1
+# while an impulse contact is held; all updated in place by the integrator.
+Args = namedtuple("Args", [
+    "kind", "nq", "like", "project_first", "masses", "minv", "inertia", "inertia_inv", "gravity",
+    "offsets", "primitives", "baumgarte", "contacts", "speeds", "grid_log0", "grid_step", "tables",
+    "torsion", "latched", "mode"])
+
+# The buffers of the right-hand side: a row per body of its kinematic state (the body kind's
+# layout), the velocity of every Jacobian column, the constraint rows (Jacobian against the
+# bodies' velocities, Phi, Phi_t, gamma then the multipliers), the Schur matrix (lower
+# triangle), the applied forces (a column each), the normal force of each contact, the rows of
+# M^-1 D^T, the two bodies of each constraint row (-1: the ground or none; ascending) and the
+# envelope of the Schur matrix (first coupled row of each row).
+Work = namedtuple("Work", ["bodies", "velocities", "jac", "phi", "phi_t", "rhs_c", "schur",
+                           "force", "normal", "mjac", "row_bodies", "first"])
+
+# A contact's deepest penetration (m) and its approach rate there (m/s).
+Depth = namedtuple("Depth", ["delta", "rate"])
+
+# An impulse: normal impulse on the journal (N s), energy dissipated (J), work of the
+# drive's impulse (J).
+Impulse = namedtuple("Impulse", ["impulse", "dissipated", "work_in"])
+
+# What the integrator tracks of the contacts between accepted steps: the penetration at the
+# last accepted state, whether a continuous contact is in contact (between an onset and the
+# next separation), and the normal force of a held contact and its peak.
+Contacts = namedtuple("Contacts", ["depth", "in_contact", "held_force", "held_peak"])
+
+# The accepted steps recorded by the integrator: time, state, impact speeds, contact modes,
+# latch flags.
+Record = namedtuple("Record", ["times", "states", "speeds", "modes", "latched"])
+
+# What the integrator returns: the record cut to the accepted steps, the impact log,
+# counters (accepted, rejected, rhs calls, impacts), status code, time reached.
+Integration = namedtuple("Integration", [
+    "times", "states", "speeds", "modes", "latched", "impacts", "counters", "status", "t_end"])
+
+
+def row(columns: int, values: dict) -> list:
+    """A row of `columns` floats, zero but for `values` ({column: value}; a tuple or list
+    value fills the columns from there)."""
+    out = [0.0] * columns
+    for column, value in values.items():
+        if isinstance(value, (tuple, list)):
+            out[column:column + len(value)] = [float(v) for v in value]
+        else:
+            out[column] = value
+    return out

@@ -1,0 +1,418 @@
+r"""Spatial rigid bodies: the body kind of a spatial mechanism (scenes kind = "spatial").
+
+Each body has its centre of mass r and Euler parameters p = (e0, e1, e2, e3), |p| = 1
+([Nikravesh1988] ch. 6), with the rotation matrix
+
+    A(p) = 2 [(e0^2 - 1/2) I + e e^T + e0 e~],     e = (e1, e2, e3),
+
+and G(p) = [-e, -e~ + e0 I] (3 x 4), so that the angular velocity in the body frame is
+w' = 2 G p' and, since G' p' = 0, w'' = 2 G p''. The state holds (r, p) and their rates (7
+coordinates a body). The dynamics are written in the body velocities v = (r', w), w = A w'
+global, the velocity columns of the constraint Jacobian:
+
+    m r'' = m g + F + ...,     J w' + w x (J w) = N,   J = A J' A^T  (Euler's equations),
+
+M = diag(m I, J) block-diagonal with an explicit inverse. The Euler parameters then follow
+from p'' = G^T w''/2 + k p, where G^T G = I - p p^T leaves the component along p to the
+normalisation constraint (p^T p - 1)/2 = 0: p^T p'' = -p'^T p' (and its Baumgarte terms),
+Nikravesh's augmented formulation reduced to the body velocities. After every accepted step
+the parameters are normalised (`normalise`), and a step onto the constraints turns a body by
+a small rotation vector (`turn`). Relative angles are atan2 of two dot products, taken modulo
+2 pi. A body point s' is at P = r + A s', with velocity r' + w x s and the velocity part of
+its acceleration w x (w x s). This module implements reduced.mechanism.bodies for
+its marker layout.SPATIAL and for vectors of three components. Every array a compiled helper reads
+out of a bundle, or a row view it makes, has its references counted: the body states sit in
+one array read in place.
+"""
+
+import math
+
+import numba
+
+from pinbore.reduced.mechanism import bodies, layout
+from pinbore.reduced.mechanism.bodies import dot1
+from pinbore.reduced.mechanism.linalg import schur_within_envelope
+from pinbore.reduced.mechanism.vectors import _space, add, cross, dot, scaled, sub
+
+# a body's row in Work.bodies: position, rotation matrix (row-major), velocity, angular
+# velocity (global), global inverse inertia A J'^-1 A^T (row-major)
+BODY_POS, BODY_ROT, BODY_VEL, BODY_OMEGA, BODY_JINV = 0, 3, 12, 15, 18
+BODY_COLUMNS = 27
+COORDINATES = 7   # r, p
+COLUMNS = 6       # velocity columns a body: v, w
+
+
+def spatial(kind) -> bool:
+    return getattr(kind, "instance_class", None) is layout.SpatialKind
+
+
+@numba.njit(cache=True, _nrt=False)
+def vec3(a, i):
+    return (a[i], a[i + 1], a[i + 2])
+
+
+@numba.njit(cache=True, _nrt=False)
+def row3(rows, b, k):
+    """Three entries of row b of a 2D array from column k."""
+    return (rows[b, k], rows[b, k + 1], rows[b, k + 2])
+
+
+@numba.njit(cache=True, _nrt=False)
+def matvec(m, b, a):
+    """m[b] a, the 3 x 3 matrix b of a stack m read in place."""
+    return (m[b, 0, 0] * a[0] + m[b, 0, 1] * a[1] + m[b, 0, 2] * a[2],
+            m[b, 1, 0] * a[0] + m[b, 1, 1] * a[1] + m[b, 1, 2] * a[2],
+            m[b, 2, 0] * a[0] + m[b, 2, 1] * a[1] + m[b, 2, 2] * a[2])
+
+
+# ---- Euler parameters
+@numba.njit(cache=True, _nrt=False)
+def rotation(p, out):
+    """A(p) into out (3 x 3) for unit p = (e0, e1, e2, e3)."""
+    e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
+    out[0, 0], out[0, 1], out[0, 2] = e0 * e0 + e1 * e1 - 0.5, e1 * e2 - e0 * e3, e1 * e3 + e0 * e2
+    out[1, 0], out[1, 1], out[1, 2] = e1 * e2 + e0 * e3, e0 * e0 + e2 * e2 - 0.5, e2 * e3 - e0 * e1
+    out[2, 0], out[2, 1], out[2, 2] = e1 * e3 - e0 * e2, e2 * e3 + e0 * e1, e0 * e0 + e3 * e3 - 0.5
+    out *= 2.0
+
+
+@numba.njit(cache=True, _nrt=False)
+def g_times(p, pd):
+    """G(p) p' (3)."""
+    e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
+    return (-e1 * pd[0] + e0 * pd[1] + e3 * pd[2] - e2 * pd[3],
+            -e2 * pd[0] - e3 * pd[1] + e0 * pd[2] + e1 * pd[3],
+            -e3 * pd[0] + e2 * pd[1] - e1 * pd[2] + e0 * pd[3])
+
+
+@numba.njit(cache=True, _nrt=False)
+def gt_times(p, w):
+    """G(p)^T w (4)."""
+    e0, e1, e2, e3 = p[0], p[1], p[2], p[3]
+    return (-e1 * w[0] - e2 * w[1] - e3 * w[2], e0 * w[0] - e3 * w[1] + e2 * w[2],
+            e3 * w[0] + e0 * w[1] - e1 * w[2], -e2 * w[0] + e1 * w[1] + e0 * w[2])
+
+
+@numba.njit(cache=True, _nrt=False)
+def unit_parameters(q, b):
+    """The Euler parameters of body b, normalised (4-tuple)."""
+    i = COORDINATES * b + 3
+    n = math.sqrt(q[i] ** 2 + q[i + 1] ** 2 + q[i + 2] ** 2 + q[i + 3] ** 2)
+    return (q[i] / n, q[i + 1] / n, q[i + 2] / n, q[i + 3] / n)
+
+
+@numba.njit(cache=True, _nrt=False)
+def body_states(kind, y, nq, inertia_inv, states, velocities):
+    """Position, rotation matrix, velocity, global angular velocity w = A 2 G p' and global
+    inverse inertia A J'^-1 A^T of every body into its row (BODY_*)."""
+    for b in range(states.shape[0]):
+        p = unit_parameters(y, b)
+        e0, e1, e2, e3 = p
+        a = ((e0 * e0 + e1 * e1 - 0.5, e1 * e2 - e0 * e3, e1 * e3 + e0 * e2),
+             (e1 * e2 + e0 * e3, e0 * e0 + e2 * e2 - 0.5, e2 * e3 - e0 * e1),
+             (e1 * e3 - e0 * e2, e2 * e3 + e0 * e1, e0 * e0 + e3 * e3 - 0.5))
+        for r in range(3):
+            for c in range(3):
+                states[b, BODY_ROT + 3 * r + c] = 2.0 * a[r][c]
+        w_body = scaled(g_times(p, vec3(y, nq + COORDINATES * b + 3) + (y[nq + COORDINATES * b + 6],)), 2.0)
+        w = turned(states, b, w_body)
+        for k in range(3):
+            states[b, BODY_POS + k] = y[COORDINATES * b + k]
+            states[b, BODY_VEL + k] = y[nq + COORDINATES * b + k]
+            states[b, BODY_OMEGA + k] = w[k]
+        for r in range(3):       # A J'^-1 A^T written out: a 3 x 3 matmul allocates
+            ar = row3(states, b, BODY_ROT + 3 * r)
+            t0 = ar[0] * inertia_inv[b, 0, 0] + ar[1] * inertia_inv[b, 1, 0] + ar[2] * inertia_inv[b, 2, 0]
+            t1 = ar[0] * inertia_inv[b, 0, 1] + ar[1] * inertia_inv[b, 1, 1] + ar[2] * inertia_inv[b, 2, 1]
+            t2 = ar[0] * inertia_inv[b, 0, 2] + ar[1] * inertia_inv[b, 1, 2] + ar[2] * inertia_inv[b, 2, 2]
+            for c in range(r + 1):
+                ac = row3(states, b, BODY_ROT + 3 * c)
+                v = t0 * ac[0] + t1 * ac[1] + t2 * ac[2]
+                states[b, BODY_JINV + 3 * r + c] = states[b, BODY_JINV + 3 * c + r] = v
+
+
+@numba.njit(cache=True, _nrt=False)
+def block_times(states, b, k, a):
+    """The 3 x 3 block of body b's row from column k (row-major) times a."""
+    return (dot(row3(states, b, k), a), dot(row3(states, b, k + 3), a),
+            dot(row3(states, b, k + 6), a))
+
+
+@numba.njit(cache=True, _nrt=False)
+def turned(states, b, a):
+    """A a: a body-frame vector of body b in global axes."""
+    return block_times(states, b, BODY_ROT, a)
+
+
+@numba.njit(cache=True, _nrt=False)
+def unturned(states, b, a):
+    """A^T a: a global vector in body b's axes."""
+    return add(add(scaled(row3(states, b, BODY_ROT), a[0]), scaled(row3(states, b, BODY_ROT + 3), a[1])),
+               scaled(row3(states, b, BODY_ROT + 6), a[2]))
+
+
+@numba.njit(cache=True, _nrt=False)
+def inverse_inertia_times(states, b, a):
+    """A J'^-1 A^T a (global)."""
+    return block_times(states, b, BODY_JINV, a)
+
+
+# ---- points and vectors
+@numba.njit(cache=True, _nrt=False)
+def point_state(states, b, s_body):
+    if b < 0:
+        return s_body, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    s = turned(states, b, s_body)
+    w = row3(states, b, BODY_OMEGA)
+    ws = cross(w, s)
+    return (add(row3(states, b, BODY_POS), s), add(row3(states, b, BODY_VEL), ws), cross(w, ws), s)
+
+
+@numba.njit(cache=True, _nrt=False)
+def vector_state(states, b, a_body):
+    if b < 0:
+        return a_body, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
+    a = turned(states, b, a_body)
+    w = row3(states, b, BODY_OMEGA)
+    wa = cross(w, a)
+    return a, wa, cross(w, wa)
+
+
+@numba.njit(cache=True, _nrt=False)
+def material_velocity(states, b, x):
+    if b < 0:
+        return (0.0, 0.0, 0.0)
+    return add(row3(states, b, BODY_VEL), cross(row3(states, b, BODY_OMEGA), sub(x, row3(states, b, BODY_POS))))
+
+
+@numba.njit(cache=True, _nrt=False)
+def put(jac, row, b, linear, angular, sign, offsets):
+    if b < 0:
+        return
+    col = offsets[b]
+    for k in range(3):
+        jac[row, col + k] += sign * linear[k]
+        jac[row, col + 3 + k] += sign * angular[k]
+
+
+@numba.njit(cache=True, _nrt=False)
+def push(force, states, b, f, x, offsets):
+    if b < 0:
+        return
+    torque = cross(sub(x, row3(states, b, BODY_POS)), f)
+    col = offsets[b]
+    for c in range(3):
+        force[col + c] += f[c]
+        force[col + 3 + c] += torque[c]
+
+
+@numba.njit(cache=True, _nrt=False)
+def push_torque(force, b, torque, offsets):
+    if b < 0:
+        return
+    col = offsets[b]
+    for c in range(3):
+        force[col + 3 + c] += torque[c]
+
+
+@numba.njit(cache=True, _nrt=False)
+def relative_rotation(states, bi, bj, a_i, b_j, c_i, offset, drift):
+    """atan2(c_i . b_j, a_i . b_j) less offset and drift, modulo 2 pi, with its Jacobian
+    coefficient, rate and the velocity part of its second derivative."""
+    c_, kc, cd, cacc = dot1(states, bi, a_i, bj, b_j)
+    s_, ks, sd, sacc = dot1(states, bi, c_i, bj, b_j)
+    rho2 = s_ * s_ + c_ * c_
+    coefficient = scaled(sub(scaled(ks, c_), scaled(kc, s_)), 1.0 / rho2)
+    rate = (c_ * sd - s_ * cd) / rho2
+    gap = math.atan2(s_, c_) - offset - drift
+    angle = gap - 2 * math.pi * math.floor(gap / (2 * math.pi) + 0.5)
+    return angle, coefficient, rate, -(c_ * sacc - s_ * cacc) / rho2 + 2 * rate * (s_ * sd + c_ * cd) / rho2
+
+
+@numba.njit(cache=True, _nrt=False)
+def body_columns(like):
+    return BODY_COLUMNS
+
+
+@numba.njit(cache=True, _nrt=False)
+def centripetal_gap(states, a, bi, arm_i, c_i, bj, arm_j, c_j):
+    return dot(a, sub(c_j, c_i))
+
+
+@numba.njit(cache=True, _nrt=False)
+def rotation_axis(states, bi, a_i, c_i):
+    return cross(vector_state(states, bi, a_i)[0], vector_state(states, bi, c_i)[0])
+
+
+@numba.njit(cache=True, _nrt=False)
+def row_rate(rate, jac, i, b, states, velocities, offsets, like):
+    col = offsets[b]
+    for c in range(3):
+        rate += (jac[i, col + c] * states[b, BODY_VEL + c]
+                 + jac[i, col + 3 + c] * states[b, BODY_OMEGA + c])
+    return rate
+
+
+@numba.njit(cache=True, _nrt=False)
+def turned_any(states, b, a):
+    """turned, the ground's vectors global."""
+    return turned(states, b, a) if b >= 0 else a
+
+
+@numba.njit(cache=True, _nrt=False)
+def unturned_any(states, b, a):
+    """unturned, the ground's vectors global."""
+    return unturned(states, b, a) if b >= 0 else a
+
+
+# ---- the whole body (the signatures of reduced.mechanism.bodies: the unused arrays are
+# other kinds')
+@numba.njit(cache=True, _nrt=False)
+def body_forces(kind, masses, minv, inertia, gravity, states, force):
+    """Gravity and the gyroscopic torque -w x (J w) of each body."""
+    for b in range(masses.size):
+        w = row3(states, b, BODY_OMEGA)
+        jw = turned(states, b, matvec(inertia, b, unturned(states, b, w)))
+        gyro = cross(w, jw)
+        for c in range(3):
+            force[COLUMNS * b + c] = masses[b] * gravity[c]
+            force[COLUMNS * b + 3 + c] = -gyro[c]
+
+
+@numba.njit(cache=True, _nrt=False)
+def fill_schur(kind, masses, minv, offsets, states, jac, mjac, schur, row_bodies, first, m):
+    """M^-1 D^T (rows of mjac): a row has nonzero columns for its two bodies only, and M^-1
+    (block-diagonal: m I and the global inverse inertia) acts on those."""
+    for i in range(m):
+        for side in range(2):
+            b = row_bodies[i, side]
+            if b < 0:
+                continue
+            col = offsets[b]
+            angular = inverse_inertia_times(states, b, (jac[i, col + 3], jac[i, col + 4], jac[i, col + 5]))
+            for c in range(3):
+                mjac[i, col + c] = jac[i, col + c] / masses[b]
+                mjac[i, col + 3 + c] = angular[c]
+    schur_within_envelope(jac, mjac, schur, row_bodies, first, offsets, m, False)
+
+
+@numba.njit(cache=True, _nrt=False)
+def state_rates(kind, y, dy, nq, masses, minv, baumgarte, states, force):
+    """Velocities, accelerations r'' = F / m and the Euler parameters' second derivatives
+    p'' = G^T (A^T w')/2 + k p with their normalisation and its Baumgarte terms."""
+    alpha = baumgarte
+    for b in range(masses.size):
+        i = COORDINATES * b
+        for c in range(3):
+            dy[i + c] = y[nq + i + c]
+            dy[nq + i + c] = force[COLUMNS * b + c] / masses[b]
+        for c in range(4):
+            dy[i + 3 + c] = y[nq + i + 3 + c]
+        wd = inverse_inertia_times(states, b, vec3(force, COLUMNS * b + 3))   # w' (global)
+        p = unit_parameters(y, b)
+        pd = vec3(y, nq + i + 3) + (y[nq + i + 6],)
+        half = gt_times(p, scaled(unturned(states, b, wd), 0.5))
+        pp = p[0] ** 2 + p[1] ** 2 + p[2] ** 2 + p[3] ** 2
+        raw = vec3(y, i + 3) + (y[i + 6],)
+        norm2 = raw[0] ** 2 + raw[1] ** 2 + raw[2] ** 2 + raw[3] ** 2
+        along = (-(pd[0] ** 2 + pd[1] ** 2 + pd[2] ** 2 + pd[3] ** 2)
+                 - 2 * alpha * (raw[0] * pd[0] + raw[1] * pd[1] + raw[2] * pd[2] + raw[3] * pd[3])
+                 - 0.5 * alpha * alpha * (norm2 - 1.0)) / pp
+        for c in range(4):
+            dy[nq + i + 3 + c] = half[c] + along * p[c]
+
+
+@numba.njit(cache=True, _nrt=False)
+def normalise(kind, y, nq, nb):
+    """Euler parameters to unit length, their rates normal to them."""
+    for b in range(nb):
+        i = COORDINATES * b + 3
+        n = math.sqrt(y[i] ** 2 + y[i + 1] ** 2 + y[i + 2] ** 2 + y[i + 3] ** 2)
+        along = 0.0
+        for c in range(4):
+            y[i + c] /= n
+            along += y[i + c] * y[nq + i + c]
+        for c in range(4):
+            y[nq + i + c] -= along * y[i + c]
+
+
+@numba.njit(cache=True, _nrt=False)
+def turn(y, b, rotation_vector):
+    """Turn body b by a small global rotation vector: p <- (cos(|r|/2), sin(|r|/2) r/|r|) p."""
+    angle = math.sqrt(dot(rotation_vector, rotation_vector))
+    if angle == 0.0:
+        return
+    k = math.sin(0.5 * angle) / angle
+    a0, a = math.cos(0.5 * angle), scaled(rotation_vector, k)
+    i = COORDINATES * b + 3
+    b0, bv = y[i], (y[i + 1], y[i + 2], y[i + 3])
+    v = add(add(scaled(bv, a0), scaled(a, b0)), cross(a, bv))
+    y[i], y[i + 1], y[i + 2], y[i + 3] = a0 * b0 - dot(a, bv), v[0], v[1], v[2]
+
+
+@numba.njit(cache=True, _nrt=False)
+def column_step(mjac, x, m, column, scale):
+    """-scale (M^-1 D^T x) in one velocity column."""
+    step = 0.0
+    for i in range(m):
+        step -= mjac[i, column] * x[i]
+    return step * scale if scale != 1.0 else step
+
+
+@numba.njit(cache=True, _nrt=False)
+def mass_weighted_step(y, nq, mjac, x, states, m, level, scale):
+    """-scale M^-1 D^T x per body: level 0 moves the centres and turns the bodies by the
+    rotation part; level 1 changes the velocities and the parameters' rates."""
+    nb = states.shape[0]
+    for b in range(nb):
+        step = (column_step(mjac, x, m, COLUMNS * b, scale), column_step(mjac, x, m, COLUMNS * b + 1, scale),
+                column_step(mjac, x, m, COLUMNS * b + 2, scale), column_step(mjac, x, m, COLUMNS * b + 3, scale),
+                column_step(mjac, x, m, COLUMNS * b + 4, scale), column_step(mjac, x, m, COLUMNS * b + 5, scale))
+        if level == 0:
+            for c in range(3):
+                y[COORDINATES * b + c] += step[c]
+            turn(y, b, (step[3], step[4], step[5]))
+        else:
+            for c in range(3):
+                y[nq + COORDINATES * b + c] += step[c]
+            w = add(row3(states, b, BODY_OMEGA), (step[3], step[4], step[5]))
+            pd = gt_times(unit_parameters(y, b), scaled(unturned(states, b, w), 0.5))
+            for c in range(4):
+                y[nq + COORDINATES * b + 3 + c] = pd[c]
+    normalise(None, y, nq, nb)
+
+
+@numba.njit(cache=True, _nrt=False)
+def position_step(kind, y, nq, minv, jac, mjac, x, states, m):
+    mass_weighted_step(y, nq, mjac, x, states, m, 0, 1.0)
+
+
+@numba.njit(cache=True, _nrt=False)
+def velocity_step(kind, y, nq, minv, jac, mjac, x, states, m, scale):
+    mass_weighted_step(y, nq, mjac, x, states, m, 1, scale)
+
+
+@numba.njit(cache=True, _nrt=False)
+def kinetic_energy(kind, y, nq, masses, minv, inertia):
+    """1/2 m v.v + 1/2 w'.J' w' of every body (w' = 2 G p' in the body frame)."""
+    energy = 0.0
+    for b in range(masses.size):
+        i = COORDINATES * b
+        v = vec3(y, nq + i)
+        p = unit_parameters(y, b)
+        w = scaled(g_times(p, vec3(y, nq + i + 3) + (y[nq + i + 6],)), 2.0)
+        energy += 0.5 * masses[b] * dot(v, v) + 0.5 * dot(w, matvec(inertia, b, w))
+    return energy
+
+
+# what spatial bodies implement of reduced.mechanism.bodies, and the argument it is chosen by
+for _name, _on in (("body_columns", "like"), ("point_state", "s_body"), ("vector_state", "a_body"),
+                   ("material_velocity", "x"), ("put", "linear"), ("push", "f"),
+                   ("push_torque", "torque"), ("centripetal_gap", "a"),
+                   ("relative_rotation", "a_i"), ("rotation_axis", "a_i"), ("row_rate", "like"),
+                   ("turned", "a"), ("unturned", "a"),
+                   ("body_states", "kind"), ("body_forces", "kind"), ("fill_schur", "kind"),
+                   ("state_rates", "kind"), ("position_step", "kind"), ("velocity_step", "kind"),
+                   ("normalise", "kind"), ("kinetic_energy", "kind")):
+    _function = {"turned": turned_any, "unturned": unturned_any}.get(_name, globals()[_name])
+    bodies.implement(getattr(bodies, _name), _function, spatial if _on == "kind" else _space, _on)
