@@ -26,7 +26,7 @@ IMPACT_RUNS := $(IMPACT_SCENES:%=build/impact/%/impact.json)
 STUDY_IMPACTS := $(filter build/impact/study_%,$(IMPACT_RUNS))
 REDUCED_SCENES := $(basename $(notdir $(wildcard scenes/reduced/*.toml)))
 REDUCED_RUNS := $(REDUCED_SCENES:%=build/reduced/%/summary.json)
-STAGE_CODE := $(wildcard pinbore/cli.py core/*.py laws/*.py meshes/*.py fem/*.py)
+STAGE_CODE := $(wildcard pinbore/cli.py core/*.py laws/*.py meshes/*.py fem/*.py fem/impact/*.py)
 MPIEXEC := $(if $(filter-out 1,$(NP)),$(VENV)/bin/mpiexec -n $(NP))
 DYNAMICS_SCENE := scenes/reduced/slider_crank_flores2004.toml
 SPATIAL_DYNAMICS_SCENE := scenes/reduced/spatial_slider_crank_flores_misaligned.toml
@@ -71,7 +71,7 @@ build/impact/%/impact.json: scenes/impact/%.toml $(STAGE_CODE) $(STAMP)
 
 calibration: build/calibration/laws.json ## fit and rank the contact laws on the study curves (2D and 3D), the restitution on the study impacts
 
-build/calibration/laws.json: $(STUDY_CURVES) $(STUDY3D_CURVES) $(STUDY_IMPACTS) fem/scene.py fem/curve.py fem/impact_file.py $(wildcard core/*.py laws/*.py meshes/*.py calibration/*.py) $(STAMP)
+build/calibration/laws.json: $(STUDY_CURVES) $(STUDY3D_CURVES) $(STUDY_IMPACTS) fem/scene.py fem/curve.py fem/impact/file.py $(wildcard core/*.py laws/*.py meshes/*.py calibration/*.py) $(STAMP)
 	$(PINBORE) calibrate $(STUDY_CURVES) $(STUDY3D_CURVES) --impacts $(STUDY_IMPACTS) --out build/calibration
 
 reduced: $(REDUCED_RUNS) ## run the mechanisms with clearance joints (build/reduced/<scene>/)

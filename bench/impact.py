@@ -3,7 +3,7 @@ time step and the mesh.
 
 Runs the shipped impact scene (scenes/impact/steel_c10um_v1.toml: steel pin, steel bore,
 c = 10 um, 1 m/s) through `pinbore impact` with 25-400 steps over the estimated contact
-(default mesh), with the energy control of the step (the default: fem.dynamics) and with
+(default mesh), with the energy control of the step (the default: fem.impact.solver) and with
 fixed steps (adaptive_steps = false, 25-200), and on three meshes (coarse, default, refine
 1; 100 steps, energy control). Writes OUT/impact.csv and OUT/impact.png:
 
@@ -26,7 +26,7 @@ from pathlib import Path
 import tomli_w
 
 from pinbore.core.figures import plt, save_png
-from pinbore.fem import impact_file
+from pinbore.fem.impact import file as impact_file
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "impact" / "steel_c10um_v1.toml"

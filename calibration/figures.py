@@ -189,7 +189,7 @@ def _joint_label(law) -> str:
 
 def force_histories(path, histories) -> None:
     """The contact force per length against time of every impact, one row per joint
-    (`histories`: {joint key: (law, [(impact point, fem.impact_file.History)])}): left, the
+    (`histories`: {joint key: (law, [(impact point, fem.impact.file.History)])}): left, the
     force (kN/m, logarithmic) against the time from first touch (us); right, the force over
     its peak against the time over the contact duration, t / t_c, which shows how the pulse's
     shape changes with the speed (a Hertzian pulse of a rigid pin would be one curve)."""

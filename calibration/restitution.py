@@ -2,7 +2,7 @@
 dissipative law of the multibody model's `damping_law = "calibrated"`.
 
 What the FE gives: an elastic pin rebounding from its bore leaves part of the impact
-energy in the bodies' vibrations (the pin rings after separation; fem.dynamics), a plastic
+energy in the bodies' vibrations (the pin rings after separation; fem.impact.solver), a plastic
 one also leaves plastic work, so e < 1 with no damping in the material. The multibody
 contact F = F_el(d) (1 + chi d'/v0) [HuntCrossley1975] can carry that loss: chi is chosen at
 each contact onset so that the impact rebounds with the FE's e at that onset's speed.
@@ -29,7 +29,7 @@ import numpy as np
 
 from pinbore.calibration import lawsfile
 from pinbore.core.errors import InputError
-from pinbore.fem import impact_file
+from pinbore.fem.impact import file as impact_file
 
 
 MIN_IMPACTS = 2   # per joint: one more than the coefficients of the lowest degree (a constant)
@@ -105,7 +105,7 @@ def fit(points: list[lawsfile.ImpactPoint], joint: lawsfile.ImpactJoint) -> laws
 
 def histories(laws: dict[str, lawsfile.RestitutionLaw]):
     """The force histories of each law's impacts, {key: (law, [(impact, History)])}, from
-    the history.csv beside each impact.json (fem.impact_file); impacts without one (a summary
+    the history.csv beside each impact.json (fem.impact.file); impacts without one (a summary
     copied alone) are left out, and so is a joint with none."""
     found = {}
     for key, law in laws.items():

@@ -134,7 +134,7 @@ class Elasticity:
         dolfinx.fem.petsc.set_bc(F, self.bcs, alpha=0.0)
 
     # --- the material interface of the load stepper (fem.solver) and of the impact's time
-    # integrator (fem.dynamics), shared with fem.plasticity.ElastoPlastic; linear elasticity
+    # integrator (fem.impact.solver), shared with fem.plasticity.ElastoPlastic; linear elasticity
     # has a constant tangent and no state
 
     plastic = False
@@ -150,7 +150,7 @@ class Elasticity:
 
     def tangent(self, x: PETSc.Vec) -> PETSc.Mat:
         """d f_int / d x with no rows replaced (a time integrator that reduces the hub to a
-        rigid body, fem.dynamics): the stiffness K, constant."""
+        rigid body, fem.impact.solver): the stiffness K, constant."""
         return self.K
 
     def elastic_energy(self, x: PETSc.Vec) -> float:

@@ -399,7 +399,7 @@ class ElastoPlastic:
 
     def tangent(self, x: PETSc.Vec) -> PETSc.Mat:
         """K_t(x) with no rows replaced (a time integrator that reduces the hub to a rigid
-        body, fem.dynamics): the elastic stiffness K itself while no point flows, else a
+        body, fem.impact.solver): the elastic stiffness K itself while no point flows, else a
         matrix the next call overwrites."""
         if self.elastic_everywhere(x):
             return self.el.tangent(x)

@@ -37,10 +37,10 @@ def _fem(args) -> int:
 
 def _impact(args) -> int:
     from pinbore.core import scene as scenes
-    from pinbore.fem.impact_scene import ImpactScene   # the scene model only: no DOLFINx yet
+    from pinbore.fem.impact.scene import ImpactScene   # the scene model only: no DOLFINx yet
 
     scene = scenes.load(ImpactScene, args.scene)
-    from pinbore.fem import impact_run
+    from pinbore.fem.impact import run as impact_run
 
     return impact_run.run(args.scene, args.out, scene)
 

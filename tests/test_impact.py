@@ -38,8 +38,8 @@ class Impact:
 
     def __init__(self, data, run=True):
         from pinbore.core.scene import validate
-        from pinbore.fem import impact_run
-        from pinbore.fem.impact_scene import ImpactScene
+        from pinbore.fem.impact import run as impact_run
+        from pinbore.fem.impact.scene import ImpactScene
 
         self.scene = validate(ImpactScene, data, "test scene")
         self.stepper, el, contact, sizing = impact_run.build(self.scene)
@@ -137,7 +137,7 @@ def test_restitution_converges_with_the_time_step():
     """Fixed steps, halved twice (50, 100, 200 steps per contact): e converges (differences
     shrinking), and the energy lost by the contact's integration halves with the step
     (first order: the force of the nodes entering contact within a step times the distance
-    they flew before touching, fem.dynamics), so e^2 + E_wave / E_0 -> 1. With the energy
+    they flew before touching, fem.impact.solver), so e^2 + E_wave / E_0 -> 1. With the energy
     control (energy_tolerance 1e-3) the book closes below 1e-3 already at 50 and 100 steps,
     where fixed steps lose several times that."""
     fixed = {"adaptive_steps": False}
@@ -208,7 +208,7 @@ def test_plastic_impact_loses_energy_above_first_yield():
     E_0 = K + U + W_p + Pi_c closes to 1e-3 E_0 at every step (the contact's time
     integration, as for the elastic impact), while the scheme's own book
     E_0 = K + U + W_p + W_c closes to Newton's tolerance: the trapezoidal plastic work is
-    exactly the dissipated internal work (fem.dynamics)."""
+    exactly the dissipated internal work (fem.impact.solver)."""
     elastic = Impact(plastic_impact(1.0, None)).summary
     y1 = hertz_first_yield_stress(elastic.peak_force_N_per_m, plastic_impact(1.0, None))
     below = Impact(plastic_impact(1.0, 1.25 * y1)).summary
@@ -280,7 +280,7 @@ def test_bad_plastic_impact_material(write_scene, tmp_path, values, key, rule):
 def test_a_run_that_fails_keeps_what_it_computed(write_scene, tmp_path):
     """Newton allowed 2 iterations and one halving: the run stops at the first contact step
     it cannot solve, keeps the converged steps, marks impact.json incomplete, exit 1."""
-    from pinbore.fem import impact_file
+    from pinbore.fem.impact import file as impact_file
 
     data = impact_scene()
     data["solver"] = {"newton_max_it": 2, "max_cutbacks": 1}
@@ -297,7 +297,7 @@ def test_every_shipped_impact_scene_is_valid():
     from conftest import ROOT
 
     from pinbore.core import scene
-    from pinbore.fem.impact_scene import ImpactScene
+    from pinbore.fem.impact.scene import ImpactScene
 
     paths = sorted((ROOT / "scenes" / "impact").glob("*.toml"))
     assert paths
@@ -330,10 +330,10 @@ def test_slow_plastic_impact_loses_the_quasi_static_loops_plastic_work():
 
     Plastic, the heavy link is quasi-static for Newton too (the mass no longer regularises
     the step's tangent): full Newton steps cycle between two iterates at first yield, and
-    the step is solved again with the l2 line search (fem.dynamics), at the default solver
+    the step is solved again with the l2 line search (fem.impact.solver), at the default solver
     settings."""
     from pinbore.core.scene import validate
-    from pinbore.fem.impact_scene import ImpactScene
+    from pinbore.fem.impact.scene import ImpactScene
     from pinbore.fem.plasticity import von_mises
 
     def quasi_static(data):

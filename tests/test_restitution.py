@@ -11,7 +11,7 @@ from conftest import ROOT, pinbore
 from test_impact import Impact, impact_scene
 
 from pinbore.calibration import lawsfile, restitution
-from pinbore.fem import impact_file
+from pinbore.fem.impact import file as impact_file
 from pinbore.laws import dissipative
 from pinbore.reduced.model import build
 from pinbore.reduced.outputs import per_step, summary
@@ -49,8 +49,8 @@ def test_hysteresis_for_restitution_near_one_is_lankarani_nikravesh():
 
 def _write_impacts(folder, speeds, bore=None) -> list:
     """impact.json and history.csv of FE impacts at `speeds` (steel bore, or the `bore`
-    material), one folder each, written through fem.impact_file."""
-    from pinbore.fem.impact_run import history_rows
+    material), one folder each, written through fem.impact.file."""
+    from pinbore.fem.impact.run import history_rows
     paths = []
     for v in speeds:
         data = impact_scene(impact={"speed": v, "steps_per_contact": 50})

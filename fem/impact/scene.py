@@ -59,7 +59,7 @@ class DynamicMaterials(Strict):
 
 class Impact(Strict):
     """The impact: speed v0 (m/s) along direction_deg, the hub's added mass (kg/m), the time
-    integration (fem.dynamics: the WBZ member of the generalized-alpha family with spectral
+    integration (fem.impact.solver: the WBZ member of the generalized-alpha family with spectral
     radius rho_inf at infinite frequency: 1, the default, is the trapezoidal rule and
     conserves the energy of the linear part exactly, below 1 damps the frequencies near
     1/dt), the time step (s) or the steps over the estimated contact duration, the flight
@@ -67,7 +67,7 @@ class Impact(Strict):
     is called incomplete, the energy control of the step (adaptive_steps: a step whose
     contact integration loses or makes more than energy_tolerance E_0 / steps_per_contact is
     repeated smaller, so the energy book closes to about energy_tolerance of E_0;
-    fem.dynamics) and the mass of the contact surfaces' nodes (fem.dynamics)."""
+    fem.impact.solver) and the mass of the contact surfaces' nodes (fem.impact.solver)."""
 
     speed: float = pydantic.Field(gt=0, description="impact speed v0 (m/s)")
     direction_deg: float = pydantic.Field(ge=-360, le=360)

@@ -1,5 +1,5 @@
-"""`pinbore impact SCENE --out DIR`: the pin flies into the bore and rebounds (fem.dynamics);
-write history.csv, impact.json (fem.impact_file) and force_time.png."""
+"""`pinbore impact SCENE --out DIR`: the pin flies into the bore and rebounds
+(fem.impact.solver); write history.csv, impact.json (fem.impact.file) and force_time.png."""
 
 import platform
 import sys
@@ -15,9 +15,10 @@ from pinbore.core import scene as scenes
 from pinbore.core.errors import InputError
 from pinbore.core.figures import plt, save_png
 from pinbore.core.output import atomic_directory
-from pinbore.fem import impact_file, model
-from pinbore.fem.dynamics import ImpactStepper
-from pinbore.fem.impact_scene import ImpactScene
+from pinbore.fem import model
+from pinbore.fem.impact import file as impact_file
+from pinbore.fem.impact.scene import ImpactScene
+from pinbore.fem.impact.solver import ImpactStepper
 
 
 def build(scene: ImpactScene, comm=MPI.COMM_WORLD):
