@@ -32,7 +32,8 @@ DYNAMICS_SCENE := scenes/reduced/slider_crank_flores2004.toml
 SPATIAL_DYNAMICS_SCENE := scenes/reduced/spatial_slider_crank_flores_misaligned.toml
 DYNAMICS := $(addprefix build/dynamics/,poincare/summary.json bifurcation/summary.json design/summary.json \
                                         spatial_poincare/summary.json spatial_bifurcation/summary.json)
-DYNAMICS_CODE := $(wildcard pinbore/cli.py core/*.py laws/*.py calibration/lawsfile.py reduced/*.py) $(STAMP)
+REDUCED_CODE := $(wildcard core/*.py laws/*.py calibration/lawsfile.py reduced/mechanism/*.py)
+DYNAMICS_CODE := $(wildcard pinbore/cli.py reduced/dynamics/*.py) $(REDUCED_CODE) $(STAMP)
 DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(DYNAMICS_CODE)
 SPATIAL_DYNAMICS_DEPS := $(SPATIAL_DYNAMICS_SCENE) $(DYNAMICS_CODE)
 
@@ -76,8 +77,7 @@ build/calibration/laws.json: $(STUDY_CURVES) $(STUDY3D_CURVES) $(STUDY_IMPACTS) 
 
 reduced: $(REDUCED_RUNS) ## run the mechanisms with clearance joints (build/reduced/<scene>/)
 
-build/reduced/%/summary.json: scenes/reduced/%.toml build/calibration/laws.json \
-                              $(wildcard core/*.py laws/*.py calibration/lawsfile.py reduced/*.py) $(STAMP)
+build/reduced/%/summary.json: scenes/reduced/%.toml build/calibration/laws.json $(REDUCED_CODE) $(STAMP)
 	$(PINBORE) reduced $< --out build/reduced/$*
 
 dynamics: $(DYNAMICS) ## Poincare maps, bifurcation diagrams and design map of the slider-crank, planar and misaligned spatial (build/dynamics/)
@@ -108,7 +108,7 @@ build/dynamics/spatial_bifurcation/summary.json: $(SPATIAL_DYNAMICS_DEPS)
 report: build/report/index.html ## build build/report/index.html from the results
 
 build/report/index.html: $(FEM_CURVES) $(MESHES) build/calibration/laws.json $(REDUCED_RUNS) $(DYNAMICS) \
-                         $(wildcard bench/*.csv) $(STAGE_CODE) $(wildcard pinbore/*.py calibration/*.py reduced/*.py) $(STAMP)
+                         $(wildcard bench/*.csv) $(STAGE_CODE) $(wildcard pinbore/*.py calibration/*.py reduced/*.py) $(REDUCED_CODE) $(STAMP)
 	$(PINBORE) report --build build --out build/report
 	@echo "report: $(abspath $@)"
 

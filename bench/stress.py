@@ -48,8 +48,10 @@ import tomli_w
 from tqdm import tqdm
 
 from pinbore.core.figures import plt, save_png
+from pinbore.fem.curve import COLUMNS as CURVE_COLUMNS
 from pinbore.laws.dissipative import HYSTERESIS
-from pinbore.reduced import verdict
+from pinbore.reduced.mechanism import kinds, verdict
+from pinbore.reduced.mechanism.scene import clearance_joints
 
 ROOT = Path(__file__).resolve().parent.parent
 REDUCED_SCENE = ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml"
@@ -89,7 +91,7 @@ def reduced_points() -> list[dict]:
     def add(sweep, label, parameter, value, edit):
         scene = copy.deepcopy(base)
         edit(scene, scene["clearance_joints"][0])
-        points.append({"kind": "reduced", "sweep": sweep, "label": label, "parameter": parameter,
+        points.append({"command": "reduced", "sweep": sweep, "label": label, "parameter": parameter,
                        "value": value, "scene": scene})
 
     for E in (1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13):
@@ -124,7 +126,7 @@ def fem_points() -> list[dict]:
     def add(sweep, label, parameter, value, edit):
         scene = copy.deepcopy(base)
         edit(scene)
-        points.append({"kind": "fem", "sweep": sweep, "label": label, "parameter": parameter,
+        points.append({"command": "fem", "sweep": sweep, "label": label, "parameter": parameter,
                        "value": value, "scene": scene})
 
     for ratio in (1e-5, 1e-4, 1e-3, 1e-2, 5e-2, 0.2):
@@ -173,19 +175,19 @@ def failures(done: dict, outcome: str, nan: str | bool, broken: list, timeout: f
 def run_point(point: dict) -> dict:
     """Run one point's CLI command in a temporary directory under its wall-clock limit;
     (exit code or None on timeout, wall time, stderr, what it wrote as parsed JSON/text)."""
-    kind = point["kind"]
-    with tempfile.TemporaryDirectory(prefix=f"stress-{kind}-") as tmp:
+    pinbore_command = point["command"]   # the CLI command that runs it: reduced or fem
+    with tempfile.TemporaryDirectory(prefix=f"stress-{pinbore_command}-") as tmp:
         tmp = Path(tmp)
         scene_path = tmp / "scene.toml"
         scene_path.write_text(tomli_w.dumps(point["scene"]))
         out = tmp / "out"
-        command = [sys.executable, "-m", "pinbore.cli", kind, str(scene_path), "--out", str(out)]
+        command = [sys.executable, "-m", "pinbore.cli", pinbore_command, str(scene_path), "--out", str(out)]
         env = os.environ | {"OMP_NUM_THREADS": "1", "OPENBLAS_NUM_THREADS": "1"}
         start = time.perf_counter()
         process = subprocess.Popen(command, cwd=tmp, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                                    text=True, env=env, start_new_session=True)
         try:
-            _, stderr = process.communicate(timeout=TIMEOUT[kind])
+            _, stderr = process.communicate(timeout=TIMEOUT[pinbore_command])
             code = process.returncode
         except subprocess.TimeoutExpired:
             os.killpg(process.pid, signal.SIGKILL)   # its own session: the point and its children
@@ -248,19 +250,25 @@ def outcome_of(done: dict, file: str) -> tuple[str, dict | None]:
 
 # ---------------------------------------------------------------- multibody rows
 
-def reduced_bound(friction: dict | None) -> float:
-    """The largest F_t / F_n the friction table allows, computed here from its parameters
-    (inf: the law sets no bound)."""
+def reduced_bound(friction) -> float:
+    """The largest F_t / F_n the friction table (validated, or None) allows, computed here
+    from its parameters (inf: the law sets no bound)."""
     if friction is None:
         return 0.0
-    law = friction["law"]
+    law = friction.law
     if law in ("coulomb_ambrosio", "dahl"):
-        return friction["mu"]
+        return friction.mu
     if law == "stribeck":
-        return max(friction["mu_static"], friction["mu_min"])
-    if law == "iwan_bilinear" and friction.get("k2", 0.0) == 0:
-        return friction["mu"]
+        return max(friction.mu_static, friction.mu_min)
+    if law == "iwan_bilinear" and friction.k2 == 0:
+        return friction.mu
     return math.inf
+
+
+def scene_joints(scene: dict) -> list:
+    """The clearance joints of a point's scene of any kind (validated through the registry),
+    in the order of summary.json."""
+    return clearance_joints(kinds.validate(scene, "stress point"))
 
 
 def reduced_breaks(s: dict, scene: dict) -> list[str]:
@@ -272,14 +280,14 @@ def reduced_breaks(s: dict, scene: dict) -> list[str]:
     if energy["dissipated_J"] < -max(energy["max_residual_J"], 1e-12):
         broken.append(f"dissipated {energy['dissipated_J']:.3g} J")
     clearances = []
-    for joint in scene["clearance_joints"]:
-        clearances.append(joint["bearing_radius"] - joint["journal_radius"])
-        peaks = s["clearance_joints"].get(joint["name"])
+    for joint in scene_joints(scene):
+        clearances.append(joint.gap())
+        peaks = s["clearance_joints"].get(joint.name)
         if peaks is None:
             continue
         if not peaks["peak_penetration_m"] <= verdict.PENETRATION * peaks["clearance_m"]:
             broken.append(f"penetration {peaks['peak_penetration_m'] / peaks['clearance_m']:.3g} c")
-        bound = reduced_bound(joint.get("friction"))
+        bound = reduced_bound(joint.friction)
         if peaks["peak_normal_force_N"] > 0 and math.isfinite(bound):
             ratio = peaks["peak_friction_force_N"] / peaks["peak_normal_force_N"]
             if ratio > verdict.FRICTION_MARGIN * bound:
@@ -299,8 +307,8 @@ def reduced_row(done: dict) -> dict:
     nan = s is not None and any_nan(s)
     broken = []
     if s is not None and outcome != "crash":
-        joint = next(iter(s["clearance_joints"].values()))
-        scene_joint = done["scene"]["clearance_joints"][0]
+        name, joint = next(iter(s["clearance_joints"].items()))
+        scene_joint = next(c for c in scene_joints(done["scene"]) if c.name == name)
         ratio = (joint["peak_friction_force_N"] / joint["peak_normal_force_N"]
                  if joint["peak_normal_force_N"] > 0 else 0.0)
         row |= {"energy_residual_rel": f"{s['energy_balance']['relative_to_peak_kinetic']:.3g}",
@@ -309,7 +317,7 @@ def reduced_row(done: dict) -> dict:
                 "penetration_over_clearance": f"{joint['peak_penetration_m'] / joint['clearance_m']:.3g}",
                 "peak_normal_force_N": f"{joint['peak_normal_force_N']:.4g}",
                 "friction_ratio": f"{ratio:.3g}",
-                "friction_bound": f"{reduced_bound(scene_joint.get('friction')):g}",
+                "friction_bound": f"{reduced_bound(scene_joint.friction):g}",
                 "steps": s["steps"], "rejected_steps": s["rejected_steps"], "impacts": s["impacts"],
                 "time_reached_s": f"{s['time_reached_s']:.4g}",
                 "verdict": "; ".join(s.get("verdict", [])
@@ -334,11 +342,20 @@ REDUCED_COLUMNS = ["sweep", "parameter", "value", "outcome", "status", "exit_cod
 
 # ---------------------------------------------------------------- FE rows
 
+# the curve.csv columns whose NaN means "undefined here", not a lost value (e.g. the residual
+# approach on a step that ends no unloading): the curve reader accepts them
+UNDEFINED_OK = {c.name for columns in CURVE_COLUMNS.values() for c in columns.values() if c.undefined_ok}
+
+
 def curve_nan(text: str) -> bool:
-    """Any cell of curve.csv that reads as NaN (read raw: the curve reader refuses them)."""
+    """Any cell of curve.csv that reads as NaN (read raw: the curve reader refuses them), but
+    in the columns where NaN means undefined (UNDEFINED_OK)."""
     rows = list(csv.reader(text.splitlines()))
+    header = rows[0] if rows else []
     for row in rows[1:]:
-        for cell in row:
+        for name, cell in zip(header, row):
+            if name in UNDEFINED_OK:
+                continue
             try:
                 if math.isnan(float(cell)):
                     return True
@@ -463,8 +480,8 @@ def main(out: Path, only: str | None, sweep: str | None, limit: int | None) -> i
         futures = {pool.submit(run_point, p): k for k, p in enumerate(points)}
         for future in tqdm(as_completed(futures), total=len(points), desc="stress", unit="point"):
             done[futures[future]] = future.result()
-    reduced_rows = [reduced_row(d) for d in done if d["kind"] == "reduced"]
-    fem_rows = [fem_row(d) for d in done if d["kind"] == "fem"]
+    reduced_rows = [reduced_row(d) for d in done if d["command"] == "reduced"]
+    fem_rows = [fem_row(d) for d in done if d["command"] == "fem"]
     if reduced_rows:
         write_csv(out / "stress_reduced.csv", REDUCED_COLUMNS, reduced_rows)
     if fem_rows:

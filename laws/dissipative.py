@@ -78,7 +78,7 @@ HYSTERESIS = {f.__name__: f for f in (hunt_crossley, lankarani_nikravesh, lee_wa
                                        hu_guo)}
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def hysteresis_force(elastic, rate, impact_speed, chi):
     """F = max(F_el (1 + chi d' / v0), 0): the Hunt-Crossley family (N, or N/m with F_el per
     length), never pulling (the bracket turns negative when the bodies separate faster than

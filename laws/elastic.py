@@ -14,7 +14,6 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 
 _warned: set[str] = set()
 
@@ -71,6 +70,13 @@ def hertz_point(d, joint: Joint):
     return 4.0 / 3.0 * joint.e_star * math.sqrt(joint.r_star) * np.asarray(d, float) ** 1.5
 
 
+def hertz_flat(d, radius: float, e_star: float):
+    """Hertz, a sphere of radius R on a flat ([Johnson1985] sec. 4.2), F = (4/3) E* sqrt(R)
+    d^1.5 (N): the point law of hertz_point with the bearing's radius infinite (R* = R). A
+    slider's rounded corner on its guide's face (reduced.mechanism.model.corner_force)."""
+    return 4.0 / 3.0 * e_star * math.sqrt(radius) * np.asarray(d, float) ** 1.5
+
+
 def liu(d, joint: Joint):
     """Liu, Zhang & Yang 2007 [Liu2007], improved elastic foundation:
 
@@ -105,6 +111,8 @@ def _solve_increasing(approach, d, name):
 
     Returns NaN (with a warning) where d exceeds the largest approach the law can give.
     """
+    from scipy.optimize import brentq   # noqa: PLC0415 (scipy.optimize: a second to import)
+
     largest_p = brentq(lambda p: _slope(approach, p), *_slope_bracket(approach))
     largest_d = approach(largest_p)
     out = np.full(np.shape(d), np.nan)
@@ -242,6 +250,8 @@ def persson_force(eps, joint: Joint):
 
 def persson_half_angle(load: float) -> float:
     """Contact half-angle eps (rad) for the dimensionless load P / (E* c) >= 0."""
+    from scipy.optimize import brentq   # noqa: PLC0415 (scipy.optimize: a second to import)
+
     if load <= 0:
         return 0.0
     b = brentq(lambda b: persson_load(b) - load, 0.0, PERSSON_LIMIT_B * (1 - 1e-12))

@@ -53,7 +53,7 @@ positive definite, K = a sum_i w_i [f'_i n_i n_i^T + f_i / |P_i - d| (I - n_i n_
 when every step that overshoots the minimum along its direction is cut back to it
 (bore_displacement). The plane law above is the in-plane case: P_i = (delta + theta z'_i) along
 x, c = 0, the approach taken along x (no curvature term), d = (c_b F / L, 0), so
-x = delta - d_x; the spatial kernel (pinbore.reduced.spatial_kernel) takes the general one.
+x = delta - d_x; the spatial mechanisms (pinbore.reduced.mechanism.engine) take the general one.
 This section geometry and its potential are the project's own construction.
 
 F and M are the generalised forces conjugate to delta and theta (the virtual work of the
@@ -77,7 +77,7 @@ from pinbore.core.compiled import follow_compiled_in
 from pinbore.laws import relief, tables
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def slice_geometry(i, length, slices, end_length):
     """Slice i of `slices` over a bore of `length` (m): its offset z_i - L/2 from the
     mid-plane, its width L/n and its weight w_i = L/n + end_length at each end slice (m)."""
@@ -86,7 +86,7 @@ def slice_geometry(i, length, slices, end_length):
     return offset, width, width + end_length * ((i == 0) + (i == slices - 1))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def slice_contact(i, dx, dy, ax, ay, bx, by, clearance, planar, length, slices, grid_log0,
                   grid_step, table, relief_length, relief_depth):
     """Slice i of `slices` in the bore's section (module docstring, "The section in 2D"): the
@@ -113,7 +113,7 @@ def slice_contact(i, dx, dy, ax, ay, bx, by, clearance, planar, length, slices, 
     return offset, approach, nx, ny, curvature, force, slope
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def section_sums(dx, dy, ax, ay, bx, by, clearance, planar, length, slices, grid_log0,
                  grid_step, table, relief_length, relief_depth, end_length, scale):
     """The slices' resultants at the bore displacement (dx, dy) (slice_contact's geometry):
@@ -141,7 +141,7 @@ def section_sums(dx, dy, ax, ay, bx, by, clearance, planar, length, slices, grid
     return fx, fy, mx, my, kxx, kxy, kyy, contact
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def bore_displacement(ax, ay, bx, by, clearance, planar, length, slices, grid_log0, grid_step,
                       table, relief_length, relief_depth, end_length, scale, compliance):
     """The bore's uniform displacement d (m, 2: d_x, d_y) under its bulk compliance (m^2/N):
@@ -204,7 +204,7 @@ def bore_displacement(ax, ay, bx, by, clearance, planar, length, slices, grid_lo
     return dx, dy
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def shared_approach(delta, theta, length, slices, grid_log0, grid_step, table, relief_length,
                     relief_depth, end_length, scale, compliance):
     """The approach x = delta - compliance F(x) / L the slices share once the bore has moved
@@ -215,7 +215,7 @@ def shared_approach(delta, theta, length, slices, grid_log0, grid_step, table, r
                                      end_length, scale, compliance)[0]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def sliced(delta, theta, length, slices, grid_log0, grid_step, table, relief_length, relief_depth,
            end_length, scale, compliance):
     """(F (N), M (N m), z_F (m), contact length (m)) of a pin approached by delta (m) and

@@ -16,7 +16,7 @@ import numba
 import numpy as np
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def table_force_slope(delta, grid_log0, grid_step, table):
     """(f, df/d delta) at delta > 0 from `table` = ln f on the grid ln delta_j = grid_log0 +
     j grid_step: log-log interpolation, the power law of the first segment below the grid,
@@ -30,7 +30,7 @@ def table_force_slope(delta, grid_log0, grid_step, table):
     return f, (table[i + 1] - table[i]) / grid_step * f / delta
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, _nrt=False)
 def table_force(delta, grid_log0, grid_step, table):
     """f(delta) (units of the tabulated law) for delta > 0 (table_force_slope)."""
     return table_force_slope(delta, grid_log0, grid_step, table)[0]

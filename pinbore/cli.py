@@ -52,7 +52,7 @@ def _calibrate(args) -> int:
 
 
 def _reduced(args) -> int:
-    from pinbore.reduced import run as reduced_run
+    from pinbore.reduced.mechanism import run as reduced_run
 
     return reduced_run.run(args.scene, args.out)
 
@@ -60,7 +60,7 @@ def _reduced(args) -> int:
 def _dynamics(args) -> int:
     """Validate the options of the chosen analysis (its model in the table of analyses),
     then run it with them."""
-    from pinbore.reduced import analyses, studies
+    from pinbore.reduced.dynamics import analyses, studies
 
     model, _ = studies.ANALYSES[args.analysis]
     options = analyses.parse(model, _options_given(args), args.analysis)
@@ -116,7 +116,7 @@ def _dynamics_command(sub) -> None:
     """`pinbore dynamics`. Its options have no argparse defaults (an option left out is absent
     from the parsed arguments): the options model of the analysis holds the defaults and the
     rules, and rejects an option that the analysis does not use."""
-    from pinbore.reduced.analyses import PARAMETERS, Sampled, Sweep
+    from pinbore.reduced.dynamics.analyses import PARAMETERS, Sampled, Sweep
 
     def default(model, name):
         return model.model_fields[name].default
@@ -126,7 +126,7 @@ def _dynamics_command(sub) -> None:
                                    "joints, sampled once per drive revolution; write DIR/summary.json "
                                    "with tables and plots of the analysis.",
                        argument_default=argparse.SUPPRESS)
-    d.add_argument("scene", help="reduced scene file (TOML) with a [drive]")
+    d.add_argument("scene", help="mechanism scene file (TOML, planar or spatial) with a [drive]")
     d.add_argument("--analysis", required=True,
                    choices=["poincare", "bifurcation", "lyapunov", "shooting", "design"])
     d.add_argument("--out", required=True, type=Path, metavar="DIR",
@@ -194,8 +194,9 @@ def parser() -> argparse.ArgumentParser:
     c.set_defaults(func=_calibrate)
     _scene_command(sub, "reduced", _reduced,
                    "integrate a mechanism with clearance joints: timeseries.csv, summary.json",
-                   "Integrate a planar mechanism with revolute clearance joints (scene kind = "
-                   "\"reduced\"); write DIR/timeseries.csv, DIR/summary.json and plots.")
+                   "Integrate a planar (scene kind = \"reduced\") or spatial (kind = "
+                   "\"spatial\") mechanism with clearance joints; write DIR/timeseries.csv, "
+                   "DIR/summary.json and plots.")
     _dynamics_command(sub)
     r = sub.add_parser("report", help="build the HTML report from the results under build/",
                        description="Collect the results under BUILD into one self-contained "

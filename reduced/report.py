@@ -5,18 +5,19 @@ from pathlib import Path
 
 from pinbore.core.html import figure, note, outcome_counts, png_data, table
 from pinbore.core.scene import load_json
-from pinbore.reduced import summary
+from pinbore.reduced.mechanism import kinds, summary
 
 
 def section(build_dir: Path, bench_dir: Path) -> str:
     runs = sorted((build_dir / "reduced").glob("*/summary.json"))
     parts = ["<h2>Mechanisms with clearance joints (reduced model)</h2>",
-             "<p>Planar rigid bodies, ideal joints as constraints with Lagrange multipliers "
-             "(Baumgarte stabilisation), revolute clearance joints with a normal law (elastic "
-             "part from the law library or calibrated on the FE study, Hunt-Crossley-type "
-             "damping) and friction, or rigid impacts (Newton restitution, then held contact); "
-             "adaptive Dormand-Prince 5(4), compiled with numba, that lands every contact onset "
-             "on a step boundary (a stiff Rosenbrock 2(3) is the alternative).</p>"]
+             "<p>One engine for planar and spatial mechanisms: rigid bodies, ideal joints as "
+             "constraints with Lagrange multipliers (Baumgarte stabilisation), clearance joints "
+             "whose contacts carry a normal law (elastic part from the law library or calibrated "
+             "on the FE study, Hunt-Crossley-type damping) and friction, or rigid impacts (Newton "
+             "or Poisson restitution, then held contact); adaptive Dormand-Prince 5(4), compiled "
+             "with numba, that lands every contact onset on a step boundary (a stiff Rosenbrock "
+             "2(3) is the alternative).</p>"]
     if not runs:
         return "".join(parts + [note("No runs under build/reduced: run <code>make reduced</code>.")]
                        + stress_part(bench_dir))
@@ -32,49 +33,24 @@ def section(build_dir: Path, bench_dir: Path) -> str:
         if s.verdict:
             parts.append(f"<p class='note'><b>{html.escape(folder.name)} is suspect</b>: "
                          f"{html.escape('; '.join(s.verdict))}.</p>")
-    spatial = [folder for folder in summaries if is_spatial(folder)]
-    if spatial:
-        parts.append("<p>Spatial scenes (" + ", ".join(html.escape(f.name) for f in spatial)
-                     + "): rigid bodies in 3D on Euler parameters, the same ideal joints, drive, "
-                     "torsion springs and latches; cylindrical clearance joints cut into slices "
-                     "along the bore (a tilted journal loads its edge and feels a tilting moment), "
-                     "with shoulders, and spherical ones (a ball in its socket).</p>")
+    for kind in kinds.KINDS.values():
+        mine = [folder.name for folder, s in summaries.items() if s.model == kind.name]
+        if mine:
+            parts.append(f"<p>{kind.name.capitalize()} scenes ({html.escape(', '.join(mine))}): "
+                         f"{kind.description}.</p>")
     for folder, s in summaries.items():
-        if is_spatial(folder):
-            parts += spatial_figures(folder, s)
-            continue
         if (folder / "acceleration.png").exists() and s.clearance_joints:
             parts.append(figure(png_data(folder / "acceleration.png"),
                                 f"Scene {folder.name}: slider acceleration against crank angle, "
                                 "with the ideal joint (dashed)."))
         if (folder / "attitude.png").exists():
             parts.append(figure(png_data(folder / "attitude.png"),
-                                f"Scene {folder.name}: attitude rate of the free-floating body "
-                                "during deployment, with the ideal hinge (dashed)."))
-        parts += joint_figures(folder, s, "the journal centre inside the clearance circle, and "
-                               "the normal contact force.")
+                                f"Scene {folder.name}: angular velocity of the first body (a "
+                                "free-floating bus's attitude rates; an unactuated crank's speed), "
+                                "with the ideal joints (dashed)."))
+        parts += joint_figures(folder, s, kinds.BY_NAME[s.model].joint_caption)
     parts += stress_part(bench_dir)
     return "".join(parts)
-
-
-def is_spatial(folder: Path) -> bool:
-    """A spatial run: its time series has Euler parameters (reduced.spatial_outputs)."""
-    try:
-        with (folder / "timeseries.csv").open(encoding="utf-8") as f:
-            return "_e0_1" in f.readline()
-    except OSError:
-        return False
-
-
-def spatial_figures(folder: Path, s) -> list[str]:
-    parts = []
-    if (folder / "attitude.png").exists():
-        parts.append(figure(png_data(folder / "attitude.png"),
-                            f"Scene {folder.name}: the three attitude rates of the free-floating "
-                            "body (global axes) during deployment, with the ideal hinge (dashed)."))
-    return parts + joint_figures(folder, s, "contact forces against time (a journal: the "
-                                 "slices' radial sum and the shoulders' axial force; a ball: its "
-                                 "force on the socket).")
 
 
 def joint_figures(folder: Path, s, caption: str) -> list[str]:

@@ -18,11 +18,15 @@ FLOORS = {"core": ("pinbore.core", 0), "laws": ("pinbore.laws", 1), "meshes": ("
 
 
 def modules() -> dict[str, Path]:
-    """Dotted name -> file of every module of the package."""
+    """Dotted name -> file of every module of the package (rooms, the subfolders of a floor,
+    included)."""
     found = {}
     for folder, (package, _) in FLOORS.items():
-        for path in sorted((ROOT / folder).glob("*.py")):
-            found[package if path.stem == "__init__" else f"{package}.{path.stem}"] = path
+        for path in sorted((ROOT / folder).rglob("*.py")):
+            if folder == "pinbore" and path.parent != ROOT / folder:
+                continue
+            parts = [package, *path.relative_to(ROOT / folder).with_suffix("").parts]
+            found[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
     return found
 
 
@@ -111,3 +115,105 @@ def test_meshing_loads_no_dolfinx(tmp_path):
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
     assert (tmp_path / "mesh" / "mesh.msh").exists()
+
+
+# ---- the rooms of a floor: reduced/ holds the mechanism model, the nonlinear dynamics and the
+# report section; fem/ the quasi-static solver and the dynamic impact
+MECHANISM = "pinbore.reduced.mechanism"
+BACK_ENDS = {f"{MECHANISM}.planar", f"{MECHANISM}.spatial"}
+
+
+def test_kinematic_back_ends_never_import_each_other():
+    edges = graph()
+    wrong = [f"{a} imports {b}" for a in BACK_ENDS for b in edges[a] if b in BACK_ENDS]
+    assert not wrong, "\n".join(wrong)
+
+
+def test_only_the_registry_names_a_back_end():
+    """The engine, the bodies' interface and every user of the mechanism reach a body kind
+    through the registry (reduced.mechanism.kinds: Kind.bodies()), never by importing it, so
+    a third kind plugs in there without touching the joints."""
+    wrong = [f"{a} imports {b}" for a, targets in graph().items() if a not in BACK_ENDS
+             for b in targets if b in BACK_ENDS]
+    assert not wrong, "\n".join(wrong)
+
+
+def test_rooms_go_one_way():
+    """The mechanism model is below the nonlinear dynamics and the report section; the
+    quasi-static FE solver does not reach into the dynamic impact's room."""
+    below = {"pinbore.reduced.mechanism": ("pinbore.reduced.dynamics", "pinbore.reduced.report"),
+             "pinbore.reduced.dynamics": ("pinbore.reduced.report",)}
+    wrong = [f"{a} imports {b}" for a, targets in graph().items() for room, above in below.items()
+             if a.startswith(room) for b in targets if b.startswith(above)]
+    fem_core = [a for a in graph() if a.startswith("pinbore.fem.") and not a.startswith("pinbore.fem.impact")]
+    wrong += [f"{a} imports {b}" for a in fem_core for b in graph()[a] if b.startswith("pinbore.fem.impact")]
+    assert not wrong, "\n".join(wrong)
+
+
+SCENE_SIDE = [f"{MECHANISM}.{name}" for name in ("scene", "kinds", "summary", "verdict", "layout")]
+
+
+def test_scene_side_of_the_mechanism_loads_no_numba():
+    """Validating a mechanism scene (and reading its summary) must not load numba: a scene
+    with a bad number is one line in well under a second of CPU."""
+    code = ("import sys; " + "; ".join(f"import {m}" for m in SCENE_SIDE)
+            + "; assert 'numba' not in sys.modules, 'numba loaded'")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr
+
+
+@pytest.mark.parametrize("command", ["reduced", "dynamics"])
+def test_a_bad_mechanism_scene_costs_well_under_a_second(tmp_path, command):
+    """A scene with a negative mass: exit 2, one line naming the key, before numba or DOLFINx
+    load (the child's CPU time, import of the CLI included)."""
+    scene = (ROOT / "scenes/reduced/slider_crank_flores2004.toml").read_text()
+    bad = tmp_path / "bad.toml"
+    bad.write_text(scene.replace("mass = 0.30", "mass = -0.30"))
+    extra = ["--analysis", "poincare"] if command == "dynamics" else []
+    code = ("import resource, sys; from pinbore.cli import main; "
+            f"code = main([{command!r}, {str(bad)!r}, '--out', {str(tmp_path / 'out')!r}, *{extra!r}]); "
+            "assert not any(m.split('.')[0] in ('numba', 'dolfinx') for m in sys.modules), 'loaded'; "
+            "u = resource.getrusage(resource.RUSAGE_SELF); print(u.ru_utime + u.ru_stime); sys.exit(code)")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert run.returncode == 2, run.stderr
+    assert "bodies" in run.stderr and "mass" in run.stderr and len(run.stderr.strip().splitlines()) == 1
+    assert float(run.stdout) < 1.0
+    assert not (tmp_path / "out").exists()
+
+
+# where a branch on the kind of mechanism would hide: the users of the mechanism model
+KIND_NEUTRAL = ["reduced/mechanism/model.py", "reduced/mechanism/run.py",
+                "reduced/mechanism/outputs.py", "reduced/mechanism/engine.py",
+                "reduced/dynamics/flow.py", "reduced/dynamics/studies.py", "reduced/report.py",
+                "bench/multibody.py", "bench/sweep.py", "bench/stress.py"]
+
+
+@pytest.mark.parametrize("name", KIND_NEUTRAL)
+def test_no_branch_on_the_kind_of_mechanism(name):
+    """Every command, the report and the benchmarks take any mechanism through the registry
+    (reduced.mechanism.kinds): no comparison with a kind's name and no test of a kind's scene
+    class outside it."""
+    tree = ast.parse((ROOT / name).read_text())
+    wrong = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Compare):
+            sides = [node.left, *node.comparators]
+            about_kind = any(isinstance(side, ast.Attribute) and side.attr in ("kind", "model")
+                             or isinstance(side, ast.Subscript) and isinstance(side.slice, ast.Constant)
+                             and side.slice.value in ("kind", "model") for side in sides)
+            for side in sides:
+                if isinstance(side, ast.Constant) and (side.value in ("planar", "spatial") or about_kind
+                                                       and side.value == "reduced"):
+                    wrong.append(f"line {node.lineno}: compares with {side.value!r}")
+        if isinstance(node, ast.Name) and node.id in ("ReducedScene", "SpatialScene"):
+            wrong.append(f"line {node.lineno}: names {node.id}")
+    assert not wrong, "\n".join(wrong)
+
+
+def test_the_scene_knows_every_damping_law():
+    """The scene lists the hysteresis laws by name (validating it loads no numba); they are
+    exactly those of pinbore.laws.dissipative."""
+    from pinbore.laws.dissipative import HYSTERESIS
+    from pinbore.reduced.mechanism.scene import HYSTERESIS_LAWS
+
+    assert sorted(HYSTERESIS_LAWS) == sorted(HYSTERESIS)

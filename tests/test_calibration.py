@@ -16,8 +16,9 @@ from pinbore.calibration.fit import errors, fit
 from pinbore.calibration.lawsfile import law_force
 from pinbore.calibration.run import evaluate, laws_json
 from pinbore.laws.elastic import Joint
-from pinbore.reduced.model import build
-from pinbore.reduced.scene import ReducedScene
+from pinbore.reduced.mechanism.layout import CONTACT_TABLE
+from pinbore.reduced.mechanism.model import build
+from pinbore.reduced.mechanism.scene import ReducedScene
 
 JOINT = Joint(10e-3, 9.95e-3, 210e9, 0.3, 210e9, 0.3, 0.02)
 APPROACH = np.linspace(1e-6, 1e-5, 10)
@@ -156,15 +157,22 @@ def test_laws_file_reads_back_what_was_written(tmp_path):
     assert lawsfile.read(path) == laws_json(curves, evaluate(curves), None, [], 0.0)
 
 
+def joint_table(model, j=0):
+    """ln F of clearance joint j's normal law, as the model tabulated it (the table of its
+    first contact; a planar revolute joint has one)."""
+    return model.base.tables[int(model.contacts[model.contact_rows[j][0], CONTACT_TABLE])]
+
+
 def test_multibody_model_applies_the_law_the_calibration_fitted(tmp_path):
     """The joint's tabulated force is F = P L, P the calibrated law: here the synthetic truth."""
     model = build(ReducedScene.model_validate(calibrated_scene(synthetic_laws_file(tmp_path))),
                   "test", tmp_path)
-    d = np.exp(model.grid_log0 + model.grid_step * np.arange(model.tables.shape[1]))
-    inside = np.isfinite(model.tables[0])
+    table = joint_table(model)
+    d = np.exp(model.base.grid_log0 + model.base.grid_step * np.arange(table.size))
+    inside = np.isfinite(table)
     reference = float(np.exp(np.mean(np.log(APPROACH))))
     truth = 1.37 * law_force("liu", d, JOINT) * (d / reference) ** -0.12 * JOINT.length
-    np.testing.assert_allclose(np.exp(model.tables[0][inside]), truth[inside], rtol=1e-8)
+    np.testing.assert_allclose(np.exp(table[inside]), truth[inside], rtol=1e-8)
 
 
 @pytest.mark.parametrize("edit, message", [

@@ -109,8 +109,8 @@ def test_the_planar_model_takes_the_straight_pin_force_of_a_3d_law(tmp_path):
     from pinbore.calibration.run import evaluate, laws_json
     from pinbore.laws import sliced as sliced_law
     from pinbore.laws import tables
-    from pinbore.reduced.model import build
-    from pinbore.reduced.scene import ReducedScene
+    from pinbore.reduced.mechanism.model import build
+    from pinbore.reduced.mechanism.scene import ReducedScene
     import test_calibration
 
     laws = sliced.calibrate([synthetic("short", 0.01, 0.9, 1.5e-3, 0.4),
@@ -122,8 +122,9 @@ def test_the_planar_model_takes_the_straight_pin_force_of_a_3d_law(tmp_path):
     joint = scene["clearance_joints"][0]
     joint["normal_law"] = "sliced:flush_steel"
     model = build(ReducedScene.model_validate(scene), "test", tmp_path)
-    d = np.exp(model.grid_log0 + model.grid_step * np.arange(model.tables.shape[1]))
-    pick = np.flatnonzero(np.isfinite(model.tables[0]))[::60]
+    modelled = test_calibration.joint_table(model)
+    d = np.exp(model.base.grid_log0 + model.base.grid_step * np.arange(modelled.size))
+    pick = np.flatnonzero(np.isfinite(modelled))[::60]
     law_joint = laws["flush_steel"].joint.joint(joint["bearing_radius"], joint["journal_radius"])
     law = laws["flush_steel"]
     table = tables.tabulate(lambda x: liu(x, law_joint), 1e-12, 1e-3, 600)
@@ -131,7 +132,7 @@ def test_the_planar_model_takes_the_straight_pin_force_of_a_3d_law(tmp_path):
     for i in pick:
         expected = sliced_law.sliced(d[i], 0.0, joint["length"], 16, *local, 0.0, 0.0,
                                      law.end_length_m, law.scale, law.bulk_compliance_m2_per_N)[0]
-        assert np.exp(model.tables[0][i]) == pytest.approx(expected, rel=1e-5)
+        assert np.exp(modelled[i]) == pytest.approx(expected, rel=1e-5)
 
 
 
@@ -173,8 +174,8 @@ def test_a_law_on_its_sections_fe_curve_holds_for_that_section_only(tmp_path):
     from pinbore.calibration import lawsfile
     from pinbore.calibration.run import evaluate, laws_json
     from pinbore.core.errors import InputError
-    from pinbore.reduced.model import build
-    from pinbore.reduced.scene import ReducedScene
+    from pinbore.reduced.mechanism.model import build
+    from pinbore.reduced.mechanism.scene import ReducedScene
     import test_calibration
 
     points = np.geomspace(1e-6, 6e-5, 12)
@@ -195,7 +196,7 @@ def test_a_law_on_its_sections_fe_curve_holds_for_that_section_only(tmp_path):
     joint |= {"normal_law": "sliced:flush_steel", "bearing_radius": JOINT.r_bore,
               "journal_radius": JOINT.r_pin}
     model = build(ReducedScene.model_validate(scene), "test", tmp_path)
-    assert np.isfinite(model.tables[0]).sum() > 100
+    assert np.isfinite(test_calibration.joint_table(model)).sum() > 100
     joint["journal_radius"] = JOINT.r_pin - 1e-5
     with pytest.raises(InputError, match="clearance_joints.bearing_radius, journal_radius: "
                                          "'sliced:flush_steel' is built on the FE curve"):

@@ -13,7 +13,7 @@ import pytest
 from conftest import ROOT, pinbore
 from scipy.integrate import solve_ivp
 
-from pinbore.reduced import dynamics, studies
+from pinbore.reduced.dynamics import flow, studies
 
 FLORES = ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml"
 DAMPING, FREQUENCY = 0.3, 1.2
@@ -46,10 +46,10 @@ class Duffing:
 
 def duffing_point(gamma):
     """A sweep task (module level, so that worker processes can run it)."""
-    flow = Duffing(gamma)
-    samples, states = dynamics.poincare(flow, flow.start(), 200, 64)
-    exponent, _ = dynamics.lyapunov(flow, states[-1], 150)
-    kind, period = dynamics.classify(samples, exponent)
+    duffing = Duffing(gamma)
+    samples, states = flow.poincare(duffing, duffing.start(), 200, 64)
+    exponent, _ = flow.lyapunov(duffing, states[-1], 150)
+    kind, period = flow.classify(samples, exponent)
     return {"value": gamma, "kind": kind, "period": period, "lyapunov_per_s": exponent}
 
 
@@ -83,13 +83,13 @@ def test_shooting_finds_the_period_one_orbit_and_liouville_fixes_its_multipliers
     """Newton on P(x) = x from a rough guess converges quadratically; the multipliers lie in
     the unit circle and their product is det DP = exp(-damping T) (Liouville: the flow's
     divergence is -damping)."""
-    flow = Duffing(0.20)
-    guess = flow.advance(flow.start(), 10)
-    orbit, multipliers, history = dynamics.shooting(flow, guess, tol=1e-10)
+    duffing = Duffing(0.20)
+    guess = duffing.advance(duffing.start(), 10)
+    orbit, multipliers, history = flow.shooting(duffing, guess, tol=1e-10)
     assert history[-1] < 1e-10 * max(np.linalg.norm(orbit[0]), 1.0) and len(history) <= 8
     assert np.all(np.abs(multipliers) < 1)
-    assert np.prod(multipliers).real == pytest.approx(math.exp(-DAMPING * flow.period), rel=1e-5)
-    assert np.allclose(flow.advance(orbit)[0], orbit[0], atol=1e-8)
+    assert np.prod(multipliers).real == pytest.approx(math.exp(-DAMPING * duffing.period), rel=1e-5)
+    assert np.allclose(duffing.advance(orbit)[0], orbit[0], atol=1e-8)
 
 
 def test_ideal_slider_crank_has_one_poincare_point_and_no_positive_exponent(tmp_path):

@@ -12,7 +12,7 @@ import pytest
 from conftest import ROOT
 
 from pinbore import cli
-from pinbore.reduced import analyses, studies
+from pinbore.reduced.dynamics import analyses, studies
 
 FLORES = ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml"
 BIFURCATION = ["--analysis", "bifurcation", "--parameter", "clearance"]

@@ -1,5 +1,5 @@
 """The files between the stages, each defined by one module: curve.csv and pressure.csv
-(pinbore.fem.curve), summary.json (pinbore.reduced.summary). What is written reads back the
+(pinbore.fem.curve), summary.json (pinbore.reduced.mechanism.summary). What is written reads back the
 same, and a file a reader cannot take (another version's, or corrupt) is refused as one line
 that names the file and what is wrong."""
 
@@ -106,4 +106,4 @@ def test_a_summary_of_another_version_is_one_line(tmp_path):
     assert done.returncode == 1, done.stderr
     line = done.stderr.strip()
     assert len(line.splitlines()) == 1 and str(folder / "summary.json") in line
-    assert "stop: required key is missing" in line and "run pinbore reduced again" in line
+    assert "model: required key is missing" in line and "run pinbore reduced again" in line

@@ -14,10 +14,11 @@ from test_reduced import free_mechanism, solve
 
 from pinbore.laws import dissipative
 from pinbore.laws.elastic import Joint, hertz_point
-from pinbore.reduced.model import build
-from pinbore.reduced.outputs import per_step
-from pinbore.reduced.run import simulate
-from pinbore.reduced.scene import ReducedScene
+from pinbore.reduced.mechanism.layout import LOG_RATE, LOG_TIME
+from pinbore.reduced.mechanism.model import build
+from pinbore.reduced.mechanism.outputs import per_step
+from pinbore.reduced.mechanism.run import simulate
+from pinbore.reduced.mechanism.scene import ReducedScene
 
 
 def rigid(data, model="newton", e=0.9):
@@ -40,7 +41,7 @@ def first_rebound(data):
         k = np.flatnonzero(force > 0)[0]
         k += np.argmax(force[k:] == 0)     # first step after separation
     else:
-        k = np.searchsorted(run.times, run.impacts[0, 0])
+        k = np.searchsorted(run.times, run.impacts[0, LOG_TIME])
     return run.states[k, model.nq:2 * model.nq], run.times[k], run
 
 
@@ -98,10 +99,10 @@ def test_bouncing_journal_comes_to_rest_in_held_contact_carrying_its_weight():
     run = simulate(model)
     assert run.status == 0
     cols = per_step(model, run)[0]
-    rates = run.impacts[:, 2]
+    rates = run.impacts[:, LOG_RATE]
     assert len(rates) >= 3 and np.all(rates[1:] < rates[:-1])   # each bounce slower
     assert np.allclose(rates[1:-1] / rates[:-2], 0.5, rtol=1e-4)  # v_(k+1) = e v_k (drop height)
-    assert run.modes[-1, 0] == 1
+    assert run.modes[-1, 0] == 1   # the journal's one contact is held
     assert cols["j_normal_force_N"][-1] == pytest.approx(mass * g, rel=1e-8)
     assert cols["j_ecc_y_m"][-1] == pytest.approx(-1e-3, abs=1e-12)
 

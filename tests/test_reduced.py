@@ -13,18 +13,19 @@ from conftest import ROOT, pinbore
 from pinbore.laws import dissipative
 from pinbore.laws import friction as friction_laws
 from pinbore.laws.elastic import Joint, hertz_point
-from pinbore.reduced import layout
-from pinbore.reduced import summary as reduced_summary
-from pinbore.reduced.model import build
-from pinbore.reduced.outputs import per_step
-from pinbore.reduced.run import ideal_twin, simulate
-from pinbore.reduced.scene import ReducedScene
+from pinbore.reduced.mechanism import layout
+from pinbore.reduced.mechanism import summary as reduced_summary
+from pinbore.reduced.mechanism.model import build
+from pinbore.reduced.mechanism.outputs import per_step
+from pinbore.reduced.mechanism.run import simulate
+from pinbore.reduced.mechanism.scene import ReducedScene
 
 FLORES = tomllib.loads((ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml").read_text())
 
 
-def solve(data):
-    model = build(ReducedScene.model_validate(data), "test", ROOT)
+def solve(data, ideal=False):
+    """Integrate a planar scene dict (ideal: its ideal twin, every clearance joint closed)."""
+    model = build(ReducedScene.model_validate(data), "test", ROOT, ideal=ideal)
     run = simulate(model)
     assert run.status == 0, (run.status, run.t_end)
     cols, energy, drift = per_step(model, run)
@@ -46,8 +47,7 @@ OMEGA = 5000 * 2 * math.pi / 60
 
 
 def test_ideal_slider_crank_matches_exact_kinematics():
-    data = ideal_twin(ReducedScene.model_validate(FLORES)).model_dump()
-    cols, _, drift, _ = solve(data)
+    cols, _, drift, _ = solve(FLORES, ideal=True)
     x, v, a = exact_slider(cols["crank_angle_rad"], OMEGA)
     np.testing.assert_allclose(cols["slider_x_m"], x, atol=1e-9)
     np.testing.assert_allclose(cols["slider_vx_m_per_s"], v, atol=1e-6 * OMEGA * 0.05)
@@ -129,17 +129,26 @@ def test_single_impact_restitution_equals_the_laws(law, e):
     assert rebound / speed == pytest.approx(reference, rel=1e-4)
 
 
+# the columns that hold a vector: three each (a planar mechanism reads two of them)
+VECTORS = {"CONTACT_": ("CONTACT_BEARING_POINT", "CONTACT_BEARING_AXIS", "CONTACT_JOURNAL_POINT",
+                        "CONTACT_JOURNAL_AXIS"),
+           "PRIM_": ("PRIM_S_I", "PRIM_S_J", "PRIM_A_I", "PRIM_B_J", "PRIM_C_I"),
+           "TORSION_": ("TORSION_A_I", "TORSION_B_J", "TORSION_C_I"), "LOG_": ()}
+
+
 @pytest.mark.parametrize("prefix, columns", [
-    ("JOINT_", layout.JOINT_COLUMNS), ("REVOLUTE_", layout.REVOLUTE_COLUMNS),
-    ("PRISMATIC_", layout.PRISMATIC_COLUMNS), ("DRIVE_", layout.DRIVE_COLUMNS),
+    ("CONTACT_", layout.CONTACT_COLUMNS), ("PRIM_", layout.PRIMITIVE_COLUMNS),
     ("TORSION_", layout.TORSION_COLUMNS), ("LOG_", layout.LOG_COLUMNS)])
 def test_a_row_layout_names_every_column_once(prefix, columns):
     """The named columns of a row are 0 .. columns - 1, each once (the friction law's
-    parameters take the block JOINT_FRICTION .. + FRICTION_PARAMETERS)."""
+    parameters take the block CONTACT_FRICTION .. + FRICTION_PARAMETERS, the calibrated
+    damping's chi table CONTACT_CHI_TABLE .. + CHI_POINTS, a vector three columns)."""
     named = [v for k, v in vars(layout).items() if k.startswith(prefix) and k != f"{prefix}COLUMNS"]
-    if prefix == "JOINT_":
-        named += range(layout.JOINT_FRICTION + 1, layout.JOINT_FRICTION + layout.FRICTION_PARAMETERS)
-        named += range(layout.JOINT_CHI_TABLE + 1, layout.JOINT_CHI_TABLE + layout.CHI_POINTS)
+    for vector in VECTORS[prefix]:
+        named += range(getattr(layout, vector) + 1, getattr(layout, vector) + 3)
+    if prefix == "CONTACT_":
+        named += range(layout.CONTACT_FRICTION + 1, layout.CONTACT_FRICTION + layout.FRICTION_PARAMETERS)
+        named += range(layout.CONTACT_CHI_TABLE + 1, layout.CONTACT_CHI_TABLE + layout.CHI_POINTS)
     assert sorted(named) == list(range(columns))
 
 
@@ -148,7 +157,7 @@ def test_a_friction_law_keeps_its_parameters_in_the_friction_block(law):
     params = [v for k, v in vars(layout).items() if k.startswith(f"{law}_")]
     if law in ("COULOMB", "STRIBECK", "LINEAR"):
         params += [layout.REGULARISATION_V0, layout.REGULARISATION_V1]
-    block = range(layout.JOINT_FRICTION, layout.JOINT_FRICTION + layout.FRICTION_PARAMETERS)
+    block = range(layout.CONTACT_FRICTION, layout.CONTACT_FRICTION + layout.FRICTION_PARAMETERS)
     assert params and len(set(params)) == len(params) and set(params) <= set(block)
 
 

@@ -13,10 +13,10 @@ from test_impact import Impact, impact_scene
 from pinbore.calibration import lawsfile, restitution
 from pinbore.fem.impact import file as impact_file
 from pinbore.laws import dissipative
-from pinbore.reduced.model import build
-from pinbore.reduced.outputs import per_step, summary
-from pinbore.reduced.run import simulate
-from pinbore.reduced.scene import ReducedScene
+from pinbore.reduced.mechanism.model import build
+from pinbore.reduced.mechanism.outputs import per_step, summary
+from pinbore.reduced.mechanism.run import simulate
+from pinbore.reduced.mechanism.scene import ReducedScene
 
 # The FE impacts of the calibration: the coarse test scene (steel pin, c = 10 um), 50 steps
 # over the contact (e within 1e-3 of its 200-step value at 1 m/s, test_impact), four speeds
@@ -200,7 +200,7 @@ def test_an_impact_beyond_the_range_warns_once(tmp_path, law):
     """At 10 m/s (above the FE's 3 m/s) e is held at its 3 m/s value and the summary says
     so in one line."""
     model, run, _ = journal_impact(laws_file(tmp_path, {law.joint.key(): law}), 10.0, 1e-6 + 1.5e-5)
-    from pinbore.reduced.outputs import sample
+    from pinbore.reduced.mechanism.outputs import sample
     text = summary(model, sample(model, run), run, "ok", "test").warnings
     assert len([w for w in text if "restitution" in w]) == 1
     assert "10 m/s" in text[0] and "0.1-3 m/s" in text[0]

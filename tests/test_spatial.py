@@ -14,38 +14,34 @@ from scipy.special import ellipk
 
 from pinbore.laws import sliced
 from pinbore.laws.tables import tabulate
-from pinbore.reduced import spatial_kernel
-from pinbore.reduced.model import build as build_planar
-from pinbore.reduced.outputs import per_step as planar_per_step
-from pinbore.reduced.run import simulate
-from pinbore.reduced.scene import ReducedScene
-from pinbore.reduced.spatial_layout import (BODY_COLUMNS, BODY_JINV, BODY_POS, BODY_ROT,
-                                            CYLINDER, SJ_BEARING_AXIS, SJ_BEARING_BODY,
-                                            SJ_COMPLIANCE, SJ_END_LENGTH, SJ_JOURNAL_AXIS,
-                                            SJ_JOURNAL_BODY, SJ_KIND, SJ_LENGTH, SJ_SCALE,
-                                            SJ_SLICES, SPATIAL_JOINT_COLUMNS)
-from pinbore.reduced.layout import JOINT_BEARING_RADIUS, JOINT_CLEARANCE
-from pinbore.reduced.spatial_model import build
-from pinbore.reduced.spatial_outputs import per_step
-from pinbore.reduced.spatial_scene import SpatialScene
+from pinbore.reduced.mechanism import engine, kinds, spatial
+from pinbore.reduced.mechanism.layout import (
+    CONTACT_BEARING_AXIS, CONTACT_BEARING_BODY, CONTACT_CLEARANCE, CONTACT_COLUMNS,
+    CONTACT_COMPLIANCE, CONTACT_END_LENGTH, CONTACT_JOURNAL_AXIS, CONTACT_JOURNAL_BODY,
+    CONTACT_KIND, CONTACT_LENGTH, CONTACT_RADIUS, CONTACT_SCALE, CONTACT_SLICES, CONTACT_STATE,
+    SLICED, row)
+from pinbore.reduced.mechanism.model import build
+from pinbore.reduced.mechanism.outputs import per_step
+from pinbore.reduced.mechanism.run import simulate
+from pinbore.reduced.mechanism.spatial import BODY_COLUMNS, BODY_JINV, BODY_POS, BODY_ROT
 
 SCENES = ROOT / "scenes" / "reduced"
 PLANAR = tomllib.loads((SCENES / "slider_crank_flores2004.toml").read_text())
 SPATIAL = tomllib.loads((SCENES / "spatial_slider_crank_flores.toml").read_text())
 
 
-def run(data, planar=False):
-    model = (build_planar(ReducedScene.model_validate(data), "test", ROOT) if planar
-             else build(SpatialScene.model_validate(data), "test", ROOT))
+def run(data):
+    """Build a scene of either kind (its `kind` key) and integrate it."""
+    model = build(kinds.validate(data, "test"), "test", ROOT)
     trajectory = simulate(model)
     assert trajectory.status == 0, (trajectory.status, trajectory.t_end)
     return model, trajectory
 
 
-def first_impact(data, planar):
+def first_impact(data):
     """Time and speed of the first onset, and the largest force before the contact opens."""
-    model, trajectory = run(data, planar)
-    cols = (planar_per_step if planar else per_step)(model, trajectory)[0]
+    model, trajectory = run(data)
+    cols = per_step(model, trajectory)[0]
     force = cols["rod_slider_normal_force_N"]
     first = np.flatnonzero(force > 0)[0]
     end = first + np.argmax(force[first:] == 0)
@@ -64,8 +60,8 @@ def test_planar_scene_as_spatial_reproduces_the_planar_model():
     for data in (planar, spatial):
         data["duration"] = 4e-4   # past the first impact (its peak at 0.25 ms)
         data["integrator"] = {"rtol": 1e-10, "atol": 1e-13, "max_step": 2e-8}
-    (p_log, p_peak, p_cols, p_first) = first_impact(planar, True)
-    (s_log, s_peak, s_cols, s_first) = first_impact(spatial, False)
+    (p_log, p_peak, p_cols, p_first) = first_impact(planar)
+    (s_log, s_peak, s_cols, s_first) = first_impact(spatial)
     assert s_log[0] == pytest.approx(p_log[0], rel=1e-8)    # onset time
     assert s_log[2] == pytest.approx(p_log[2], rel=1e-6)    # impact speed
     t = np.linspace(0, p_log[0], 50)
@@ -89,9 +85,9 @@ def angular_momentum(cols, model):
     for k in range(cols["time_s"].size):
         p = [cols[f"body_e{i}_1"][k] for i in range(4)]
         a = np.empty((3, 3))
-        spatial_kernel.rotation(np.array(p), a)
+        spatial.rotation(np.array(p), a)
         w = np.array([cols[f"body_w{c}_rad_per_s"][k] for c in "xyz"])
-        out.append(a @ model.inertia[0] @ a.T @ w)
+        out.append(a @ model.base.inertia[0] @ a.T @ w)
     return np.array(out)
 
 
@@ -139,7 +135,7 @@ def test_intermediate_axis_flip_has_the_closed_form_period():
     body_w2 = []
     for k in range(t.size):   # the body-frame component about the intermediate axis
         a = np.empty((3, 3))
-        spatial_kernel.rotation(np.array([cols[f"body_e{i}_1"][k] for i in range(4)]), a)
+        spatial.rotation(np.array([cols[f"body_e{i}_1"][k] for i in range(4)]), a)
         body_w2.append((a.T @ np.array([cols[f"body_w{c}_rad_per_s"][k] for c in "xyz"]))[1])
     body_w2 = np.array(body_w2)
     crossings = t[:-1][np.diff(np.sign(body_w2)) != 0]
@@ -149,36 +145,39 @@ def test_intermediate_axis_flip_has_the_closed_form_period():
 
 
 def cylinder(length=0.02, slices=16, end_length=0.0, scale=1.0, compliance=0.0):
-    joint = np.zeros(SPATIAL_JOINT_COLUMNS)
-    joint[SJ_KIND], joint[SJ_BEARING_BODY], joint[SJ_JOURNAL_BODY] = CYLINDER, -1, 0
-    joint[SJ_BEARING_AXIS:SJ_BEARING_AXIS + 3] = joint[SJ_JOURNAL_AXIS:SJ_JOURNAL_AXIS + 3] = (0, 0, 1)
-    joint[SJ_LENGTH], joint[SJ_SLICES], joint[SJ_END_LENGTH], joint[SJ_SCALE] = length, slices, end_length, scale
-    joint[SJ_COMPLIANCE] = compliance
-    joint[JOINT_CLEARANCE], joint[JOINT_BEARING_RADIUS] = 1e-4, 0.01
-    return joint
+    """The contact row (reduced.mechanism.layout.CONTACT_*) of a journal along its bore
+    (SLICED): the bore on the ground along z through the origin, the journal body 0 with its
+    axis along its z through its centre, table 0, no friction, no damping."""
+    return np.array([row(CONTACT_COLUMNS, {
+        CONTACT_KIND: SLICED, CONTACT_BEARING_BODY: -1, CONTACT_JOURNAL_BODY: 0,
+        CONTACT_BEARING_AXIS: (0.0, 0.0, 1.0), CONTACT_JOURNAL_AXIS: (0.0, 0.0, 1.0),
+        CONTACT_LENGTH: length, CONTACT_SLICES: slices, CONTACT_END_LENGTH: end_length,
+        CONTACT_SCALE: scale, CONTACT_COMPLIANCE: compliance, CONTACT_STATE: -1,
+        CONTACT_CLEARANCE: 1e-4, CONTACT_RADIUS: 0.01})])
 
 
 def journal(position, parameters):
-    """The body rows (reduced.spatial_layout.BODY_*) of one journal at rest: its centre and
+    """The body rows (reduced.mechanism.spatial.BODY_*) of one journal at rest: its centre and
     Euler parameters (unit inverse inertia)."""
     bodies = np.zeros((1, BODY_COLUMNS))
     rot = np.empty((3, 3))
-    spatial_kernel.rotation(np.asarray(parameters, float), rot)
+    spatial.rotation(np.asarray(parameters, float), rot)
     bodies[0, BODY_POS:BODY_POS + 3] = position
     bodies[0, BODY_ROT:BODY_ROT + 9] = rot.ravel()
     bodies[0, BODY_JINV:BODY_JINV + 9] = np.eye(3).ravel()
     return bodies
 
 
-def tilted_journal_forces(joint, table, delta, theta):
+def tilted_journal_forces(contacts, table, delta, theta):
     """Forces and torques (6) on a journal whose centre sits c + delta off the bore's axis
     along x and whose axis is tilted by theta about y (leaning towards +x for z > 0), with
-    the radial normal force joint_forces returns."""
-    bodies = journal([joint[JOINT_CLEARANCE] + delta, 0, 0],
+    the radial normal force the engine's slice sum returns."""
+    bodies = journal([contacts[0, CONTACT_CLEARANCE] + delta, 0, 0],
                      [math.cos(theta / 2), 0, math.sin(theta / 2), 0])
     force = np.zeros(6)
-    f_n = spatial_kernel.joint_forces(force, bodies, joint, table[2], table[0], table[1], 1.0,
-                                      1.0)[0]
+    f_n = engine.sliced_forces_3d(force, np.zeros(1), np.zeros(1), bodies, contacts,
+                                  np.array([0, 6]), np.ones(1), table[2][None, :], table[0],
+                                  table[1], 0, True)[0]
     return force, f_n
 
 
@@ -190,11 +189,11 @@ def test_slice_sum_equals_the_sliced_law(end_length, scale, compliance):
     equal laws.sliced.sliced(delta, sin theta, ..., scale, compliance) to round-off (1e-12;
     with a bulk compliance both solve for the bore's displacement to 1e-12 of its scale, the
     kernel by the 2D Newton across the section, the law along the load): the same slices,
-    weights and law (module docstring of reduced.spatial_kernel)."""
+    weights and law (reduced.mechanism.engine.sliced_forces_3d)."""
     grid_log0, grid_step, table = tabulate(lambda d: 3e10 * d**1.1, 1e-12, 1e-3, 400)
-    joint = cylinder(end_length=end_length, scale=scale, compliance=compliance)
+    contacts = cylinder(end_length=end_length, scale=scale, compliance=compliance)
     delta, theta = 2e-6, 1.5e-4
-    force, f_n = tilted_journal_forces(joint, (grid_log0, grid_step, table), delta, theta)
+    force, f_n = tilted_journal_forces(contacts, (grid_log0, grid_step, table), delta, theta)
     expected = sliced.sliced(delta, math.sin(theta), 0.02, 16, grid_log0, grid_step, table, 0.0,
                              0.0, end_length, scale, compliance)
     assert -force[0] == pytest.approx(expected[0], rel=1e-12)

@@ -14,20 +14,15 @@ from conftest import ROOT
 from scipy.optimize import fsolve, root
 
 from pinbore.laws import elastic, sliced, tables
-from pinbore.reduced import spatial_kernel
-from pinbore.reduced.layout import JOINT_BEARING_RADIUS, JOINT_CLEARANCE
-from pinbore.reduced.model import build as build_planar
-from pinbore.reduced.outputs import per_step as planar_per_step
-from pinbore.reduced.run import simulate
-from pinbore.reduced.scene import ReducedScene
-from pinbore.reduced.spatial_layout import (BODY_COLUMNS, BODY_JINV, BODY_POS, BODY_ROT,
-                                            CYLINDER, SJ_BEARING_AXIS, SJ_BEARING_BODY,
-                                            SJ_COMPLIANCE, SJ_JOURNAL_AXIS, SJ_JOURNAL_BODY,
-                                            SJ_KIND, SJ_LENGTH, SJ_SCALE, SJ_SLICES,
-                                            SPATIAL_JOINT_COLUMNS)
-from pinbore.reduced.spatial_model import build
-from pinbore.reduced.spatial_outputs import per_step
-from pinbore.reduced.spatial_scene import SpatialScene
+from pinbore.reduced.mechanism import engine, kinds, spatial
+from pinbore.reduced.mechanism.layout import (
+    CONTACT_BEARING_AXIS, CONTACT_BEARING_BODY, CONTACT_CLEARANCE, CONTACT_COLUMNS,
+    CONTACT_COMPLIANCE, CONTACT_JOURNAL_AXIS, CONTACT_JOURNAL_BODY, CONTACT_KIND, CONTACT_LENGTH,
+    CONTACT_RADIUS, CONTACT_SCALE, CONTACT_SLICES, CONTACT_STATE, SLICED, row)
+from pinbore.reduced.mechanism.model import build
+from pinbore.reduced.mechanism.outputs import per_step
+from pinbore.reduced.mechanism.run import simulate
+from pinbore.reduced.mechanism.spatial import BODY_COLUMNS, BODY_JINV, BODY_POS, BODY_ROT
 
 K = 4e10            # N/m^2, the linear per-length law f = K delta
 L = 0.02            # m, bore length
@@ -35,31 +30,32 @@ CLEARANCE = 1e-4    # m
 
 
 def cylinder(slices, compliance):
-    """A cylindrical joint row: the bore on the ground along z through the origin, the journal
-    body 0 with its axis along its z through its centre."""
-    joint = np.zeros(SPATIAL_JOINT_COLUMNS)
-    joint[SJ_KIND], joint[SJ_BEARING_BODY], joint[SJ_JOURNAL_BODY] = CYLINDER, -1, 0
-    joint[SJ_BEARING_AXIS:SJ_BEARING_AXIS + 3] = joint[SJ_JOURNAL_AXIS:SJ_JOURNAL_AXIS + 3] = (0, 0, 1)
-    joint[SJ_LENGTH], joint[SJ_SLICES], joint[SJ_SCALE] = L, slices, 1.0
-    joint[SJ_COMPLIANCE] = compliance
-    joint[JOINT_CLEARANCE], joint[JOINT_BEARING_RADIUS] = CLEARANCE, 0.01
-    return joint
+    """A journal along its bore (a SLICED contact row, reduced.mechanism.layout.CONTACT_*):
+    the bore on the ground along z through the origin, the journal body 0 with its axis along
+    its z through its centre, table 0, no friction, no damping."""
+    return np.array([row(CONTACT_COLUMNS, {
+        CONTACT_KIND: SLICED, CONTACT_BEARING_BODY: -1, CONTACT_JOURNAL_BODY: 0,
+        CONTACT_BEARING_AXIS: (0.0, 0.0, 1.0), CONTACT_JOURNAL_AXIS: (0.0, 0.0, 1.0),
+        CONTACT_LENGTH: L, CONTACT_SLICES: slices, CONTACT_SCALE: 1.0,
+        CONTACT_COMPLIANCE: compliance, CONTACT_STATE: -1, CONTACT_CLEARANCE: CLEARANCE,
+        CONTACT_RADIUS: 0.01})])
 
 
-def journal_forces(joint, table, centre, axis_angle, axis_direction):
+def journal_forces(contacts, table, centre, axis_angle, axis_direction):
     """Force and torque about its centre (6) on a journal at rest with its centre at `centre`
     and its axis turned by `axis_angle` from z towards `axis_direction` (a unit vector normal
-    to z)."""
+    to z): the engine's slice sum (reduced.mechanism.engine.sliced_forces_3d)."""
     turn = np.cross([0, 0, 1], axis_direction)
     parameters = [math.cos(axis_angle / 2), *(math.sin(axis_angle / 2) * turn)]
     bodies = np.zeros((1, BODY_COLUMNS))
     rot = np.empty((3, 3))
-    spatial_kernel.rotation(np.array(parameters), rot)
+    spatial.rotation(np.array(parameters), rot)
     bodies[0, BODY_POS:BODY_POS + 3] = centre
     bodies[0, BODY_ROT:BODY_ROT + 9] = rot.ravel()
     bodies[0, BODY_JINV:BODY_JINV + 9] = np.eye(3).ravel()
     force = np.zeros(6)
-    spatial_kernel.joint_forces(force, bodies, joint, table[2], table[0], table[1], 1.0, 1.0)
+    engine.sliced_forces_3d(force, np.zeros(1), np.zeros(1), bodies, contacts, np.array([0, 6]),
+                            np.ones(1), table[2][None, :], table[0], table[1], 0, True)
     return force
 
 
@@ -153,18 +149,19 @@ def final_pose(data):
     """The journal's mid-plane eccentricity beyond the clearance (m), its tilt (sin of the
     angle between the axes) and axial offset (m) at the end, and its largest speed over the
     last tenth of the run."""
-    model = build(SpatialScene.model_validate(data), "test", ROOT)
+    model = build(kinds.validate(data, "test"), "test", ROOT)
     run = simulate(model)
     assert run.status == 0, run.status
     y = run.states[-1]
-    args = model.kernel_args()
-    work = spatial_kernel.workspace(args)
-    spatial_kernel.body_states(y, args, work)
-    pj, _, _, a0, a1 = spatial_kernel.bore_section(work.bodies, model.joints[0])
+    args = model.args()
+    work = engine.workspace(args)
+    engine.refresh(y, args, work)
+    pj, _, _, a0, a1 = engine.bore_section(work.bodies, model.contacts, model.contact_rows[0][0],
+                                           (0.0, 0.0, 0.0))
     cols = per_step(model, run)[0]
     late = cols["time_s"] > 0.9 * cols["time_s"][-1]
     speed = np.max(np.abs(np.stack([cols[f"journal_v{c}_m_per_s"][late] for c in "xyz"])))
-    clearance = model.joints[0][JOINT_CLEARANCE]
+    clearance = model.joints[0].gap()
     return np.linalg.norm(a0) - clearance, np.linalg.norm(a1), pj[2], speed, model
 
 
@@ -213,7 +210,7 @@ def test_journal_pushed_axially_settles_on_its_shoulder():
 
 
 def first_impact(data):
-    model = build(SpatialScene.model_validate(data), "test", ROOT)
+    model = build(kinds.validate(data, "test"), "test", ROOT)
     run = simulate(model)
     assert run.status == 0
     force = per_step(model, run)[0]["rod_slider_normal_force_N"]
@@ -268,17 +265,16 @@ def test_planar_and_spatial_models_agree_on_a_sliced_law_with_bulk_compliance(tm
     common = {"bearing_radius": joint.r_bore, "journal_radius": joint.r_pin, "length": 0.02,
               "normal_law": "sliced:flush_steel"}
     results = []
-    for name, planar in (("slider_crank_flores2004", True), ("spatial_slider_crank_flores", False)):
+    for name in ("slider_crank_flores2004", "spatial_slider_crank_flores"):
         data = tomllib.loads((ROOT / "scenes" / "reduced" / f"{name}.toml").read_text())
         data["laws_file"] = str(tmp_path / "laws.json")
         data["clearance_joints"][0] |= common
         data["duration"] = 4e-4
         data["integrator"] = {"rtol": 1e-10, "atol": 1e-13, "max_step": 2e-8}
-        model = (build_planar(ReducedScene.model_validate(data), "test", ROOT) if planar
-                 else build(SpatialScene.model_validate(data), "test", ROOT))
+        model = build(kinds.validate(data, "test"), "test", ROOT)   # kind from the scene
         run = simulate(model)
         assert run.status == 0
-        force = (planar_per_step if planar else per_step)(model, run)[0]["rod_slider_normal_force_N"]
+        force = per_step(model, run)[0]["rod_slider_normal_force_N"]
         first = np.flatnonzero(force > 0)[0]
         end = first + np.argmax(force[first:] == 0)
         results.append((run.impacts[0][0], float(force[first:end].max())))

@@ -19,13 +19,10 @@ from conftest import ROOT, pinbore
 
 from pinbore.calibration import lawsfile
 from pinbore.core.errors import InputError
-from pinbore.reduced.model import build as build_planar
-from pinbore.reduced.outputs import per_step as planar_per_step
-from pinbore.reduced.run import simulate
-from pinbore.reduced.scene import ReducedScene
-from pinbore.reduced.spatial_model import build
-from pinbore.reduced.spatial_outputs import per_step, sample, summary
-from pinbore.reduced.spatial_scene import SpatialScene
+from pinbore.reduced.mechanism import kinds
+from pinbore.reduced.mechanism.model import build
+from pinbore.reduced.mechanism.outputs import per_step, sample, summary
+from pinbore.reduced.mechanism.run import simulate
 
 R_PIN, R_BORE, LENGTH = 9.99e-3, 10e-3, 0.02        # m: the FE study's joint, a 20 mm lug
 MASS = 7850 * math.pi * R_PIN**2 * LENGTH          # kg: the steel pin over the lug
@@ -64,7 +61,7 @@ def spatial_impact(laws_path, speed, duration, slices=4, **joint):
                                   "damping_law": "calibrated", "start": "free"} | joint],
             "integrator": {"rtol": 1e-9, "atol": 1e-13, "max_step": 1e-6},
             "output": {"sample_time": duration / 50, "plots": False}}
-    model = build(SpatialScene.model_validate(data), "test", ROOT)
+    model = build(kinds.validate(data, "test"), "test", ROOT)
     run = simulate(model)
     assert run.status == 0, (run.status, run.t_end)
     return model, run, per_step(model, run)[0]
@@ -90,8 +87,9 @@ def rebound(run, cols):
 @pytest.mark.parametrize("speed", [0.1, 0.7, 3.0])
 def test_spatial_impact_rebounds_with_the_calibrated_e(tmp_path, speed):
     """The rebound speed over the impact speed is e(v0) of the law to 2e-4: the table of
-    chi(v0) (33 points in ln v0: 1e-4 of e, reduced.model.damping_block) and the integration
-    (rtol 1e-9); the onset is located, so the impact speed is the throw's to round-off."""
+    chi(v0) (33 points in ln v0: 1e-4 of e, reduced.mechanism.model.damping_block) and the
+    integration (rtol 1e-9); the onset is located, so the impact speed is the throw's to
+    round-off."""
     path, law = law_file(tmp_path)
     e = law.restitution(speed)
     _, run, cols = spatial_impact(path, speed, duration(speed, e))
@@ -122,9 +120,9 @@ def test_spatial_impact_matches_the_planar_calibrated_impact(tmp_path):
                                     "damping_law": "calibrated", "start": "free"}],
               "integrator": {"rtol": 1e-9, "atol": 1e-13, "max_step": 1e-6},
               "output": {"sample_time": t_end / 50, "plots": False}}
-    model_p = build_planar(ReducedScene.model_validate(planar), "test", ROOT)
+    model_p = build(kinds.validate(planar, "test"), "test", ROOT)   # the planar kind
     run_p = simulate(model_p)
-    cols_p = planar_per_step(model_p, run_p)[0]
+    cols_p = per_step(model_p, run_p)[0]
     assert rebound(run, cols)[1] == 1
     assert rebound(run, cols)[0] == pytest.approx(rebound(run_p, cols_p)[0], rel=1e-6)
     assert vertex(cols) == pytest.approx(vertex(cols_p), rel=1e-5)

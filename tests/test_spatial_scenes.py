@@ -16,11 +16,12 @@ from pinbore.core import scene as scenes
 from pinbore.core.errors import InputError
 from pinbore.laws import dissipative
 from pinbore.laws.elastic import Joint, hertz_point
-from pinbore.reduced import dynamics, studies
-from pinbore.reduced.run import simulate
-from pinbore.reduced.spatial_model import build
-from pinbore.reduced.spatial_outputs import per_step
-from pinbore.reduced.spatial_scene import SpatialScene
+from pinbore.reduced.dynamics import flow as dynamics
+from pinbore.reduced.dynamics import studies
+from pinbore.reduced.mechanism.model import build
+from pinbore.reduced.mechanism.outputs import per_step
+from pinbore.reduced.mechanism.run import simulate
+from pinbore.reduced.mechanism.scene import SpatialScene
 
 SCENES = ROOT / "scenes" / "reduced"
 MISALIGNED = tomllib.loads((SCENES / "spatial_slider_crank_flores_misaligned.toml").read_text())
@@ -171,7 +172,7 @@ def test_ideal_spatial_mechanism_has_one_poincare_point():
     and a perturbation projected onto the joints vanishes (no free direction): what is left
     after a period is the two integrations' different steps (rtol 1e-10), below 1e-3 of the
     perturbation, so the exponent is below ln(1e-3) / T (measured: a separation of 1e-5 d0)."""
-    flow = dynamics.SpatialMechanismFlow(build(SpatialScene.model_validate(
+    flow = dynamics.MechanismFlow(build(SpatialScene.model_validate(
         offset_slider_crank()), "test", ROOT))
     coords, states = dynamics.poincare(flow, flow.start(), 1, 3)
     assert np.ptp(coords, axis=0).max() * flow.length < 1e-12

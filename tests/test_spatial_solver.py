@@ -11,16 +11,12 @@ import numpy as np
 import pytest
 from conftest import ROOT
 
-from pinbore.reduced.kernel import cholesky_solve
-from pinbore.reduced.model import build as build_planar
-from pinbore.reduced.outputs import per_step as planar_per_step
-from pinbore.reduced.outputs import refined_peak as planar_refined_peak
-from pinbore.reduced.run import simulate
-from pinbore.reduced.scene import ReducedScene
-from pinbore.reduced.spatial_kernel import workspace
-from pinbore.reduced.spatial_model import build
-from pinbore.reduced.spatial_outputs import per_step, refined_peak
-from pinbore.reduced.spatial_scene import SpatialScene
+from pinbore.reduced.mechanism import kinds
+from pinbore.reduced.mechanism.engine import workspace
+from pinbore.reduced.mechanism.linalg import cholesky_solve
+from pinbore.reduced.mechanism.model import build
+from pinbore.reduced.mechanism.outputs import per_step, refined_peak
+from pinbore.reduced.mechanism.run import simulate
 
 SCENES = ROOT / "scenes" / "reduced"
 
@@ -58,7 +54,7 @@ def test_envelope_cholesky_solves_as_the_dense_solve(dependent):
     assert np.all(np.isfinite(rhs))
     assert a @ rhs == pytest.approx(b, abs=1e-10 * np.abs(b).max())
     dense, rhs_dense = a.copy(), b.copy()
-    cholesky_solve(dense, rhs_dense, a.shape[0])
+    cholesky_solve(dense, rhs_dense, a.shape[0], np.zeros(a.shape[0], np.int64))   # no envelope
     assert rhs == pytest.approx(rhs_dense, rel=1e-9, abs=1e-12)
 
 
@@ -66,32 +62,34 @@ def test_slider_crank_envelope_leaves_out_the_slider():
     """The spatial slider-crank's 16 constraint rows: ground-crank revolute (5), crank-rod
     revolute (5), slider prismatic (5), drive (1). The prismatic rows share no body with the
     crank's or the rod's, so their envelope starts at their own first row; the drive acts on
-    the crank and reaches back to row 0."""
+    the crank and reaches back to row 0. After them the workspace keeps a row per contact for
+    a held impulse contact (here the one SLICED contact of the rod-slider joint), whose
+    bodies change with the contacts held: dense (first 0)."""
     data = tomllib.loads((SCENES / "spatial_slider_crank_flores.toml").read_text())
-    model = build(SpatialScene.model_validate(data), "test", ROOT)
-    first = workspace(model.kernel_args()).first
-    assert list(first) == [0] * 10 + [10] * 5 + [0]
+    model = build(kinds.validate(data, "test"), "test", ROOT)
+    first = workspace(model.args()).first
+    assert model.contacts.shape[0] == 1
+    assert list(first) == [0] * 10 + [10] * 5 + [0] + [0]
 
 
 def test_refined_spatial_peak_matches_the_planar_refined_peak():
     """The Flores slider-crank's first impact: the spatial model at rtol 1e-4 (a run of the
-    speed benchmark), its peak refined between steps (Hermite state, the kernel's force),
-    against the planar model at rtol 1e-10 refined its own way (Hermite penetration): within
-    2e-4 (the bench measures 5e-5 at this tolerance; the 1 % goal is fifty times wider). The
-    peak at the accepted steps alone is further off (0.6 % at rtol 1e-4)."""
+    speed benchmark), its peak refined between steps (Hermite state, the engine's force),
+    against the planar model at rtol 1e-10 (another formulation of the same mechanism; both
+    refined by reduced.mechanism.outputs.refined_peak): within 2e-4 (the bench measures 5e-5
+    at this tolerance; the 1 % goal is fifty times wider). The peak at the accepted steps
+    alone is further off (0.6 % at rtol 1e-4)."""
     planar = tomllib.loads((SCENES / "slider_crank_flores2004.toml").read_text())
     spatial = tomllib.loads((SCENES / "spatial_slider_crank_flores.toml").read_text())
     peaks = []
-    for data, builder, scene, steps, refine, tolerance in (
-            (planar, build_planar, ReducedScene, planar_per_step, planar_refined_peak, 1e-10),
-            (spatial, build, SpatialScene, per_step, refined_peak, 1e-4)):
+    for data, tolerance in ((planar, 1e-10), (spatial, 1e-4)):
         data = copy.deepcopy(data)
         data["duration"] = 4e-4   # past the first impact (its peak at 0.25 ms)
         data["integrator"] = {"rtol": tolerance, "atol": tolerance * 1e-3}
-        model = builder(scene.model_validate(data), "test", ROOT)
+        model = build(kinds.validate(data, "test"), "test", ROOT)   # kind from the scene
         run = simulate(model)
-        force = steps(model, run)[0]["rod_slider_normal_force_N"]
+        force = per_step(model, run)[0]["rod_slider_normal_force_N"]
         first = np.flatnonzero(force > 0)[0]
         k = int(first + np.argmax(force[first:first + np.argmax(force[first:] == 0)]))
-        peaks.append(refine(model, 0, run, k)[0])
+        peaks.append(refined_peak(model, 0, run, k)[0])
     assert peaks[1] == pytest.approx(peaks[0], rel=2e-4)

@@ -9,9 +9,9 @@ import tomllib
 import pytest
 from conftest import ROOT, pinbore
 
-from pinbore.reduced import verdict
-from pinbore.reduced.scene import ReducedScene
-from pinbore.reduced.summary import Summary
+from pinbore.reduced.mechanism import kinds, verdict
+from pinbore.reduced.mechanism.scene import ReducedScene
+from pinbore.reduced.mechanism.summary import Summary
 
 FLORES = tomllib.loads((ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml").read_text())
 
@@ -74,7 +74,8 @@ def test_default_fixed_step_is_clean(write_scene, tmp_path):
 
 def summary_with(**changes) -> Summary:
     """A clean summary of the Flores scene, with `changes` applied (dotted keys)."""
-    data = {"status": "complete", "stop": None, "duration_s": 0.048, "time_reached_s": 0.048,
+    data = {"model": "planar", "coordinates": kinds.KINDS["reduced"].coordinates,
+            "status": "complete", "stop": None, "duration_s": 0.048, "time_reached_s": 0.048,
             "integrator": "dopri5", "impacts": 10, "steps": 100, "rejected_steps": 1,
             "rhs_evaluations": 700, "wall_time_s": 0.1, "warnings": [], "scene_file": "x.toml",
             "clearance_joints": {"rod_slider": {

@@ -28,14 +28,17 @@ changed: for a body point P'' = r'' + w' x s + w x (w x s), for a body vector
 a'' = w' x a + w x (w x a).
 
 Clearance joints are contacts (layout.CONTACT_*), each a distance that closes:
-- RADIAL: a journal point X (a planar journal's centre, a ball's) from a bearing point P
+- RADIAL: a journal point X (a planar journal's centre; a ball's in its socket, the dry
+  spherical joint of [FloresLankarani2010] and [Tian2009]) from a bearing point P
   (the bore's or socket's centre): delta = |X - P| - c, normal n = (X - P)/|X - P|, contact
   point C = P + R_b n;
 - AXIS_RADIAL: a journal point from the bore's axis u (a cylindrical journal's end, with rigid
   impacts): delta = |(X - P) - ((X - P).u) u| - c;
 - PLANE: a journal point against a face of the bearing body, normal N (body-fixed), offset d:
   delta = s N.(X - P) - d on the face's side s (a translational joint's slider corners; the
-  shoulders of a cylindrical joint, two-sided: s = sgn N.(X - P));
+  shoulders of a cylindrical joint, two-sided: s = sgn N.(X - P), a linear penalty of the
+  project's own; a calibrated joint's shoulders take chi of its e(v0) at the axial impact
+  speed, though the FE impacts were radial: for the shoulders' faces that e is unverified);
 - SLICED: a journal along its bore in space, cut into slices ([Cao2013]'s 3D joint, the
   sliced law of pinbore.laws.sliced with its bulk compliance): see sliced_forces.
 A continuous contact carries F_n = F_el(delta) (1 + chi delta'/v0) while delta > 0, F_el from
@@ -114,8 +117,10 @@ from pinbore.reduced.mechanism.vectors import (
 LATCH_TOL = 1e-8   # rad: a latch engages within this of its angle (the step is shortened to it)
 
 # numba's inliner checks the SSA form of what it inlines and warns of a variable "not in scope"
-# when a function that assigns in branches is inlined (a pedantic check of its own; the
-# compiled code is right, as the tests against the closed forms say): not the user's concern
+# when a function that assigns in branches is inlined. Where it was right, the function is not
+# inlined (`start`: inlined, it lost the contacts found in contact at a restart); the inlined
+# right-hand side gives the numbers of the closed forms and of the models written before this
+# engine to the last bit (the tests), so the warning is not the user's concern.
 warnings.filterwarnings("ignore", category=NumbaIRAssumptionWarning)
 
 
@@ -397,7 +402,8 @@ def scalar_friction(contact, f_n, slip, state):
 @numba.njit(cache=True, _nrt=False)
 def planar_friction(contacts, k, f_n, n, v, y, dy, index):
     """Friction at a contact in the plane: the slip v.t along the tangent t = (-n_y, n_x), the
-    law's force along it and its states' rates into dy. (force on the journal, power)."""
+    law's force along it and its states' rates into dy. (force on the journal, power, the
+    law's force f_t: the journal is pushed by -f_t t)."""
     t = tangent(n)
     slip = dot(t, v)
     contact = contacts[k]
@@ -411,26 +417,31 @@ def planar_friction(contacts, k, f_n, n, v, y, dy, index):
         f_t, rate0 = scalar_friction(contact, f_n, slip, y[index] if index >= 0 else 0.0)
         if index >= 0:
             dy[index] = rate0
-    return scaled(t, -f_t), f_t * slip
+    return scaled(t, -f_t), f_t * slip, f_t
 
 
 @numba.njit(cache=True, _nrt=False)
-def spatial_friction(states, contacts, k, f_n, n, v, y, dy, index):
+def spatial_friction(states, contacts, k, f_n, n, v, y, dy, index, spin, share):
     """Friction at a contact in space: the slip v - n (v.n) and the law's force against it; a
     state law's state is a vector in the bearing body's frame, of which the part tangent to
     the contact acts (LuGre: z' = v - sigma0 |v| z / g(|v|), F = F_n (sigma0 z + sigma1 z' +
     sigma2 v); Dahl: m' = sigma (v - m |v| / mu), F = F_n m; Iwan: travel x' = v, stretch z'
     = v (sticking) or its part across z (sliding, |k1 z| = mu F_n), F = k1 z + k2 x): the
-    planar laws for a slip of any direction, equal to them when it keeps one. (force on the
-    journal, power)."""
+    planar laws for a slip of any direction. A state is carried with the contact's frame: as
+    the normal turns against the bearing body at `spin` (n' relative to the bearing, global
+    components) its rate gains -n (n'.z), which keeps it tangent; in the plane that is exactly
+    the planar law's scalar state along the turning tangent (z = s t, z' = s' t - s theta' n).
+    An Iwan element of a slice carries its `share` of the joint's stiffnesses k1, k2 (its part
+    of the length; its strength is its own mu F_n). (force on the journal, power, the force's
+    size)."""
     law = int(contacts[k, CONTACT_FRICTION_LAW])
     slip = sub(v, scaled(n, dot(v, n)))
     speed = math.sqrt(dot(slip, slip))
     if law <= LINEAR:
         if speed > 0.0:
             f_t = scalar_friction(contacts[k], f_n, speed, 0.0)[0]
-            return scaled(slip, -f_t / speed), f_t * speed
-        return (0.0, 0.0, 0.0), 0.0
+            return scaled(slip, -f_t / speed), f_t * speed, f_t
+        return (0.0, 0.0, 0.0), 0.0, 0.0
     bb = int(contacts[k, CONTACT_BEARING_BODY])
     state = index + 3 * STATE_STRETCH if law == IWAN else index   # the stretch, or the state
     z = turned(states, bb, (y[state], y[state + 1], y[state + 2]))
@@ -442,12 +453,15 @@ def spatial_friction(states, contacts, k, f_n, n, v, y, dy, index):
         rate = sub(slip, scaled(z, sigma0 * speed / g))
         f = scaled(add(add(scaled(z, sigma0), scaled(rate, contacts[k, LUGRE_SIGMA1])),
                        scaled(slip, contacts[k, LUGRE_SIGMA2])), f_n)
+        rate = sub(rate, scaled(n, dot(spin, z)))
     elif law == DAHL:
         mu = contacts[k, DAHL_MU]
-        rate = scaled(sub(slip, scaled(z, speed / mu)), contacts[k, DAHL_SIGMA])
+        rate = sub(scaled(sub(slip, scaled(z, speed / mu)), contacts[k, DAHL_SIGMA]),
+                   scaled(n, dot(spin, z)))
         f = scaled(z, f_n)
     else:   # IWAN: travel then stretch
-        k1, limit = contacts[k, IWAN_K1], contacts[k, IWAN_MU] * f_n / contacts[k, IWAN_K1]
+        k1 = share * contacts[k, IWAN_K1]
+        limit = contacts[k, IWAN_MU] * f_n / k1
         travel = turned(states, bb, (y[index], y[index + 1], y[index + 2]))
         travel = sub(travel, scaled(n, dot(travel, n)))
         size = math.sqrt(dot(z, z))
@@ -455,26 +469,42 @@ def spatial_friction(states, contacts, k, f_n, n, v, y, dy, index):
         if size >= limit and dot(z, slip) > 0.0:   # sliding: the stretch turns, its size held
             rate = sub(slip, scaled(z, dot(z, slip) / (size * size)))
         held = scaled(z, limit / size) if size > limit else z
-        f = add(scaled(held, k1), scaled(travel, contacts[k, IWAN_K2]))
-        moved = unturned(states, bb, slip)
+        f = add(scaled(held, k1), scaled(travel, share * contacts[k, IWAN_K2]))
+        rate = sub(rate, scaled(n, dot(spin, z)))
+        moved = unturned(states, bb, sub(slip, scaled(n, dot(spin, travel))))
         dy[index], dy[index + 1], dy[index + 2] = moved[0], moved[1], moved[2]
     moved = unturned(states, bb, rate)
     dy[state], dy[state + 1], dy[state + 2] = moved[0], moved[1], moved[2]
-    return negated(f), dot(f, slip)
+    return negated(f), dot(f, slip), math.sqrt(dot(f, f))
 
 
-def contact_friction(states, contacts, k, f_n, n, v, y, dy, index):
-    """Friction at a contact (planar_friction, spatial_friction by the dimension)."""
+def contact_friction(states, contacts, k, f_n, n, v, y, dy, index, xj, delta):
+    """Friction at a contact point (planar_friction; spatial_friction, with the normal's turn
+    against the bearing body (normal_spin) that a vector state follows, by the dimension)."""
 
 
 @overload(contact_friction, jit_options={"_nrt": False})
-def _contact_friction(states, contacts, k, f_n, n, v, y, dy, index):
+def _contact_friction(states, contacts, k, f_n, n, v, y, dy, index, xj, delta):
     if _plane(n):
-        return lambda states, contacts, k, f_n, n, v, y, dy, index: planar_friction(
+        return lambda states, contacts, k, f_n, n, v, y, dy, index, xj, delta: planar_friction(
             contacts, k, f_n, n, v, y, dy, index)
     if _space(n):
-        return lambda states, contacts, k, f_n, n, v, y, dy, index: spatial_friction(
-            states, contacts, k, f_n, n, v, y, dy, index)
+        return lambda states, contacts, k, f_n, n, v, y, dy, index, xj, delta: spatial_friction(
+            states, contacts, k, f_n, n, v, y, dy, index,
+            normal_spin(states, contacts, k, n, xj, delta), 1.0)
+
+
+@numba.njit(cache=True, _nrt=False)
+def normal_spin(states, contacts, k, n, x, delta):
+    """n' against the bearing body of a point contact in space (global components): zero for
+    a face (PLANE: its normal is the bearing's); for a journal point x at |e| = delta + c from
+    the bearing point, the relative velocity v_j(x) - v_b(x) across n over |e| (a state law
+    needs it only; the others do not read it)."""
+    if int(contacts[k, CONTACT_KIND]) == PLANE or int(contacts[k, CONTACT_FRICTION_LAW]) <= LINEAR:
+        return (0.0, 0.0, 0.0)
+    w = sub(material_velocity(states, int(contacts[k, CONTACT_JOURNAL_BODY]), x),
+            material_velocity(states, int(contacts[k, CONTACT_BEARING_BODY]), x))
+    return scaled(sub(w, scaled(n, dot(n, w))), 1.0 / (delta + contacts[k, CONTACT_CLEARANCE]))
 
 
 @numba.njit(cache=True, _nrt=False)
@@ -488,10 +518,11 @@ def elastic_force(contacts, k, delta, grid_log0, grid_step, tables_):
 
 @numba.njit(cache=True, _nrt=False)
 def point_contact(force, y, dy, states, contacts, offsets, k, speed, grid_log0, grid_step, tables_,
-                  normal, z):
+                  normal, friction, z):
     """The forces of a continuous RADIAL, AXIS_RADIAL or PLANE contact into `force` (its normal
-    force into normal[k], its friction states' rates into dy), its impact speed `speed`: its
-    dissipated power (NaN beyond its law's table; 0 when open)."""
+    force into normal[k], its friction force into friction[k]: the law's signed f_t in the
+    plane, the size in space; its friction states' rates into dy), its impact speed `speed`:
+    its dissipated power (NaN beyond its law's table; 0 when open)."""
     bb, bj = int(contacts[k, CONTACT_BEARING_BODY]), int(contacts[k, CONTACT_JOURNAL_BODY])
     if int(contacts[k, CONTACT_KIND]) == PLANE:
         p = plane_geometry(states, contacts, k, z)
@@ -514,7 +545,8 @@ def point_contact(force, y, dy, states, contacts, offsets, k, speed, grid_log0, 
         power = (f_n - f_el) * rate
         f = scaled(n, -f_n)
         if rubbing or len(z) == 2:
-            f_t, p_t = contact_friction(states, contacts, k, f_n, n, v, y, dy, index)
+            f_t, p_t, friction[k] = contact_friction(states, contacts, k, f_n, n, v, y, dy, index,
+                                                     xj, delta)
             f = add(f, f_t)
             power = power + p_t
         push(force, states, bj, f, c, offsets)
@@ -525,7 +557,8 @@ def point_contact(force, y, dy, states, contacts, offsets, k, speed, grid_log0, 
     power = (f_n - f_el) * rate
     if rubbing:   # friction at the contact point, against the slip there
         v = sub(material_velocity(states, bj, c), material_velocity(states, bb, c))
-        f_t, p_t = contact_friction(states, contacts, k, f_n, n, v, y, dy, index)
+        f_t, p_t, friction[k] = contact_friction(states, contacts, k, f_n, n, v, y, dy, index,
+                                                 xj, delta)
         if p_t != 0.0 or dot(f_t, f_t) > 0.0:
             push(force, states, bj, f_t, c, offsets)
             push(force, states, bb, negated(f_t), c, offsets)
@@ -607,16 +640,16 @@ def sliced_forces_3d(force, y, dy, states, contacts, offsets, speeds, tables_, g
     bore's section); the slices then see e_i^perp - d, act at B_i = X_i - (e_i^perp - d) on the
     bore, and their rate is taken at fixed d. The deepest slice is an end slice (sliced_depth):
     a journal whose end slices are free skips the slices. Returns (normal force N, dissipated
-    power W; NaN beyond the law's table). apply = False: the forces are not pushed, only the
+    power W, the slices' friction forces' sizes summed N; NaN beyond the law's table). apply = False: the forces are not pushed, only the
     Iwan sliders of the slices held to their strength (after a step)."""
     z = (0.0, 0.0, 0.0)
-    normal = power = 0.0
+    normal = power = tangential = 0.0
     pj, uj, ub, a0, a1 = bore_section(states, contacts, k, z)
     zz = end_offset(contacts, k)
     plus, minus = add(a0, scaled(a1, zz)), sub(a0, scaled(a1, zz))
     clearance = contacts[k, CONTACT_CLEARANCE]
     if max(dot(plus, plus), dot(minus, minus)) <= clearance * clearance:
-        return normal, power
+        return normal, power, tangential
     table = tables_[int(contacts[k, CONTACT_TABLE])]
     f, g, ax, ay, bx, by = section_frame(ub, a0, a1)
     length, slices, scale = contacts[k, CONTACT_LENGTH], int(contacts[k, CONTACT_SLICES]), contacts[k, CONTACT_SCALE]
@@ -624,13 +657,14 @@ def sliced_forces_3d(force, y, dy, states, contacts, offsets, speeds, tables_, g
                                        grid_step, table, 0.0, 0.0, contacts[k, CONTACT_END_LENGTH],
                                        scale, contacts[k, CONTACT_COMPLIANCE])
     if not math.isfinite(dx):
-        return math.nan, math.nan
+        return math.nan, math.nan, math.nan
     bb, bj = int(contacts[k, CONTACT_BEARING_BODY]), int(contacts[k, CONTACT_JOURNAL_BODY])
     speed = speeds[k]
     chi = contact_chi(contacts, k, speed)
     index = int(contacts[k, CONTACT_STATE])
     law = int(contacts[k, CONTACT_FRICTION_LAW])
     per_slice = 0 if index < 0 else (6 if law == IWAN else 3)
+    total = length + 2.0 * contacts[k, CONTACT_END_LENGTH]   # the slices' weights summed
     for i in range(slices):
         offset, approach, nx, ny, _, f_loc, _ = sliced.slice_contact(
             i, dx, dy_, ax, ay, bx, by, clearance, False, length, slices, grid_log0, grid_step,
@@ -648,21 +682,28 @@ def sliced_forces_3d(force, y, dy, states, contacts, offsets, speeds, tables_, g
         c = add(b, scaled(n, contacts[k, CONTACT_RADIUS]))
         if not apply:
             if law == IWAN:
-                iwan_return(states, contacts, k, f_n, n, y, state)
+                iwan_return(states, contacts, k, f_n, n, y, state, weight / total)
             continue
         push(force, states, bj, scaled(n, -f_n), x, offsets)
         push(force, states, bb, scaled(n, f_n), b, offsets)
         p = (f_n - f_el) * rate
         if law != NO_FRICTION:
             v = sub(material_velocity(states, bj, c), material_velocity(states, bb, c))
-            f_t, p_t = spatial_friction(states, contacts, k, f_n, n, v, y, dy, state)
+            spin = (0.0, 0.0, 0.0)
+            if law > LINEAR:   # a state follows the slice's normal: its turn across the bore
+                w = sub(material_velocity(states, bj, x), material_velocity(states, bb, x))
+                w = sub(w, add(scaled(n, dot(n, w)), scaled(ub, dot(ub, w))))
+                spin = scaled(w, 1.0 / (approach + clearance))
+            f_t, p_t, size = spatial_friction(states, contacts, k, f_n, n, v, y, dy, state, spin,
+                                              weight / total)
+            tangential += size
             if p_t != 0.0 or dot(f_t, f_t) > 0.0:
                 push(force, states, bj, f_t, c, offsets)
                 push(force, states, bb, negated(f_t), c, offsets)
                 p += p_t
         normal += f_n
         power += p
-    return normal, power
+    return normal, power, tangential
 
 
 def sliced_depth(states, contacts, k, z):
@@ -691,7 +732,7 @@ def _sliced_forces(force, y, dy, states, contacts, offsets, speeds, tables_, gri
                                              grid_log0, grid_step, k, apply)
     if _plane(like):
         return lambda force, y, dy, states, contacts, offsets, speeds, tables_, grid_log0, grid_step, \
-            k, apply, like: (0.0, 0.0)
+            k, apply, like: (0.0, 0.0, 0.0)
 
 
 # ---- Iwan sliders
@@ -707,15 +748,15 @@ def planar_iwan_return(contacts, k, f_n, y, index):
 
 
 @numba.njit(cache=True, _nrt=False)
-def spatial_iwan_return(states, contacts, k, f_n, n, y, index):
+def spatial_iwan_return(states, contacts, k, f_n, n, y, index, share):
     """The slider of a contact point held to |k1 z| <= mu F_n on the size of the stretch's
-    tangent part (a vector in the bearing body's frame)."""
+    tangent part (a vector in the bearing body's frame; a slice's k1 its `share`)."""
     bb = int(contacts[k, CONTACT_BEARING_BODY])
     stretch = index + 3 * STATE_STRETCH
     z = turned(states, bb, (y[stretch], y[stretch + 1], y[stretch + 2]))
     tangential = sub(z, scaled(n, dot(z, n)))
     size = math.sqrt(dot(tangential, tangential))
-    limit = contacts[k, IWAN_MU] * f_n / contacts[k, IWAN_K1]
+    limit = contacts[k, IWAN_MU] * f_n / (share * contacts[k, IWAN_K1])
     if size <= limit:
         return False
     held = unturned(states, bb, scaled(tangential, limit / size))
@@ -723,18 +764,19 @@ def spatial_iwan_return(states, contacts, k, f_n, n, y, index):
     return True
 
 
-def iwan_return(states, contacts, k, f_n, n, y, index):
+def iwan_return(states, contacts, k, f_n, n, y, index, share):
     """The Iwan slider of a contact point held to its strength after a step (planar_iwan_return,
-    spatial_iwan_return by the dimension); whether it moved."""
+    spatial_iwan_return by the dimension; `share`: a slice's part of k1); whether it moved."""
 
 
 @overload(iwan_return, jit_options={"_nrt": False})
-def _iwan_return(states, contacts, k, f_n, n, y, index):
+def _iwan_return(states, contacts, k, f_n, n, y, index, share):
     if _plane(n):
-        return lambda states, contacts, k, f_n, n, y, index: planar_iwan_return(contacts, k, f_n, y, index)
+        return lambda states, contacts, k, f_n, n, y, index, share: planar_iwan_return(
+            contacts, k, f_n, y, index)
     if _space(n):
-        return lambda states, contacts, k, f_n, n, y, index: spatial_iwan_return(
-            states, contacts, k, f_n, n, y, index)
+        return lambda states, contacts, k, f_n, n, y, index, share: spatial_iwan_return(
+            states, contacts, k, f_n, n, y, index, share)
 
 
 # ---- torsion elements
@@ -781,28 +823,30 @@ def workspace(args):
     row_bodies, first = constraint_pattern(args.primitives, m, z)
     return Work(np.zeros((nb, body_columns(z))), np.zeros(columns), np.zeros((m, columns)),
                 np.zeros(m), np.zeros(m), np.zeros(m), np.zeros((m, m)), np.zeros(columns),
-                np.zeros(max(nc, 1)), np.zeros((m, columns)), row_bodies, first)
+                np.zeros(max(nc, 1)), np.zeros(max(nc, 1)), np.zeros((m, columns)), row_bodies, first)
 
 
 @numba.njit(cache=True, _nrt=False)
 def contact_forces(force, y, dy, states, contacts, offsets, speeds, tables_, grid_log0, grid_step,
-                   normal, z):
+                   normal, friction, z):
     """Every contact's forces into `force` (continuous contacts: impulse contacts act between
-    steps and as held rows); per contact its normal force into `normal`; the power dissipated,
-    summed joint by joint (NaN beyond a law's table)."""
+    steps and as held rows); per contact its normal and friction forces into `normal` and
+    `friction`; the power dissipated, summed joint by joint (NaN beyond a law's table)."""
     for k in range(normal.size):
         normal[k] = 0.0
+        friction[k] = 0.0
     dissipation = 0.0
     joint_power = 0.0
     for k in range(contacts.shape[0]):
         if int(contacts[k, CONTACT_IMPACT]) == CONTINUOUS:
             if int(contacts[k, CONTACT_KIND]) == SLICED:
-                f_n, p = sliced_forces(force, y, dy, states, contacts, offsets, speeds, tables_,
-                                       grid_log0, grid_step, k, True, z)
+                f_n, p, f_t = sliced_forces(force, y, dy, states, contacts, offsets, speeds, tables_,
+                                            grid_log0, grid_step, k, True, z)
                 normal[k] = f_n
+                friction[k] = f_t
             else:
                 p = point_contact(force, y, dy, states, contacts, offsets, k, speeds[k], grid_log0,
-                                  grid_step, tables_, normal, z)
+                                  grid_step, tables_, normal, friction, z)
             if not math.isfinite(p):
                 return math.nan
             joint_power += p
@@ -867,7 +911,7 @@ def rhs(t, y, dy, args, work):
     for i in range(2 * nq + ENERGY_STATES, y.size):
         dy[i] = 0.0   # friction states rest out of contact
     dissipation = contact_forces(force, y, dy, states, contacts, offsets, args.speeds, args.tables,
-                                 args.grid_log0, args.grid_step, normal, z)
+                                 args.grid_log0, args.grid_step, normal, work.friction, z)
     if not math.isfinite(dissipation):
         for i in range(dy.size):   # penetration beyond the tabulated law: the integrator stops
             dy[i] = math.nan
@@ -892,10 +936,95 @@ def rhs(t, y, dy, args, work):
     dy[2 * nq + WORK_IN] = work_in
 
 
+@numba.njit(cache=True)
+def constraint_values(t, y, args):
+    """(Phi_q, Phi, Phi_t) of the ideal joints and the drive (and held contacts) at the
+    positions of y, as new arrays (Python-side: the kinds' projections)."""
+    work = workspace(args)
+    refresh(y, args, work)
+    m = fill_constraints(t, args, work, 0.0)
+    return work.jac[:m].copy(), work.phi[:m].copy(), work.phi_t[:m].copy()
+
+
 def rhs_value(t, y, args):
     """(f(t, y), normal force per contact) as new arrays (Python-side convenience)."""
     dy, work = integrator.evaluate_once(workspace, rhs, t, y, args)
     return dy, work.normal[:args.contacts.shape[0]].copy()
+
+
+# ---- what the outputs see of a state
+@numba.njit(cache=True)
+def observe(t, y, dy, args, work, depth, offset):
+    """One state as the outputs see it: f(t, y) into dy, each contact's normal and friction
+    forces into work.normal and work.friction (rhs), its deepest penetration into depth and
+    its journal point's offset from its bearing point (global) into offset[k], the body
+    states into work.bodies; returns the ideal joints' largest gap |Phi| (no held contacts)."""
+    z = args.like
+    rhs(t, y, dy, args, work)
+    states = work.bodies
+    contacts = args.contacts
+    for k in range(contacts.shape[0]):
+        depth[k] = contact_depth(states, contacts, k, z).delta
+        e = sub(point_state(states, int(contacts[k, CONTACT_JOURNAL_BODY]),
+                            cell(contacts, k, CONTACT_JOURNAL_POINT, z))[0],
+                point_state(states, int(contacts[k, CONTACT_BEARING_BODY]),
+                            cell(contacts, k, CONTACT_BEARING_POINT, z))[0])
+        for i in range(len(z)):
+            offset[k, i] = e[i]
+    m = constraint_rows(t, args.primitives, contacts, args.mode * 0, args.offsets, states,
+                        work.velocities, work.jac, work.mjac, work.phi, work.phi_t, work.rhs_c,
+                        work.row_bodies, 0.0, z)
+    gap = 0.0
+    for i in range(m):
+        gap = max(gap, abs(work.phi[i]))
+    return gap
+
+
+@numba.njit(cache=True)
+def relative_motion(y, args, work, bb, s_b, bj, s_j, f, g):
+    """Body bj's point s_j relative to body bb's point s_b (body frames): the offset e and the
+    relative velocity v_j(P_j) - v_b(P_j) along body bb's vectors f and g (its frame; the
+    ground's: global), (e.f, e.g, v.f, v.g)."""
+    refresh(y, args, work)
+    states = work.bodies
+    pj = point_state(states, bj, s_j)[0]
+    e = sub(pj, point_state(states, bb, s_b)[0])
+    v = sub(material_velocity(states, bj, pj), material_velocity(states, bb, pj))
+    ff, gg = vector_state(states, bb, f)[0], vector_state(states, bb, g)[0]
+    return dot(e, ff), dot(e, gg), dot(v, ff), dot(v, gg)
+
+
+@numba.njit(cache=True)
+def torsion_angles(y, args, work, angles):
+    """Each torsion element's angle beyond its free angle into `angles` (rad)."""
+    refresh(y, args, work)
+    for r in range(args.torsion.shape[0]):
+        angles[r] = torsion_angle(work.bodies, args.torsion, r, args.like)[0]
+
+
+@numba.njit(cache=True)
+def slice_approaches(y, args, work, k, approaches, weights):
+    """The slices of SLICED contact k with the bore moved by its bulk compliance
+    (laws.sliced.bore_displacement; 0 without): each slice's approach delta_i into
+    `approaches` (m), its weight a w_i into `weights` (m); returns the bore's displacement
+    (global; NaN beyond the law's table). For the energy book of the outputs."""
+    z = args.like
+    refresh(y, args, work)
+    contacts = args.contacts
+    _, _, ub, a0, a1 = bore_section(work.bodies, contacts, k, z)
+    f, g, ax, ay, bx, by = section_frame(ub, a0, a1)
+    length, slices = contacts[k, CONTACT_LENGTH], int(contacts[k, CONTACT_SLICES])
+    clearance, table = contacts[k, CONTACT_CLEARANCE], args.tables[int(contacts[k, CONTACT_TABLE])]
+    dx, dy = sliced.bore_displacement(ax, ay, bx, by, clearance, False, length, slices,
+                                      args.grid_log0, args.grid_step, table, 0.0, 0.0,
+                                      contacts[k, CONTACT_END_LENGTH], contacts[k, CONTACT_SCALE],
+                                      contacts[k, CONTACT_COMPLIANCE])
+    for i in range(slices):
+        approaches[i] = sliced.slice_contact(i, dx, dy, ax, ay, bx, by, clearance, False, length,
+                                             slices, args.grid_log0, args.grid_step, table, 0.0, 0.0)[1]
+        weights[i] = contacts[k, CONTACT_SCALE] * sliced.slice_geometry(
+            i, length, slices, contacts[k, CONTACT_END_LENGTH])[2]
+    return add(scaled(f, dx), scaled(g, dy))
 
 
 # ---- impacts and the projection onto the constraints
@@ -1217,7 +1346,7 @@ def iwan_slider_return(y, args, work, tracked):
         if delta > 0.0:
             f_el = elastic_force(contacts, k, delta, args.grid_log0, args.grid_step, args.tables)
             f_n = dissipative.hysteresis_force(f_el, rate, speeds[k], contact_chi(contacts, k, speeds[k]))
-        changed |= iwan_return(states, contacts, k, f_n, n, y, int(contacts[k, CONTACT_STATE]))
+        changed |= iwan_return(states, contacts, k, f_n, n, y, int(contacts[k, CONTACT_STATE]), 1.0)
     return changed
 
 
@@ -1258,7 +1387,7 @@ def _evaluate(t, y, dy, args, work):
         return rhs.py_func
 
 
-@overload(integrator.start, inline="always")
+@overload(integrator.start)   # not inlined: numba's inliner loses the branches of its loop
 def _start(y, args, onset_tol):
     if mechanism(args):
         return start.py_func

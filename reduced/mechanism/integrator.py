@@ -42,13 +42,9 @@ import numpy as np
 from pinbore.core.compiled import follow_compiled_in
 from pinbore.laws import dissipative, friction, sliced, tables
 from pinbore.reduced.mechanism import layout
-from pinbore.reduced.mechanism.layout import (ENERGY_STATES, LOG_COLUMNS, LOG_IMPULSE, LOG_JOINT, LOG_RATE,
-                                    LOG_TIME, Integration, Record)
-
-# status codes
-OK, BLOWN_UP, TOO_MANY_STEPS, STEP_TOO_SMALL = 0, 1, 2, 3
-# integration methods
-DOPRI5, DOPRI5_FIXED, ROSENBROCK23 = 0, 1, 2
+from pinbore.reduced.mechanism.layout import (  # noqa: F401 (the codes are the integrator's)
+    BLOWN_UP, DOPRI5, DOPRI5_FIXED, ENERGY_STATES, LOG_COLUMNS, LOG_IMPULSE, LOG_JOINT, LOG_RATE,
+    LOG_TIME, OK, ROSENBROCK23, STEP_TOO_SMALL, TOO_MANY_STEPS, Integration, Record)
 
 
 # ---- what a mechanism overloads (declarations: compiled code reaches the mechanism's own)

@@ -136,11 +136,11 @@ Args = namedtuple("Args", [
 # The buffers of the right-hand side: a row per body of its kinematic state (the body kind's
 # layout), the velocity of every Jacobian column, the constraint rows (Jacobian against the
 # bodies' velocities, Phi, Phi_t, gamma then the multipliers), the Schur matrix (lower
-# triangle), the applied forces (a column each), the normal force of each contact, the rows of
-# M^-1 D^T, the two bodies of each constraint row (-1: the ground or none; ascending) and the
+# triangle), the applied forces (a column each), the normal and friction forces of each
+# contact, the rows of M^-1 D^T, the two bodies of each constraint row (-1: the ground or none; ascending) and the
 # envelope of the Schur matrix (first coupled row of each row).
 Work = namedtuple("Work", ["bodies", "velocities", "jac", "phi", "phi_t", "rhs_c", "schur",
-                           "force", "normal", "mjac", "row_bodies", "first"])
+                           "force", "normal", "friction", "mjac", "row_bodies", "first"])
 
 # A contact's deepest penetration (m) and its approach rate there (m/s).
 Depth = namedtuple("Depth", ["delta", "rate"])
@@ -157,6 +157,10 @@ Contacts = namedtuple("Contacts", ["depth", "in_contact", "held_force", "held_pe
 # The accepted steps recorded by the integrator: time, state, impact speeds, contact modes,
 # latch flags.
 Record = namedtuple("Record", ["times", "states", "speeds", "modes", "latched"])
+
+# The integrator's status codes and methods (reduced.mechanism.integrator).
+OK, BLOWN_UP, TOO_MANY_STEPS, STEP_TOO_SMALL = 0, 1, 2, 3
+DOPRI5, DOPRI5_FIXED, ROSENBROCK23 = 0, 1, 2
 
 # What the integrator returns: the record cut to the accepted steps, the impact log,
 # counters (accepted, rejected, rhs calls, impacts), status code, time reached.

@@ -12,8 +12,12 @@ its marker layout.PLANAR and for vectors of two components.
 import math
 
 import numba
+import numpy as np
 
+from pinbore.core.errors import InputError
 from pinbore.reduced.mechanism import bodies, layout
+from pinbore.reduced.mechanism.layout import ANGLE, DOT2, POINT
+from pinbore.reduced.mechanism.scene import GROUND
 from pinbore.reduced.mechanism.linalg import schur_within_envelope
 from pinbore.reduced.mechanism.vectors import _plane, _scalar
 
@@ -216,3 +220,205 @@ for _name, _on in (("body_columns", "like"), ("point_state", "s"), ("vector_stat
                    ("normalise", "kind"), ("kinetic_energy", "kind")):
     bodies.implement(getattr(bodies, _name), globals()[_name],
                      _scalar if _on == "torque" else planar if _on == "kind" else _plane, _on)
+
+
+# ---- a planar scene as the model's arrays (reduced.mechanism.model.build asks these)
+MARKER = layout.PLANAR
+PROJECT_FIRST = False   # an accepted step's events are read before its projection (layout.Args)
+
+
+class Geometry:
+    """A planar scene's bodies and ideal joints as the model's arrays: the coordinates, the
+    mass, the primitive constraints, a revolute clearance joint's contact, torsion elements,
+    and the consistent initial state."""
+
+    def __init__(self, scene, index, source):
+        self.scene, self.index, self.source = scene, index, source
+        self.nq = COLUMNS * len(scene.bodies)
+
+    def mass(self):
+        """(masses, 1/m, 1/m, 1/J per velocity column, inertia: J in [0, 0] of a 3 x 3 per body)."""
+        bodies = self.scene.bodies
+        minv = np.array([[1 / b.mass, 1 / b.mass, 1 / b.inertia] for b in bodies]).ravel()
+        inertia = np.zeros((len(bodies), 3, 3))
+        inertia[:, 0, 0] = [b.inertia for b in bodies]
+        return np.array([b.mass for b in bodies], float), minv, inertia
+
+    def offsets(self) -> np.ndarray:
+        return COLUMNS * np.arange(len(self.scene.bodies) + 1)
+
+    def primitives(self, closures):
+        """The revolute joints (a point each), the clearance joints closed by `closures`,
+        the prismatic joints (the body's point on the line, its angle held), the drive (the
+        body's angle = angle0 + omega t): (rows, the drive's row or None)."""
+        index, scene = self.index, self.scene
+        rows = [primitive(POINT, index[j.body_i], index[j.body_j], s_i=j.point_i, s_j=j.point_j)
+                for j in scene.joints if j.type == "revolute"]
+        rows += [r for closure in closures for r in closure]
+        for j in scene.joints:
+            if j.type == "prismatic":
+                axis = math.radians(j.axis_deg)
+                b = index[j.body]
+                rows.append(primitive(DOT2, -1, b, s_i=j.axis_point, s_j=j.point,
+                                      a_i=(-math.sin(axis), math.cos(axis))))
+                rows.append(primitive(ANGLE, -1, b, angle0=math.radians(scene.bodies[b].angle_deg)))
+        if scene.drive is None:
+            return rows, None
+        rows.append(primitive(ANGLE, -1, index[scene.drive.body], speed=scene.drive.speed_rpm * 2 * math.pi / 60,
+                              angle0=math.radians(scene.drive.angle0_deg)))
+        return rows, len(rows) - 1
+
+    def closing(self, c) -> list:
+        """A revolute clearance joint closed: the revolute of its bearing and journal centres."""
+        return [primitive(POINT, self.index[c.bearing_body], self.index[c.journal_body],
+                          s_i=c.bearing_point, s_j=c.journal_point)]
+
+    def contacts(self, c, deltas, laws_data, source):
+        """A revolute clearance joint: one RADIAL contact, its normal force and friction at
+        the contact point on both bodies; the force of its law (N) at `deltas`."""
+        from pinbore.reduced.mechanism.model import point_force   # noqa: PLC0415 (model imports us)
+
+        geometry = {layout.CONTACT_KIND: layout.RADIAL,
+                    layout.CONTACT_BEARING_BODY: self.index[c.bearing_body],
+                    layout.CONTACT_JOURNAL_BODY: self.index[c.journal_body],
+                    layout.CONTACT_BEARING_POINT: list(c.bearing_point),
+                    layout.CONTACT_JOURNAL_POINT: list(c.journal_point),
+                    layout.CONTACT_CLEARANCE: c.bearing_radius - c.journal_radius,
+                    layout.CONTACT_RADIUS: c.bearing_radius, layout.CONTACT_AT_CONTACT: 1.0}
+        if c.impact != "continuous":
+            return [geometry], np.full(deltas.size, np.nan)   # rigid: no law, never evaluated
+        return [geometry], point_force(c, deltas, laws_data, source)
+
+    def torsion(self, t) -> dict:
+        """The free angle relative to the bodies' initial relative angle (angles without
+        bound: no vectors needed)."""
+        angle = {b.name: math.radians(b.angle_deg) for b in self.scene.bodies} | {GROUND: 0.0}
+        return {layout.TORSION_FREE_ANGLE: angle[t.body_j] - angle[t.body_i]
+                + math.radians(t.free_angle_deg),
+                layout.TORSION_A_I: [1.0, 0.0], layout.TORSION_B_J: [1.0, 0.0],
+                layout.TORSION_C_I: [0.0, 1.0]}
+
+    def inverse_inertia(self, b, t) -> float:
+        return 1 / self.scene.bodies[b].inertia
+
+    def place(self, model, closings) -> np.ndarray:
+        """Positions satisfying the ideal joints (an ideal twin's closures among them) with the
+        clearance joints that start "ideal" or "free" closed (least change from the scene's guesses), and the scene's velocities
+        projected onto Phi_q q' = -Phi_t (least change in kinetic-energy norm) of the ideal
+        joints and those that start "ideal" ("placed" joints keep their positions)."""
+        scene = self.scene
+        q = np.array([[*b.position, math.radians(b.angle_deg)] for b in scene.bodies]).ravel()
+        qd = np.array([[*b.velocity, b.omega] for b in scene.bodies]).ravel()
+        minv = model.base.minv
+        closed = self.primitives(model.closures + [rows for rows, start in closings
+                                                   if start in ("ideal", "free")])[0]
+        q, _, gap = project(model, q, qd, closed, minv)
+        if gap >= 1e-14:
+            raise InputError("joints: the bodies cannot be placed so that every joint closes "
+                             f"(largest gap {gap:.3g} m)")
+        closed = self.primitives(model.closures + [rows for rows, start in closings if start == "ideal"])[0]
+        _, qd, _ = project(model, q, qd, closed, minv)
+        return np.concatenate([q, qd, np.zeros(layout.ENERGY_STATES), np.zeros(model.friction_states)])
+
+
+def primitive(kind, bi, bj, s_i=(0.0, 0.0), s_j=(0.0, 0.0), a_i=(0.0, 0.0), b_j=(0.0, 0.0),
+              c_i=(0.0, 0.0), speed=0.0, angle0=0.0) -> list:
+    """A primitive constraint's row (layout.PRIM_*) of planar vectors."""
+    return layout.row(layout.PRIMITIVE_COLUMNS, {
+        layout.PRIM_KIND: kind, layout.PRIM_BODY_I: bi, layout.PRIM_BODY_J: bj,
+        layout.PRIM_SPEED: speed, layout.PRIM_ANGLE0: angle0, layout.PRIM_S_I: list(s_i),
+        layout.PRIM_S_J: list(s_j), layout.PRIM_A_I: list(a_i), layout.PRIM_B_J: list(b_j),
+        layout.PRIM_C_I: list(c_i)})
+
+
+def project(model, q, qd, primitives, minv, t=0.0):
+    """The nearest consistent state: positions moved least onto Phi(q, t) = 0 (Gauss-Newton),
+    velocities projected onto Phi_q q' = -Phi_t with least change in kinetic-energy norm.
+    Returns (q, q', largest remaining position gap)."""
+    from pinbore.reduced.mechanism.engine import constraint_values   # noqa: PLC0415 (compiled)
+
+    q, qd = q.copy(), qd.copy()
+    args = model.args(primitives=np.array(primitives, float).reshape(-1, layout.PRIMITIVE_COLUMNS),
+                      mode=np.zeros(model.contacts.shape[0], np.int64))
+    nq = q.size
+    y = np.zeros(2 * nq + layout.ENERGY_STATES)
+    gap = 0.0
+    for _ in range(50):
+        y[:nq] = q
+        jac, phi, _ = constraint_values(t, y, args)
+        gap = np.max(np.abs(phi), initial=0.0)
+        if jac.shape[0] == 0 or gap < 1e-14:
+            break
+        q -= jac.T @ np.linalg.lstsq(jac @ jac.T, phi, rcond=None)[0]
+    y[:nq] = q
+    jac, _, phi_t = constraint_values(t, y, args)
+    if jac.shape[0]:
+        scaled = jac * minv
+        qd -= scaled.T @ np.linalg.lstsq(scaled @ jac.T, jac @ qd + phi_t, rcond=None)[0]
+    return q, qd, gap
+
+
+# ---- a planar run's outputs (reduced.mechanism.outputs asks these)
+def motion_columns(names, q, qd, qdd, bodies) -> dict:
+    """Each body's coordinates, rates and accelerations at the steps (columns by name)."""
+    cols = {}
+    keys = ((q, (("x", "m"), ("y", "m"), ("angle", "rad"))),
+            (qd, (("vx", "m_per_s"), ("vy", "m_per_s"), ("omega", "rad_per_s"))),
+            (qdd, (("ax", "m_per_s2"), ("ay", "m_per_s2"), ("alpha", "rad_per_s2"))))
+    for b, name in enumerate(names):
+        for values, what in keys:
+            for i, (key, unit) in enumerate(what):
+                cols[f"{name}_{key}_{unit}"] = values[:, COLUMNS * b + i]
+    return cols
+
+
+def drive_angle(model, cols):
+    """The driven body's angle from its start (deg), None without a drive."""
+    drive = model.scene.drive
+    if drive is None:
+        return None
+    return np.degrees(cols[f"{drive.body}_angle_rad"] - math.radians(drive.angle0_deg))
+
+
+def slider_acceleration(model, cols):
+    """The acceleration (m/s^2) of the first prismatic joint's body along its axis, None
+    without one."""
+    slider = next((j for j in model.scene.joints if j.type == "prismatic"), None)
+    if slider is None:
+        return None
+    a = math.radians(slider.axis_deg)
+    return cols[f"{slider.body}_ax_m_per_s2"] * math.cos(a) + cols[f"{slider.body}_ay_m_per_s2"] * math.sin(a)
+
+
+# ---- a planar mechanism seen once per drive period (reduced.dynamics.flow asks these)
+WRAPPED_ANGLES = False   # angles have no bound: the drive's angle0 turns on by 2 pi a period
+
+
+def flow_scale(model, length, omega) -> np.ndarray:
+    """The scales of the coordinates: positions and angles by the clearance c, their rates
+    by c omega."""
+    return np.concatenate([np.full(model.nq, length), np.full(model.nq, length * abs(omega))])
+
+
+def flow_signs(model, y) -> np.ndarray:
+    return np.ones(2 * model.nq)
+
+
+def flow_coordinates(model, y, primitives) -> np.ndarray:
+    """q and q', the driven body's angle taken relative to the drive's (angle0 of the
+    period)."""
+    x = y[:2 * model.nq].copy()
+    row = primitives[model.drive_row]
+    b = int(row[layout.PRIM_BODY_J])
+    if b >= 0:
+        x[COLUMNS * b + 2] -= row[layout.PRIM_ANGLE0]
+    return x
+
+
+def flow_consistent(model, y, args) -> np.ndarray:
+    """y with q moved least onto the constraints of args.primitives, then q' projected
+    (`project`)."""
+    nq = model.nq
+    y = y.copy()
+    y[:nq], y[nq:2 * nq], _ = project(model, y[:nq], y[nq:2 * nq], args.primitives, model.base.minv)
+    return y

@@ -28,9 +28,13 @@ one array read in place.
 import math
 
 import numba
+import numpy as np
 
+from pinbore.core.errors import InputError
 from pinbore.reduced.mechanism import bodies, layout
 from pinbore.reduced.mechanism.bodies import dot1
+from pinbore.reduced.mechanism.layout import ANGLE, DOT1, DOT2, POINT
+from pinbore.reduced.mechanism.scene import GROUND, rotation_matrix, unit_axis
 from pinbore.reduced.mechanism.linalg import schur_within_envelope
 from pinbore.reduced.mechanism.vectors import _space, add, cross, dot, scaled, sub
 
@@ -416,3 +420,297 @@ for _name, _on in (("body_columns", "like"), ("point_state", "s_body"), ("vector
                    ("normalise", "kind"), ("kinetic_energy", "kind")):
     _function = {"turned": turned_any, "unturned": unturned_any}.get(_name, globals()[_name])
     bodies.implement(getattr(bodies, _name), _function, spatial if _on == "kind" else _space, _on)
+
+
+# ---- a spatial scene as the model's arrays (reduced.mechanism.model.build asks these)
+MARKER = layout.SPATIAL
+PROJECT_FIRST = True    # an accepted step is projected before its events are read (layout.Args)
+PARALLEL = 1e-9   # |1 - |u_b . u_j|| below which a journal's axis is aligned with its bore's
+
+
+class Geometry:
+    """A spatial scene's bodies and ideal joints as the model's arrays: the coordinates, the
+    mass, the primitive constraints ([Nikravesh1988] ch. 7), the contacts of a cylindrical or
+    spherical clearance joint, torsion elements, and the consistent initial state."""
+
+    def __init__(self, scene, index, source):
+        self.scene, self.index, self.source = scene, index, source
+        self.nq = COORDINATES * len(scene.bodies)
+        self.rot = {GROUND: np.eye(3)} | {b.name: rotation_matrix(b.parameters()) for b in scene.bodies}
+
+    def mass(self):
+        """(masses, no per-column inverse masses, inertia tensors in the body frames)."""
+        bodies = self.scene.bodies
+        return (np.array([b.mass for b in bodies], float), np.zeros(COLUMNS * len(bodies)),
+                np.array([b.inertia for b in bodies], float))
+
+    def offsets(self) -> np.ndarray:
+        return COLUMNS * np.arange(len(self.scene.bodies) + 1)
+
+    def primitives(self, closures):
+        """Every ideal joint's primitives, the clearance joints closed by `closures`, then the
+        drive (the relative angle of its joint's bodies about the joint's axis): (rows, the
+        drive's row or None)."""
+        index, rot = self.index, self.rot
+        rows, named = [], {}
+        for j in self.scene.joints:
+            u_i = unit_axis(j.axis_i, "axis_i") if j.axis_i else [0, 0, 1]
+            u_j = unit_axis(j.axis_j, "axis_j") if j.axis_j else [0, 0, 1]
+            rows += joint_primitives(j.type, index[j.body_i], index[j.body_j], j.point_i, j.point_j,
+                                     np.array(u_i), np.array(u_j), rot[j.body_i], rot[j.body_j],
+                                     self.source)
+            if j.name:
+                named[j.name] = (j, np.array(u_i))
+        rows += [r for closure in closures for r in closure]
+        if self.scene.drive is None:
+            return rows, None
+        j, u_i = named[self.scene.drive.joint]
+        f, g = normals(u_i)
+        rows.append(primitive(ANGLE, index[j.body_i], index[j.body_j], a_i=f,
+                              b_j=rot[j.body_j].T @ rot[j.body_i] @ f, c_i=g,
+                              speed=self.scene.drive.speed_rpm * 2 * math.pi / 60))
+        return rows, len(rows) - 1
+
+    def closing(self, c) -> list:
+        """A clearance joint closed (ideal_kind): a revolute on the bore's axis, or a
+        spherical joint for a ball or a misaligned journal."""
+        u_b = np.array(unit_axis(c.bearing_axis, "bearing_axis")) if c.bearing_axis else np.zeros(3)
+        u_j = np.array(unit_axis(c.journal_axis, "journal_axis")) if c.journal_axis else np.zeros(3)
+        kind = ideal_kind(c, self.rot[c.bearing_body] @ u_b, self.rot[c.journal_body] @ u_j)
+        return joint_primitives(kind, self.index[c.bearing_body], self.index[c.journal_body],
+                                c.bearing_point, c.journal_point, u_b, u_j, self.rot[c.bearing_body],
+                                self.rot[c.journal_body], "clearance_joints")
+
+    def contacts(self, c, deltas, laws_data, source):
+        """A ball: one RADIAL contact (its normal force at the two centres, friction at the
+        contact point); a journal: the journal along its bore (SLICED; with rigid impacts its
+        two ends, AXIS_RADIAL) and its shoulders (PLANE, two-sided, frictionless): the
+        contacts' geometry and the force (N) or force per length (N/m) of its law at
+        `deltas`."""
+        from pinbore.reduced.mechanism.model import per_length_table   # noqa: PLC0415 (model imports us)
+
+        bb, bj = self.index[c.bearing_body], self.index[c.journal_body]
+        base = {layout.CONTACT_BEARING_BODY: bb, layout.CONTACT_JOURNAL_BODY: bj,
+                layout.CONTACT_BEARING_POINT: list(c.bearing_point),
+                layout.CONTACT_JOURNAL_POINT: list(c.journal_point),
+                layout.CONTACT_CLEARANCE: c.bearing_radius - c.journal_radius,
+                layout.CONTACT_RADIUS: c.bearing_radius}
+        table = np.full(deltas.size, np.nan)   # rigid: no law, never evaluated
+        scale = end = bulk = 0.0
+        if c.impact == "continuous":
+            scale, end, bulk, table = per_length_table(c, deltas, laws_data, source)
+        if c.type == "spherical":
+            return [base | {layout.CONTACT_KIND: layout.RADIAL}], table
+        u_b = unit_axis(c.bearing_axis, "bearing_axis")
+        u_j = unit_axis(c.journal_axis, "journal_axis")
+        if c.impact == "continuous":
+            out = [base | {layout.CONTACT_KIND: layout.SLICED, layout.CONTACT_BEARING_AXIS: u_b,
+                           layout.CONTACT_JOURNAL_AXIS: u_j, layout.CONTACT_LENGTH: c.length,
+                           layout.CONTACT_SLICES: c.slices, layout.CONTACT_END_LENGTH: end,
+                           layout.CONTACT_SCALE: scale, layout.CONTACT_COMPLIANCE: bulk}]
+        else:   # the journal's two ends against the bore's axis
+            out = [base | {layout.CONTACT_KIND: layout.AXIS_RADIAL, layout.CONTACT_BEARING_AXIS: u_b,
+                           layout.CONTACT_JOURNAL_POINT: list(np.asarray(c.journal_point)
+                                                              + side * 0.5 * c.length * np.asarray(u_j))}
+                   for side in (-1.0, 1.0)]
+        if c.axial_clearance is not None:
+            out.append(base | {layout.CONTACT_KIND: layout.PLANE, layout.CONTACT_BEARING_AXIS: u_b,
+                               layout.CONTACT_CLEARANCE: c.axial_clearance,
+                               layout.CONTACT_STIFFNESS: c.axial_stiffness if c.impact == "continuous" else 0.0,
+                               layout.CONTACT_SIDE: 0.0, layout.CONTACT_FRICTION_ON: 0.0})
+        return out, table
+
+    def torsion(self, t) -> dict:
+        """The relative angle about u_i = a_i x c_i (body i) from a_i to b_j (body j: a_i
+        in its frame at the start), beyond the free angle."""
+        u = np.array(unit_axis(t.axis_i, "axis_i"))
+        f, g = normals(u)
+        return {layout.TORSION_FREE_ANGLE: math.radians(t.free_angle_deg), layout.TORSION_A_I: list(f),
+                layout.TORSION_C_I: list(g),
+                layout.TORSION_B_J: list(self.rot[t.body_j].T @ self.rot[t.body_i] @ f)}
+
+    def inverse_inertia(self, b, t) -> float:
+        """u . J^-1 u of body b about a torsion element's axis u (body i's axis, in b's frame)."""
+        body = self.scene.bodies[b]
+        u = self.rot[body.name].T @ self.rot[t.body_i] @ np.array(unit_axis(t.axis_i, "axis_i"))
+        return float(u @ np.linalg.solve(np.array(body.inertia), u))
+
+    def place(self, model, closings) -> np.ndarray:
+        """Positions on the ideal joints with the clearance joints that start "ideal" or
+        "free" closed (mass-weighted least change from the scene's guesses); then the
+        velocities as given (each body's r' and global w, on the positions found), projected
+        onto the ideal joints and the clearance joints that start "ideal" (those that start
+        "free" keep their relative velocity; "placed" ones keep their positions too)."""
+        from pinbore.reduced.mechanism import engine   # noqa: PLC0415 (compiled)
+
+        s = self.scene
+        nq = self.nq
+        y = np.concatenate([np.concatenate([[*b.position, *b.parameters()] for b in s.bodies]),
+                            np.zeros(nq + layout.ENERGY_STATES + model.friction_states)])
+        for starts in (("ideal", "free"), ("ideal",)):
+            for k, b in enumerate(s.bodies):   # the given velocities at the current orientation
+                p = y[7 * k + 3:7 * k + 7] / np.linalg.norm(y[7 * k + 3:7 * k + 7])
+                w_body = rotation_matrix(p).T @ np.array(b.omega, float)
+                y[nq + 7 * k:nq + 7 * k + 7] = [*b.velocity, *gt_times(p, tuple(0.5 * w_body))]
+            extra = [r for rows, start in closings if start in starts for r in rows]
+            primitives = np.vstack([model.primitives,
+                                    np.array(extra, float).reshape(-1, layout.PRIMITIVE_COLUMNS)])
+            args = model.args(primitives=primitives)
+            work = engine.workspace(args)
+            for _ in range(50):
+                if not engine.project_onto_constraints(0.0, y, args, work, 1e-14, 1e-14):
+                    break
+            _, phi, _ = engine.constraint_values(0.0, y, args)
+            gap = np.max(np.abs(phi), initial=0.0)
+            if gap >= 1e-12:
+                raise InputError(f"{self.source}: joints: the bodies cannot be placed so that "
+                                 f"every joint closes (largest gap {gap:.3g})")
+        return y
+
+
+def ideal_kind(c, bore_axis, journal_axis) -> str:
+    """The ideal joint that closes a clearance joint: spherical for a ball; for a journal a
+    revolute on the bore's axis, or, when the journal's axis is tilted against the bore's at
+    the start (a misaligned joint, global axes given), a spherical joint at the bore's
+    centre: the journal centred, its tilt left to the other joints (a revolute could not
+    close)."""
+    if c.type == "spherical" or abs(abs(bore_axis @ journal_axis) - 1) > PARALLEL:
+        return "spherical"
+    return "revolute"
+
+
+def normals(u):
+    """Two unit vectors f, g = u x f normal to the unit vector u (a right-handed triad)."""
+    u = np.asarray(u, float)
+    helper = np.eye(3)[int(np.argmin(np.abs(u)))]
+    f = np.cross(u, helper)
+    f /= np.linalg.norm(f)
+    return f, np.cross(u, f)
+
+
+def primitive(kind, bi, bj, s_i=(0, 0, 0), s_j=(0, 0, 0), a_i=(0, 0, 0), b_j=(0, 0, 0),
+              c_i=(0, 0, 0), speed=0.0, angle0=0.0) -> list:
+    """A primitive constraint's row (layout.PRIM_*)."""
+    out = layout.row(layout.PRIMITIVE_COLUMNS, {layout.PRIM_KIND: kind, layout.PRIM_BODY_I: bi,
+                                                layout.PRIM_BODY_J: bj, layout.PRIM_SPEED: speed,
+                                                layout.PRIM_ANGLE0: angle0})
+    for column, v in ((layout.PRIM_S_I, s_i), (layout.PRIM_S_J, s_j), (layout.PRIM_A_I, a_i),
+                      (layout.PRIM_B_J, b_j), (layout.PRIM_C_I, c_i)):
+        out[column:column + 3] = [float(c) for c in v]
+    return out
+
+
+def joint_primitives(kind, bi, bj, s_i, s_j, u_i, u_j, a_i, a_j, source) -> list:
+    """The primitive constraints of an ideal joint (engine docstring); a_i, a_j the bodies'
+    initial rotation matrices (u_i, u_j unit, in body frames)."""
+    point = primitive(POINT, bi, bj, s_i, s_j)
+    if kind == "spherical":
+        return [point]
+    if kind == "fixed":
+        ex, ey, ez = np.eye(3)
+        in_j = a_j.T @ a_i   # body i's axes in body j's frame
+        return [point, primitive(DOT1, bi, bj, a_i=ey, b_j=in_j @ ex),
+                primitive(DOT1, bi, bj, a_i=ez, b_j=in_j @ ex),
+                primitive(DOT1, bi, bj, a_i=ez, b_j=in_j @ ey)]
+    if kind == "universal":
+        if abs((a_i @ u_i) @ (a_j @ u_j)) > 1e-9:
+            raise InputError(f"{source}: joints.axis_j: the cross arms of a universal joint must "
+                             "be normal to each other at the start")
+        return [point, primitive(DOT1, bi, bj, a_i=u_i, b_j=u_j)]
+    if abs(abs((a_i @ u_i) @ (a_j @ u_j)) - 1) > 1e-9:
+        raise InputError(f"{source}: joints.axis_j: the axes of a {kind} joint must be parallel "
+                         "at the start")
+    f, g = normals(u_i)
+    aligned = [primitive(DOT1, bi, bj, a_i=f, b_j=u_j), primitive(DOT1, bi, bj, a_i=g, b_j=u_j)]
+    if kind == "revolute":
+        return [point] + aligned
+    line = [primitive(DOT2, bi, bj, s_i, s_j, a_i=f), primitive(DOT2, bi, bj, s_i, s_j, a_i=g)]
+    if kind == "cylindrical":
+        return aligned + line
+    return aligned + line + [primitive(DOT1, bi, bj, a_i=g, b_j=a_j.T @ a_i @ f)]   # prismatic
+
+
+# ---- a spatial run's outputs (reduced.mechanism.outputs asks these)
+def motion_columns(names, q, qd, qdd, bodies) -> dict:
+    """Each body's position, Euler parameters, velocity, global angular velocity (from the
+    body states `bodies`, per step) and acceleration at the steps (columns by name)."""
+    cols = {}
+    for b, name in enumerate(names):
+        first = COORDINATES * b
+        for i, key in enumerate(("x_m", "y_m", "z_m", "e0_1", "e1_1", "e2_1", "e3_1")):
+            cols[f"{name}_{key}"] = q[:, first + i]
+        for i, key in enumerate(("vx_m_per_s", "vy_m_per_s", "vz_m_per_s")):
+            cols[f"{name}_{key}"] = qd[:, first + i]
+        for i, key in enumerate(("wx_rad_per_s", "wy_rad_per_s", "wz_rad_per_s")):
+            cols[f"{name}_{key}"] = bodies[:, b, BODY_OMEGA + i]
+        for i, key in enumerate(("ax_m_per_s2", "ay_m_per_s2", "az_m_per_s2")):
+            cols[f"{name}_{key}"] = qdd[:, first + i]
+    return cols
+
+
+def drive_angle(model, cols):
+    """None: a spatial run's pictures are against time."""
+    return None
+
+
+def slider_acceleration(model, cols):
+    """The acceleration (m/s^2) of the first prismatic joint's slider along the guide's axis
+    at the start (exact for a guide on the ground), None without one."""
+    guide = next((j for j in model.scene.joints if j.type == "prismatic"), None)
+    if guide is None:
+        return None
+    body_i = {b.name: b for b in model.scene.bodies}.get(guide.body_i)
+    axis = np.asarray(guide.axis_i, float) / np.linalg.norm(guide.axis_i)
+    if body_i is not None:
+        axis = rotation_matrix(body_i.parameters()) @ axis
+    slider = guide.body_i if guide.body_j == GROUND else guide.body_j
+    return sum(axis[k] * cols[f"{slider}_a{c}_m_per_s2"] for k, c in enumerate("xyz"))
+
+
+# ---- a spatial mechanism seen once per drive period (reduced.dynamics.flow asks these)
+WRAPPED_ANGLES = True   # the drive holds its relative angle modulo 2 pi: no shift a period
+
+
+def flow_scale(model, length, omega) -> np.ndarray:
+    """The scales of the coordinates, per body: its centre by the clearance c; its Euler
+    parameters by c / (2 k), k its radius of gyration sqrt(trace J / 3m) (a small turn
+    d theta changes p by d theta / 2 and moves a point at k by k d theta); their rates by
+    c omega the same way."""
+    base = model.base
+    gyration = np.sqrt(np.trace(base.inertia, axis1=1, axis2=2) / (3 * base.masses))
+    per_body = np.concatenate([np.full((base.masses.size, 3), 1.0),
+                               np.repeat(0.5 / gyration[:, None], 4, axis=1)], axis=1).ravel()
+    return length * np.concatenate([per_body, per_body * abs(omega)])
+
+
+def flow_signs(model, y) -> np.ndarray:
+    """+1, or -1 on the Euler parameters (and their rates) of a body whose largest parameter
+    in magnitude is negative (p and -p are one orientation; a turn of 2 pi changes the
+    sign)."""
+    nq = model.nq
+    signs = np.ones(2 * nq)
+    for b in range(len(model.names)):
+        p = y[COORDINATES * b + 3:COORDINATES * b + 7]
+        if p[np.argmax(np.abs(p))] < 0:
+            signs[COORDINATES * b + 3:COORDINATES * b + 7] = -1.0
+            signs[nq + COORDINATES * b + 3:nq + COORDINATES * b + 7] = -1.0
+    return signs
+
+
+def flow_coordinates(model, y, primitives) -> np.ndarray:
+    """r, p and their rates, p of one sign (flow_signs)."""
+    x = y[:2 * model.nq]
+    return x * flow_signs(model, x)
+
+
+def flow_consistent(model, y, args) -> np.ndarray:
+    """y made consistent with the ideal joints and the drive (Euler parameters normalised;
+    Gauss-Newton projection, engine.project_onto_constraints)."""
+    from pinbore.reduced.mechanism import engine   # noqa: PLC0415 (the engine imports us)
+
+    y = y.copy()
+    work = engine.workspace(args)
+    for _ in range(50):
+        if not engine.project_onto_constraints(0.0, y, args, work, 1e-14, 1e-14):
+            break
+    return y

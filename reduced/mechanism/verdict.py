@@ -23,6 +23,8 @@ of these rules is `suspect`, with the reasons:
 
 import math
 
+from pinbore.reduced.mechanism.scene import clearance_joints
+
 ENERGY_RESIDUAL = 1e-2     # of the peak kinetic energy
 PENETRATION = 1.0          # of the joint's clearance
 FRICTION_MARGIN = 1.05     # over the law's largest coefficient
@@ -56,7 +58,7 @@ def reasons(summary, scene) -> list[str]:
                      f"energy (above {ENERGY_RESIDUAL:g}): {remedy}")
     if energy.dissipated_J < -max(energy.max_residual_J, 1e-12):
         found.append(f"negative dissipated energy {energy.dissipated_J:.3g} J")
-    for joint in scene.clearance_joints:
+    for joint in clearance_joints(scene):
         peaks = summary.clearance_joints.get(joint.name)
         if peaks is None:
             continue

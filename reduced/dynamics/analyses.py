@@ -18,7 +18,7 @@ threshold is > 0 (inf, the default: no threshold); --workers goes with local pro
 with --scheduler, which needs the dask `distributed` package; the cache folder (--cache,
 default OUT-cache) is no existing file and lies outside OUT (replaced when a run completes).
 What the options need of the scene (a drive, a valid scene at both ends of every swept
-range) is checked against the scene by `pinbore.reduced.studies`.
+range) is checked against the scene by `pinbore.reduced.dynamics.studies`.
 """
 
 import importlib.util

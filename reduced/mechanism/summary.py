@@ -1,5 +1,5 @@
 """summary.json of `pinbore reduced`, defined once as a validated model: the run builds a
-Summary (reduced/outputs.py) and writes it (`write`); the report, the tests and any other
+Summary (reduced.mechanism.outputs) and writes it (`write`); the report, the tests and any other
 reader read it back through `read`.
 
 Units are SI and every key carries its unit (_N, _s, _m, _J ...); forces are those of the
@@ -18,7 +18,7 @@ from pinbore.core.scene import Record, read_json
 class JointPeaks(Record):
     """One clearance joint over the run: its peaks and impacts."""
 
-    peak_normal_force_N: float   # refined between the steps (continuous contact)
+    peak_normal_force_N: float   # refined between the steps (continuous contacts)
     time_of_peak_s: float
     impacts: int
     peak_impact_speed_m_per_s: float
@@ -45,6 +45,8 @@ class EnergyBalance(Record):
 
 
 class Summary(Record):
+    model: Literal["planar", "spatial"]   # the kind of mechanism (reduced.mechanism.kinds)
+    coordinates: str            # what its state's coordinates are, per body
     status: Literal["complete", "incomplete", "suspect"]   # suspect: see `verdict`
     stop: Stop | None           # None: complete
     duration_s: float           # asked by the scene
@@ -60,7 +62,7 @@ class Summary(Record):
     energy_balance: EnergyBalance
     constraint_drift_max: float   # m, the largest gap of the ideal joints
     warnings: list[str]         # e.g. a calibrated law used beyond its calibrated range
-    verdict: list[str] = []     # why the run is suspect (reduced/verdict.py); empty: nothing
+    verdict: list[str] = []     # why the run is suspect (reduced.mechanism.verdict); empty: nothing
     scene_file: str
 
     @property

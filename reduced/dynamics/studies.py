@@ -1,7 +1,7 @@
 """`pinbore dynamics SCENE --analysis ... --out DIR`: Poincare maps, bifurcation diagrams,
 Lyapunov exponents, periodic orbits by shooting and design studies of a driven mechanism.
 
-`ANALYSES` maps each analysis to its options model (`pinbore.reduced.analyses`, validated
+`ANALYSES` maps each analysis to its options model (`pinbore.reduced.dynamics.analyses`, validated
 before any work) and the function that runs it; `run` checks the scene against the options,
 runs the analysis into a temporary folder and moves it into place when complete.
 
@@ -29,20 +29,31 @@ from tqdm import tqdm
 from pinbore.core import scene as scenes
 from pinbore.core.errors import InputError
 from pinbore.core.output import atomic_directory
-from pinbore.reduced import dynamics, spatial_model, spatial_outputs
-from pinbore.reduced import dynamics_plots as plots
-from pinbore.reduced.analyses import (PARAMETERS, Analysis, BifurcationOptions, DesignOptions,
-                                      LyapunovOptions, PoincareOptions, Sampled, ShootingOptions)
-from pinbore.reduced.model import build
-from pinbore.reduced.outputs import per_step
-from pinbore.reduced.run import ideal_twin
-from pinbore.reduced.scene import GROUND, ReducedScene
-from pinbore.reduced.spatial_scene import SpatialScene
+from pinbore.reduced.dynamics.analyses import (PARAMETERS, Analysis, BifurcationOptions, DesignOptions,
+                                               LyapunovOptions, PoincareOptions, Sampled, ShootingOptions)
+from pinbore.reduced.mechanism import kinds
+from pinbore.reduced.mechanism.layout import PRIM_ANGLE0
 
 
-def scene_model(data: dict) -> type[ReducedScene] | type[SpatialScene]:
-    """The scene model of a planar (kind = "reduced") or spatial (kind = "spatial") scene."""
-    return SpatialScene if data.get("kind") == "spatial" else ReducedScene
+def scene_model(data: dict) -> type:
+    """The scene model of a mechanism scene's data of any kind (reduced.mechanism.kinds)."""
+    return kinds.kind_of(data, "scene").scene
+
+
+def figures():
+    """The analyses' tables and figures (reduced.dynamics.plots; importing it loads
+    matplotlib, which refusing a bad scene does not need)."""
+    from pinbore.reduced.dynamics import plots   # noqa: PLC0415
+
+    return plots
+
+
+def dynamics():
+    """The flow and its analyses (reduced.dynamics.flow; importing it loads numba, which a
+    scene is validated without)."""
+    from pinbore.reduced.dynamics import flow   # noqa: PLC0415
+
+    return flow
 
 
 def with_parameter(data: dict, parameter: str, value: float, source: str) -> dict:
@@ -50,10 +61,12 @@ def with_parameter(data: dict, parameter: str, value: float, source: str) -> dic
     data = copy.deepcopy(data)
     joints = data.get("clearance_joints", [])
     if parameter == "clearance":
-        if not joints:
+        if not joints and not data.get("translational_joints"):
             raise InputError(f"{source}: --parameter clearance: the scene has no clearance joints")
         for joint in joints:
             joint["journal_radius"] = joint["bearing_radius"] - value
+        for joint in data.get("translational_joints", []):
+            joint["clearance"] = value
     elif parameter == "speed":
         data["drive"]["speed_rpm"] = value
     elif parameter == "friction":
@@ -65,7 +78,7 @@ def with_parameter(data: dict, parameter: str, value: float, source: str) -> dic
     return data
 
 
-def require_drive(scene: ReducedScene, source: str) -> None:
+def require_drive(scene, source: str) -> None:
     """A drive that turns: the Poincare section is taken once per drive revolution."""
     if scene.drive is None:
         raise InputError(f"{source}: drive: nonlinear-dynamics analyses need a driven mechanism "
@@ -75,13 +88,14 @@ def require_drive(scene: ReducedScene, source: str) -> None:
                          "analyses (a drive that stands still has no revolution to sample)")
 
 
-def mechanism_flow(data: dict, base: Path, source: str):
-    """The flow (dynamics.MechanismFlow or SpatialMechanismFlow) of a driven scene's data."""
+def mechanism_flow(data: dict, base: Path, source: str, ideal: bool = False):
+    """The flow (reduced.dynamics.flow.MechanismFlow) of a driven scene's data (`ideal`: of
+    its ideal twin, every clearance joint closed)."""
+    from pinbore.reduced.mechanism.model import build   # noqa: PLC0415 (compiled)
+
     scene = scene_model(data).model_validate(data)
     require_drive(scene, source)
-    if isinstance(scene, SpatialScene):
-        return dynamics.SpatialMechanismFlow(spatial_model.build(scene, source, base))
-    return dynamics.MechanismFlow(build(scene, source, base))
+    return dynamics().MechanismFlow(build(scene, source, base, ideal=ideal))
 
 
 @dataclass(frozen=True)
@@ -101,7 +115,7 @@ class SceneFile:
         """The folder that relative paths in the scene (laws_file) start from."""
         return self.path.parent
 
-    def flow(self) -> dynamics.MechanismFlow:
+    def flow(self):
         return mechanism_flow(self.data, self.base, self.source)
 
 
@@ -130,11 +144,11 @@ class BifurcationPoint:
     def _point(self, value: float) -> dict:
         flow = mechanism_flow(with_parameter(self.data, self.parameter, value, self.source),
                               self.base, self.source)
-        coords, states = dynamics.poincare(flow, flow.start(), self.transient, self.periods)
+        coords, states = dynamics().poincare(flow, flow.start(), self.transient, self.periods)
         exponent = None
-        if dynamics.period_of(coords) is None:
-            exponent, _ = dynamics.lyapunov(flow, states[-1], max(self.periods // 5, 10))
-        kind, period = dynamics.classify(coords, exponent)
+        if dynamics().period_of(coords) is None:
+            exponent, _ = dynamics().lyapunov(flow, states[-1], max(self.periods // 5, 10))
+        kind, period = dynamics().classify(coords, exponent)
         return {"value": value, "kind": kind, "period": period,
                 "lyapunov_per_s": exponent if exponent is None or math.isfinite(exponent) else None,
                 "observed": observed_samples(flow, states).tolist()}
@@ -229,9 +243,7 @@ class DesignPoint:
         state = flow.advance(flow.start(), self.transient)
         flow.advance(state, self.periods)
         cols = per_step_of(flow)
-        twin_of = spatial_model.ideal_twin if isinstance(flow.model.scene, SpatialScene) else ideal_twin
-        ideal = mechanism_flow(twin_of(scene_model(data).model_validate(data)).model_dump(),
-                               self.base, self.source)
+        ideal = mechanism_flow(data, self.base, self.source, ideal=True)
         ideal.advance(ideal.start(), 1)
         ideal_cols = per_step_of(ideal)
         angle, acceleration = slider_motion(flow, cols)
@@ -241,7 +253,7 @@ class DesignPoint:
                               period=2 * math.pi)
         deviation = math.sqrt(np.mean((acceleration - reference) ** 2)
                               / np.mean(ideal_acceleration ** 2))
-        forces = [cols[f"{c.name}_normal_force_N"] for c in flow.model.scene.clearance_joints]
+        forces = [cols[f"{c.name}_normal_force_N"] for c in flow.model.joints]
         return {"clearance_m": clearance, "speed_rpm": speed,
                 "peak_force_N": float(max(np.max(f) for f in forces)),
                 "impacts_per_revolution": float(flow.last.counters[3]) / self.periods,
@@ -249,28 +261,18 @@ class DesignPoint:
 
 
 def per_step_of(flow) -> dict:
-    """The columns of the flow's last advance (reduced.outputs or reduced.spatial_outputs)."""
-    spatial = isinstance(flow.model.scene, SpatialScene)
-    return (spatial_outputs.per_step if spatial else per_step)(flow.model, flow.last)[0]
+    """The columns of the flow's last advance (reduced.mechanism.outputs)."""
+    from pinbore.reduced.mechanism import outputs   # noqa: PLC0415 (compiled)
+
+    return outputs.per_step(flow.model, flow.last)[0]
 
 
 def slider_motion(flow, cols) -> tuple[np.ndarray, np.ndarray]:
-    """At each step of the flow's last advance: the drive's angle in [0, 2 pi) and the
-    slider's acceleration along its guide (the first prismatic joint; planar: along x;
-    spatial: along the guide's axis at the start, exact for a guide on the ground)."""
-    scene = flow.model.scene
-    guide = next(j for j in scene.joints if j.type == "prismatic")
-    if not isinstance(scene, SpatialScene):
-        angle = cols[f"{scene.drive.body}_angle_rad"]
-        return np.mod(angle, 2 * math.pi), cols[f"{guide.body}_ax_m_per_s2"]
-    body_i = {b.name: b for b in scene.bodies}.get(guide.body_i)
-    axis = np.asarray(guide.axis_i, float) / np.linalg.norm(guide.axis_i)
-    if body_i is not None:
-        axis = spatial_model.rotation_matrix(body_i.parameters()) @ axis
-    slider = guide.body_i if guide.body_j == GROUND else guide.body_j
-    acceleration = sum(axis[k] * cols[f"{slider}_a{c}_m_per_s2"] for k, c in enumerate("xyz"))
-    # the drive's relative angle is angle0 + omega t, t restarting at 0 on a whole period
-    return np.mod(flow.omega * cols["time_s"], 2 * math.pi), acceleration
+    """At each step of the flow's last advance: the drive's phase angle0 + omega t in
+    [0, 2 pi) (t restarting at 0 on a whole period) and the slider's acceleration along its
+    guide (the body kind's slider_acceleration)."""
+    phase = flow.drive[PRIM_ANGLE0] + flow.omega * cols["time_s"]
+    return np.mod(phase, 2 * math.pi), flow.back_end.slider_acceleration(flow.model, cols)
 
 
 def design_band(rows, speeds, max_force, max_deviation) -> dict:
@@ -289,7 +291,7 @@ def run(scene_file: str | Path, analysis: str, options: Analysis) -> int:
     options; outputs in options.out (replaced when complete). 1 if shooting did not
     converge (its outputs are written, marked)."""
     path = Path(scene_file)
-    scene = scenes.load(scene_model(scenes.read_toml(path)), path)   # validates, one-line errors
+    scene = kinds.load(path)   # validates (without numba), one-line errors
     target = SceneFile(path, scene.model_dump(exclude_none=True))
     check_scene(scene, target, options)
     _, analyse = ANALYSES[analysis]
@@ -312,7 +314,7 @@ def run(scene_file: str | Path, analysis: str, options: Analysis) -> int:
     return 1
 
 
-def check_scene(scene: ReducedScene, target: SceneFile, options: Analysis) -> None:
+def check_scene(scene, target: SceneFile, options: Analysis) -> None:
     """What the options need of the scene, before any work: a drive (the section is taken
     once per revolution); a valid scene at both ends of every swept range (e.g. a clearance
     below the bearing's radius, a friction law with a coefficient mu to set); a prismatic
@@ -330,14 +332,14 @@ def check_scene(scene: ReducedScene, target: SceneFile, options: Analysis) -> No
 def poincare_map(target: SceneFile, options: PoincareOptions, tmp: Path) -> dict:
     """The Poincare samples after the transient, their class and the largest exponent."""
     flow = target.flow()
-    coords, states = dynamics.poincare(flow, flow.start(), options.transient, options.periods,
+    coords, states = dynamics().poincare(flow, flow.start(), options.transient, options.periods,
                                        progress=True)
-    exponent, _ = dynamics.lyapunov(flow, states[-1], options.periods)
-    kind, period = dynamics.classify(coords, exponent)
+    exponent, _ = dynamics().lyapunov(flow, states[-1], options.periods)
+    kind, period = dynamics().classify(coords, exponent)
     samples = observed_samples(flow, states)
-    plots.write_table(tmp / "poincare.csv", ["period", "x_m", "y_m", "vx_m_per_s", "vy_m_per_s"],
+    figures().write_table(tmp / "poincare.csv", ["period", "x_m", "y_m", "vx_m_per_s", "vy_m_per_s"],
                       [[options.transient + k + 1, *row] for k, row in enumerate(samples)])
-    plots.poincare(tmp / "poincare.png", samples, flow.length, f"{target.path.stem}: {kind}"
+    figures().poincare(tmp / "poincare.png", samples, flow.length, f"{target.path.stem}: {kind}"
                    + (f", period {period}" if period else ""), flow.observed_name())
     return {"observed": flow.observed_name(), "kind": kind, "period": period,
             "lyapunov_per_s": _finite(exponent)}
@@ -347,10 +349,10 @@ def lyapunov_exponent(target: SceneFile, options: LyapunovOptions, tmp: Path) ->
     """The largest Lyapunov exponent after the transient, and its running estimate."""
     flow = target.flow()
     state = flow.advance(flow.start(), options.transient)
-    exponent, running = dynamics.lyapunov(flow, state, options.periods)
-    plots.write_table(tmp / "lyapunov.csv", ["period", "running_estimate_per_s"],
+    exponent, running = dynamics().lyapunov(flow, state, options.periods)
+    figures().write_table(tmp / "lyapunov.csv", ["period", "running_estimate_per_s"],
                       [[k + 1, v] for k, v in enumerate(running)])
-    plots.convergence(tmp / "lyapunov.png", running)
+    figures().convergence(tmp / "lyapunov.png", running)
     tail = [v for v in running[len(running) * 3 // 4:] if math.isfinite(v)]
     return {"lyapunov_per_s": _finite(exponent),
             "last_quarter_spread_per_s": (max(tail) - min(tail)) if tail else None}
@@ -362,7 +364,7 @@ def periodic_orbit(target: SceneFile, options: ShootingOptions, tmp: Path) -> di
     flow = target.flow()
     state = flow.advance(flow.start(), options.transient)
     try:
-        orbit, multipliers, history = dynamics.shooting(flow, state, options.multiple)
+        orbit, multipliers, history = dynamics().shooting(flow, state, options.multiple)
     except FloatingPointError as err:
         return {"converged": False, "reason": str(err)}
     return {"converged": True, "residuals": history,
@@ -379,11 +381,11 @@ def bifurcation_diagram(target: SceneFile, options: BifurcationOptions, tmp: Pat
                             options.transient, options.periods)
     key = sweep_key(target.data, "bifurcation", options.parameter, options.transient, options.periods)
     rows = sweep(task, values, options.cache, options.workers, options.scheduler, key)
-    plots.write_table(tmp / "bifurcation.csv",
+    figures().write_table(tmp / "bifurcation.csv",
                       ["value", "kind", "period", "lyapunov_per_s", "x_m", "y_m"],
                       [[r["value"], r["kind"], r["period"], r["lyapunov_per_s"], *j[:2]]
                        for r in rows for j in r["observed"]])
-    plots.bifurcation(tmp / "bifurcation.png", rows, options.parameter, PARAMETERS[options.parameter].label)
+    figures().bifurcation(tmp / "bifurcation.png", rows, options.parameter, PARAMETERS[options.parameter].label)
     kinds = [r["kind"] for r in rows]
     return {"parameter": options.parameter, "range": list(options.range), "points": options.points,
             "counts": {k: kinds.count(k) for k in sorted(set(kinds))}}
@@ -400,8 +402,8 @@ def design_map(target: SceneFile, options: DesignOptions, tmp: Path) -> dict:
     rows = sweep(task, grid, options.cache, options.workers, options.scheduler, key)
     names = ["clearance_m", "speed_rpm", "peak_force_N", "impacts_per_revolution",
              "acceleration_deviation"]
-    plots.write_table(tmp / "design.csv", names, [[r[n] for n in names] for r in rows])
-    plots.design(tmp / "design.png", rows, clearances, speeds, options.max_force, options.max_deviation)
+    figures().write_table(tmp / "design.csv", names, [[r[n] for n in names] for r in rows])
+    figures().design(tmp / "design.png", rows, clearances, speeds, options.max_force, options.max_deviation)
     return {"thresholds": {"peak_force_N": options.max_force,
                            "acceleration_deviation": options.max_deviation},
             "band": design_band(rows, speeds, options.max_force, options.max_deviation)}

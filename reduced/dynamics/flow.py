@@ -1,0 +1,232 @@
+r"""Nonlinear dynamics of periodically driven systems, seen once per driving period.
+
+A `Flow` is what the analyses need of a system: its driving period, a way to advance a state
+by whole periods, the state's coordinates (normalised, so that distances mean something) and
+a way to perturb a state along them. `MechanismFlow` wraps a driven mechanism of any kind
+(reduced.mechanism: what only a body kind knows, its coordinates' scales and how a state is
+put back on the constraints, is its back-end's `flow_*` functions); the tests wrap a forced
+Duffing oscillator the same way, so every analysis is checked on a system with published
+behaviour.
+
+- Poincare map (stroboscopic, at the driving period): the first `transient` periods are
+  discarded, then `periods` samples are kept. The transient criterion is the count given
+  (default 50 periods: for the slider-crank's journal, impacts damp an initial condition in
+  a few revolutions; the classification is checked not to change when it is doubled).
+- Classification of the samples x_0..x_(N-1): periodic with period p (the smallest p <= 16
+  with |x_(i+p) - x_i| <= tol * max |x| for every i); otherwise chaotic if the largest
+  Lyapunov exponent is positive, quasi-periodic if not.
+- Largest Lyapunov exponent (Benettin et al. 1980 [Benettin1980]): a neighbour at distance d0 is advanced
+  with the reference one period at a time, its separation d measured and renormalised back
+  to d0; lambda = sum log(d / d0) / (N T). Each trajectory locates its own impacts, so an
+  impact that one meets and the other misses shows up as the (finite) jump it is; d0 = 1e-7
+  of the coordinates' scale keeps such jumps rare.
+- Periodic orbits by shooting: Newton on P^m(x) - x = 0 with the Jacobian of the m-fold map
+  by finite differences; its eigenvalues are the Floquet multipliers (stable when all lie
+  inside the unit circle).
+"""
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+from tqdm import tqdm
+
+from pinbore.reduced.mechanism import engine
+from pinbore.reduced.mechanism.layout import OK, PRIM_ANGLE0, PRIM_BODY_I, PRIM_BODY_J, PRIM_SPEED
+from pinbore.reduced.mechanism.model import Model, translational_frames
+from pinbore.reduced.mechanism.run import simulate
+
+MAX_PERIOD = 16
+
+
+@dataclass
+class MechanismState:
+    y: np.ndarray           # the engine's state vector
+    speeds: np.ndarray      # impact speeds of the contacts
+    mode: np.ndarray        # contact modes (held contacts of impulse joints)
+    latched: np.ndarray     # latch flags of the torsion elements
+    period: int             # periods elapsed since the start
+
+
+class MechanismFlow:
+    """A driven mechanism advanced by whole drive periods. Coordinates: the body kind's
+    positions and velocities (back-end `flow_coordinates`: a planar driven angle taken
+    relative to the drive, spatial Euler parameters of one sign), scaled by the smallest
+    clearance c and c omega (back-end `flow_scale`). A drive whose angle has no bound (the
+    planar one) turns its angle0 on by 2 pi each period, as the integration restarts at
+    t = 0; a spatial drive holds its relative angle modulo 2 pi and needs no shift."""
+
+    def __init__(self, model: Model):
+        self.model = model
+        self.back_end = model.kind.bodies()
+        self.drive = model.primitives[model.drive_row]
+        self.omega = self.drive[PRIM_SPEED]
+        self.period = 2 * math.pi / abs(self.omega)
+        self.length = min((c.gap() for c in model.joints), default=1e-3)
+        self.scale = self.back_end.flow_scale(model, self.length, self.omega)
+        self.last = None   # the Trajectory of the last advance (for the design study)
+
+    def start(self) -> MechanismState:
+        args = self.model.args()
+        return MechanismState(self.model.y0.copy(), args.speeds, args.mode, args.latched, 0)
+
+    def _primitives(self, period: int) -> np.ndarray:
+        primitives = self.model.primitives
+        if self.back_end.WRAPPED_ANGLES:
+            return primitives
+        primitives = primitives.copy()
+        primitives[self.model.drive_row, PRIM_ANGLE0] += 2 * math.pi * period * math.copysign(1.0, self.omega)
+        return primitives
+
+    def advance(self, state: MechanismState, periods: int = 1) -> MechanismState:
+        """The state `periods` drive periods on (the engine's impact speeds, modes and
+        latches carried over); the trajectory is kept in self.last. An integration that stops
+        is a FloatingPointError."""
+        args = self.model.args(state.speeds, state.latched, state.mode, self._primitives(state.period))
+        self.last = simulate(self.model, state.y, periods * self.period, args)
+        if self.last.status != OK:
+            raise FloatingPointError(f"the integration stopped at t = {self.last.t_end:.6g} s "
+                                     f"of period {state.period} (status {self.last.status})")
+        return MechanismState(self.last.states[-1].copy(), args.speeds, args.mode, args.latched,
+                              state.period + periods)
+
+    def coordinates(self, state: MechanismState) -> np.ndarray:
+        return self.back_end.flow_coordinates(self.model, state.y, self._primitives(state.period)) / self.scale
+
+    def perturb(self, state: MechanismState, dx: np.ndarray) -> MechanismState:
+        """The state moved by dx (in coordinates), then made consistent with the ideal joints
+        and the drive."""
+        nq = self.model.nq
+        y = state.y.copy()
+        y[:2 * nq] += dx * self.scale * self.back_end.flow_signs(self.model, y)
+        args = self.model.args(state.speeds, state.latched, primitives=self._primitives(state.period))
+        return replace(state, y=self.back_end.flow_consistent(self.model, y, args))
+
+    def _observed_joint(self):
+        """The first clearance joint's bodies, points and the two vectors of the bearing body
+        (its frame) the observed point is measured along: a guide's axis and face normal; a
+        journal's two directions across its bore's axis (the body's x axis made normal to the
+        axis, or y if the axis lies near x); otherwise the frame's x and y."""
+        c, model = self.model.joints[0], self.model
+        index = {n: i for i, n in enumerate(model.names)} | {"ground": -1}
+        dimension = model.kind.dimension
+        f, g = np.eye(dimension)[0], np.eye(dimension)[1]
+        if c.type == "translational":
+            f, g = translational_frames(None, c)[0]
+        elif c.type == "cylindrical":
+            u = np.asarray(c.bearing_axis, float) / np.linalg.norm(c.bearing_axis)
+            helper = np.eye(3)[0] if abs(u[0]) < 0.9 else np.eye(3)[1]
+            f = helper - (helper @ u) * u
+            f /= np.linalg.norm(f)
+            g = np.cross(u, f)
+        return (index[c.bearing_body], tuple(map(float, c.bearing_point)), index[c.journal_body],
+                tuple(map(float, c.journal_point)), tuple(map(float, f)), tuple(map(float, g)))
+
+    def _free_body(self) -> int:
+        driven = {int(self.drive[PRIM_BODY_I]), int(self.drive[PRIM_BODY_J])}
+        return next(b for b in range(len(self.model.names)) if b not in driven)
+
+    def observed(self, state: MechanismState) -> np.ndarray:
+        """What the Poincare map shows: the first clearance joint's journal (slider) centre
+        relative to its bearing (guide) point (m) and its rate (m/s), along the bearing
+        body's two directions across the joint; without clearance joints, the centre of the
+        first body that is not driven (x, y global)."""
+        model = self.model
+        if not model.joints:
+            b, per_body = self._free_body(), model.nq // len(model.names)
+            return np.array([*state.y[per_body * b:per_body * b + 2],
+                             *state.y[model.nq + per_body * b:model.nq + per_body * b + 2]])
+        args = model.args()
+        return np.array(engine.relative_motion(state.y, args, engine.workspace(args),
+                                               *self._observed_joint()))
+
+    def observed_name(self) -> str:
+        if self.model.joints:
+            return (f"journal centre of {self.model.joints[0].name} relative to its bearing, "
+                    "across the joint")
+        return f"centre of body {self.model.names[self._free_body()]}"
+
+
+def poincare(flow, state, transient: int, periods: int, progress: bool = False):
+    """Stroboscopic samples (periods x coordinates) after `transient` periods, and the states
+    they were taken at (the last one: the state reached)."""
+    if transient:
+        state = flow.advance(state, transient)
+    states = []
+    for _ in tqdm(range(periods), desc="poincare", unit="period", disable=not progress):
+        state = flow.advance(state)
+        states.append(state)
+    return np.array([flow.coordinates(s) for s in states]), states
+
+
+def period_of(samples: np.ndarray, tol: float = 1e-4) -> int | None:
+    """The smallest p <= MAX_PERIOD with x_(i+p) = x_i (to tol of the samples' scale) for
+    every sample, or None."""
+    scale = max(np.max(np.abs(samples)), 1e-300)
+    for p in range(1, min(MAX_PERIOD, len(samples) // 2) + 1):
+        if np.max(np.abs(samples[p:] - samples[:-p])) <= tol * scale:
+            return p
+    return None
+
+
+def lyapunov(flow, state, periods: int, d0: float = 1e-7, seed: int = 0):
+    """Largest Lyapunov exponent (1/s) by Benettin's renormalisation once per period, and its
+    running estimate after each period (to show convergence). A neighbour whose separation
+    collapses (every direction contracts onto the reference: a fully constrained mechanism)
+    gives -inf."""
+    rng = np.random.default_rng(seed)
+    x0 = flow.coordinates(state)
+    direction = rng.standard_normal(x0.size)
+    neighbour = flow.perturb(state, d0 * direction / np.linalg.norm(direction))
+    total, running = 0.0, []
+    for k in range(periods):
+        state, neighbour = flow.advance(state), flow.advance(neighbour)
+        dx = flow.coordinates(neighbour) - flow.coordinates(state)
+        d = np.linalg.norm(dx)
+        if d < 1e-14 * d0:
+            return -math.inf, running + [-math.inf]
+        total += math.log(d / d0)
+        running.append(total / ((k + 1) * flow.period))
+        neighbour = flow.perturb(state, dx * (d0 / d))
+    return running[-1], running
+
+
+def classify(samples, exponent=None, tol=1e-4) -> tuple[str, int | None]:
+    """("periodic", p), ("quasi-periodic", None) or ("chaotic", None)."""
+    p = period_of(samples, tol)
+    if p is not None:
+        return "periodic", p
+    if exponent is None:
+        return "not periodic", None
+    return ("chaotic" if exponent > 0 else "quasi-periodic"), None
+
+
+def shooting(flow, state, multiple: int = 1, tol: float = 1e-9, iterations: int = 20, step: float = 1e-6):
+    """A periodic orbit of period `multiple` driving periods from a guess `state`, by Newton
+    on P^m(x) - x = 0 in the flow's coordinates. Returns (state on the orbit, Floquet
+    multipliers, residual history). The Jacobian of P^m by forward differences of size `step`."""
+    history = []
+    for _ in range(iterations):
+        x = flow.coordinates(state)
+        end = flow.advance(state, multiple)
+        residual = flow.coordinates(end) - x
+        history.append(float(np.linalg.norm(residual)))
+        jac = monodromy(flow, state, end, multiple, step)
+        if history[-1] <= tol * max(np.linalg.norm(x), 1.0):
+            return state, np.linalg.eigvals(jac), history
+        dx = np.linalg.lstsq(jac - np.eye(x.size), -residual, rcond=None)[0]
+        state = flow.perturb(state, dx)
+    raise FloatingPointError(f"shooting did not converge in {iterations} Newton iterations "
+                             f"(residuals {', '.join(f'{r:.2e}' for r in history)})")
+
+
+def monodromy(flow, state, end, multiple, step):
+    """d P^m / d x at `state` (forward differences; `end` = P^m(state))."""
+    x_end = flow.coordinates(end)
+    n = x_end.size
+    jac = np.empty((n, n))
+    for i in range(n):
+        dx = np.zeros(n)
+        dx[i] = step
+        jac[:, i] = (flow.coordinates(flow.advance(flow.perturb(state, dx), multiple)) - x_end) / step
+    return jac

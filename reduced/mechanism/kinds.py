@@ -1,0 +1,82 @@
+"""The kinds of mechanism, in one registry: every command, the report and the benchmarks ask
+here which kind a scene is and never branch on it themselves.
+
+A kind names its scene model (reduced.mechanism.scene: pure pydantic, so that a scene is
+validated without numba), its body kind's module (compiled: reduced.mechanism.planar or
+.spatial, loaded only to build a model) and what its state's coordinates are (recorded in
+summary.json). A new kind of body (a flexible body in the floating frame of its modes) is a
+body kind's module and a line here.
+"""
+
+import importlib
+from dataclasses import dataclass
+from pathlib import Path
+
+from pinbore.core import scene as scenes
+from pinbore.core.errors import InputError
+from pinbore.reduced.mechanism.scene import ReducedScene, SpatialScene
+
+
+@dataclass(frozen=True)
+class Kind:
+    name: str                  # "planar" or "spatial" (summary.json's `model`)
+    scene_kind: str            # the scene's `kind` key
+    scene: type                # its scene model
+    module: str                # its body kind's module (compiled)
+    coordinates: str           # its state's coordinates per body, for summary.json
+    dimension: int
+    eccentricity_columns: bool   # a revolute joint's journal offset (ecc_x, ecc_y) in the outputs
+    axial_columns: bool          # a journal's shoulders (axial penetration and force) in the outputs
+    description: str           # what the report says of its runs
+    joint_caption: str         # what a clearance joint's figure shows
+
+    def bodies(self):
+        """The body kind's module: its compiled body functions and how its scenes become the
+        model's arrays (importing it loads numba)."""
+        return importlib.import_module(self.module)
+
+
+KINDS = {
+    "reduced": Kind(
+        "planar", "reduced", ReducedScene, "pinbore.reduced.mechanism.planar",
+        "x, y (m), phi (rad) of each body's centre of mass", 2, True, False,
+        "rigid bodies in the plane; revolute clearance joints (a journal in its bore) and "
+        "translational ones (a slider in its guide, four corner contacts)",
+        "the journal centre inside the clearance circle and the normal contact force (a slider "
+        "in its guide: its offset across the guide, its tilt and its four corners' normal forces)."),
+    "spatial": Kind(
+        "spatial", "spatial", SpatialScene, "pinbore.reduced.mechanism.spatial",
+        "x, y, z (m) of each body's centre of mass, Euler parameters e0..e3", 3, False, True,
+        "rigid bodies in 3D on Euler parameters, the same ideal joints, drive, torsion springs "
+        "and latches; cylindrical clearance joints cut into slices along the bore (a tilted "
+        "journal loads its edge and feels a tilting moment), with shoulders, spherical ones (a "
+        "ball in its socket) and translational ones",
+        "contact forces against time (a journal: the slices' radial sum and the shoulders' axial "
+        "force; a ball: its force on the socket; a slider: its offset, tilt and corner forces)."),
+}
+BY_NAME = {kind.name: kind for kind in KINDS.values()}
+
+
+def kind_of(data: dict, source: str) -> Kind:
+    """The kind of a scene's data (its `kind` key); one InputError line for another."""
+    kind = data.get("kind")
+    if kind not in KINDS:
+        raise InputError(f"{source}: kind: {kind!r} is not a mechanism; valid: "
+                         f"{', '.join(repr(k) for k in KINDS)}")
+    return KINDS[kind]
+
+
+def of_scene(scene) -> Kind:
+    """The kind of a validated scene."""
+    return KINDS[scene.kind]
+
+
+def validate(data: dict, source: str):
+    """The scene of its data, validated by its kind's model (one InputError line)."""
+    return scenes.validate(kind_of(data, source).scene, data, source)
+
+
+def load(path) -> object:
+    """Read and validate a mechanism scene file of any kind."""
+    path = Path(path)
+    return validate(scenes.read_toml(path), str(path))

@@ -1,0 +1,562 @@
+"""From a mechanism scene of any kind to the arrays of the compiled engine
+(reduced.mechanism.engine), with consistent initial conditions, written once: the laws file,
+the tables of the normal laws, the contacts of every clearance joint with their damping and
+friction, the torsion elements, the friction states, the fixed step. What only a kind knows
+(its bodies' coordinates and mass, its ideal joints as primitive constraints, how a revolute,
+cylindrical or spherical clearance joint sits in its geometry, how a state is moved onto the
+constraints) comes from its body kind's module (reduced.mechanism.kinds: planar or spatial);
+the translational clearance joint is written here once for both.
+"""
+
+import math
+import warnings
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from pinbore.calibration import lawsfile
+from pinbore.core.errors import InputError
+from pinbore.laws import dissipative, elastic
+from pinbore.laws.sliced import sliced
+from pinbore.laws.tables import log_grid, split_compliance
+from pinbore.reduced.mechanism import kinds, layout
+from pinbore.reduced.mechanism.layout import (
+    CHI_POINTS, CONTACT_AT_CONTACT, CONTACT_BEARING_AXIS, CONTACT_BEARING_BODY,
+    CONTACT_BEARING_POINT, CONTACT_CHI, CONTACT_CHI_LOG_SPEED, CONTACT_CHI_STEP, CONTACT_CHI_TABLE,
+    CONTACT_CLEARANCE, CONTACT_COLUMNS, CONTACT_FRICTION_LAW, CONTACT_FRICTION_ON, CONTACT_IMPACT,
+    CONTACT_JOINT, CONTACT_JOURNAL_BODY, CONTACT_JOURNAL_POINT, CONTACT_KIND, CONTACT_REST_SPEED,
+    CONTACT_RESTITUTION, CONTACT_SIDE, CONTACT_SLICES, CONTACT_STATE, CONTACT_TABLE, CONTINUOUS,
+    COULOMB, COULOMB_MU, DAHL, DAHL_MU, DAHL_SIGMA, DOT1, DOT2, ENERGY_STATES, IWAN, IWAN_K1, IWAN_K2,
+    IWAN_MU, LATCH, LINEAR, LINEAR_ALPHA, LINEAR_MU_STATIC, LUGRE, LUGRE_MU_COULOMB,
+    LUGRE_MU_STATIC, LUGRE_SIGMA0, LUGRE_SIGMA1, LUGRE_SIGMA2, LUGRE_STRIBECK_SPEED, NEWTON,
+    NO_FRICTION, PLANE, POISSON, PRIM_A_I, PRIM_B_J, PRIM_BODY_I, PRIM_BODY_J, PRIM_KIND, PRIM_S_I,
+    PRIM_S_J, PRIMITIVE_COLUMNS, REGULARISATION_V0, REGULARISATION_V1, SLICED, SPRING, STOP,
+    STRIBECK, STRIBECK_MU_MIN, STRIBECK_MU_STATIC, STRIBECK_V_MIN, TORSION_BODY_I, TORSION_BODY_J,
+    TORSION_COLUMNS, TORSION_DAMPING, TORSION_FREE_ANGLE, TORSION_KIND, TORSION_STIFFNESS, row)
+from pinbore.reduced.mechanism.scene import GROUND, MAX_STEPS, clearance_joints, unit_axis
+
+GRID_POINTS = 600
+GRID_LOW = 1e-12       # m, smallest tabulated penetration (power law below)
+SPEED_FLOOR = 1e-3     # m/s, smallest impact speed in chi delta'/v0 (grazing contacts)
+BLOW_UP_FRACTION = 0.1  # a penetration beyond this fraction of the journal radius (of a
+#                         slider's half-width) stops a run
+STEPS_PER_PERIOD = 300  # default dopri5_fixed step: this fraction of the shortest period
+IMPACT = {"continuous": CONTINUOUS, "newton": NEWTON, "poisson": POISSON}
+TORSION_KINDS = {"spring": SPRING, "stop": STOP, "latch": LATCH}
+# a translational joint's corners: (end along the slider's axis, side across it), in the order
+# of its contacts and of their outputs corner1..corner4
+CORNERS = ((-1.0, 1.0), (1.0, 1.0), (-1.0, -1.0), (1.0, -1.0))
+
+
+@dataclass
+class Model:
+    """A mechanism ready to integrate: its scene and kind, the names of its bodies, the
+    compiled engine's arrays (layout.Args, `args()`), the clearance joints in the order of
+    their contacts and each joint's contacts (a range of rows), the laws file if a law came
+    from it, the initial state y0 and the drive's primitive row (None: no drive)."""
+
+    scene: object
+    kind: kinds.Kind
+    names: list[str]
+    base: layout.Args
+    joints: list                  # the scene's clearance joints, in the order of `contacts`
+    contact_rows: list[range]     # per clearance joint, its rows of base.contacts
+    calibration: object | None
+    drive_row: int | None
+    friction_states: int          # how many states the friction laws add to y
+    y0: np.ndarray = field(default_factory=lambda: np.empty(0))
+    closures: list = field(default_factory=list)   # an ideal twin's closing joints (in primitives)
+
+    @property
+    def nq(self) -> int:
+        return self.base.nq
+
+    @property
+    def contacts(self) -> np.ndarray:
+        return self.base.contacts
+
+    @property
+    def primitives(self) -> np.ndarray:
+        return self.base.primitives
+
+    @property
+    def torsion(self) -> np.ndarray:
+        return self.base.torsion
+
+    def args(self, speeds=None, latched=None, mode=None, primitives=None) -> layout.Args:
+        """The arguments of the engine: impact speeds per contact (default: the floor), latch
+        flags and contact modes (given here to evaluate a recorded step or to continue a run;
+        copied, as the integrator updates them in place), and the primitives (default: the
+        scene's)."""
+        nc, nt = self.contacts.shape[0], self.torsion.shape[0]
+        return self.base._replace(
+            speeds=np.full(nc, SPEED_FLOOR) if speeds is None else np.array(speeds, float),
+            latched=np.zeros(nt) if latched is None else np.array(latched, float),
+            mode=np.zeros(nc, np.int64) if mode is None else np.array(mode, np.int64),
+            primitives=self.primitives if primitives is None else primitives)
+
+    def elastic_energy(self, k: int, delta: float) -> float:
+        """U(delta) of contact k's tabulated law (table_energy); a linear law's k delta^2 / 2."""
+        stiffness = self.contacts[k, layout.CONTACT_STIFFNESS]
+        if stiffness > 0:
+            return 0.5 * stiffness * max(delta, 0.0) ** 2
+        return table_energy(self.base.tables[int(self.contacts[k, CONTACT_TABLE])],
+                            self.base.grid_log0, self.base.grid_step, delta)
+
+
+def table_energy(log_f, grid_log0: float, grid_step: float, delta: float) -> float:
+    """U(delta) = int_0^delta F_el of a law tabulated as ln F (pinbore.laws.tables), exact for
+    the log-log interpolant the dynamics use: on a segment F = F_i (d / d_i)^s_i, whose
+    integral is F_i d_i ((d/d_i)^(s_i+1) - 1)/(s_i+1); below the grid the first segment's power
+    law continues to 0."""
+    if delta <= 0:
+        return 0.0
+    d = np.exp(grid_log0 + grid_step * np.arange(log_f.size))
+    f = np.exp(log_f)
+    slope = np.diff(log_f) / grid_step
+    x = (math.log(delta) - grid_log0) / grid_step
+    i = min(max(int(math.floor(x)), 0), log_f.size - 2)
+    below = f[0] * d[0] / (slope[0] + 1)
+    whole = f[:i] * d[:i] * ((d[1:i + 1] / d[:i]) ** (slope[:i] + 1) - 1) / (slope[:i] + 1)
+    if delta < d[0]:
+        return below * (delta / d[0]) ** (slope[0] + 1)
+    part = f[i] * d[i] * ((delta / d[i]) ** (slope[i] + 1) - 1) / (slope[i] + 1)
+    return float(below + whole.sum() + part)
+
+
+# ---- the build
+def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
+    """The model of a validated scene of any kind; `ideal`: its ideal twin, every clearance
+    joint replaced by the ideal joint that closes it (a revolute, a ball joint, a prismatic
+    guide), its initial state consistent with those too. One InputError line for a scene that cannot be built (a disconnected mechanism, a
+    law the laws file lacks, joints that cannot all close)."""
+    kind = kinds.of_scene(scene)
+    body_kind = kind.bodies()
+    names = [b.name for b in scene.bodies]
+    index = {name: i for i, name in enumerate(names)} | {GROUND: -1}
+    check_connected(scene, names)
+    geometry = body_kind.Geometry(scene, index, source)
+    joints = clearance_joints(scene)
+    closures = [closing(geometry, c) for c in joints] if ideal else []
+    primitives, drive_row = geometry.primitives(closures)
+    laws_data = None if ideal else laws_file(scene, base, source)
+    # penetrations up to a tenth of the journal radius are tabulated; beyond, the run has blown up
+    top = max((BLOW_UP_FRACTION * c.journal_radius for c in scene.clearance_joints), default=1.0)
+    if scene.translational_joints:
+        top = max([top] + [BLOW_UP_FRACTION * c.half_width for c in scene.translational_joints])
+    grid_log0, grid_step, deltas = log_grid(GRID_LOW, top, GRID_POINTS)
+    contacts, tables, rows = [], [], []
+    for j, c in enumerate([] if ideal else joints):
+        law = law_columns(c, laws_data, source)
+        geometries, table = joint_contacts(geometry, c, deltas, laws_data, source)
+        start = len(contacts)
+        for g in geometries:
+            contacts.append(row(CONTACT_COLUMNS, law | g | {CONTACT_JOINT: j, CONTACT_TABLE: len(tables)}))
+        tables.append(np.log(table))
+        rows.append(range(start, len(contacts)))
+    contacts = np.array(contacts, float).reshape(-1, CONTACT_COLUMNS)
+    states = assign_friction_states(contacts, geometry.nq, kind.dimension)
+    masses, minv, inertia = geometry.mass()
+    args = layout.Args(
+        kind=body_kind.MARKER, nq=geometry.nq, like=(0.0,) * kind.dimension,
+        project_first=body_kind.PROJECT_FIRST, masses=masses, minv=minv, inertia=inertia,
+        inertia_inv=np.linalg.inv(inertia) if kind.dimension == 3 else inertia,
+        gravity=np.asarray(scene.gravity, float), offsets=geometry.offsets(),
+        primitives=np.array(primitives, float).reshape(-1, PRIMITIVE_COLUMNS),
+        baumgarte=scene.integrator.baumgarte, contacts=contacts,
+        speeds=np.full(contacts.shape[0], SPEED_FLOOR), grid_log0=grid_log0, grid_step=grid_step,
+        tables=np.array(tables).reshape(len(tables), GRID_POINTS),
+        torsion=torsion_rows(geometry, scene),
+        latched=np.zeros(len(scene.torsion)), mode=np.zeros(contacts.shape[0], np.int64))
+    model = Model(scene, kind, names, args, [] if ideal else joints, rows, laws_data, drive_row, states,
+                  closures=closures)
+    model.y0 = geometry.place(model, [] if ideal else [(closing(geometry, c), c.start) for c in joints])
+    if scene.integrator.method == "dopri5_fixed":
+        fixed_step(model, source)   # refuses a default step that cannot finish, before any work
+    return model
+
+
+def closing(geometry, c) -> list:
+    """The primitive rows of the ideal joint that closes the clearance joint c."""
+    if getattr(c, "type", None) == "translational":
+        return translational_closing(geometry, c)
+    return geometry.closing(c)
+
+
+def joint_contacts(geometry, c, deltas, laws_data, source):
+    """(the geometry columns of each contact of the clearance joint c, the force its table
+    holds at `deltas`: N, or N/m for a journal along its bore)."""
+    if getattr(c, "type", None) == "translational":
+        return translational_contacts(geometry, c), corner_force(c, deltas)
+    geometries, table = geometry.contacts(c, deltas, laws_data, source)
+    table = np.array(table, float)
+    table[deltas > BLOW_UP_FRACTION * c.journal_radius] = np.nan
+    return geometries, table
+
+
+def assign_friction_states(contacts: np.ndarray, nq: int, dimension: int) -> int:
+    """Each contact of a state law its states in y, after q, q' and the energy integrals:
+    LuGre and Dahl one, Iwan two (travel, stretch), of a component each in the plane and
+    three in space, per slice of a SLICED contact. Returns how many there are."""
+    index = 2 * nq + ENERGY_STATES
+    for k in range(contacts.shape[0]):
+        law = int(contacts[k, CONTACT_FRICTION_LAW])
+        if law not in (LUGRE, DAHL, IWAN) or contacts[k, CONTACT_FRICTION_ON] == 0:
+            contacts[k, CONTACT_STATE] = -1
+            continue
+        count = (2 if law == IWAN else 1) * (1 if dimension == 2 else 3)
+        if int(contacts[k, CONTACT_KIND]) == SLICED:
+            count *= int(contacts[k, CONTACT_SLICES])
+        contacts[k, CONTACT_STATE] = index
+        index += count
+    return index - 2 * nq - ENERGY_STATES
+
+
+def law_columns(c, laws_data, source) -> dict:
+    """The contact-law columns of every contact of the clearance joint c: impact model,
+    restitution, rest speed, friction law and its parameters, the damping block."""
+    law = {CONTACT_IMPACT: IMPACT[c.impact], CONTACT_RESTITUTION: c.restitution,
+           CONTACT_REST_SPEED: c.rest_speed, CONTACT_FRICTION_ON: 1.0}
+    code, parameters = friction_block(c.friction)
+    law |= {CONTACT_FRICTION_LAW: code} | parameters
+    if c.impact == "continuous":
+        law |= damping_block(c, laws_data, source)
+    else:
+        law |= {CONTACT_CHI: 0.0}
+    return law
+
+
+def friction_block(f):
+    """(law code, {contact column: parameter}) of a friction table (the columns:
+    reduced.mechanism.layout). The static laws carry their regularisation speeds v0, v1."""
+    if f is None:
+        return NO_FRICTION, {}
+    if f.law == "coulomb_ambrosio":
+        return COULOMB, {COULOMB_MU: f.mu, REGULARISATION_V0: f.v0, REGULARISATION_V1: f.v1}
+    if f.law == "stribeck":
+        return STRIBECK, {STRIBECK_MU_STATIC: f.mu_static, STRIBECK_MU_MIN: f.mu_min,
+                          STRIBECK_V_MIN: f.v_min, REGULARISATION_V0: f.v0, REGULARISATION_V1: f.v1}
+    if f.law == "linear":
+        return LINEAR, {LINEAR_MU_STATIC: f.mu_static, LINEAR_ALPHA: f.alpha,
+                        REGULARISATION_V0: f.v0, REGULARISATION_V1: f.v1}
+    if f.law == "lugre":
+        return LUGRE, {LUGRE_MU_COULOMB: f.mu_coulomb, LUGRE_MU_STATIC: f.mu_static,
+                       LUGRE_STRIBECK_SPEED: f.stribeck_speed, LUGRE_SIGMA0: f.sigma0,
+                       LUGRE_SIGMA1: f.sigma1, LUGRE_SIGMA2: f.sigma2}
+    if f.law == "dahl":
+        return DAHL, {DAHL_MU: f.mu, DAHL_SIGMA: f.sigma}
+    return IWAN, {IWAN_K1: f.k1, IWAN_K2: f.k2, IWAN_MU: f.mu}
+
+
+def damping_block(c, laws_data, source) -> dict:
+    """The damping columns of a clearance joint's contacts: chi of a published hysteresis law
+    for the joint's restitution, or (damping_law = "calibrated") the table of chi(v0) over the
+    speed range of the laws file's restitution law: at CHI_POINTS speeds equally spaced in
+    ln v0, chi = laws.dissipative.hysteresis_for_restitution(e(v0)) (engine.contact_chi
+    interpolates it, held at the ends)."""
+    if c.damping_law != "calibrated":
+        chi = 0.0 if c.damping_law == "none" else dissipative.HYSTERESIS[c.damping_law](c.restitution)
+        return {CONTACT_CHI: chi}
+    law = calibrated_restitution(c, laws_data, source)
+    low, high = (math.log(v) for v in law.speed_range_m_per_s)
+    speeds = np.exp(np.linspace(low, high, CHI_POINTS))
+    chis = [dissipative.hysteresis_for_restitution(law.restitution(v)) for v in speeds]
+    block = {CONTACT_CHI: chis[0], CONTACT_CHI_LOG_SPEED: low,
+             CONTACT_CHI_STEP: (high - low) / (CHI_POINTS - 1) if high > low else 1.0}
+    return block | {CONTACT_CHI_TABLE + i: chi for i, chi in enumerate(chis)}
+
+
+def calibrated_restitution(c, laws_data, source) -> lawsfile.RestitutionLaw:
+    """The laws file's restitution law for the clearance joint c (damping_law =
+    "calibrated"): the one fitted on impacts of its radii and of its journal's and bearing's
+    E and nu; none, or several (joints differing only in densities or mass per length, which
+    the multibody joint does not know), is one InputError line."""
+    j = c.elastic_joint()
+    where = f"{source}: clearance_joints.{c.name}.damping_law: 'calibrated'"
+    if laws_data is None or not laws_data.restitution:
+        raise InputError(f"{where} needs a laws_file with a restitution law "
+                         "(pinbore calibrate --impacts IMPACT.json ...)")
+    found = laws_data.restitution_for(j.r_bore, j.r_pin, j.E_pin, j.nu_pin, j.E_bore, j.nu_bore)
+    if len(found) != 1:
+        what = "no restitution law" if not found else f"{len(found)} restitution laws"
+        raise InputError(f"{where}: {what} of the laws file fits the joint (bearing_radius "
+                         f"{j.r_bore:.6g} m, journal_radius {j.r_pin:.6g} m, journal E {j.E_pin:.4g} "
+                         f"Pa nu {j.nu_pin:.4g}, bearing E {j.E_bore:.4g} Pa nu {j.nu_bore:.4g}); "
+                         f"the file has: {'; '.join(laws_data.restitution)}")
+    return next(iter(found.values()))
+
+
+# ---- the normal laws' tables
+def point_force(c, deltas, laws_data, source) -> np.ndarray:
+    """Elastic normal force (N) of a revolute clearance joint of a planar mechanism at the
+    penetrations `deltas`: the Hertz point law, a per-length law (published or calibrated:
+    the laws file's) times the joint's length, or a sliced:<group> law of a straight pin."""
+    joint = c.elastic_joint()
+    if c.normal_law == "hertz_point":
+        return elastic.hertz_point(deltas, joint)
+    if c.normal_law.startswith("calibrated:"):
+        return per_length_force(c.normal_law, laws_data, deltas, joint,
+                                f"{source}: clearance_joints.normal_law") * c.length
+    if c.normal_law.startswith("sliced:"):
+        # a straight pin (no tilt in the planar model): every slice at the same approach, so
+        # one slice of width L + 2 end_length gives the sliced sum (laws.sliced, theta = 0,
+        # no relief): F = scale (L + 2 e) f_loc(d - c_b F / L), tabulated on the grid of
+        # `deltas`
+        law, per_length = sliced_parts(c, deltas, laws_data, source)
+        grid_log0 = math.log(deltas[0])
+        grid_step = math.log(deltas[1] / deltas[0])
+        bulk = law.bulk_compliance_m2_per_N
+        local = split_compliance(grid_log0, grid_step, np.log(per_length), bulk)
+        return np.array([sliced(d, 0.0, c.length, 1, *local, 0.0, 0.0, law.end_length_m,
+                                law.scale, bulk)[0] for d in deltas])
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the range is enforced by the table (NaN beyond it)
+        return elastic.PUBLISHED[c.normal_law](deltas, joint) * c.length
+
+
+def per_length_table(c, deltas, laws_data, source):
+    """(scale a, end length e, bulk compliance c_b (m^2/N), the per-length force f (N/m) the
+    slices carry at deltas: a sliced law's local law f_loc, laws.sliced) of a journal along
+    its bore (a cylindrical clearance joint), or (1, 0, 0, F (N)) of a ball in its socket."""
+    joint = c.elastic_joint()
+    if c.type == "spherical":
+        return 1.0, 0.0, 0.0, elastic.hertz_point(deltas, joint)
+    if c.normal_law == "hertz_point":   # the point law spread evenly over the length
+        return 1.0, 0.0, 0.0, elastic.hertz_point(deltas, joint) / c.length
+    if c.normal_law.startswith("sliced:"):
+        law, per_length = sliced_parts(c, deltas, laws_data, source)
+        bulk = law.bulk_compliance_m2_per_N
+        if bulk > 0:   # the slices carry the local law; the engine moves the bore (laws.sliced)
+            grid_log0, grid_step = math.log(deltas[0]), math.log(deltas[1] / deltas[0])
+            local_log0, local_step, local_table = split_compliance(
+                grid_log0, grid_step, np.log(per_length), bulk)
+            per_length = np.exp(np.interp(   # on the model's grid: log-log, as the lookup
+                np.log(deltas), local_log0 + local_step * np.arange(local_table.size),
+                local_table, right=np.nan))
+        return law.scale, law.end_length_m, bulk, per_length
+    return 1.0, 0.0, 0.0, per_length_force(c.normal_law, laws_data, deltas, joint,
+                                           f"{source}: clearance_joints.normal_law")
+
+
+def sliced_parts(c, deltas, laws_data, source):
+    """(the law, its per-length law f (N/m) at deltas) of a clearance joint's
+    `sliced:<group>` law; one InputError line for an unknown group, a joint too short for
+    the end lengths, or radii other than those of a law on its section's FE curve. The
+    per-length law takes the materials and law length it was calibrated with (the scene's
+    radii: the clearance is the joint's own)."""
+    name = c.normal_law.split(":", 1)[1]
+    if name not in laws_data.sliced:
+        raise InputError(f"{source}: clearance_joints.normal_law: {c.normal_law!r} is not a "
+                         "3D law of the laws file; valid: "
+                         f"{', '.join('sliced:' + k for k in laws_data.sliced) or 'none (no 3D curves)'}")
+    law = laws_data.sliced[name]
+    if c.length + 2 * law.end_length_m <= 0:
+        raise InputError(f"{source}: clearance_joints.length: {c.length:g} m is too short for "
+                         f"{c.normal_law!r}, whose end lengths ({law.end_length_m:.3g} m each) "
+                         "leave no length to carry the load")
+    if law.section is None:
+        calibrated_joint = law.joint.joint(c.bearing_radius, c.journal_radius)
+        return law, per_length_force(law.per_length_law, laws_data, deltas, calibrated_joint,
+                                     f"{source}: laws file: sliced.{name}.per_length_law")
+    # the 2D FE curve of the calibrated section: valid for its own radii only
+    if not (math.isclose(c.bearing_radius, law.joint.r_bore, rel_tol=1e-9)
+            and math.isclose(c.journal_radius, law.joint.r_pin, rel_tol=1e-9)):
+        raise InputError(
+            f"{source}: clearance_joints.bearing_radius, journal_radius: {c.normal_law!r} is "
+            f"built on the FE curve of its own section (radii {law.joint.r_bore:g} m and "
+            f"{law.joint.r_pin:g} m); use those radii, or a sliced law calibrated with "
+            "--per-length calibrated:<law>")
+    return law, law.section.force(deltas)
+
+
+def per_length_force(name, laws_data, deltas, joint, where) -> np.ndarray:
+    """P(d) (N/m) of a per-length law of the laws file (calibrated:<law>) or a published one;
+    `where` names the key that gave `name` in the one-line error for an unknown law."""
+    if not name.startswith("calibrated:"):
+        if name not in elastic.PUBLISHED:
+            raise InputError(f"{where}: {name!r} is not a published law; valid: "
+                             f"{', '.join(elastic.PUBLISHED)}")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the range is enforced by the table (NaN beyond it)
+            return elastic.PUBLISHED[name](deltas, joint)
+    law = name.split(":", 1)[1]
+    fitted = laws_data.fitted()
+    if law not in fitted:
+        raise InputError(f"{where}: {name!r} is not a fitted law of the laws file; valid: "
+                         f"calibrated:{', calibrated:'.join(fitted)}")
+    return fitted[law].force(law, deltas, joint)
+
+
+def laws_path(scene, base: Path) -> Path | None:
+    """Where the scene's laws file is (relative to the scene's folder `base`), if it has one."""
+    if scene.laws_file is None:
+        return None
+    return (base / scene.laws_file) if not Path(scene.laws_file).is_absolute() else Path(scene.laws_file)
+
+
+def laws_file(scene, base: Path, source: str) -> lawsfile.LawsFile | None:
+    """The scene's laws file, validated."""
+    path = laws_path(scene, base)
+    return None if path is None else lawsfile.read(path, f"{source}: laws_file: {path}")
+
+
+# ---- the translational clearance joint (a slider in its guide), for both kinds
+def translational_frames(geometry, c):
+    """The guide's axis u and face normal n (guide frame) and the slider's axis and normal
+    (slider frame), unit; in the plane each normal is its axis turned a quarter turn."""
+    frames = []
+    for axis, normal in ((c.bearing_axis, getattr(c, "bearing_normal", None)),
+                         (c.journal_axis, getattr(c, "journal_normal", None))):
+        u = np.array(unit_axis(axis, "axis"))
+        n = np.array([-u[1], u[0]]) if normal is None else np.array(unit_axis(normal, "normal"))
+        frames.append((u, n))
+    return frames
+
+
+def translational_contacts(geometry, c) -> list[dict]:
+    """The four corners of a slider, each a PLANE contact against the guide's face on its
+    side: the corner s0 + e a u_s + s b n_s (slider frame) at delta = s n_g.(X - P_g) - (b + c)."""
+    (_, n_g), (u_s, n_s) = translational_frames(geometry, c)
+    s0 = np.array(c.journal_point, float)
+    out = []
+    for end, side in CORNERS:
+        corner = s0 + end * c.half_length * u_s + side * c.half_width * n_s
+        out.append({CONTACT_KIND: PLANE, CONTACT_BEARING_BODY: geometry.index[c.bearing_body],
+                    CONTACT_JOURNAL_BODY: geometry.index[c.journal_body],
+                    CONTACT_BEARING_POINT: list(c.bearing_point), CONTACT_BEARING_AXIS: list(n_g),
+                    CONTACT_JOURNAL_POINT: list(corner), CONTACT_SIDE: side,
+                    CONTACT_CLEARANCE: c.half_width + c.clearance, CONTACT_AT_CONTACT: 1.0})
+    return out
+
+
+def translational_closing(geometry, c) -> list:
+    """The ideal guide that closes a translational joint: the slider's centre on the guide's
+    axis (a dot-2 on the face normal) and its axis along the guide's (a dot-1: the slider's
+    axis normal to the face normal); the rest of its motion is left to the other joints."""
+    (_, n_g), (u_s, _) = translational_frames(geometry, c)
+    bi, bj = geometry.index[c.bearing_body], geometry.index[c.journal_body]
+    pad = [0.0] * (3 - len(n_g))
+    return [row(PRIMITIVE_COLUMNS, {PRIM_KIND: DOT2, PRIM_BODY_I: bi, PRIM_BODY_J: bj,
+                                    PRIM_S_I: list(c.bearing_point) + pad, PRIM_A_I: list(n_g) + pad,
+                                    PRIM_S_J: list(c.journal_point) + pad}),
+            row(PRIMITIVE_COLUMNS, {PRIM_KIND: DOT1, PRIM_BODY_I: bi, PRIM_BODY_J: bj,
+                                    PRIM_A_I: list(n_g) + pad, PRIM_B_J: list(u_s) + pad})]
+
+
+def corner_force(c, deltas) -> np.ndarray:
+    """The elastic force (N) of a slider's corner on its guide's face at the penetrations
+    `deltas`: "hertz_point", a sphere of the corner's radius r on a flat,
+    F = (4/3) E* sqrt(r) delta^1.5 ([Johnson1985] sec. 4.2, the point law's limit of an
+    infinite bearing radius), or "power", F = stiffness delta^exponent; NaN beyond a tenth
+    of the slider's half-width (the run has blown up there). Rigid impacts: no law."""
+    if c.impact != "continuous":
+        return np.full(deltas.size, np.nan)
+    if c.normal_law == "hertz_point":
+        force = elastic.hertz_flat(deltas, c.corner_radius, c.effective_modulus())
+    else:
+        force = c.stiffness * deltas ** c.exponent
+    force = np.array(force, float)
+    force[deltas > BLOW_UP_FRACTION * c.half_width] = np.nan
+    return force
+
+
+# ---- torsion, connectivity, the fixed step
+def torsion_rows(geometry, scene) -> np.ndarray:
+    """Torsion springs, stops and latches: the law's columns, and the kind's vectors and free
+    angle (geometry.torsion: the relative angle measured from the initial configuration)."""
+    rows = [row(TORSION_COLUMNS, {
+        TORSION_BODY_I: geometry.index[t.body_i], TORSION_BODY_J: geometry.index[t.body_j],
+        TORSION_STIFFNESS: t.stiffness, TORSION_DAMPING: t.damping,
+        TORSION_KIND: TORSION_KINDS[t.type]} | geometry.torsion(t)) for t in scene.torsion]
+    return np.array(rows, float).reshape(-1, TORSION_COLUMNS)
+
+
+def check_connected(scene, names) -> None:
+    """Every body must be linked to the others (through joints, clearance joints, torsion
+    elements, the drive, the ground)."""
+    links = {name: set() for name in names + [GROUND]}
+    pairs = []
+    for j in scene.joints:
+        pairs.append((j.body, GROUND) if getattr(j, "type", None) == "prismatic" and hasattr(j, "body")
+                     else (j.body_i, j.body_j))
+    pairs += [(c.bearing_body, c.journal_body) for c in clearance_joints(scene)]
+    pairs += [(t.body_i, t.body_j) for t in scene.torsion]
+    if scene.drive is not None and hasattr(scene.drive, "body"):
+        pairs.append((scene.drive.body, GROUND))
+    for a, b in pairs:
+        links[a].add(b)
+        links[b].add(a)
+    start = names[0]
+    seen, todo = {start}, [start]
+    while todo:
+        for other in links[todo.pop()] - seen:
+            seen.add(other)
+            todo.append(other)
+    lost = [n for n in names if n not in seen]
+    if lost:
+        raise InputError(f"bodies: {', '.join(lost)} not connected to {start} by any joint "
+                         "(disconnected mechanism)")
+
+
+def shortest_period(model: Model) -> float:
+    """The shortest natural period 2 pi sqrt(m / k) (s) of the scene's compliant elements, inf
+    if it has none. A continuous contact: m the reduced mass of its two bodies, k the secant
+    stiffness F(d)/d of its normal law at a penetration d equal to the clearance (the deepest
+    a clean run reaches, reduced.mechanism.verdict; the stiffest point of a hardening law).
+    A torsion element: the reduced inertia of its bodies about its axis and its stiffness."""
+    geometry = model.kind.bodies().Geometry(model.scene, {n: i for i, n in enumerate(model.names)}
+                                            | {GROUND: -1}, "")
+    masses = model.base.masses
+
+    def reduced(i, j, inverse):
+        total = sum(inverse(int(b)) for b in (i, j) if b >= 0)
+        return 1 / total if total > 0 else math.inf
+    periods = []
+    deltas = np.exp(model.base.grid_log0 + model.base.grid_step * np.arange(model.base.tables.shape[1]))
+    for c, rows in zip(model.joints, model.contact_rows):
+        if c.impact != "continuous":
+            continue
+        k = rows[0]
+        table = model.base.tables[int(model.contacts[k, CONTACT_TABLE])]
+        reach = np.isfinite(table) & (deltas <= model.contacts[k, CONTACT_CLEARANCE])
+        if reach.any():
+            d = deltas[reach][-1]
+            stiffness = math.exp(table[reach][-1]) / d
+            if int(model.contacts[k, CONTACT_KIND]) == SLICED:   # a per-length law over the bore
+                stiffness *= model.contacts[k, layout.CONTACT_LENGTH] * model.contacts[k, layout.CONTACT_SCALE]
+            periods.append(2 * math.pi * math.sqrt(reduced(
+                model.contacts[k, CONTACT_BEARING_BODY], model.contacts[k, CONTACT_JOURNAL_BODY],
+                lambda b: 1 / masses[b]) / stiffness))
+    for t in model.torsion:
+        if t[TORSION_STIFFNESS] > 0:
+            periods.append(2 * math.pi * math.sqrt(reduced(
+                t[TORSION_BODY_I], t[TORSION_BODY_J], lambda b: geometry.inverse_inertia(b, t))
+                / t[TORSION_STIFFNESS]))
+    return min(periods, default=math.inf)
+
+
+def fixed_step(model: Model, source: str = "scene") -> float:
+    """The step of dopri5_fixed (s): the scene's integrator.fixed_step, or 1/300 of the shortest
+    period. Without event location the error depends on where the steps fall against a contact
+    onset: on the Flores slider-crank (period 47.5 us) the first peak force is 0.1-2.5 % off at
+    T/100 and within 0.2 % at five steps around T/300 (0.16 us; 1e-8-rtol DOPRI5 as reference);
+    max_step when the scene has no compliant element. One InputError line when the derived
+    step would need more than MAX_STEPS steps, or when a clearance joint has rigid impacts
+    (no period: the step must be given)."""
+    s = model.scene.integrator
+    if s.fixed_step is not None:
+        return s.fixed_step
+    rigid = [c.name for c in model.joints if c.impact != "continuous"]
+    if rigid:
+        raise InputError(f"{source}: integrator.fixed_step: required by method = 'dopri5_fixed' "
+                         f"with rigid impacts ({', '.join(rigid)}): they have no contact period "
+                         "to derive a step from")
+    step = min(shortest_period(model) / STEPS_PER_PERIOD, s.max_step)
+    if model.scene.duration / step > MAX_STEPS:
+        raise InputError(f"{source}: integrator.fixed_step: the default fixed step {step:.3g} s "
+                         f"(1/300 of the shortest contact or torsion period) needs "
+                         f"{model.scene.duration / step:.3g} steps, more than {MAX_STEPS:.0e}: "
+                         "use method = 'dopri5' or a shorter duration")
+    return step
+

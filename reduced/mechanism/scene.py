@@ -1,0 +1,725 @@
+"""Mechanism scenes, SI units: `kind = "reduced"`, a planar mechanism (vectors [x, y], bodies
+of mass and inertia, angles in degrees), and `kind = "spatial"`, a spatial one (vectors
+[x, y, z], 3 x 3 inertia tensors, orientations as Euler parameters or rotation matrices).
+What the two share is written once here: the contact laws of a clearance joint and its
+materials, the friction laws, the translational clearance joint, torsion springs, stops and
+latches, the integrator, the outputs, and the rules across a scene (names, run size).
+
+Body positions, angles and velocities are initial guesses for the centres of mass; pinbore
+makes them consistent with the joints before integrating (a clearance joint starts closed
+unless it starts "placed"). Points and axes of a body are in its own frame (origin at its
+centre of mass), those of the ground global. Validating a scene needs neither numba nor
+DOLFINx: a bad scene costs a fraction of a second.
+"""
+
+import math
+from typing import Annotated, Literal
+
+import numpy as np
+import pydantic
+
+from pinbore.core.scene import Strict
+from pinbore.laws import elastic
+from pinbore.laws.elastic import PUBLISHED
+
+GROUND = "ground"
+# What a run may ask for, refused at validation when exceeded: it could not finish (the
+# integrator stops at MAX_STEPS; a fixed step needs duration / max_step of them) or would not
+# fit in memory (every sample is a row of timeseries.csv).
+MAX_STEPS = 5_000_000
+MAX_SAMPLES = 2_000_000
+ELASTIC_LAWS = ["hertz_point"] + sorted(PUBLISHED)
+# the hysteresis laws of pinbore.laws.dissipative.HYSTERESIS by name (that module compiles
+# with numba, which validating a scene must not load; a test holds the two lists equal)
+HYSTERESIS_LAWS = ("flores", "gonthier", "herbert_mcwhannell", "hu_guo", "hunt_crossley",
+                   "lankarani_nikravesh", "lee_wang", "zhiying_qishao")
+DAMPING_LAWS = ["none", *HYSTERESIS_LAWS, "calibrated"]   # calibrated: laws file
+FILE_LAWS = ("calibrated:", "sliced:")   # normal laws read from the scene's laws file
+CORNER_LAWS = ["hertz_point", "power"]   # a slider's corner on its guide's face
+UNIT = 1e-9   # how far from unit length (or orthonormal) rotation data may be
+
+Vector = Annotated[list[float], pydantic.Field(min_length=2, max_length=2)]
+Vector3 = Annotated[list[float], pydantic.Field(min_length=3, max_length=3)]
+Quaternion = Annotated[list[float], pydantic.Field(min_length=4, max_length=4)]
+Matrix3 = Annotated[list[Vector3], pydantic.Field(min_length=3, max_length=3)]
+
+
+def unit_axis(v, key):
+    """v (a nonzero axis) normalised; one rule line otherwise."""
+    n = math.sqrt(sum(c * c for c in v))
+    if n == 0:
+        raise ValueError(f"{key}: an axis must have nonzero length")
+    return [c / n for c in v]
+
+
+def rotation_matrix(p) -> np.ndarray:
+    """A(p) of unit Euler parameters p = (e0, e1, e2, e3) ([Nikravesh1988] ch. 6), in the
+    operations of the spatial body kind's compiled A(p) (reduced.mechanism.spatial.rotation),
+    so that both give the same numbers."""
+    e0, e1, e2, e3 = (float(c) for c in p)
+    a = np.array([[e0 * e0 + e1 * e1 - 0.5, e1 * e2 - e0 * e3, e1 * e3 + e0 * e2],
+                  [e1 * e2 + e0 * e3, e0 * e0 + e2 * e2 - 0.5, e2 * e3 - e0 * e1],
+                  [e1 * e3 - e0 * e2, e2 * e3 + e0 * e1, e0 * e0 + e3 * e3 - 0.5]])
+    return a * 2.0
+
+
+# ---- friction laws, a clearance joint's contact laws and materials (both kinds)
+class Regularised(Strict):
+    """Below v0 the friction force vanishes, between v0 and v1 it grows linearly to its full
+    value [Ambrosio2003]: the static laws need it to be continuous at zero slip."""
+
+    v0: float = pydantic.Field(default=1e-4, gt=0, description="m/s")
+    v1: float = pydantic.Field(default=1e-3, gt=0, description="m/s")
+
+    @pydantic.model_validator(mode="after")
+    def _speeds(self):
+        if self.v1 <= self.v0:
+            raise ValueError("v1 must exceed v0")
+        return self
+
+
+class CoulombFriction(Regularised):
+    """F_t = mu c_d(|v|) F_n (Ambrosio's regularised Coulomb)."""
+
+    law: Literal["coulomb_ambrosio"]
+    mu: float = pydantic.Field(ge=0)
+
+
+class StribeckFriction(Regularised):
+    """Polynomial Stribeck ([ThomsenFidlin2003]; [Cao2013] eq. 14): mu_static at rest, mu_min at |v| = v_min."""
+
+    law: Literal["stribeck"]
+    mu_static: float = pydantic.Field(ge=0)
+    mu_min: float = pydantic.Field(ge=0)
+    v_min: float = pydantic.Field(gt=0, description="m/s")
+
+
+class LinearFriction(Regularised):
+    """mu = mu_static + alpha |v| ([Cao2013] eq. 15)."""
+
+    law: Literal["linear"]
+    mu_static: float = pydantic.Field(ge=0)
+    alpha: float = pydantic.Field(ge=0, description="s/m")
+
+
+class LuGreFriction(Strict):
+    """LuGre normalised by the normal force: F_t = F_n (sigma0 z + sigma1 z' + sigma2 v),
+    z' = v - sigma0 |v| z / g(v), g = mu_coulomb + (mu_static - mu_coulomb) exp(-(v/v_s)^2).
+    Both coefficients > 0 (g divides the bristle rate); a joint without friction has no
+    friction table. In space z is a vector along the contact's tangent plane."""
+
+    law: Literal["lugre"]
+    mu_coulomb: float = pydantic.Field(gt=0)
+    mu_static: float = pydantic.Field(gt=0)
+    stribeck_speed: float = pydantic.Field(gt=0, description="m/s")
+    sigma0: float = pydantic.Field(gt=0, description="1/m")
+    sigma1: float = pydantic.Field(default=0.0, ge=0, description="s/m")
+    sigma2: float = pydantic.Field(default=0.0, ge=0, description="s/m")
+
+
+class DahlFriction(Strict):
+    """Dahl ([Dahl1976]; [Cao2013] eq. 16, alpha = 1) normalised by the normal force: F_t = F_n m,
+    m' = sigma (1 - (m / mu) sgn v) v."""
+
+    law: Literal["dahl"]
+    mu: float = pydantic.Field(gt=0)
+    sigma: float = pydantic.Field(gt=0, description="1/m")
+
+
+class IwanFriction(Strict):
+    """Bilinear Iwan element ([Iwan1966]; [Cao2013] eq. 13) along the contact: a spring k1 in series with a
+    Coulomb slider of strength mu F_n, in parallel with a spring k2; it starts unloaded at
+    every new contact. For joints that oscillate rather than turn (k2 resists travel)."""
+
+    law: Literal["iwan_bilinear"]
+    mu: float = pydantic.Field(ge=0)
+    k1: float = pydantic.Field(gt=0, description="N/m")
+    k2: float = pydantic.Field(default=0.0, ge=0, description="N/m")
+
+
+Friction = Annotated[CoulombFriction | StribeckFriction | LinearFriction | LuGreFriction
+                     | DahlFriction | IwanFriction, pydantic.Field(discriminator="law")]
+
+
+class ContactLaw(Strict):
+    """How a clearance joint's contacts carry their load. `impact = "continuous"`: the normal
+    law (`normal_law`) and the damping law (`damping_law`, with the target `restitution`; or
+    "calibrated": the laws file's e(v0)) act while a contact penetrates, and friction
+    (`friction`) against its slip; "newton" / "poisson": rigid, frictionless impacts with
+    restitution `restitution`, and below `rest_speed` (approach rate x restitution) the
+    contact is held until it would pull (the three-state model)."""
+
+    normal_law: str | None = None
+    damping_law: str = "none"
+    restitution: float = pydantic.Field(default=1.0, ge=0, le=1)
+    friction: Friction | None = None
+    impact: Literal["continuous", "newton", "poisson"] = "continuous"
+    rest_speed: float = pydantic.Field(default=1e-3, gt=0, description="m/s")
+
+    @pydantic.model_validator(mode="after")
+    def _law(self):
+        if self.impact != "continuous":
+            if self.friction is not None or self.normal_law is not None or self.damping_law != "none":
+                raise ValueError(f"impact = {self.impact!r} is a rigid, frictionless impact model: "
+                                 "give no normal_law, damping_law or friction")
+            return self
+        if self.normal_law is None:
+            raise ValueError("normal_law is required by impact = 'continuous'")
+        if self.restitution == 0 and self.damping_law not in ("none", "calibrated"):
+            raise ValueError("restitution must be > 0 for a continuous damping law")
+        if self.damping_law not in DAMPING_LAWS:
+            raise ValueError(f"damping_law {self.damping_law!r} is unknown; valid: "
+                             f"{', '.join(DAMPING_LAWS)}")
+        return self
+
+
+class JointMaterials(Strict):
+    """The radii and elastic constants of a revolute, cylindrical or spherical clearance
+    joint: what its elastic law and its calibrated restitution (damping_law = "calibrated",
+    matched on these in the laws file) are chosen by."""
+
+    bearing_radius: float = pydantic.Field(gt=0)
+    journal_radius: float = pydantic.Field(gt=0)
+    length: float | None = pydantic.Field(default=None, gt=0,
+                                          description="axial length (m): per-length laws x L")
+    E: float = pydantic.Field(gt=0, description="Pa, the journal's (and the bearing's unless "
+                                               "bearing_E is given)")
+    nu: float = pydantic.Field(gt=-1, lt=0.5)
+    bearing_E: float | None = pydantic.Field(default=None, gt=0, description="Pa; default E")
+    bearing_nu: float | None = pydantic.Field(default=None, gt=-1, lt=0.5, description="default nu")
+
+    def gap(self) -> float:
+        """The radial clearance c = R_b - R_j (m)."""
+        return self.bearing_radius - self.journal_radius
+
+    def elastic_joint(self) -> elastic.Joint:
+        """The joint of the elastic laws: radii, the bearing's and the journal's E and nu."""
+        return elastic.Joint(self.bearing_radius, self.journal_radius,
+                             self.E if self.bearing_E is None else self.bearing_E,
+                             self.nu if self.bearing_nu is None else self.bearing_nu,
+                             self.E, self.nu, self.length)
+
+    @pydantic.model_validator(mode="after")
+    def _fits(self):
+        if self.journal_radius >= self.bearing_radius:
+            raise ValueError("journal_radius must be smaller than bearing_radius (the journal "
+                             "must fit its bore: clearance > 0)")
+        return self
+
+
+def check_normal_law(law: str) -> None:
+    """A normal law of the library or of the laws file."""
+    if not (law in ELASTIC_LAWS or law.startswith(FILE_LAWS)):
+        raise ValueError(f"normal_law {law!r} is unknown; valid: {', '.join(ELASTIC_LAWS)}, "
+                         "calibrated:<law in laws.json>, sliced:<3D law in laws.json>")
+
+
+def translational_joint(vector):
+    """The translational clearance joint of a planar (`vector` of 2) or spatial (3) scene."""
+    space = vector is Vector3
+
+    class TranslationalJoint(ContactLaw):
+        """A slider (on journal_body) in a guide (on bearing_body) with clearance: a rectangle
+        of half-length a along its axis and half-width b across it, between the guide's two
+        faces at b + c on either side of the guide's axis (through bearing_point, along
+        bearing_axis; in space the faces are normal to bearing_normal). Its four corners
+        meet the face on their side through the contact laws, each a contact of its own:
+        normal_law "hertz_point" (a corner rounded to corner_radius on a flat face:
+        F = (4/3) E* sqrt(r) delta^1.5, E* of the slider's and the guide's E and nu) or
+        "power" (F = stiffness delta^exponent), or rigid impacts. The slider's centre
+        (journal_point) and its axis (journal_axis; in space journal_normal across it) are
+        in its own frame. It starts centred and aligned (start "ideal": moving with the ideal
+        prismatic joint; "free": velocities as given) or where the bodies put it ("placed")."""
+
+        name: str
+        type: Literal["translational"] = "translational"
+        bearing_body: str
+        bearing_point: vector
+        bearing_axis: vector
+        journal_body: str
+        journal_point: vector = [0.0] * (3 if space else 2)
+        journal_axis: vector
+        if space:
+            bearing_normal: Vector3
+            journal_normal: Vector3
+        half_length: float = pydantic.Field(gt=0, description="m, a")
+        half_width: float = pydantic.Field(gt=0, description="m, b")
+        clearance: float = pydantic.Field(gt=0, description="m, c: the gap on each side, centred")
+        E: float | None = pydantic.Field(default=None, gt=0, description="Pa, the slider's (hertz_point)")
+        nu: float | None = pydantic.Field(default=None, gt=-1, lt=0.5)
+        bearing_E: float | None = pydantic.Field(default=None, gt=0, description="Pa; default E")
+        bearing_nu: float | None = pydantic.Field(default=None, gt=-1, lt=0.5)
+        corner_radius: float | None = pydantic.Field(default=None, gt=0, description="m (hertz_point)")
+        stiffness: float | None = pydantic.Field(default=None, gt=0, description="N/m^exponent (power)")
+        exponent: float = pydantic.Field(default=1.5, ge=1, le=3)
+        start: Literal["ideal", "free", "placed"] = "ideal"
+
+        @pydantic.model_validator(mode="after")
+        def _geometry(self):
+            unit_axis(self.bearing_axis, "bearing_axis")
+            unit_axis(self.journal_axis, "journal_axis")
+            if space:
+                for axis, normal in (("bearing_axis", "bearing_normal"), ("journal_axis", "journal_normal")):
+                    u, n = unit_axis(getattr(self, axis), axis), unit_axis(getattr(self, normal), normal)
+                    if abs(np.dot(u, n)) > 1e-9:
+                        raise ValueError(f"{normal}: must be normal to {axis}")
+            if self.impact != "continuous":
+                return self
+            if self.normal_law not in CORNER_LAWS:
+                raise ValueError(f"normal_law {self.normal_law!r} is not a law of a corner on a "
+                                 f"face; valid: {', '.join(CORNER_LAWS)}")
+            if self.damping_law == "calibrated":
+                raise ValueError("damping_law 'calibrated' is the laws file's e(v0) of a pin in a "
+                                 "bore, not of a slider's corner on a face")
+            needs = {"hertz_point": ("corner_radius", "E", "nu"), "power": ("stiffness",)}[self.normal_law]
+            missing = [key for key in needs if getattr(self, key) is None]
+            if missing:
+                raise ValueError(f"{', '.join(missing)} required by normal_law {self.normal_law!r}")
+            return self
+
+        def gap(self) -> float:
+            """The clearance c on each side (m)."""
+            return self.clearance
+
+        def effective_modulus(self) -> float:
+            """E* of the slider's and the guide's materials (Pa)."""
+            e_b = self.E if self.bearing_E is None else self.bearing_E
+            nu_b = self.nu if self.bearing_nu is None else self.bearing_nu
+            return 1.0 / ((1 - self.nu ** 2) / self.E + (1 - nu_b ** 2) / e_b)
+
+    return TranslationalJoint
+
+
+class Integrator(Strict):
+    """dopri5: explicit, adaptive, contact onsets located (the default); rosenbrock23: linearly
+    implicit and L-stable (Shampine-Reichelt), for stiff contact laws or springs;
+    dopri5_fixed: the step fixed_step throughout, no error control or event location (only for
+    comparing against); without fixed_step, 1/300 of the shortest contact or torsion period
+    of the scene (reduced.mechanism.model.fixed_step)."""
+
+    method: Literal["dopri5", "rosenbrock23", "dopri5_fixed"] = "dopri5"
+    rtol: float = pydantic.Field(default=1e-6, gt=0, lt=1)
+    atol: float = pydantic.Field(default=1e-9, gt=0)
+    max_step: float = pydantic.Field(default=1e-4, gt=0, description="s, the adaptive methods' bound")
+    fixed_step: float | None = pydantic.Field(default=None, gt=0, description="s, dopri5_fixed only")
+    baumgarte: float = pydantic.Field(default=50.0, gt=0, description="1/s")
+
+    @pydantic.model_validator(mode="after")
+    def _fixed_step(self):
+        if self.fixed_step is not None and self.method != "dopri5_fixed":
+            raise ValueError(f"fixed_step is used by method = 'dopri5_fixed' only, not {self.method!r}")
+        return self
+
+
+class Output(Strict):
+    sample_time: float = pydantic.Field(default=2e-5, gt=0, description="s between samples")
+    plots: bool = True
+
+
+def check_fixed_steps(duration: float, step: float) -> None:
+    """Refuse a fixed step that needs more than MAX_STEPS steps over the duration."""
+    steps = duration / step
+    if steps > MAX_STEPS:
+        raise ValueError(f"integrator.fixed_step: a fixed step of {step:.3g} s needs {steps:.3g} "
+                         f"steps, more than {MAX_STEPS:.0e}: a longer step or a shorter duration")
+
+
+def check_run_size(scene) -> None:
+    """Refuse a run that would not fit in memory (samples) or could not finish (fixed steps)."""
+    samples = scene.duration / scene.output.sample_time
+    if samples > MAX_SAMPLES:
+        raise ValueError(f"output.sample_time: {samples:.3g} samples over the duration, more "
+                         f"than {MAX_SAMPLES:.0e}: sample less often or shorten the duration")
+    if scene.integrator.fixed_step is not None:
+        check_fixed_steps(scene.duration, scene.integrator.fixed_step)
+
+
+def check_names(scene, used) -> None:
+    """Body names unique and not the ground; every (name, key) of `used` a body or the ground;
+    clearance and named joints named once each; a laws file where a law needs one."""
+    names = [b.name for b in scene.bodies]
+    if len(set(names)) != len(names) or GROUND in names:
+        raise ValueError(f"bodies: names must be unique and not {GROUND!r}")
+    known = set(names) | {GROUND}
+    for name, key in used:
+        if name not in known:
+            raise ValueError(f"{key}: unknown body {name!r}; bodies: {', '.join(sorted(known))}")
+        if name == GROUND and key in ("drive.body", "joints.body"):
+            raise ValueError(f"{key}: must be a moving body, not {GROUND!r}")
+    joints = [c.name for c in clearance_joints(scene)]
+    twice = sorted({n for n in joints if joints.count(n) > 1})
+    if twice:
+        raise ValueError(f"clearance_joints, translational_joints: names must be unique "
+                         f"({', '.join(twice)} given twice): each names its outputs")
+    named = [j.name for j in scene.joints if getattr(j, "name", None)]
+    twice = sorted({n for n in named if named.count(n) > 1})
+    if twice:
+        raise ValueError(f"joints: names must be unique ({', '.join(twice)} given twice): a drive "
+                         "names the joint it turns")
+    laws = [c for c in scene.clearance_joints if c.impact == "continuous"]
+    if any(c.normal_law.startswith(FILE_LAWS) for c in laws) and scene.laws_file is None:
+        raise ValueError("laws_file is required by a calibrated:<law> or sliced:<law> normal law")
+    if any(c.damping_law == "calibrated" for c in laws) and scene.laws_file is None:
+        raise ValueError("laws_file is required by damping_law = 'calibrated'")
+
+
+def clearance_joints(scene) -> list:
+    """The scene's clearance joints: revolute, cylindrical, spherical, then translational."""
+    return list(scene.clearance_joints) + list(scene.translational_joints)
+
+
+def body_references(scene) -> list[tuple[str, str]]:
+    """(body name, key) of every body the clearance joints and torsion elements name."""
+    used = [(c.bearing_body, f"{table}.bearing_body") for table in ("clearance_joints", "translational_joints")
+            for c in getattr(scene, table)]
+    used += [(c.journal_body, f"{table}.journal_body") for table in ("clearance_joints", "translational_joints")
+             for c in getattr(scene, table)]
+    used += [(t.body_i, "torsion.body_i") for t in scene.torsion]
+    used += [(t.body_j, "torsion.body_j") for t in scene.torsion]
+    return used
+
+
+# ---- planar scenes (kind = "reduced")
+class Body(Strict):
+    name: str
+    mass: float = pydantic.Field(gt=0, description="kg")
+    inertia: float = pydantic.Field(gt=0, description="kg m^2 about the centre of mass")
+    position: Vector = [0.0, 0.0]
+    angle_deg: float = 0.0
+    velocity: Vector = [0.0, 0.0]
+    omega: float = 0.0
+
+
+class Revolute(Strict):
+    """Ideal pin between point_i of body_i and point_j of body_j (points in body frames;
+    on the ground, in the global frame)."""
+
+    type: Literal["revolute"]
+    body_i: str
+    point_i: Vector
+    body_j: str
+    point_j: Vector
+
+
+class Prismatic(Strict):
+    """The body slides along a fixed line through axis_point with direction axis_deg,
+    without rotating; `point` (body frame) stays on the line."""
+
+    type: Literal["prismatic"]
+    body: str
+    point: Vector = [0.0, 0.0]
+    axis_point: Vector = [0.0, 0.0]
+    axis_deg: float = 0.0
+
+
+class Drive(Strict):
+    """Constant angular speed of a body: angle = angle0 + omega t."""
+
+    body: str
+    speed_rpm: float
+    angle0_deg: float = 0.0
+
+
+class ClearanceJoint(JointMaterials, ContactLaw):
+    """A revolute joint with radial clearance: the journal (on journal_body) moves freely
+    inside the bearing (on bearing_body) and meets its wall through the contact laws."""
+
+    name: str
+    type: Literal["revolute"] = "revolute"
+    bearing_body: str
+    bearing_point: Vector
+    journal_body: str
+    journal_point: Vector
+    # ideal: centred, moving with the ideal joint; free: centred, velocities as given;
+    # placed: where the bodies' positions put it, velocities as given
+    start: Literal["ideal", "free", "placed"] = "ideal"
+
+    @pydantic.model_validator(mode="after")
+    def _normal_law(self):
+        if self.impact != "continuous":
+            return self
+        check_normal_law(self.normal_law)
+        if self.normal_law != "hertz_point" and self.length is None:
+            raise ValueError(f"length is required by normal_law {self.normal_law!r} (a force per "
+                             "unit length)")
+        return self
+
+
+class TorsionSpring(Strict):
+    """A torque between two bodies on their relative angle phi = phi_j - phi_i (deg from the
+    initial configuration): spring  T = -k (phi - free_angle) - c phi'  on body j (and -T on
+    i); stop: the same only while phi > free_angle, and never pulling; latch: nothing until
+    phi first passes free_angle, then the spring-damper both ways (a catch that holds)."""
+
+    type: Literal["spring", "stop", "latch"]
+    body_i: str
+    body_j: str
+    stiffness: float = pydantic.Field(ge=0, description="N m / rad")
+    damping: float = pydantic.Field(default=0.0, ge=0, description="N m s / rad")
+    free_angle_deg: float = 0.0
+
+
+TranslationalJoint = translational_joint(Vector)
+
+
+class MechanismScene(Strict):
+    """What a mechanism scene of every kind has: its duration, laws file, integrator and
+    outputs (a kind's scene adds its bodies, joints, drive, clearance joints, torsion)."""
+
+    duration: float = pydantic.Field(gt=0)
+    laws_file: str | None = None
+    integrator: Integrator = Integrator()
+    output: Output = Output()
+
+    @pydantic.model_validator(mode="after")
+    def _bounded(self):
+        check_run_size(self)
+        return self
+
+
+class ReducedScene(MechanismScene):
+    kind: Literal["reduced"]
+    gravity: Vector = [0.0, 0.0]
+    bodies: list[Body] = pydantic.Field(min_length=1)
+    joints: list[Revolute | Prismatic] = []
+    drive: Drive | None = None
+    clearance_joints: list[ClearanceJoint] = []
+    translational_joints: list[TranslationalJoint] = []
+    torsion: list[TorsionSpring] = []
+
+    @pydantic.model_validator(mode="after")
+    def _names(self):
+        used = [(j.body_i, "joints.body_i") for j in self.joints if j.type == "revolute"]
+        used += [(j.body_j, "joints.body_j") for j in self.joints if j.type == "revolute"]
+        used += [(j.body, "joints.body") for j in self.joints if j.type == "prismatic"]
+        used += body_references(self)
+        if self.drive:
+            used.append((self.drive.body, "drive.body"))
+        check_names(self, used)
+        return self
+
+
+# ---- spatial scenes (kind = "spatial")
+class SpatialBody(Strict):
+    """A rigid body in space. Orientation: `orientation` (Euler parameters [e0, e1, e2, e3],
+    unit) or `rotation` (a 3 x 3 rotation matrix, rows), one or neither (identity). Inertia:
+    the 3 x 3 tensor about the centre of mass in the body frame (symmetric, positive definite,
+    its principal moments obeying the triangle inequality J1 + J2 >= J3)."""
+
+    name: str
+    mass: float = pydantic.Field(gt=0, description="kg")
+    inertia: Matrix3 = pydantic.Field(description="kg m^2, about the centre of mass, body frame")
+    position: Vector3 = [0.0, 0.0, 0.0]
+    orientation: Quaternion | None = None
+    rotation: Matrix3 | None = None
+    velocity: Vector3 = [0.0, 0.0, 0.0]
+    omega: Vector3 = pydantic.Field(default=[0.0, 0.0, 0.0], description="rad/s, global frame")
+
+    @pydantic.model_validator(mode="after")
+    def _physical(self):
+        j = np.array(self.inertia)
+        if not np.allclose(j, j.T, rtol=0, atol=1e-12 * max(np.abs(j).max(), 1e-300)):
+            raise ValueError("inertia: the tensor must be symmetric")
+        moments = np.linalg.eigvalsh(j)
+        if moments[0] <= 0:
+            raise ValueError(f"inertia: the tensor must be positive definite (principal moments "
+                             f"{', '.join(f'{m:.3g}' for m in moments)})")
+        if moments[0] + moments[1] < moments[2] * (1 - 1e-9):
+            raise ValueError(f"inertia: principal moments {', '.join(f'{m:.3g}' for m in moments)} "
+                             "break the triangle inequality J1 + J2 >= J3 (no rigid body has them)")
+        if self.orientation is not None and self.rotation is not None:
+            raise ValueError("orientation and rotation: give one of them")
+        if self.orientation is not None:
+            norm = math.sqrt(sum(c * c for c in self.orientation))
+            if abs(norm - 1) > UNIT:
+                raise ValueError(f"orientation: Euler parameters must have unit length (|p| = {norm:.12g})")
+        if self.rotation is not None:
+            a = np.array(self.rotation)
+            if np.abs(a @ a.T - np.eye(3)).max() > UNIT or np.linalg.det(a) < 0:
+                raise ValueError("rotation: must be a rotation matrix (orthonormal rows, "
+                                 "determinant +1)")
+        return self
+
+    def parameters(self) -> list[float]:
+        """Euler parameters of the initial orientation."""
+        if self.orientation is not None:
+            return list(self.orientation)
+        if self.rotation is None:
+            return [1.0, 0.0, 0.0, 0.0]
+        a = np.array(self.rotation)
+        # the largest of the four squares first (numerically safe; [Nikravesh1988] sec. 6.3)
+        squares = [(1 + np.trace(a)) / 4, (1 + 2 * a[0, 0] - np.trace(a)) / 4,
+                   (1 + 2 * a[1, 1] - np.trace(a)) / 4, (1 + 2 * a[2, 2] - np.trace(a)) / 4]
+        k = int(np.argmax(squares))
+        e = [0.0] * 4
+        e[k] = math.sqrt(squares[k])
+        pairs = {0: (a[2, 1] - a[1, 2], a[0, 2] - a[2, 0], a[1, 0] - a[0, 1]),
+                 1: (a[2, 1] - a[1, 2], a[1, 0] + a[0, 1], a[0, 2] + a[2, 0]),
+                 2: (a[0, 2] - a[2, 0], a[1, 0] + a[0, 1], a[2, 1] + a[1, 2]),
+                 3: (a[1, 0] - a[0, 1], a[0, 2] + a[2, 0], a[2, 1] + a[1, 2])}
+        others = [i for i in range(4) if i != k]
+        for i, value in zip(others, pairs[k]):
+            e[i] = value / (4 * e[k])
+        return e
+
+
+class Joint(Strict):
+    """An ideal joint between body_i and body_j at point_i = point_j (at the start), axes
+    axis_i, axis_j (revolute, cylindrical, prismatic: the joint axis; universal: the two cross
+    arms, normal to each other; spherical and fixed take none)."""
+
+    name: str | None = None
+    type: Literal["spherical", "revolute", "cylindrical", "prismatic", "universal", "fixed"]
+    body_i: str
+    point_i: Vector3
+    axis_i: Vector3 | None = None
+    body_j: str
+    point_j: Vector3
+    axis_j: Vector3 | None = None
+
+    @pydantic.model_validator(mode="after")
+    def _axes(self):
+        needs = self.type in ("revolute", "cylindrical", "prismatic", "universal")
+        if needs and (self.axis_i is None or self.axis_j is None):
+            raise ValueError(f"axis_i and axis_j are required by a {self.type} joint")
+        if not needs and (self.axis_i is not None or self.axis_j is not None):
+            raise ValueError(f"a {self.type} joint takes no axes")
+        if needs:
+            unit_axis(self.axis_i, "axis_i")
+            unit_axis(self.axis_j, "axis_j")
+        return self
+
+
+class SpatialDrive(Strict):
+    """The relative angle of a revolute or cylindrical joint's bodies about its axis turns at a
+    constant speed from its initial value: angle = speed t."""
+
+    joint: str
+    speed_rpm: float
+
+
+class SpatialClearanceJoint(JointMaterials, ContactLaw):
+    """cylindrical: a journal (axis journal_axis through journal_point) in a bore of `length`
+    (axis bearing_axis through its mid-plane centre bearing_point), sliced into `slices`, with
+    optional shoulders (axial_clearance, axial_stiffness); spherical: a ball (centre
+    journal_point) in a socket (centre bearing_point). The normal law: a per-length law of
+    pinbore.laws.elastic, hertz_point (cylindrical: spread evenly over the length), or
+    calibrated:/sliced: from the laws file; or rigid impacts (a cylindrical journal's two
+    ends, and its shoulders). Radii, length, E, nu, bearing_E, bearing_nu: as in the planar
+    joint (JointMaterials). It starts closed (journal centred and aligned, ball centred:
+    "ideal", moving with the ideal joint, or "free", velocities as given) or where the bodies
+    put it ("placed")."""
+
+    name: str
+    type: Literal["cylindrical", "spherical"]
+    bearing_body: str
+    bearing_point: Vector3
+    bearing_axis: Vector3 | None = None
+    journal_body: str
+    journal_point: Vector3
+    journal_axis: Vector3 | None = None
+    slices: int = pydantic.Field(default=8, ge=1, le=256)
+    axial_clearance: float | None = pydantic.Field(default=None, gt=0, description="m")
+    axial_stiffness: float | None = pydantic.Field(default=None, gt=0, description="N/m")
+    start: Literal["ideal", "free", "placed"] = "ideal"
+
+    @pydantic.model_validator(mode="after")
+    def _geometry(self):
+        if self.type == "cylindrical":
+            if self.bearing_axis is None or self.journal_axis is None or self.length is None:
+                raise ValueError("bearing_axis, journal_axis and length are required by a "
+                                 "cylindrical clearance joint")
+            unit_axis(self.bearing_axis, "bearing_axis")
+            unit_axis(self.journal_axis, "journal_axis")
+            if (self.axial_clearance is None) != (self.axial_stiffness is None):
+                raise ValueError("axial_clearance and axial_stiffness go together (shoulders)")
+        else:
+            if self.bearing_axis is not None or self.journal_axis is not None or \
+                    self.length is not None or self.axial_clearance is not None:
+                raise ValueError("a spherical clearance joint takes no axes, length or shoulders")
+            if self.impact == "continuous" and self.normal_law != "hertz_point":
+                raise ValueError("normal_law: a spherical joint takes 'hertz_point' (a point law)")
+        if self.impact != "continuous":
+            return self
+        check_normal_law(self.normal_law)
+        if self.damping_law == "calibrated" and self.type == "spherical":
+            # the laws file's e(v0) comes from plane-strain impacts of a pin in a bore (a line
+            # contact per unit length); a ball's point contact is another impact
+            raise ValueError("damping_law 'calibrated' is for cylindrical joints: the laws file's "
+                             "e(v0) is fitted on line-contact impacts of a pin in a bore, not of "
+                             "a ball in a socket")
+        return self
+
+
+class Torsion(Strict):
+    """A torque about axis_i (body i's frame) on the relative angle of body j about it,
+    measured from the initial configuration: spring, stop or latch as in the planar scene
+    (TorsionSpring)."""
+
+    type: Literal["spring", "stop", "latch"]
+    body_i: str
+    body_j: str
+    axis_i: Vector3
+    stiffness: float = pydantic.Field(ge=0, description="N m / rad")
+    damping: float = pydantic.Field(default=0.0, ge=0, description="N m s / rad")
+    free_angle_deg: float = 0.0
+
+    @pydantic.model_validator(mode="after")
+    def _axis(self):
+        unit_axis(self.axis_i, "axis_i")
+        return self
+
+
+SpatialTranslationalJoint = translational_joint(Vector3)
+
+
+class SpatialScene(MechanismScene):
+    kind: Literal["spatial"]
+    gravity: Vector3 = [0.0, 0.0, 0.0]
+    bodies: list[SpatialBody] = pydantic.Field(min_length=1)
+    joints: list[Joint] = []
+    drive: SpatialDrive | None = None
+    clearance_joints: list[SpatialClearanceJoint] = []
+    translational_joints: list[SpatialTranslationalJoint] = []
+    torsion: list[Torsion] = []
+
+    @pydantic.model_validator(mode="after")
+    def _journals_fit(self):
+        """A journal whose axis is tilted against its bore's at the start (a misaligned joint;
+        it starts centred) fits only if its ends stay inside the clearance there:
+        (L / 2) sin(tilt) < c."""
+        bodies = {b.name: b for b in self.bodies}
+        for k, c in enumerate(self.clearance_joints):
+            if c.type != "cylindrical" or c.start == "placed" or \
+                    c.bearing_body not in bodies | {GROUND: None} or \
+                    c.journal_body not in bodies | {GROUND: None}:
+                continue   # unknown bodies: _names says so
+            axes = []
+            for name, axis in ((c.bearing_body, c.bearing_axis), (c.journal_body, c.journal_axis)):
+                rot = np.eye(3) if name == GROUND else rotation_matrix(bodies[name].parameters())
+                axes.append(rot @ unit_axis(axis, "axis"))
+            sine = float(np.linalg.norm(np.cross(*axes)))
+            clearance = c.bearing_radius - c.journal_radius
+            if 0.5 * c.length * sine >= clearance:
+                raise ValueError(
+                    f"clearance_joints.{k} ({c.name}): the journal, tilted by "
+                    f"{math.degrees(math.asin(min(sine, 1.0))):.3g} deg against its bore, does not "
+                    f"fit: centred, its ends lie (L/2) sin(tilt) = {0.5 * c.length * sine:.4g} m "
+                    f"off the bore's axis, beyond the radial clearance {clearance:.4g} m")
+        return self
+
+    @pydantic.model_validator(mode="after")
+    def _names(self):
+        used = [(j.body_i, "joints.body_i") for j in self.joints]
+        used += [(j.body_j, "joints.body_j") for j in self.joints]
+        used += body_references(self)
+        check_names(self, used)
+        if self.drive is not None:
+            driven = {j.name: j for j in self.joints if j.name}
+            if self.drive.joint not in driven:
+                raise ValueError(f"drive.joint: unknown joint {self.drive.joint!r}; named joints: "
+                                 f"{', '.join(sorted(driven)) or 'none'}")
+            if driven[self.drive.joint].type not in ("revolute", "cylindrical"):
+                raise ValueError("drive.joint: must be a revolute or cylindrical joint (it turns "
+                                 "about the joint's axis)")
+        return self
