@@ -13,8 +13,10 @@ vectors), with numba.extending.overload; numba picks the implementation when it 
 
 Where a third kind plugs in: a flexible body (modal coordinates in a floating frame) is a
 body whose points and vectors move with its deformation. It implements these same functions
-(a point's velocity and Jacobian then carry the modes' columns, its mass matrix is full), and
-the joints, drives, springs and contacts, which call nothing else, work with it unchanged.
+(a point's velocity and Jacobian then carry the modes' columns, its mass matrix is full) in
+a module of its own that registers them (`implement_kind`, for its marker), with its line in
+the registry reduced.mechanism.kinds; the joints, drives, springs and contacts, which call
+nothing else, work with it unchanged.
 
 Bodies are numbered from 0; -1 is the ground (a point or vector of the ground is global).
 Angular quantities are floats in the plane (about its normal) and vectors in space.
@@ -25,11 +27,37 @@ import inspect
 
 HOT = {"point_state", "material_velocity", "put", "push", "row_rate"}   # inlined (below)
 
+# The interface a body kind implements: each function, and the argument (its position) whose
+# type picks a kind's implementation: "kind" (the arguments' marker), "vector" (a vector of
+# the kind's dimension) or "angular" (a torque: a float in the plane, a vector in space).
+INTERFACE = {
+    "body_columns": ("vector", 0), "point_state": ("vector", 2), "vector_state": ("vector", 2),
+    "material_velocity": ("vector", 2), "put": ("vector", 3), "push": ("vector", 3),
+    "push_torque": ("angular", 2), "centripetal_gap": ("vector", 1),
+    "relative_rotation": ("vector", 3), "rotation_axis": ("vector", 2), "row_rate": ("vector", 7),
+    "turned": ("vector", 2), "unturned": ("vector", 2),
+    "body_states": ("kind", 0), "body_forces": ("kind", 0), "fill_schur": ("kind", 0),
+    "state_rates": ("kind", 0), "position_step": ("kind", 0), "velocity_step": ("kind", 0),
+    "normalise": ("kind", 0), "kinetic_energy": ("kind", 0)}
+OPTIONAL = {"turned", "unturned"}   # a body frame's vectors turned (the spatial state laws')
 
-def implement(declaration, function, applies, on) -> None:
+
+def implement_kind(namespace: dict, tests: dict) -> None:
+    """Register a body kind: each function of INTERFACE that `namespace` (the kind's module)
+    defines is the implementation where the argument INTERFACE names passes the kind's test
+    (`tests`: "kind", its marker; "vector", a vector of its dimension; "angular", a torque of
+    its dimension: a float in the plane, a vector in space). A kind without an OPTIONAL
+    function leaves it to the kinds that have one."""
+    for name, (what, position) in INTERFACE.items():
+        if name not in namespace and name in OPTIONAL:
+            continue
+        implement(globals()[name], namespace[name], tests[what], position)
+
+
+def implement(declaration, function, applies, position) -> None:
     """Register the compiled `function` as the implementation of the body hook `declaration`
-    where `applies(numba type of the argument named on)` (a body kind's marker, or a vector of
-    its dimension): numba.extending.overload, the implementation `function` itself (no
+    where `applies(numba type of its argument at position)` (a body kind's marker, or a vector
+    of its dimension): numba.extending.overload, the implementation `function` itself (no
     forwarding layer), compiled without the reference-counting runtime like the engine that
     calls it (a body function allocates nothing; numba would count the references of every
     array it receives), its typing function written with `function`'s own parameters (numba
@@ -39,7 +67,7 @@ def implement(declaration, function, applies, on) -> None:
     parameters = list(inspect.signature(function.py_func).parameters)
     namespace = {"applies": applies, "implementation": function.py_func}
     exec(f"def typing({', '.join(parameters)}):\n"   # noqa: S102 (names from our own signature)
-         f"    if applies({on}):\n"
+         f"    if applies({parameters[position]}):\n"
          "        return implementation\n", namespace)
     options = {"inline": "always"} if declaration.__name__ in HOT else {"jit_options": {"_nrt": False}}
     overload(declaration, **options)(namespace["typing"])

@@ -210,16 +210,8 @@ def kinetic_energy(kind, y, nq, masses, minv, inertia):
     return energy
 
 
-# what planar bodies implement of reduced.mechanism.bodies, and the argument it is chosen by
-for _name, _on in (("body_columns", "like"), ("point_state", "s"), ("vector_state", "v"),
-                   ("material_velocity", "x"), ("put", "linear"), ("push", "f"),
-                   ("push_torque", "torque"), ("centripetal_gap", "a"),
-                   ("relative_rotation", "a_i"), ("rotation_axis", "a_i"), ("row_rate", "like"),
-                   ("body_states", "kind"), ("body_forces", "kind"), ("fill_schur", "kind"),
-                   ("state_rates", "kind"), ("position_step", "kind"), ("velocity_step", "kind"),
-                   ("normalise", "kind"), ("kinetic_energy", "kind")):
-    bodies.implement(getattr(bodies, _name), globals()[_name],
-                     _scalar if _on == "torque" else planar if _on == "kind" else _plane, _on)
+# planar bodies implement reduced.mechanism.bodies for their marker and 2-vectors
+bodies.implement_kind(globals(), {"kind": planar, "vector": _plane, "angular": _scalar})
 
 
 # ---- a planar scene as the model's arrays (reduced.mechanism.model.build asks these)

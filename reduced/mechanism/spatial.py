@@ -409,17 +409,10 @@ def kinetic_energy(kind, y, nq, masses, minv, inertia):
     return energy
 
 
-# what spatial bodies implement of reduced.mechanism.bodies, and the argument it is chosen by
-for _name, _on in (("body_columns", "like"), ("point_state", "s_body"), ("vector_state", "a_body"),
-                   ("material_velocity", "x"), ("put", "linear"), ("push", "f"),
-                   ("push_torque", "torque"), ("centripetal_gap", "a"),
-                   ("relative_rotation", "a_i"), ("rotation_axis", "a_i"), ("row_rate", "like"),
-                   ("turned", "a"), ("unturned", "a"),
-                   ("body_states", "kind"), ("body_forces", "kind"), ("fill_schur", "kind"),
-                   ("state_rates", "kind"), ("position_step", "kind"), ("velocity_step", "kind"),
-                   ("normalise", "kind"), ("kinetic_energy", "kind")):
-    _function = {"turned": turned_any, "unturned": unturned_any}.get(_name, globals()[_name])
-    bodies.implement(getattr(bodies, _name), _function, spatial if _on == "kind" else _space, _on)
+# spatial bodies implement reduced.mechanism.bodies for their marker and 3-vectors (the
+# ground's vectors global when turned)
+bodies.implement_kind(globals() | {"turned": turned_any, "unturned": unturned_any},
+                      {"kind": spatial, "vector": _space, "angular": _space})
 
 
 # ---- a spatial scene as the model's arrays (reduced.mechanism.model.build asks these)
