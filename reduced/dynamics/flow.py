@@ -108,7 +108,7 @@ class MechanismFlow:
         journal's two directions across its bore's axis (the body's x axis made normal to the
         axis, or y if the axis lies near x); otherwise the frame's x and y."""
         c, model = self.model.joints[0], self.model
-        index = {n: i for i, n in enumerate(model.names)} | {"ground": -1}
+        index = model.geometry.index
         dimension = model.kind.dimension
         f, g = np.eye(dimension)[0], np.eye(dimension)[1]
         if c.type == "translational":

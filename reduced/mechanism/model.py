@@ -67,6 +67,7 @@ class Model:
     friction_states: int          # how many states the friction laws add to y
     y0: np.ndarray = field(default_factory=lambda: np.empty(0))
     closures: list = field(default_factory=list)   # an ideal twin's closing joints (in primitives)
+    geometry: object = None       # the body kind's Geometry of the scene (its `index` of bodies)
 
     @property
     def nq(self) -> int:
@@ -170,7 +171,7 @@ def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
         torsion=torsion_rows(geometry, scene),
         latched=np.zeros(len(scene.torsion)), mode=np.zeros(contacts.shape[0], np.int64))
     model = Model(scene, kind, names, args, [] if ideal else joints, rows, laws_data, drive_row, states,
-                  closures=closures)
+                  closures=closures, geometry=geometry)
     model.y0 = geometry.place(model, [] if ideal else [(closing(geometry, c), c.start) for c in joints])
     if scene.integrator.method == "dopri5_fixed":
         fixed_step(model, source)   # refuses a default step that cannot finish, before any work
@@ -505,8 +506,7 @@ def shortest_period(model: Model) -> float:
     stiffness F(d)/d of its normal law at a penetration d equal to the clearance (the deepest
     a clean run reaches, reduced.mechanism.verdict; the stiffest point of a hardening law).
     A torsion element: the reduced inertia of its bodies about its axis and its stiffness."""
-    geometry = model.kind.bodies().Geometry(model.scene, {n: i for i, n in enumerate(model.names)}
-                                            | {GROUND: -1}, "")
+    geometry = model.geometry
     masses = model.base.masses
 
     def reduced(i, j, inverse):
