@@ -45,6 +45,16 @@ def _impact(args) -> int:
     return impact_run.run(args.scene, args.out, scene)
 
 
+def _modes(args) -> int:
+    from pinbore.core import scene as scenes
+    from pinbore.fem.modes.scene import ModesScene   # the scene model only: no DOLFINx yet
+
+    scene = scenes.load(ModesScene, args.scene)
+    from pinbore.fem.modes import run as modes_run
+
+    return modes_run.run(args.scene, args.out, scene)
+
+
 def _calibrate(args) -> int:
     from pinbore.calibration import run as calibration_run
 
@@ -171,6 +181,13 @@ def parser() -> argparse.ArgumentParser:
                    "strain): the pin with its mass hits the bore at the impact speed and "
                    "rebounds; write DIR/history.csv, DIR/impact.json (restitution, contact "
                    "duration, peak force, energy book) and DIR/force_time.png.")
+    _scene_command(sub, "modes", _modes,
+                   "reduce a body's FE model to a flexible body: body.npz, modes.json",
+                   "Mesh a body (a link or a panel), assemble its mass and stiffness with "
+                   "DOLFINx, reduce it (Craig-Bampton with rigid interfaces, then the reduced "
+                   "body's free modes, SLEPc) and write DIR/body.npz (modes, frequencies, the "
+                   "floating frame's inertia invariants, interface frames: what a mechanism "
+                   "reads), DIR/modes.json and DIR/mode_shapes.png.")
     c = sub.add_parser("calibrate", help="fit and rank the contact laws on FE curves: laws.json",
                        description="Fit every contact law to FE load-approach curves (2D, per "
                                    "unit length; each curve.csv with its result.json beside it) "

@@ -1,0 +1,196 @@
+"""The reduced body, defined once: the file `pinbore modes` writes (body.npz) and the
+mechanism reads. NumPy only (no DOLFINx): a stage that reads a body does not load the FE.
+
+body.npz holds, SI units, the body frame at the centre of mass with the mesh's axes (a plane
+body's z entries are zero; n the flexible modes, N the FE nodes, k the interfaces):
+
+    format, version         "pinbore-reduced-body", VERSION
+    scene, scene_sha256     the modes scene it came from (its file name and its bytes' hash)
+    mesh_sha256             of the nodes and cells below: the mesh the modes belong to
+    dim                     2 (plane stress) or 3
+    mass                    kg
+    centre                  (3,) the centre of mass in the mesh frame (m)
+    omega                   (n,) rad/s, ascending, the reduced body's free modes
+    psi                     (N, 3, n) the modes at the nodes, M-normalised (m / sqrt(kg))
+    nodes                   (N, 3) the FE nodes, body frame (m)
+    cells                   (c, v) the mesh's cells as node indices (for pictures and points)
+    second_moments          (3, 3) I_ab (kg m^2)
+    s, S                    (3, 3, n), (3, 3, n, n) the inertia invariants (fem.modes.reduction)
+    translation_coupling    (3, n) zero in the mean-axis frame (kept as its check)
+    stiffening              (3, 3, n, n) K_G,ab, 1/s^2 per (rad/s)^2
+    interfaces              (k,) names; interface_centres (k, 3) body frame (m);
+    interface_translation   (k, 3, n); interface_rotation (k, 3, n): each mode's motion of
+                            the interface's frame
+    fixed_interface_omega   (n_f,) rad/s; full_omega (m,) the whole FE model's free modes
+
+A file that does not fit (another format or version, a key missing, a shape that does not
+agree with n, N or k, a number not finite, a body that is not physical) is one InputError
+line naming the file and the rule.
+"""
+
+import hashlib
+import zipfile
+from dataclasses import dataclass, fields
+from pathlib import Path
+
+import numpy as np
+
+from pinbore.core.errors import InputError
+from pinbore.core.scene import Record, read_json
+
+FORMAT = "pinbore-reduced-body"
+VERSION = 1
+BODY = "body.npz"
+SUMMARY = "modes.json"
+COMMAND = "modes"
+
+
+@dataclass(frozen=True)
+class ReducedBody:
+    """A reduced flexible body, read from (or about to be written to) body.npz."""
+
+    scene: str
+    scene_sha256: str
+    dim: int
+    mass: float
+    centre: np.ndarray
+    omega: np.ndarray
+    psi: np.ndarray
+    nodes: np.ndarray
+    cells: np.ndarray
+    second_moments: np.ndarray
+    s: np.ndarray
+    S: np.ndarray
+    translation_coupling: np.ndarray
+    stiffening: np.ndarray
+    interfaces: tuple[str, ...]
+    interface_centres: np.ndarray
+    interface_translation: np.ndarray
+    interface_rotation: np.ndarray
+    fixed_interface_omega: np.ndarray
+    full_omega: np.ndarray
+
+    @property
+    def modes(self) -> int:
+        return self.omega.size
+
+    @property
+    def mesh_sha256(self) -> str:
+        return mesh_hash(self.nodes, self.cells)
+
+    def interface(self, name: str) -> int:
+        return self.interfaces.index(name)
+
+    @property
+    def inertia(self) -> np.ndarray:
+        """The undeformed body's inertia tensor about its centre of mass (kg m^2):
+        J = tr(I) 1 - I."""
+        return np.trace(self.second_moments) * np.eye(3) - self.second_moments
+
+
+def mesh_hash(nodes: np.ndarray, cells: np.ndarray) -> str:
+    h = hashlib.sha256()
+    h.update(np.ascontiguousarray(nodes, dtype="<f8").tobytes())
+    h.update(np.ascontiguousarray(cells, dtype="<i8").tobytes())
+    return h.hexdigest()
+
+
+def file_hash(path: Path) -> str:
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def write(path: Path, body: ReducedBody) -> None:
+    """body.npz (uncompressed: it is read whole, and quickly)."""
+    arrays = {f.name: getattr(body, f.name) for f in fields(ReducedBody)}
+    arrays["interfaces"] = np.array(body.interfaces, dtype=str)
+    arrays["cells"] = np.asarray(body.cells, dtype=np.int64)
+    with open(path, "wb") as stream:
+        np.savez(stream, format=FORMAT, version=VERSION, mesh_sha256=body.mesh_sha256, **arrays)
+
+
+def read(path) -> ReducedBody:
+    """The reduced body of a body.npz, checked (module docstring)."""
+    path = Path(path)
+    source = str(path)
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            arrays = {key: data[key] for key in data.files}
+    except FileNotFoundError:
+        raise InputError(f"{source}: no such reduced body (run pinbore {COMMAND} first)") from None
+    except (OSError, ValueError, zipfile.BadZipFile, EOFError) as err:
+        raise InputError(f"{source}: not a reduced body written by pinbore {COMMAND} ({err})") from None
+    if str(arrays.get("format", "")) != FORMAT:
+        raise InputError(f"{source}: format: not a reduced body written by pinbore {COMMAND}")
+    if int(arrays.get("version", -1)) != VERSION:
+        raise InputError(f"{source}: version: {int(arrays.get('version', -1))} is not this "
+                         f"pinbore's {VERSION}: run pinbore {COMMAND} again")
+    values = {}
+    for f in fields(ReducedBody):
+        if f.name not in arrays:
+            raise InputError(f"{source}: {f.name}: required key is missing (run pinbore "
+                             f"{COMMAND} again)")
+        values[f.name] = arrays[f.name]
+    for key in ("scene", "scene_sha256"):
+        values[key] = str(values[key])
+    values["dim"], values["mass"] = int(values["dim"]), float(values["mass"])
+    values["interfaces"] = tuple(str(name) for name in values["interfaces"])
+    body = ReducedBody(**values)
+    _check(body, source, str(arrays.get("mesh_sha256", "")))
+    return body
+
+
+def _check(body: ReducedBody, source: str, mesh_sha256: str) -> None:
+    n, N, k = body.omega.size, body.nodes.shape[0], len(body.interfaces)
+    shapes = {"centre": (3,), "psi": (N, 3, n), "nodes": (N, 3), "second_moments": (3, 3),
+              "s": (3, 3, n), "S": (3, 3, n, n), "translation_coupling": (3, n),
+              "stiffening": (3, 3, n, n), "interface_centres": (k, 3),
+              "interface_translation": (k, 3, n), "interface_rotation": (k, 3, n)}
+    for key, shape in shapes.items():
+        value = getattr(body, key)
+        if value.shape != shape:
+            raise InputError(f"{source}: {key}: shape {value.shape}, not {shape} ({n} modes, "
+                             f"{N} nodes, {k} interfaces)")
+    for f in fields(ReducedBody):
+        value = getattr(body, f.name)
+        if isinstance(value, np.ndarray) and value.dtype.kind == "f" and not np.all(np.isfinite(value)):
+            raise InputError(f"{source}: {f.name}: a value is not a finite number")
+    if body.dim not in (2, 3):
+        raise InputError(f"{source}: dim: {body.dim} is neither 2 nor 3")
+    if not (np.isfinite(body.mass) and body.mass > 0):
+        raise InputError(f"{source}: mass: must be a positive, finite number")
+    if n == 0 or np.any(body.omega <= 0) or np.any(np.diff(body.omega) < 0):
+        raise InputError(f"{source}: omega: the frequencies must be positive and ascending")
+    if body.cells.ndim != 2 or body.cells.size == 0 or body.cells.min() < 0 or body.cells.max() >= N:
+        raise InputError(f"{source}: cells: not node indices of the {N} nodes")
+    if mesh_sha256 != body.mesh_sha256:
+        raise InputError(f"{source}: mesh_sha256: the nodes and cells are not those the modes "
+                         "were computed on")
+
+
+class ModesSummary(Record):
+    """modes.json: what `pinbore modes` computed, for a person and the report."""
+
+    scene_file: str
+    scene: dict
+    dofs: int
+    nodes: int
+    cells: int
+    mass_kg: float
+    centre_m: list[float]
+    inertia_kg_m2: list[list[float]]
+    frequencies_Hz: list[float]                  # the reduced body's free modes
+    fixed_interface_frequencies_Hz: list[float]
+    full_frequencies_Hz: list[float]             # the whole FE model's free modes (if asked)
+    reduction_error: list[float]                 # reduced / full - 1, mode by mode
+    mean_axis_residual: float                    # |1^T M Psi|, |x~^T M Psi| of sqrt(m) |X|
+    rigid_residual: float                        # rigid eigenvalues / the first flexible one
+    wall_time_s: dict
+    platform: dict
+
+
+def write_summary(path: Path, summary: ModesSummary) -> None:
+    path.write_text(summary.model_dump_json(indent=2) + "\n")
+
+
+def read_summary(path, source: str | None = None) -> ModesSummary:
+    return read_json(ModesSummary, path, COMMAND, source)
