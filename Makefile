@@ -24,6 +24,9 @@ STUDY3D_CURVES := $(filter build/fem/study3d_%,$(FEM_CURVES))
 IMPACT_SCENES := $(basename $(notdir $(wildcard scenes/impact/*.toml)))
 IMPACT_RUNS := $(IMPACT_SCENES:%=build/impact/%/impact.json)
 STUDY_IMPACTS := $(filter build/impact/study_%,$(IMPACT_RUNS))
+MODES_SCENES := $(basename $(notdir $(wildcard scenes/modes/*.toml)))
+MODES_RUNS := $(MODES_SCENES:%=build/modes/%/body.npz)
+MODES_CODE := $(wildcard pinbore/cli.py core/*.py meshes/body.py fem/modes/*.py)
 REDUCED_SCENES := $(basename $(notdir $(wildcard scenes/reduced/*.toml)))
 REDUCED_RUNS := $(REDUCED_SCENES:%=build/reduced/%/summary.json)
 STAGE_CODE := $(wildcard pinbore/cli.py core/*.py laws/*.py meshes/*.py fem/*.py fem/impact/*.py)
@@ -37,7 +40,7 @@ DYNAMICS_CODE := $(wildcard pinbore/cli.py reduced/dynamics/*.py) $(REDUCED_CODE
 DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(DYNAMICS_CODE)
 SPATIAL_DYNAMICS_DEPS := $(SPATIAL_DYNAMICS_SCENE) $(DYNAMICS_CODE)
 
-.PHONY: all venv mesh fem impact calibration reduced dynamics report bench stress test test-slow clean help
+.PHONY: all venv mesh fem impact modes calibration reduced dynamics report bench stress test test-slow clean help
 .DELETE_ON_ERROR:
 
 all: report ## set up .venv, run the default scenes, build the report (the main job)
@@ -69,6 +72,11 @@ impact: $(IMPACT_RUNS) ## run the dynamic impacts of scenes/impact/ (build/impac
 
 build/impact/%/impact.json: scenes/impact/%.toml $(STAGE_CODE) $(STAMP)
 	$(PINBORE) impact $< --out build/impact/$*
+
+modes: $(MODES_RUNS) ## reduce the flexible bodies of scenes/modes/ to their modes (build/modes/<scene>/)
+
+build/modes/%/body.npz: scenes/modes/%.toml $(MODES_CODE) $(STAMP)
+	$(PINBORE) modes $< --out build/modes/$*
 
 calibration: build/calibration/laws.json ## fit and rank the contact laws on the study curves (2D and 3D), the restitution on the study impacts
 
@@ -107,8 +115,8 @@ build/dynamics/spatial_bifurcation/summary.json: $(SPATIAL_DYNAMICS_DEPS)
 
 report: build/report/index.html ## build build/report/index.html from the results
 
-build/report/index.html: $(FEM_CURVES) $(MESHES) build/calibration/laws.json $(REDUCED_RUNS) $(DYNAMICS) \
-                         $(wildcard bench/*.csv) $(STAGE_CODE) $(wildcard pinbore/*.py calibration/*.py reduced/*.py) $(REDUCED_CODE) $(STAMP)
+build/report/index.html: $(FEM_CURVES) $(MESHES) $(MODES_RUNS) build/calibration/laws.json $(REDUCED_RUNS) $(DYNAMICS) \
+                         $(wildcard bench/*.csv) $(STAGE_CODE) $(MODES_CODE) $(wildcard pinbore/*.py calibration/*.py reduced/*.py) $(REDUCED_CODE) $(STAMP)
 	$(PINBORE) report --build build --out build/report
 	@echo "report: $(abspath $@)"
 

@@ -13,12 +13,14 @@ from pinbore.core.errors import InputError
 from pinbore.core.html import STYLE
 from pinbore.core.output import write_text_atomic
 from pinbore.fem import report as fem_report
+from pinbore.fem.modes import report as modes_report
 from pinbore.reduced import report as reduced_report
 
 
 # (heading, section): each a function of what its stage wrote under build/ (and of bench/)
 SECTIONS = [
     ("FE contact", lambda build, bench: fem_report.section(build, bench)),
+    ("flexible bodies", lambda build, bench: modes_report.section(build, bench)),
     ("calibration", lambda build, bench: calibration_report.section(build, bench)),
     ("reduced models", lambda build, bench: reduced_report.section(build, bench)),
     ("nonlinear dynamics", lambda build, bench: reduced_report.dynamics_section(build)),
