@@ -129,6 +129,7 @@ bench: $(STUDY_CURVES) $(STAMP) ## run the benchmarks: bench/*.csv and plots (a 
 	$(PY) bench/multibody.py --out bench
 	$(PY) bench/sweep.py --out bench
 	$(PY) bench/impact.py --out bench
+	$(PY) bench/modes.py --out bench
 
 stress: $(STAMP) ## the stress matrix: bench/stress_*.csv, bench/stress.png (about 3 min)
 	$(PY) bench/stress.py --out bench
