@@ -11,6 +11,9 @@ What `--out` may be (`check_output`, applied by the CLI before any work and agai
 - a path that does not exist yet, or an empty directory;
 - a directory that pinbore wrote itself (it holds the marker file `.pinbore-output`) and that
   holds none of the run's inputs.
+The run's inputs are what the command declared (`declared_inputs`: the CLI declares every
+file each command reads, in one table) and what the stage itself passes; every check sees
+both, so a stage cannot forget an input its command reads.
 Refused, with one line naming the rule: `""` and `.`, the working directory or a folder
 above it, a file, a directory that pinbore did not write and that is not empty, a path that
 contains an input (the scene, the curves, a cache), a parent that is a file or cannot be
@@ -21,6 +24,7 @@ process's id; one left by a killed process (SIGKILL) is removed by the next run 
 """
 
 import contextlib
+import contextvars
 import fcntl
 import os
 import re
@@ -34,6 +38,8 @@ from pathlib import Path
 from mpi4py import MPI
 
 from pinbore.core.errors import InputError
+
+_DECLARED: contextvars.ContextVar[tuple] = contextvars.ContextVar("declared_inputs", default=())
 
 MARKER = ".pinbore-output"
 MARKER_TEXT = "Written by pinbore. A later run with this --out replaces this directory whole.\n"
@@ -94,6 +100,17 @@ def _stop_cleanly():
             signal.signal(s, handler)
 
 
+@contextlib.contextmanager
+def declared_inputs(paths):
+    """Within the block, every output check (check_output, atomic_directory) also refuses an
+    `--out` holding any of `paths` (the files the command reads)."""
+    token = _DECLARED.set(tuple(str(p) for p in paths if p is not None))
+    try:
+        yield
+    finally:
+        _DECLARED.reset(token)
+
+
 def _inside(path: Path, folder: Path) -> bool:
     """Whether `path` is `folder` or lies below it (both resolved)."""
     return path == folder or folder in path.parents
@@ -110,7 +127,7 @@ def check_output(out, inputs=()) -> Path:
     if _inside(Path.cwd().resolve(), where):
         raise InputError(f"--out {text}: is the working directory or a folder above it; "
                          "name a directory of its own")
-    for item in inputs:
+    for item in (*inputs, *_DECLARED.get()):
         if item is not None and _inside(Path(item).resolve(), where):
             raise InputError(f"--out {text}: holds the input {item}; pinbore would replace it "
                              "(choose another output directory)")
@@ -250,21 +267,3 @@ def _commit(tmp: Path, out: Path) -> None:
             for s in signals:   # run ends by itself (the caller restores the handlers)
                 signal.signal(s, signal.SIG_IGN)
             signal.pthread_sigmask(signal.SIG_UNBLOCK, signals)
-
-
-def write_text_atomic(path: str | Path, text: str) -> None:
-    """Write a single file through a temporary name and a rename."""
-    path = Path(path)
-    tmp = None
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        handle, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-        with os.fdopen(handle, "w", encoding="utf-8") as f:
-            f.write(text)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except OSError as err:
-        if tmp is not None:   # a temporary name of its own: two writers never share one
-            with contextlib.suppress(OSError):
-                os.unlink(tmp)
-        raise InputError(f"{path}: cannot write ({err.strerror or err})") from None

@@ -69,6 +69,33 @@ def _rule(error: dict) -> str:
     return message.removeprefix("Value error, ")
 
 
+def referenced_files(path: str | Path) -> list[Path]:
+    """The files a scene names: the string values of its keys `*_file` and the strings of its
+    lists `*_files`, in any table, relative to the scene's folder unless absolute. A scene that
+    cannot be read names none (reading it for its run says why)."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return []
+    found = []
+
+    def walk(node):
+        if isinstance(node, dict):
+            for key, value in node.items():
+                if key.endswith("_file") and isinstance(value, str):
+                    found.append(value)
+                elif key.endswith("_files") and isinstance(value, list):
+                    found.extend(v for v in value if isinstance(v, str))
+                else:
+                    walk(value)
+        elif isinstance(node, list):
+            for item in node:
+                walk(item)
+    walk(data)
+    return [Path(f) if Path(f).is_absolute() else path.parent / f for f in found]
+
+
 def load(model: type[pydantic.BaseModel], path: str | Path) -> pydantic.BaseModel:
     """Read and validate a scene file."""
     return validate(model, read_toml(path), str(path))

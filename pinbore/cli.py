@@ -13,7 +13,9 @@ import traceback
 from pathlib import Path
 
 from pinbore.core.errors import InputError
-from pinbore.core.output import Terminated, check_output, clear_stop_signal, stop_signal
+from pinbore.core.output import (Terminated, check_output, clear_stop_signal, declared_inputs,
+                                 stop_signal)
+from pinbore.core.scene import referenced_files
 
 
 def _mesh(args) -> int:
@@ -224,10 +226,19 @@ def parser() -> argparse.ArgumentParser:
     return p
 
 
-def _inputs(args) -> list:
-    """What a command reads and its --out must therefore not hold (the dynamics' --cache is
-    checked by its options model)."""
-    return [*(getattr(args, "curves", None) or []), getattr(args, "scene", None)]
+def _scene_inputs(args) -> list:
+    """A scene and every file it names (its laws file, ...)."""
+    return [args.scene, *referenced_files(args.scene)]
+
+
+# What each command reads, which its --out must not hold (core.output.declared_inputs): every
+# command has its line (tests/test_outputs.py enumerates the parser's commands against it).
+INPUTS = {
+    "mesh": _scene_inputs, "fem": _scene_inputs, "impact": _scene_inputs,
+    "modes": _scene_inputs, "reduced": _scene_inputs, "dynamics": _scene_inputs,
+    "calibrate": lambda args: [*args.curves, *args.impacts],
+    "report": lambda args: [args.build, "bench"],
+}
 
 
 def _trace_file(command: str) -> Path:
@@ -245,9 +256,9 @@ def main(argv=None) -> int:
     args = parser().parse_args(argv)
     clear_stop_signal()
     try:
-        if args.command != "report":
-            check_output(args.out, _inputs(args))
-        return args.func(args)
+        with declared_inputs(INPUTS[args.command](args)):
+            check_output(args.out)
+            return args.func(args)
     except InputError as err:
         print(f"pinbore {args.command}: {err}", file=sys.stderr)
         return 2

@@ -11,7 +11,7 @@ from pathlib import Path
 from pinbore.calibration import report as calibration_report
 from pinbore.core.errors import InputError
 from pinbore.core.html import STYLE
-from pinbore.core.output import write_text_atomic
+from pinbore.core.output import atomic_directory
 from pinbore.fem import report as fem_report
 from pinbore.fem.modes import report as modes_report
 from pinbore.reduced import report as reduced_report
@@ -28,7 +28,9 @@ SECTIONS = [
 
 
 def build(build_dir, out) -> tuple[Path, list[str]]:
-    """Write OUT/index.html; (its path, one line per section that could not be built).
+    """Write OUT/index.html (OUT replaced whole, like every output directory: new, empty or
+    pinbore's own, holding no input); (its path, one line per section that could not be
+    built).
 
     A section whose files are missing says so on the page; one whose files do not read (an
     InputError of the stage's seam module: corrupt, truncated, of another version) is left
@@ -51,6 +53,6 @@ def build(build_dir, out) -> tuple[Path, list[str]]:
             "<p>Finite-element contact of a pin in a bore (DOLFINx), calibration of the contact "
             "laws and reduced multibody models. Units SI; 2D forces are per unit length "
             "(N/m).</p>" + "".join(sections) + "</body></html>\n")
-    index = Path(out) / "index.html"
-    write_text_atomic(index, page)
-    return index, problems
+    with atomic_directory(out) as tmp:
+        (tmp / "index.html").write_text(page, encoding="utf-8")
+    return Path(out) / "index.html", problems

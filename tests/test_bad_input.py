@@ -207,4 +207,4 @@ def test_report_out_that_cannot_be_written_is_one_line(tmp_path):
     (tmp_path / "build").mkdir()
     done = pinbore("report", "--build", tmp_path / "build", "--out", tmp_path / "a_file" / "report")
     assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
-    assert "cannot write" in done.stderr and (tmp_path / "a_file").read_text() == "x"
+    assert "is a file, not a directory" in done.stderr and (tmp_path / "a_file").read_text() == "x"

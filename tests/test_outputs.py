@@ -6,6 +6,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 from conftest import ROOT, pinbore
@@ -55,6 +56,82 @@ def test_a_refused_out_destroys_nothing(home, out, rule, command):
     lines = run.stderr.strip().splitlines()
     assert len(lines) == 1 and rule in lines[0], run.stderr
     assert snapshot(home) == before   # nothing changed, nothing added (no hidden temporaries)
+
+
+def test_every_command_declares_what_it_reads():
+    """One table (pinbore.cli.INPUTS) names the files each command reads; a command without
+    its line could not run (the CLI looks it up), and this test lists the parser's commands
+    so that a new one cannot be added without one."""
+    from pinbore import cli
+
+    commands = set(cli.parser()._subparsers._group_actions[0].choices)
+    assert commands == set(cli.INPUTS)
+
+
+def _impacts_home(home):
+    """Two impact runs' directories (pinbore's own) A and B, and a curve."""
+    for name in ("A", "B"):
+        (home / name).mkdir()
+        (home / name / MARKER).write_text("pinbore\n")
+        for f in ("impact.json", "history.csv", "force_time.png"):
+            (home / name / f).write_text(f"{name} {f}\n")
+    (home / "curve.csv").write_text("x\n")
+    return ["calibrate", "curve.csv", "--impacts", "A/impact.json", "B/impact.json", "--out", "B"]
+
+
+def _laws_home(command):
+    def setup(home):
+        (home / "calib").mkdir()
+        (home / "calib" / MARKER).write_text("pinbore\n")
+        (home / "calib" / "laws.json").write_text("{}\n")
+        text = (ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml").read_text()
+        (home / "scene.toml").write_text(f'laws_file = "calib/laws.json"\n{text}')
+        analysis = ["--analysis", "poincare"] if command == "dynamics" else []
+        return [command, "scene.toml", *analysis, "--out", "calib"]
+    return setup
+
+
+def _report_home(out):
+    def setup(home):
+        (home / "build").mkdir()
+        (home / "site").mkdir()
+        (home / "site" / "index.html").write_text("<p>my page</p>\n")
+        return ["report", "--build", "build", "--out", out]
+    return setup
+
+
+# a command whose --out holds a file it reads (declared in one place, pinbore.cli.INPUTS), or
+# is a folder that is not pinbore's: refused, nothing touched
+DESTRUCTIVE = [
+    ("calibrate --out holding an --impacts run", _impacts_home, "holds the input B/impact.json"),
+    ("dynamics --out holding the scene's laws file", _laws_home("dynamics"), "holds the input"),
+    ("reduced --out holding the scene's laws file", _laws_home("reduced"), "holds the input"),
+    ("report --out a foreign folder", _report_home("site"), "did not write"),
+    ("report --out .", _report_home("."), "must name a directory of its own"),
+    ("report --out the build folder", _report_home("build"), "holds the input build"),
+]
+
+
+@pytest.mark.parametrize("case, setup, rule", DESTRUCTIVE, ids=[d[0] for d in DESTRUCTIVE])
+def test_an_out_holding_what_the_command_reads_is_refused(home, case, setup, rule):
+    command = setup(home)
+    before = snapshot(home)
+    run = pinbore(*command, cwd=home)
+    assert run.returncode == 2, run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and rule in lines[0], run.stderr
+    assert snapshot(home) == before
+
+
+def test_a_scene_names_its_files_relative_to_its_folder(tmp_path):
+    from pinbore.core.scene import referenced_files
+
+    (tmp_path / "s.toml").write_text('laws_file = "a/laws.json"\n[[bodies]]\nmodes_file = "/abs/body.npz"\n'
+                                     '[x]\ncurve_files = ["c1.csv", 2]\nname = "n_file"\n')
+    assert referenced_files(tmp_path / "s.toml") == [
+        tmp_path / "a" / "laws.json", Path("/abs/body.npz"), tmp_path / "c1.csv"]
+    (tmp_path / "bad.toml").write_text("not = [toml")
+    assert referenced_files(tmp_path / "bad.toml") == []
 
 
 def test_the_folder_holding_the_scene_is_refused(home, tmp_path_factory):
