@@ -78,6 +78,8 @@ surface would come out too high.
 """
 
 import dolfinx_solver  # noqa: F401  (must precede dolfinx)
+import math
+
 import basix.ufl
 import dolfinx
 import dolfinx.fem.petsc
@@ -204,6 +206,12 @@ def von_mises(stress: np.ndarray) -> np.ndarray:
     return np.sqrt(1.5 * np.sum(dev * dev, axis=1))
 
 
+def table_end(material) -> float:
+    """The plastic strain beyond which a material's hardening is not known: the last pair of
+    its `hardening` table; none (inf) for the linear law (hardening_modulus, 0 included)."""
+    return material.hardening[-1][0] if material.hardening is not None else math.inf
+
+
 def hardening_tables(curves):
     """The arrays radial_return reads, from hardening curves given as (strains, stresses,
     tail): padded tables (m, k), counts (m,) and tails (m,)."""
@@ -285,7 +293,7 @@ class ElastoPlastic:
 
         # the material of each point
         n = self.cells.size * self.per_cell
-        curves, index = [], {}
+        curves, index, self.table_ends = [], {}, []
         self.shear_modulus, self.bulk_modulus = np.empty(n), np.empty(n)
         self.curve = np.full(n, ELASTIC, dtype=np.int64)
         for tag, material in ((PIN, pin_material), (HOUSING, bore_material)):
@@ -298,9 +306,9 @@ class ElastoPlastic:
             if material.yield_stress is not None:
                 index[tag] = len(curves)
                 curves.append(material.hardening_curve)
+                self.table_ends.append(table_end(material))
                 self.curve[points] = index[tag]
         self.tables = hardening_tables(curves)
-        self.table_ends = [c[0][-1] if c[2] == 0 else np.inf for c in curves]
 
         # the committed state, and the last evaluated iterate
         self.plastic_strain = np.zeros((n, 6))

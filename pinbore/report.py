@@ -13,6 +13,7 @@ from pinbore.core.errors import InputError
 from pinbore.core.html import STYLE
 from pinbore.core.output import atomic_directory
 from pinbore.fem import report as fem_report
+from pinbore.fem.impact import report as impact_report
 from pinbore.fem.modes import report as modes_report
 from pinbore.reduced import report as reduced_report
 
@@ -20,6 +21,7 @@ from pinbore.reduced import report as reduced_report
 # (heading, section): each a function of what its stage wrote under build/ (and of bench/)
 SECTIONS = [
     ("FE contact", lambda build, bench: fem_report.section(build, bench)),
+    ("dynamic impacts", lambda build, bench: impact_report.section(build, bench)),
     ("flexible bodies", lambda build, bench: modes_report.section(build, bench)),
     ("calibration", lambda build, bench: calibration_report.section(build, bench)),
     ("reduced models", lambda build, bench: reduced_report.section(build, bench)),
@@ -33,8 +35,8 @@ def build(build_dir, out) -> tuple[Path, list[str]]:
     built).
 
     A section whose files are missing says so on the page; one whose files do not read (an
-    InputError of the stage's seam module: corrupt, truncated, of another version) is left
-    out with a note, and the others are built."""
+    InputError of the stage's seam module: corrupt, truncated, of another version; or any
+    other error while reading them) is left out with a note, and the others are built."""
     build_dir = Path(build_dir)
     if not build_dir.is_dir():
         raise InputError(f"--build {build_dir}: not a directory of results (run make first)")
@@ -43,10 +45,12 @@ def build(build_dir, out) -> tuple[Path, list[str]]:
     for heading, section in SECTIONS:
         try:
             sections.append(section(build_dir, bench))
-        except InputError as err:
-            problems.append(f"{heading} section left out: {err}")
+        except Exception as err:   # noqa: BLE001 (a section fails alone, whatever broke it)
+            why = str(err) if isinstance(err, InputError) else (
+                f"its files do not read as expected ({type(err).__name__}: {err})")
+            problems.append(f"{heading} section left out: {why}")
             sections.append(f"<h2>{html.escape(heading)}</h2><p class='note'>Not built: "
-                            f"{html.escape(str(err))}</p>")
+                            f"{html.escape(why)}</p>")
     page = ("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
             f"<title>pinbore report</title><style>{STYLE}</style></head><body>"
             "<h1>pinbore: contact in pin-in-bore (revolute clearance) joints</h1>"

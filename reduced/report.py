@@ -3,6 +3,7 @@
 import html
 from pathlib import Path
 
+from pinbore.core.errors import InputError
 from pinbore.core.html import figure, note, outcome_counts, png_data, table
 from pinbore.core.scene import load_json
 from pinbore.reduced.mechanism import kinds, summary
@@ -83,6 +84,11 @@ def stress_part(bench_dir: Path) -> list[str]:
     return parts
 
 
+# what the report reads of each analysis' summary.json
+DYNAMICS_KEYS = {"poincare": ("kind", "period", "lyapunov_per_s", "wall_time_s"),
+                 "bifurcation": ("counts", "wall_time_s"), "design": ("band", "wall_time_s")}
+
+
 def dynamics_section(build_dir: Path) -> str:
     """Nonlinear dynamics: Poincare map, bifurcation diagram, design map (build/dynamics)."""
     folder = build_dir / "dynamics"
@@ -106,6 +112,10 @@ def dynamics_section(build_dir: Path) -> str:
             continue
         s = load_json(path, "dynamics")
         kind = name.removeprefix("spatial_")
+        for key in DYNAMICS_KEYS[kind]:
+            if key not in s:
+                raise InputError(f"{path}: {key}: required key is missing (run pinbore "
+                                 "dynamics again)")
         facts = {"poincare": lambda: f"{s['kind']}" + (f", period {s['period']}" if s["period"] else "")
                  + (f", largest Lyapunov exponent {s['lyapunov_per_s']:.4g} 1/s" if s["lyapunov_per_s"] else ""),
                  "bifurcation": lambda: ", ".join(f"{k}: {v} points" for k, v in s["counts"].items()),

@@ -171,6 +171,10 @@ def test_report_needs_a_build_directory(tmp_path):
     ("reduced/run/summary.json", "{}", "reduced models"),
     ("reduced/run/summary.json", "garbage", "reduced models"),
     ("calibration/laws.json", '{"laws": {}}', "calibration"),
+    ("dynamics/poincare/summary.json", "{}", "nonlinear dynamics"),
+    ("dynamics/bifurcation/summary.json", '{"counts": 3, "wall_time_s": 1.0}', "nonlinear dynamics"),
+    ("impact/run/impact.json", '{"speed_m_per_s": 1.0}', "dynamic impacts"),
+    ("modes/run/modes.json", "{}", "flexible bodies"),
 ])
 def test_report_builds_what_it_can_and_names_what_it_cannot(tmp_path, broken, text, section):
     build = tmp_path / "build"

@@ -9,7 +9,8 @@ stress): a looser tolerance would hide a wrong factor in the flow rule or the ha
 import numpy as np
 import pytest
 
-from pinbore.fem.plasticity import ELASTIC, elastic_energy, hardening_tables, radial_return, von_mises
+from pinbore.fem.plasticity import (ELASTIC, elastic_energy, hardening_tables, radial_return,
+                                   table_end, von_mises)
 
 E, NU, Y, H = 200e9, 0.3, 250e6, 10e9
 MU, KAPPA = E / (2 * (1 + NU)), E / (3 * (1 - 2 * NU))
@@ -154,3 +155,15 @@ def test_an_elastic_point_never_yields_and_energy_is_that_of_hooke():
     assert p[0] == 0 and not eps_p.any()
     np.testing.assert_allclose(stress[0], tangent[0] @ strain[0], rtol=1e-14)
     assert elastic_energy(stress, args[0], args[1])[0] == pytest.approx(0.5 * stress[0] @ strain[0], rel=1e-13)
+
+
+def test_only_a_hardening_table_has_an_end():
+    """The warning 'past the last pair of a hardening table' is for tables only: a linear
+    law, perfectly plastic included (hardening_modulus = 0), holds for any strain."""
+    from pinbore.fem.scene import Material
+
+    Y = 250e6
+    assert table_end(Material(E=2e11, nu=0.3, yield_stress=Y, hardening_modulus=0.0)) == np.inf
+    assert table_end(Material(E=2e11, nu=0.3, yield_stress=Y)) == np.inf
+    tabled = Material(E=2e11, nu=0.3, yield_stress=Y, hardening=[[0.0, Y], [0.02, 300e6]])
+    assert table_end(tabled) == 0.02
