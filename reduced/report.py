@@ -122,6 +122,8 @@ def dynamics_section(build_dir: Path) -> str:
                  "design": lambda: "; ".join(f"{speed} rpm: " + (f"{b['low_m'] * 1e3:.3g}-{b['high_m'] * 1e3:.3g} mm"
                                                                  if b["low_m"] is not None else "none")
                                              for speed, b in s["band"].items())}[kind]()
+        if s.get("disagreement"):
+            facts += f"; NOTE: {s['disagreement']}"
         png = folder / name / f"{kind}.png"
         if png.exists():
             parts.append(figure(png_data(png), f"{caption} ({facts}; {s['wall_time_s']:.1f} s)."))

@@ -59,6 +59,19 @@ def test_duffing_attractors_and_the_sign_of_their_exponent(gamma, kind, period):
     point = duffing_point(gamma)
     assert (point["kind"], point["period"]) == (kind, period)
     assert (point["lyapunov_per_s"] > 0) == (kind == "chaotic")
+    duffing = Duffing(gamma)
+    assert flow.disagreement(kind, point["lyapunov_per_s"], duffing.period) is None
+
+
+def test_repeating_samples_beside_a_growing_exponent_are_reported():
+    """A periodic attractor's largest exponent is negative: samples that repeat beside an
+    exponent of +699 1/s at a 12 ms drive period (8 e-folds a period) contradict each other,
+    and the summary says so; a small positive estimate (finite-time noise) and the other
+    classes do not."""
+    assert "+699" in flow.disagreement("periodic", 699.0, 0.012)
+    assert flow.disagreement("periodic", 1.0, 0.012) is None
+    assert flow.disagreement("periodic", None, 0.012) is None
+    assert flow.disagreement("chaotic", 699.0, 0.012) is None
 
 
 def test_a_parallel_sweep_finds_the_period_doubling_and_resumes_from_its_cache(tmp_path):

@@ -191,6 +191,24 @@ def lyapunov(flow, state, periods: int, d0: float = 1e-7, seed: int = 0):
     return running[-1], running
 
 
+AGREEMENT_GROWTH = 0.1   # e-folds per drive period: a periodic attractor's exponent stays below
+
+
+def disagreement(kind: str, exponent, period_s: float) -> str | None:
+    """Why the class of the samples and the largest Lyapunov exponent contradict each other,
+    or None. Samples that repeat belong to a periodic attractor, whose largest exponent is
+    negative (a driven mechanism's map has no neutral direction along the flow); an estimate
+    growing by more than AGREEMENT_GROWTH e-folds a period says otherwise (a chaotic motion
+    of small amplitude, or a finite-time estimate upset by the impacts' timing). Chaos with a
+    negative exponent cannot be: classify never says so."""
+    if kind == "periodic" and exponent is not None and exponent * period_s > AGREEMENT_GROWTH:
+        return (f"the samples repeat, but the largest Lyapunov exponent is {exponent:+.4g} 1/s "
+                f"({exponent * period_s:+.3g} e-folds per drive period): the motion may be "
+                "chaotic at an amplitude below the samples' tolerance, or the estimate is "
+                "upset by the impacts; run --analysis lyapunov with more periods")
+    return None
+
+
 def classify(samples, exponent=None, tol=1e-4) -> tuple[str, int | None]:
     """("periodic", p), ("quasi-periodic", None) or ("chaotic", None)."""
     p = period_of(samples, tol)

@@ -336,13 +336,16 @@ def poincare_map(target: SceneFile, options: PoincareOptions, tmp: Path) -> dict
                                        progress=True)
     exponent, _ = dynamics().lyapunov(flow, states[-1], options.periods)
     kind, period = dynamics().classify(coords, exponent)
+    doubt = dynamics().disagreement(kind, exponent, flow.period)
+    if doubt:
+        print(f"pinbore dynamics: {target.source}: warning: {doubt}", file=sys.stderr)
     samples = observed_samples(flow, states)
     figures().write_table(tmp / "poincare.csv", ["period", "x_m", "y_m", "vx_m_per_s", "vy_m_per_s"],
                       [[options.transient + k + 1, *row] for k, row in enumerate(samples)])
     figures().poincare(tmp / "poincare.png", samples, flow.length, f"{target.path.stem}: {kind}"
                    + (f", period {period}" if period else ""), flow.observed_name())
     return {"observed": flow.observed_name(), "kind": kind, "period": period,
-            "lyapunov_per_s": _finite(exponent)}
+            "lyapunov_per_s": _finite(exponent), "disagreement": doubt}
 
 
 def lyapunov_exponent(target: SceneFile, options: LyapunovOptions, tmp: Path) -> dict:
