@@ -47,7 +47,7 @@ def read_impacts(paths) -> dict[str, tuple[lawsfile.ImpactJoint, list[lawsfile.I
             raise InputError(f"{p}: status: the impact must be complete with a rebound to "
                              f"calibrate a restitution (status {summary.status!r}, stop "
                              f"{summary.stop!r})")
-        scene = summary.scene
+        scene = summary.scene   # checked on read as an impact scene (hub_mass defaults)
         g, m = scene["geometry"], scene["materials"]
         e_star = 1 / ((1 - m["pin"]["nu"] ** 2) / m["pin"]["E"]
                       + (1 - m["bore"]["nu"] ** 2) / m["bore"]["E"])
@@ -58,7 +58,7 @@ def read_impacts(paths) -> dict[str, tuple[lawsfile.ImpactJoint, list[lawsfile.I
             bore_density_kg_per_m3=m["bore"]["density"], pin_radius_m=g["pin_radius"],
             bore_radius_m=g["bore_radius"],   # the nominal mass (the FE mesh's is within 0.4 %)
             pin_mass_kg_per_m=m["pin"]["density"] * math.pi * g["pin_radius"] ** 2
-            + scene["impact"]["hub_mass"],
+            + scene["impact"].get("hub_mass", 0.0),
             pin_plasticity=lawsfile.plasticity_label(m["pin"]),
             bore_plasticity=lawsfile.plasticity_label(m["bore"]))
         groups.setdefault(joint.key(), (joint, []))[1].append(lawsfile.ImpactPoint(

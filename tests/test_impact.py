@@ -237,6 +237,7 @@ def test_plastic_impact_loses_energy_above_first_yield():
     ("impact", "hub_mass", -0.1, "greater than or equal to 0"),
     ("impact", "time_step", 1e-5, "must be <="),
     ("impact", "spectral_radius", 1.5, "less than or equal to 1"),
+    ("impact", "initial_gap", 3e-5, "below the diametral clearance 2c = 2e-05 m"),
 ])
 def test_bad_impact_scene(write_scene, tmp_path, table, key, value, rule):
     data = impact_scene()
@@ -365,3 +366,81 @@ def test_slow_plastic_impact_loses_the_quasi_static_loops_plastic_work():
           f"{book.residual_J_per_m:.3e}, the impact's plastic work {book.plastic_J_per_m:.5e}")
     assert plastic.restitution < elastic.restitution and work > 0.01 * book.impact_J_per_m
     assert abs(loss - work) <= abs(book.residual_J_per_m) + 0.01 * work
+
+
+def test_the_default_start_is_inside_the_bore():
+    """A heavy pin (1e4 kg/m) has a long contact and so a long time step: five steps of flight
+    at 1 m/s would start it beyond the diametral clearance, through the far side of the
+    bore. The default flight stops at 1.5 c."""
+    from pinbore.core.scene import validate
+    from pinbore.fem.impact.scene import ImpactScene
+
+    scene = validate(ImpactScene, impact_scene(impact={"hub_mass": 1e4}), "test")
+    assert 5 * scene.dt * scene.impact.speed > 2 * scene.geometry.clearance
+    assert scene.initial_gap == pytest.approx(1.5 * scene.geometry.clearance)
+
+
+@pytest.fixture(scope="module")
+def finished():
+    """A finished impact's summary (the test scene at 1 m/s)."""
+    return Impact(impact_scene()).summary
+
+
+def test_a_sound_impact_has_no_verdict(finished):
+    from pinbore.fem.impact import file as impact_file
+
+    assert impact_file.verdict(finished) == []
+
+
+@pytest.mark.parametrize("change, reason", [
+    (lambda s, e: {"restitution": 1.7}, "outside 0 < e <= 1"),
+    (lambda s, e: {"restitution": -1.02}, "outside 0 < e <= 1"),
+    (lambda s, e: {"energy": e.model_copy(update={"max_relative_residual": 398.0})},
+     "energy book's residual reached 398"),
+    (lambda s, e: {"contact_duration_s": 2.8e-7}, "contact duration 2.8e-07 s"),
+    (lambda s, e: {"energy": e.model_copy(update={"wave_J_per_m": 2 * e.impact_J_per_m})},
+     "vibration energy 2 E0"),
+])
+def test_garbage_is_suspect(finished, change, reason):
+    """What a pin started through the far side of its bore produced (e = -1.02, a book
+    residual of 398 E0, a contact of 0.28 us against 887 us estimated), each alone: the
+    verdict names it (the run then writes status suspect and exits 1)."""
+    from pinbore.fem.impact import file as impact_file
+
+    bad = finished.model_copy(update=change(finished, finished.energy))
+    reasons = impact_file.verdict(bad)
+    assert len(reasons) == 1 and reason in reasons[0], reasons
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"restitution": 1.7}, "restitution: 1.7 is outside 0 < e <= 1"),
+    ({"restitution": -0.4}, "restitution: -0.4 is outside"),
+    ({"restitution": float("nan")}, "restitution: nan is outside"),
+    ({"speed_m_per_s": 0.0}, "speed_m_per_s: must be a positive number"),
+    ({"scene": {}}, "scene: kind: required key is missing"),
+])
+def test_an_impact_summary_that_does_not_fit_is_one_line(finished, tmp_path, change, message):
+    """impact.json is checked on read (the calibration fits what it reads): one line."""
+    from pinbore.core.errors import InputError
+    from pinbore.fem.impact import file as impact_file
+
+    path = tmp_path / "impact.json"
+    impact_file.write_summary(path, finished.model_copy(update=change))
+    if change.get("restitution", 0.0) != change.get("restitution", 0.0):   # NaN: JSON's null
+        text = path.read_text()   # a hand-edited file says NaN
+        path.write_text(text.replace('"restitution": null', '"restitution": NaN'))
+    with pytest.raises(InputError) as err:
+        impact_file.read_summary(path)
+    assert message in str(err.value) and "\n" not in str(err.value)
+
+
+def test_a_scene_record_without_hub_mass_reads(finished, tmp_path):
+    """hub_mass has a default: a summary whose scene leaves it out reads, and its joint's
+    mass is the pin's."""
+    from pinbore.fem.impact import file as impact_file
+
+    scene = copy.deepcopy(finished.scene)
+    scene["impact"].pop("hub_mass")
+    path = tmp_path / "impact.json"
+    impact_file.write_summary(path, finished.model_copy(update={"scene": scene}))
+    assert impact_file.read_summary(path).scene["impact"].get("hub_mass", 0.0) == 0.0

@@ -97,8 +97,9 @@ class EnergyBook(Record):
 class ImpactSummary(Record):
     scene_file: str
     scene: dict
-    status: str                      # complete | incomplete
+    status: str                      # complete | incomplete | suspect (see `verdict`)
     stop: str | None
+    verdict: list[str] = []          # why a finished run's numbers are not to be trusted
     speed_m_per_s: float
     pin_mass_kg_per_m: float         # the FE pin's mass (annulus + hub + added)
     hub_mass_kg_per_m: float         # the rigid hub: its own core and the added mass
@@ -132,9 +133,57 @@ def history_beside(summary_path) -> Path:
     return (path if path.is_dir() else path.parent) / HISTORY
 
 
+# a finished impact's numbers are suspect beyond these (measured on the shipped study: energy
+# book <= 6e-4 of E0, contact 0.46-0.97 of Liu's estimate, wave energy <= 0.76 E0)
+BOOK_LIMIT = 1e-2               # the energy book's largest residual, of E0
+DURATION_RANGE = (0.1, 10.0)    # the contact duration, of the estimate on Liu's law
+
+
+def verdict(summary: ImpactSummary) -> list[str]:
+    """Why a finished impact (status complete) is not to be trusted, or nothing: an energy
+    book that does not close, a restitution outside 0 < e <= 1 (energy from nowhere, or no
+    rebound), a contact far shorter or longer than Liu's law allows, more energy left in the
+    bodies' vibration than came in."""
+    reasons = []
+    e0 = summary.energy.impact_J_per_m
+    if not summary.energy.max_relative_residual <= BOOK_LIMIT:
+        reasons.append(f"the energy book's residual reached {summary.energy.max_relative_residual:.3g} "
+                       f"E0 (limit {BOOK_LIMIT:g})")
+    e = summary.restitution
+    if e is not None and not 0 < e <= 1 + summary.energy.max_relative_residual:
+        reasons.append(f"restitution e = {e:.4g} outside 0 < e <= 1")
+    duration, estimate = summary.contact_duration_s, summary.estimate.get("contact_duration_s")
+    if duration is not None and estimate:
+        low, high = DURATION_RANGE
+        if not low * estimate <= duration <= high * estimate:
+            reasons.append(f"contact duration {duration:.3g} s against {estimate:.3g} s estimated "
+                           f"on Liu's law (outside {low:g}-{high:g} times)")
+    if not summary.energy.wave_J_per_m <= e0 * (1 + BOOK_LIMIT):
+        reasons.append(f"vibration energy {summary.energy.wave_J_per_m / e0:.3g} E0 after the "
+                       "impact, more than came in")
+    return reasons
+
+
 def write_summary(path: Path, summary: ImpactSummary) -> None:
     path.write_text(summary.model_dump_json(indent=2) + "\n")
 
 
 def read_summary(path, source: str | None = None) -> ImpactSummary:
-    return read_json(ImpactSummary, path, COMMAND, source)
+    """impact.json, checked: its keys, a positive impact speed and mass, a restitution
+    (if any) in 0 < e <= 1, a scene record that reads as an impact scene."""
+    from pinbore.core.errors import InputError   # noqa: PLC0415
+    from pinbore.core.scene import validate   # noqa: PLC0415
+    from pinbore.fem.impact.scene import ImpactScene   # noqa: PLC0415
+
+    summary = read_json(ImpactSummary, path, COMMAND, source)
+    where = str(path) if source is None else source
+    again = f"(run pinbore {COMMAND} again)"
+    for key in ("speed_m_per_s", "pin_mass_kg_per_m"):
+        value = getattr(summary, key)
+        if not (value == value and 0 < value < float("inf")):
+            raise InputError(f"{where}: {key}: must be a positive number, not {value} {again}")
+    e = summary.restitution
+    if e is not None and not 0 < e <= 1 + summary.energy.max_relative_residual:
+        raise InputError(f"{where}: restitution: {e} is outside 0 < e <= 1 {again}")
+    validate(ImpactScene, summary.scene, f"{where}: scene")
+    return summary

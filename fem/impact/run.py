@@ -75,7 +75,14 @@ def run(scene_path, out, scene: ImpactScene | None = None, comm=MPI.COMM_WORLD) 
         if scene.output.picture:
             figure(tmp / "force_time.png", result, scene, summary)
         summary.wall_time_s["total"] = time.perf_counter() - start
+        reasons = impact_file.verdict(summary) if result.stop is None else []
+        if reasons:
+            summary = summary.model_copy(update={"status": "suspect", "verdict": reasons})
         impact_file.write_summary(tmp / impact_file.SUMMARY, summary)
+    if reasons:
+        print(f"pinbore impact: {scene_path}: suspect: {'; '.join(reasons)}; wrote {out} "
+              "(status suspect)", file=sys.stderr)
+        return 1
     if result.stop is not None:
         print(f"pinbore impact: {scene_path}: stopped early: {result.stop}; kept "
               f"{len(result.records)} time points in {out} (marked incomplete)", file=sys.stderr)

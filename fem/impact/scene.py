@@ -18,8 +18,8 @@ Either body yields where its material has a `yield_stress` (von Mises, isotropic
 plastic work then enters the energy book.
 
 At t = 0 the pin sits `impact.initial_gap` short of touching the bore along
-`impact.direction_deg` and moves at `impact.speed` (m/s, v0 > 0) along it; nothing else moves
-and nothing is loaded.
+`impact.direction_deg` (below the diametral clearance 2c: the pin inside its bore) and moves
+at `impact.speed` (m/s, v0 > 0) along it; nothing else moves and nothing is loaded.
 
 Before meshing, the impact is estimated on Liu's law (laws.elastic.liu, within tens of
 percent of the FE force in conformal contact: see README, Calibration) with the mass m:
@@ -43,6 +43,7 @@ from pinbore.meshes.model import Geometry, MeshOptions
 MIN_STEPS_PER_CONTACT = 10     # fewer steps than this over the estimated contact: refused
 APPROACH_MARGIN = 1.3          # the mesh is sized for this multiple of the estimated d_m
 INITIAL_GAP_STEPS = 5          # default flight before contact, in time steps
+MAX_DEFAULT_GAP = 1.5          # ... but at most this many clearances c (below 2c: inside the bore)
 
 
 class DynamicMaterial(Material):
@@ -113,6 +114,11 @@ class ImpactScene(Strict):
             raise ValueError(f"impact.time_step: must be <= {estimate.duration / MIN_STEPS_PER_CONTACT:.3g} s "
                              f"(estimated contact duration {estimate.duration:.3g} s on Liu's "
                              f"law / {MIN_STEPS_PER_CONTACT} steps); got {self.dt:.3g} s")
+        diametral = 2 * self.geometry.clearance
+        if self.impact.initial_gap is not None and self.impact.initial_gap >= diametral:
+            raise ValueError(f"impact.initial_gap: {self.impact.initial_gap:.3g} m short of touching "
+                             f"puts the pin through the far side of the bore: it must be below the "
+                             f"diametral clearance 2c = {diametral:.3g} m")
         self.equivalent_fem_scene   # the geometry, mesh and contact rules of the FE scene
         return self
 
@@ -147,10 +153,13 @@ class ImpactScene(Strict):
 
     @property
     def initial_gap(self) -> float:
-        """Flight (m) before first touch: initial_gap, or INITIAL_GAP_STEPS steps at v0."""
+        """Flight (m) before first touch: initial_gap, or INITIAL_GAP_STEPS steps at v0 but
+        at most MAX_DEFAULT_GAP c (the pin starts clear of the far side of the bore by c/2: a
+        flight of 2c or more would start it through that side)."""
         if self.impact.initial_gap is not None:
             return self.impact.initial_gap
-        return INITIAL_GAP_STEPS * self.dt * self.impact.speed
+        return min(INITIAL_GAP_STEPS * self.dt * self.impact.speed,
+                   MAX_DEFAULT_GAP * self.geometry.clearance)
 
     @functools.cached_property
     def equivalent_fem_scene(self) -> FemScene:
