@@ -55,6 +55,21 @@ def read(path, length: float | None) -> Curve | Curve3D:
     return read_curve(path, length, fe=fe) if fe.dim == 2 else read_curve_3d(path, length, fe=fe)
 
 
+def read_all(paths, length: float | None) -> list:
+    """Every curve of `paths` (read), none given twice: the same file twice, or two runs with
+    the same steps (a copy) would weigh one run double in a fit."""
+    curves, seen = [], {}
+    for path in paths:
+        curve = read(path, length)
+        fingerprint = (type(curve).__name__, curve.approach.tobytes(), curve.force.tobytes())
+        if fingerprint in seen:
+            raise InputError(f"{path}: the same curve as {seen[fingerprint]} (the same run given "
+                             "twice); give each FE run once")
+        seen[fingerprint] = path
+        curves.append(curve)
+    return curves
+
+
 def read_curve_3d(path, length: float | None, min_points: int = 3, fe=None) -> Curve3D:
     """Every step of a 3D DIR/curve.csv with the tilt columns, and the scene in
     DIR/result.json; `length` as in read_curve."""
@@ -71,7 +86,7 @@ def read_curve_3d(path, length: float | None, min_points: int = 3, fe=None) -> C
         row = int(np.argmax((fe.approach <= 0) | (fe.force <= 0))) + 1
         raise InputError(f"{path}: {fe_curve.column(3, 'approach').name}, "
                          f"{fe_curve.column(3, 'force').name}: must be positive (row {row})")
-    scene = _scene(path)
+    scene = _scene(path, fe)
     g, m = scene.geometry, scene.materials
     if g.tilt_deg:
         raise InputError(f"{path}: geometry.tilt_deg: the 3D calibration reads the tilt as a load "
@@ -105,7 +120,7 @@ def read_curve(path, length: float | None, min_points: int = 3, fe=None) -> Curv
     if np.any(push.force <= 0):
         raise InputError(f"{path}: {force}: must be positive (row "
                          f"{int(np.argmax(push.force <= 0)) + 1})")
-    scene = _scene(path)
+    scene = _scene(path, fe)
     g = scene.geometry
     joint = replace(scene.joint, length=length if length is not None else 2 * g.bore_radius)
     return Curve(path.parent.name, push.approach, push.force, push.half_angle, joint,
@@ -121,8 +136,10 @@ def section_of(scene: FemScene) -> tuple:
             m.bore.E, m.bore.nu)
 
 
-def _scene(path: Path) -> FemScene:
-    """The scene the FE run recorded in the result.json beside the curve."""
+def _scene(path: Path, fe) -> FemScene:
+    """The scene the FE run recorded in the result.json beside the curve, checked against the
+    curve: of its dimension, and with every step the run converged (a curve cut short is not
+    the run's)."""
     result = path.parent / "result.json"
     if not result.is_file():
         raise InputError(f"{path}: needs the FE run's result.json beside it (the scene's "
@@ -131,4 +148,13 @@ def _scene(path: Path) -> FemScene:
     if "scene" not in data:
         raise InputError(f"{result}: scene: required key is missing "
                          f"({RUN_AGAIN.format(command='fem')})")
-    return validate(FemScene, data["scene"], f"{result}: scene")
+    scene = validate(FemScene, data["scene"], f"{result}: scene")
+    if scene.geometry.dim != fe.dim:
+        raise InputError(f"{result}: scene: geometry.dim = {scene.geometry.dim}, but {path.name} "
+                         f"is a {fe.dim}D curve: the result.json of another run")
+    converged = data.get("steps_converged")
+    if isinstance(converged, int) and fe.points < converged:
+        raise InputError(f"{path}: {fe.points} steps, but the run converged {converged} "
+                         f"({result.name}): the curve was cut short "
+                         f"({RUN_AGAIN.format(command='fem')})")
+    return scene

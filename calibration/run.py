@@ -13,7 +13,7 @@ import numpy as np
 
 from pinbore.calibration import figures, lawsfile, restitution, sliced
 from pinbore.calibration.curves import Curve
-from pinbore.calibration.curves import read as read_any
+from pinbore.calibration.curves import read_all
 from pinbore.calibration.fit import NotFitted, errors, fit
 from pinbore.calibration.lawsfile import LAWS, law_force
 from pinbore.core.errors import InputError
@@ -154,7 +154,7 @@ def per_length(name: str | None, table, curves, curves_3d) -> sliced.PerLength:
 
 
 def run(paths, out, length=None, per_length_name=None, impacts=()) -> int:
-    read = [read_any(p, length) for p in paths]
+    read = read_all(paths, length)
     restitution_laws = restitution.fit_all(impacts) if impacts else {}
     curves = [c for c in read if isinstance(c, Curve)]
     curves_3d = [c for c in read if not isinstance(c, Curve)]

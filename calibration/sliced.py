@@ -194,6 +194,12 @@ def calibrate(curves, per_length: PerLength) -> dict[str, lawsfile.SlicedLaw]:
         groups.setdefault(group_key(c), []).append(c)
     laws = {}
     for key, members in sorted(groups.items()):
+        lengths = sorted({c.length for c in members})
+        if len(lengths) < 2:
+            raise InputError(f"{', '.join(c.path.as_posix() for c in members)}: 3D group {key}: "
+                             f"curves of one length ({lengths[0]:g} m); the end length is what "
+                             "carries a sliced law from one length to another, and it needs "
+                             "curves of two lengths at least (same ends and materials)")
         table_of = {c.name: per_length_table(per_length.force, c) for c in members}
         tables_of = [table_of[c.name] for c in members]
         try:

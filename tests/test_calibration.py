@@ -125,6 +125,37 @@ def test_bad_curves_are_one_line_exit_2(fe_run, tmp_path, edit, message):
     assert not (tmp_path / "out").exists()
 
 
+def test_a_curve_cut_short_of_its_run_is_one_line(fe_run, tmp_path):
+    """The run converged 4 steps; a curve.csv of 3 is not its curve."""
+    path = _edited(fe_run, tmp_path, lambda r: r[:4])
+    done = pinbore("calibrate", path, "--out", tmp_path / "out")
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
+    assert "3 steps, but the run converged 4 (result.json): the curve was cut short" in done.stderr
+
+
+def test_a_curve_beside_another_dimensions_run_is_one_line(fe_run, tmp_path):
+    """A 2D curve beside the result.json of a 3D run (a TypeError once)."""
+    path = _edited(fe_run, tmp_path, lambda r: r)
+    result = json.loads((path.parent / "result.json").read_text())
+    result["scene"]["geometry"].update(dim=3, length=0.01)
+    result["scene"].setdefault("mesh", {})["max_cells"] = 10**7   # a valid 3D scene
+    (path.parent / "result.json").write_text(json.dumps(result))
+    done = pinbore("calibrate", path, "--out", tmp_path / "out")
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
+    assert "scene: geometry.dim = 3, but curve.csv is a 2D curve" in done.stderr
+
+
+@pytest.mark.parametrize("how", ["same file", "a copy"])
+def test_a_curve_given_twice_is_one_line(fe_run, tmp_path, how):
+    """One run given twice would weigh double in the fit."""
+    other = fe_run / "curve.csv"
+    if how == "a copy":
+        other = _edited(fe_run, tmp_path, lambda r: r)
+    done = pinbore("calibrate", fe_run / "curve.csv", other, "--out", tmp_path / "out")
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
+    assert "the same curve as" in done.stderr
+
+
 def test_curve_without_its_scene(fe_run, tmp_path):
     path = _edited(fe_run, tmp_path, lambda r: r)
     (path.parent / "result.json").unlink()
