@@ -224,3 +224,41 @@ def test_bad_spatial_scene_is_one_line_naming_key_and_rule(change, words):
     assert "\n" not in line
     for word in words:
         assert word in line, line
+
+
+def test_the_3d_deployment_has_the_planar_ones_shortest_period():
+    """The torsion springs of the 3D deployment about their hinge axes: its shortest period
+    (what sizes a fixed step and bounds the steps a run can need) equals the planar
+    deployment's, the same panels and springs in the plane (a spatial torsion element crashed
+    this sum once)."""
+    from pinbore.reduced.mechanism import kinds
+    from pinbore.reduced.mechanism.model import shortest_period
+
+    periods = []
+    for name in ("solar_panel_deployment", "solar_panel_deployment_3d"):
+        path = ROOT / "scenes" / "reduced" / f"{name}.toml"
+        periods.append(shortest_period(build(kinds.load(path), str(path), path.parent)))
+    assert periods[1] == pytest.approx(periods[0], rel=1e-9)
+
+
+@pytest.mark.parametrize("name", ["slider_crank_flores2004", "spatial_slider_crank_flores"])
+def test_a_mass_ratio_that_cannot_be_resolved_is_refused_at_once(tmp_path, name):
+    """A slider of 1e-12 kg on the Flores joint: a contact period of 1.6e-10 s, 6e8 steps at
+    two a period, beyond the integrator's 5e6 (the run worked on for minutes): one line,
+    before any work; 1e-6 kg (7.6e5 steps) builds."""
+    import tomli_w
+    from conftest import pinbore
+
+    data = tomllib.loads((ROOT / "scenes" / "reduced" / f"{name}.toml").read_text())
+    slider = next(b for b in data["bodies"] if b["name"] == "slider")
+    slider["mass"] = 1e-12
+    path = tmp_path / "light.toml"
+    path.write_text(tomli_w.dumps(data))
+    done = pinbore("reduced", path, "--out", tmp_path / "out")
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
+    assert "bodies: the shortest contact or torsion period" in done.stderr
+    assert "the mass ratio cannot be resolved" in done.stderr
+    slider["mass"] = 1e-6
+    from pinbore.reduced.mechanism import kinds
+    path.write_text(tomli_w.dumps(data))
+    build(kinds.load(path), str(path), path.parent)

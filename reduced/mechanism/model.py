@@ -175,7 +175,28 @@ def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
     model.y0 = geometry.place(model, [] if ideal else [(closing(geometry, c), c.start) for c in joints])
     if scene.integrator.method == "dopri5_fixed":
         fixed_step(model, source)   # refuses a default step that cannot finish, before any work
+    else:
+        resolvable(model, source)
     return model
+
+
+STEPS_PER_PERIOD_LEAST = 2   # no method follows a vibration in fewer steps a period
+
+
+def resolvable(model: Model, source: str = "scene") -> None:
+    """One InputError line, before any work, when the shortest period of the scene's compliant
+    elements (shortest_period: a light body on a stiff contact) would need more than MAX_STEPS
+    steps over the duration even at STEPS_PER_PERIOD_LEAST steps a period: the integrator would
+    work until it stops at MAX_STEPS (a spatial body of 1e-12 kg on the Flores joint: a period
+    of 1.3e-10 s, 7e8 steps; 1e-6 kg runs, 7.6e5 steps)."""
+    period = shortest_period(model)
+    needed = model.scene.duration * STEPS_PER_PERIOD_LEAST / period
+    if needed > MAX_STEPS:
+        raise InputError(f"{source}: bodies: the shortest contact or torsion period, {period:.3g} s "
+                         f"(a body's mass or inertia against a stiffness), needs at least "
+                         f"{needed:.3g} steps over the duration, more than {MAX_STEPS:.0e}: the "
+                         "mass ratio cannot be resolved (make the body heavier or the duration "
+                         "shorter)")
 
 
 def closing(geometry, c) -> list:
@@ -528,10 +549,10 @@ def shortest_period(model: Model) -> float:
             periods.append(2 * math.pi * math.sqrt(reduced(
                 model.contacts[k, CONTACT_BEARING_BODY], model.contacts[k, CONTACT_JOURNAL_BODY],
                 lambda b: 1 / masses[b]) / stiffness))
-    for t in model.torsion:
+    for t, element in zip(model.torsion, model.scene.torsion):   # a row each, in the scene's order
         if t[TORSION_STIFFNESS] > 0:
             periods.append(2 * math.pi * math.sqrt(reduced(
-                t[TORSION_BODY_I], t[TORSION_BODY_J], lambda b: geometry.inverse_inertia(b, t))
+                t[TORSION_BODY_I], t[TORSION_BODY_J], lambda b: geometry.inverse_inertia(b, element))
                 / t[TORSION_STIFFNESS]))
     return min(periods, default=math.inf)
 
