@@ -11,6 +11,14 @@ Multibody (around scenes/reduced/slider_crank_flores2004.toml, one crank revolut
 radius kept), restitution and drive speed swept alone; every friction law at mu 0, 0.2, 0.8;
 every damping law; every integrator at its defaults.
 
+Spatial multibody (around scenes/reduced/spatial_slider_crank_flores.toml, one revolution):
+the slider's mass from 1e-12 kg to 10 kg (the mass ratio), and scenes with two joints or two
+clearance joints of one name.
+
+Dynamic impact (around scenes/impact/study_steel_c100um_v1000mm_s.toml, coarse: 30 steps
+over the contact): the hub's added mass, the impact speed, the initial gap (up to and beyond
+the diametral clearance) and the steps over the contact, swept alone.
+
 FE (around scenes/fem/steel_c10um.toml, 2D, 4 load steps, no pictures): c/R, modulus ratio
 pin/bore, Poisson's ratio, max_approach, penalty factor (penalty and augmented Lagrangian),
 mu = 0.8 with a rotation after the push.
@@ -18,12 +26,13 @@ mu = 0.8 with a rotation after the push.
 Outcome of a point: complete / suspect / incomplete (from the file it wrote), refused (exit
 2, bad input), hang (wall-clock limit), crash (exit 3, another exit code or signal, or no
 readable file). The criterion (column `ok`): no NaN, no hang, no crash, and no `complete`
-run whose numbers break the verdict's thresholds (recomputed here from summary.json, not
-taken from its status; FE: a run marked complete must have converged every load step of
+run whose numbers break the verdict's thresholds (recomputed here from summary.json or
+impact.json, not taken from its status; FE: a run marked complete must have converged every load step of
 its programme and, with the augmented Lagrangian, meet its gap tolerance). The script exits 0 whatever the points do (it is
 a measurement) and prints `stress: N points, M failed the criterion` and the failures.
 
-Writes OUT/stress_reduced.csv, OUT/stress_fem.csv and OUT/stress.png.
+Writes OUT/stress_reduced.csv (planar and spatial), OUT/stress_impact.csv, OUT/stress_fem.csv
+and OUT/stress.png.
 """
 
 import argparse
@@ -49,14 +58,17 @@ from tqdm import tqdm
 
 from pinbore.core.figures import plt, save_png
 from pinbore.fem.curve import COLUMNS as CURVE_COLUMNS
+from pinbore.fem.impact import file as impact_file
 from pinbore.laws.dissipative import HYSTERESIS
 from pinbore.reduced.mechanism import kinds, verdict
 from pinbore.reduced.mechanism.scene import clearance_joints
 
 ROOT = Path(__file__).resolve().parent.parent
 REDUCED_SCENE = ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml"
+SPATIAL_SCENE = ROOT / "scenes" / "reduced" / "spatial_slider_crank_flores.toml"
+IMPACT_SCENE = ROOT / "scenes" / "impact" / "study_steel_c100um_v1000mm_s.toml"
 FEM_SCENE = ROOT / "scenes" / "fem" / "steel_c10um.toml"
-TIMEOUT = {"reduced": 120.0, "fem": 300.0}
+TIMEOUT = {"reduced": 120.0, "fem": 300.0, "impact": 300.0}
 WORKERS = 2
 OUTCOMES = ["complete", "suspect", "incomplete", "refused", "hang", "crash"]
 COLOURS = {"complete": "#4caf50", "suspect": "#ffc107", "incomplete": "#ff7f0e",
@@ -113,6 +125,61 @@ def reduced_points() -> list[dict]:
     for method in ("dopri5", "rosenbrock23", "dopri5_fixed"):
         add("integrator (defaults)", method, "integrator", method,
             lambda s, j, method=method: s.update(integrator={"method": method}))
+    return points
+
+
+def spatial_points() -> list[dict]:
+    """The spatial slider-crank's points: the mass ratio, names given twice."""
+    base = tomllib.loads(SPATIAL_SCENE.read_text())
+    base["duration"] = 0.012
+    base["output"] = {"plots": False}
+    points = []
+
+    def add(sweep, label, parameter, value, edit):
+        scene = copy.deepcopy(base)
+        edit(scene)
+        points.append({"command": "reduced", "sweep": sweep, "label": label, "parameter": parameter,
+                       "value": value, "scene": scene})
+
+    def slider(scene):
+        return next(b for b in scene["bodies"] if b["name"] == "slider")
+
+    for mass in (1e-12, 1e-9, 1e-6, 1e-3, 1e-1, 10.0):
+        add("spatial: slider mass (kg)", f"{mass:.0e}", "slider mass", mass,
+            lambda s, m=mass: slider(s).update(mass=m))
+    add("spatial: a name twice", "joints", "names", "joints",
+        lambda s: s["joints"][1].update(name=s["joints"][0]["name"]))
+    add("spatial: a name twice", "clearance joints", "names", "clearance joints",
+        lambda s: s["clearance_joints"].append(copy.deepcopy(s["clearance_joints"][0])))
+    return points
+
+
+def impact_points() -> list[dict]:
+    """The dynamic impact's points, each parameter alone around a coarse steel impact."""
+    base = tomllib.loads(IMPACT_SCENE.read_text())
+    base["impact"]["steps_per_contact"] = 30
+    base["output"] = {"picture": False}
+    clearance = base["geometry"]["bore_radius"] - base["geometry"]["pin_radius"]
+    points = []
+
+    def add(sweep, label, parameter, value, edit):
+        scene = copy.deepcopy(base)
+        edit(scene["impact"])
+        points.append({"command": "impact", "sweep": sweep, "label": label, "parameter": parameter,
+                       "value": value, "scene": scene})
+
+    for mass in (0.0, 1.0, 1e2, 1e4):
+        add("impact: hub mass (kg/m)", f"{mass:g}", "hub_mass", mass,
+            lambda i, m=mass: i.update(hub_mass=m))
+    for speed in (0.01, 0.1, 5.0, 20.0):
+        add("impact: speed (m/s)", f"{speed:g}", "speed", speed,
+            lambda i, v=speed: i.update(speed=v))
+    for gap in (0.1, 1.0, 1.9, 2.0, 3.0):
+        add("impact: initial gap (c)", f"{gap:g}", "initial_gap / c", gap,
+            lambda i, g=gap: i.update(initial_gap=g * clearance))
+    for steps in (10, 100):
+        add("impact: steps over the contact", f"{steps}", "steps_per_contact", steps,
+            lambda i, n=steps: i.update(steps_per_contact=n))
     return points
 
 
@@ -195,7 +262,7 @@ def run_point(point: dict) -> dict:
             code = None
         wall = time.perf_counter() - start
         files = {}
-        for name in ("summary.json", "result.json", "curve.csv"):
+        for name in ("summary.json", "result.json", "curve.csv", "impact.json"):
             path = out / name
             if path.exists():
                 files[name] = path.read_text()
@@ -340,6 +407,59 @@ REDUCED_COLUMNS = ["sweep", "parameter", "value", "outcome", "status", "exit_cod
                    "verdict", "ok", "failure"]
 
 
+# ---------------------------------------------------------------- impact rows
+
+def impact_breaks(s: dict) -> list[str]:
+    """The impact verdict's thresholds (fem.impact.file's limits) recomputed from impact.json."""
+    broken = []
+    energy = s["energy"]
+    e0 = energy["impact_J_per_m"]
+    if not energy["max_relative_residual"] <= impact_file.BOOK_LIMIT:
+        broken.append(f"energy book {energy['max_relative_residual']:.3g} E0")
+    e = s.get("restitution")
+    if e is not None and not 0 < e <= 1 + energy["max_relative_residual"]:
+        broken.append(f"e = {e:.4g}")
+    duration, estimate = s.get("contact_duration_s"), s["estimate"]["contact_duration_s"]
+    low, high = impact_file.DURATION_RANGE
+    if duration is not None and not low * estimate <= duration <= high * estimate:
+        broken.append(f"contact {duration / estimate:.3g} of the estimate")
+    if not energy["wave_J_per_m"] <= e0 * (1 + impact_file.BOOK_LIMIT):
+        broken.append(f"vibration {energy['wave_J_per_m'] / e0:.3g} E0")
+    return broken
+
+
+def impact_row(done: dict) -> dict:
+    outcome, s = outcome_of(done, "impact.json")
+    row = {"sweep": done["sweep"], "parameter": done["parameter"], "value": done["value"],
+           "outcome": outcome, "status": (s or {}).get("status", ""),
+           "exit_code": "" if done["exit_code"] is None else done["exit_code"],
+           "wall_time_s": f"{done['wall_s']:.2f}"}
+    nan = s is not None and any_nan({k: v for k, v in s.items() if k != "restitution"})
+    broken = []
+    if s is not None and outcome != "crash":
+        energy, estimate = s["energy"], s["estimate"]["contact_duration_s"]
+        duration = s.get("contact_duration_s")
+        row |= {"restitution": "" if s.get("restitution") is None else f"{s['restitution']:.4f}",
+                "contact_over_estimate": "" if duration is None else f"{duration / estimate:.3g}",
+                "book_residual_over_E0": f"{energy['max_relative_residual']:.3g}",
+                "vibration_over_E0": f"{energy['wave_J_per_m'] / energy['impact_J_per_m']:.3g}",
+                "steps": s.get("steps", ""), "verdict": "; ".join(s.get("verdict", []))}
+        if s["status"] == "complete":
+            broken = impact_breaks(s)
+    if outcome in ("refused", "crash", "incomplete") and not row.get("verdict"):
+        row["verdict"] = first_line(done["stderr"])
+    row["nan"] = nan
+    failure = failures(done, outcome, nan and "NaN in impact.json", broken, TIMEOUT["impact"])
+    row["ok"] = not failure
+    row["failure"] = "; ".join(failure)
+    return row
+
+
+IMPACT_COLUMNS = ["sweep", "parameter", "value", "outcome", "status", "exit_code", "wall_time_s",
+                  "restitution", "contact_over_estimate", "book_residual_over_E0",
+                  "vibration_over_E0", "steps", "nan", "verdict", "ok", "failure"]
+
+
 # ---------------------------------------------------------------- FE rows
 
 # the curve.csv columns whose NaN means "undefined here", not a lost value (e.g. the residual
@@ -428,15 +548,15 @@ def sweeps_of(rows) -> dict[str, list[dict]]:
     return sweeps
 
 
-def heat_map(path: Path, reduced_rows, fem_rows) -> None:
+def heat_map(path: Path, panels) -> None:
     """One strip per sweep, a cell per point coloured by outcome and labelled by its value
-    (a cell that failed the criterion is crossed)."""
-    panels = [("multibody (slider-crank, 1 revolution)", sweeps_of(reduced_rows)),
-              ("FE 2D (steel_c10um, 4 steps)", sweeps_of(fem_rows))]
+    (a cell that failed the criterion is crossed); `panels`: (title, rows) with rows."""
+    panels = [(title, sweeps_of(rows)) for title, rows in panels if rows]
     width = max(len(cells) for _, sweeps in panels for cells in sweeps.values())
     heights = [len(sweeps) for _, sweeps in panels]
-    fig, axes = plt.subplots(2, 1, figsize=(2.6 + 1.05 * width, 0.42 * sum(heights) + 2.2),
-                             gridspec_kw={"height_ratios": heights})
+    fig, axes = plt.subplots(len(panels), 1, figsize=(2.6 + 1.05 * width, 0.42 * sum(heights) + 2.2),
+                             gridspec_kw={"height_ratios": heights}, squeeze=False)
+    axes = axes[:, 0]
     for ax, (title, sweeps) in zip(axes, panels):
         for i, (sweep, cells) in enumerate(sweeps.items()):
             for j, row in enumerate(cells):
@@ -466,7 +586,9 @@ def heat_map(path: Path, reduced_rows, fem_rows) -> None:
 def main(out: Path, only: str | None, sweep: str | None, limit: int | None) -> int:
     points = []
     if only in (None, "reduced"):
-        points += reduced_points()
+        points += reduced_points() + spatial_points()
+    if only in (None, "impact"):
+        points += impact_points()
     if only in (None, "fem"):
         points += fem_points()
     if sweep:
@@ -481,15 +603,21 @@ def main(out: Path, only: str | None, sweep: str | None, limit: int | None) -> i
         for future in tqdm(as_completed(futures), total=len(points), desc="stress", unit="point"):
             done[futures[future]] = future.result()
     reduced_rows = [reduced_row(d) for d in done if d["command"] == "reduced"]
+    impact_rows = [impact_row(d) for d in done if d["command"] == "impact"]
     fem_rows = [fem_row(d) for d in done if d["command"] == "fem"]
     if reduced_rows:
         write_csv(out / "stress_reduced.csv", REDUCED_COLUMNS, reduced_rows)
+    if impact_rows:
+        write_csv(out / "stress_impact.csv", IMPACT_COLUMNS, impact_rows)
     if fem_rows:
         write_csv(out / "stress_fem.csv", FEM_COLUMNS, fem_rows)
-    if reduced_rows and fem_rows:
-        heat_map(out / "stress.png", reduced_rows, fem_rows)
-    rows = reduced_rows + fem_rows
-    for name, part in (("multibody", reduced_rows), ("FE", fem_rows)):
+    if only is None:
+        heat_map(out / "stress.png", [
+            ("multibody (slider-crank, 1 revolution; spatial: its spatial twin)", reduced_rows),
+            ("dynamic impact (steel, c = 100 um, 1 m/s, coarse)", impact_rows),
+            ("FE 2D (steel_c10um, 4 steps)", fem_rows)])
+    rows = reduced_rows + impact_rows + fem_rows
+    for name, part in (("multibody", reduced_rows), ("impact", impact_rows), ("FE", fem_rows)):
         if part:
             counts = {o: sum(r["outcome"] == o for r in part) for o in OUTCOMES}
             print(f"{name}: " + ", ".join(f"{n} {o}" for o, n in counts.items() if n))
@@ -504,7 +632,7 @@ def main(out: Path, only: str | None, sweep: str | None, limit: int | None) -> i
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=ROOT / "bench")
-    parser.add_argument("--only", choices=["reduced", "fem"], help="run one of the two matrices")
+    parser.add_argument("--only", choices=["reduced", "impact", "fem"], help="run one of the matrices")
     parser.add_argument("--sweep", help="run the sweeps whose name holds this text only (trials)")
     parser.add_argument("--limit", type=int, help="run the first N points only (trials)")
     args = parser.parse_args()
