@@ -83,6 +83,9 @@ def require_drive(scene, source: str) -> None:
     if scene.drive is None:
         raise InputError(f"{source}: drive: nonlinear-dynamics analyses need a driven mechanism "
                          "(the Poincare section is taken once per drive revolution)")
+    if not scene.drive.constant:
+        raise InputError(f"{source}: drive: nonlinear-dynamics analyses need a drive at constant "
+                         "speed (a spin-up or an angle table gives the motion no period)")
     if scene.drive.speed_rpm == 0:
         raise InputError(f"{source}: drive.speed_rpm: must not be 0 for nonlinear-dynamics "
                          "analyses (a drive that stands still has no revolution to sample)")

@@ -105,7 +105,8 @@ from pinbore.reduced.mechanism.layout import (
     LOG_COLUMNS, LOG_IMPULSE, LOG_JOINT, LOG_RATE, LOG_TIME, LUGRE_SIGMA1, LUGRE_SIGMA2,
     LUGRE_STRIBECK_SPEED, NO_FRICTION, PLANE, POINT, POISSON,
     PRIM_A_I, PRIM_ANGLE0, PRIM_B_J, PRIM_BODY_I, PRIM_BODY_J, PRIM_C_I, PRIM_KIND, PRIM_S_I,
-    PRIM_S_J, PRIM_SPEED, RADIAL, REGULARISATION_V0, REGULARISATION_V1, SLICED, STATE_STRETCH,
+    PRIM_PROFILE, PRIM_PROFILE_ROWS, PRIM_PROFILE_TIME, PRIM_S_J, PRIM_SPEED, RADIAL, SEG_C0,
+    SEG_C1, SEG_C2, SEG_C3, SEG_TIME, SPIN_UP, TABLE, REGULARISATION_V0, REGULARISATION_V1, SLICED, STATE_STRETCH,
     STATE_TRAVEL, STOP, STRIBECK, STRIBECK_MU_MIN, STRIBECK_MU_STATIC, STRIBECK_V_MIN,
     TORSION_A_I, TORSION_B_J, TORSION_BODY_I, TORSION_BODY_J, TORSION_C_I, TORSION_DAMPING,
     TORSION_FREE_ANGLE, TORSION_KIND, TORSION_STIFFNESS, WORK_IN, Contacts, Depth, Impulse, Work)
@@ -179,8 +180,44 @@ def constraint_rate(jac, phi_t, row_bodies, states, velocities, i, offsets, like
 
 
 @numba.njit(cache=True, _nrt=False)
-def constraint_rows(t, primitives, contacts, mode, offsets, states, velocities, jac, mjac, phi, phi_t,
-                    rhs_c, row_bodies, alpha, z):
+def spin_up(t, speed, duration):
+    """The smooth spin-up to `speed` (rad/s) over `duration` (s) [SimoVuQuoc1986]:
+
+        theta(t) = (w_s / T_s) (t^2 / 2 + (T_s / 2 pi)^2 (cos(2 pi t / T_s) - 1)),  t < T_s,
+        theta(t) = w_s (t - T_s / 2),                                               t >= T_s,
+
+    (theta (rad), its rate (rad/s), its acceleration (rad/s^2)): rate and acceleration
+    continuous, the acceleration zero at both ends of the spin-up."""
+    if t >= duration:
+        return speed * (t - duration / 2), speed, 0.0
+    w = 2 * math.pi / duration
+    k = speed / duration
+    return (k * (t * t / 2 + (math.cos(w * t) - 1) / (w * w)), k * (t - math.sin(w * t) / w),
+            k * (1 - math.cos(w * t)))
+
+
+@numba.njit(cache=True, _nrt=False)
+def drive_profile(primitives, k, profile, t):
+    """theta(t) of the ANGLE primitive k (layout.PRIM_PROFILE): its value (rad), rate and
+    acceleration; a table's segment found by a scan from its first (tables are short)."""
+    kind, speed = int(primitives[k, PRIM_PROFILE]), primitives[k, PRIM_SPEED]
+    if kind == SPIN_UP:
+        return spin_up(t, speed, primitives[k, PRIM_PROFILE_TIME])
+    if kind == TABLE:
+        first = int(primitives[k, PRIM_PROFILE_TIME])
+        i, last = first, first + int(primitives[k, PRIM_PROFILE_ROWS]) - 1
+        while i < last and profile[i + 1, SEG_TIME] <= t:
+            i += 1
+        tau = t - profile[i, SEG_TIME]
+        c1, c2, c3 = profile[i, SEG_C1], profile[i, SEG_C2], profile[i, SEG_C3]
+        return (profile[i, SEG_C0] + tau * (c1 + tau * (c2 + tau * c3)),
+                c1 + tau * (2 * c2 + 3 * c3 * tau), 2 * c2 + 6 * c3 * tau)
+    return speed * t, speed, 0.0
+
+
+@numba.njit(cache=True, _nrt=False)
+def constraint_rows(t, primitives, profile, contacts, mode, offsets, states, velocities, jac, mjac,
+                    phi, phi_t, rhs_c, row_bodies, alpha, z):
     """fill_constraints on the arrays."""
     row = 0
     for k in range(primitives.shape[0]):
@@ -211,14 +248,14 @@ def constraint_rows(t, primitives, contacts, mode, offsets, states, velocities, 
                                     cell(primitives, k, PRIM_A_I, z), bj,
                                     cell(primitives, k, PRIM_S_J, z), offsets)
             phi[row], phi_t[row], rhs_c[row] = value, 0.0, gamma
-        else:   # ANGLE: the relative angle = angle0 + speed t
-            speed = primitives[k, PRIM_SPEED]
+        else:   # ANGLE: the relative angle = angle0 + theta(t)
+            theta, rate, acceleration = drive_profile(primitives, k, profile, t)
             angle, coefficient, _, gamma = relative_rotation(
                 states, bi, bj, cell(primitives, k, PRIM_A_I, z), cell(primitives, k, PRIM_B_J, z),
-                cell(primitives, k, PRIM_C_I, z), primitives[k, PRIM_ANGLE0], speed * t)
+                cell(primitives, k, PRIM_C_I, z), primitives[k, PRIM_ANGLE0], theta)
             put(jac, row, bi, zero(z), coefficient, 1.0, offsets)
             put(jac, row, bj, zero(z), coefficient, -1.0, offsets)
-            phi[row], phi_t[row], rhs_c[row] = angle, 0.0 - speed, gamma
+            phi[row], phi_t[row], rhs_c[row] = angle, 0.0 - rate, gamma + acceleration
         row += 1
     for k in range(contacts.shape[0]):
         if mode[k] == 1:
@@ -917,7 +954,7 @@ def rhs(t, y, dy, args, work):
             dy[i] = math.nan
         return
     dissipation = torsion_forces(force, states, args.torsion, args.latched, offsets, dissipation, z)
-    m = constraint_rows(t, primitives, contacts, mode, offsets, states, work.velocities, jac, mjac,
+    m = constraint_rows(t, primitives, args.profile, contacts, mode, offsets, states, work.velocities, jac, mjac,
                         work.phi, phi_t, rhs_c, row_bodies, args.baumgarte, z)
     work_in = 0.0
     if m > 0:
@@ -971,7 +1008,7 @@ def observe(t, y, dy, args, work, depth, offset):
                             cell(contacts, k, CONTACT_BEARING_POINT, z))[0])
         for i in range(len(z)):
             offset[k, i] = e[i]
-    m = constraint_rows(t, args.primitives, contacts, args.mode * 0, args.offsets, states,
+    m = constraint_rows(t, args.primitives, args.profile, contacts, args.mode * 0, args.offsets, states,
                         work.velocities, work.jac, work.mjac, work.phi, work.phi_t, work.rhs_c,
                         work.row_bodies, 0.0, z)
     gap = 0.0
@@ -1038,7 +1075,7 @@ def refresh(y, args, work):
 def fill_constraints(t, args, work, alpha):
     """Jacobian D, Phi, Phi_t and gamma - 2 a Phi' - a^2 Phi into the workspace (body states
     current) for the ideal joints, the drive and the held contacts; the number of rows."""
-    return constraint_rows(t, args.primitives, args.contacts, args.mode, args.offsets, work.bodies,
+    return constraint_rows(t, args.primitives, args.profile, args.contacts, args.mode, args.offsets, work.bodies,
                            work.velocities, work.jac, work.mjac, work.phi, work.phi_t, work.rhs_c,
                            work.row_bodies, alpha, args.like)
 

@@ -88,8 +88,16 @@ PRIM_KIND, PRIM_BODY_I, PRIM_BODY_J = 0, 1, 2
 PRIM_S_I, PRIM_S_J = 3, 6           # points s_i', s_j' (m, body frames; the ground: global)
 PRIM_A_I, PRIM_B_J = 9, 12          # unit vectors a_i' (body i), b_j' (body j)
 PRIM_C_I = 15                       # ANGLE: the second vector of body i, c_i' = u_i' x a_i'
-PRIM_SPEED, PRIM_ANGLE0 = 18, 19    # ANGLE: relative angle = angle0 + speed t (rad/s, rad)
-PRIMITIVE_COLUMNS = 20
+PRIM_SPEED, PRIM_ANGLE0 = 18, 19    # ANGLE: relative angle = angle0 + theta(t) (rad/s, rad)
+PRIM_PROFILE = 20                   # ANGLE: theta(t) = speed t (CONSTANT_SPEED), the smooth
+PRIM_PROFILE_TIME = 21              # spin-up to `speed` over PRIM_PROFILE_TIME (s) (SPIN_UP),
+PRIM_PROFILE_ROWS = 22              # or the PRIM_PROFILE_ROWS segments of Args.profile from
+PRIMITIVE_COLUMNS = 23              # row PRIM_PROFILE_TIME (TABLE)
+CONSTANT_SPEED, SPIN_UP, TABLE = 0, 1, 2
+# a drive table's segments (Args.profile, a row each): from time SEG_TIME, theta = c0 + c1 tau
+# + c2 tau^2 + c3 tau^3 (rad), tau = t - SEG_TIME; the last segment runs on without end
+SEG_TIME, SEG_C0, SEG_C1, SEG_C2, SEG_C3 = 0, 1, 2, 3, 4
+PROFILE_COLUMNS = 5
 
 # ---- torsion spring, stop or latch (Model.torsion): a torque about body i's axis u_i' on
 # the relative angle from a_i' (body i) to b_j' (body j), measured like the ANGLE primitive
@@ -125,13 +133,14 @@ PLANAR, SPATIAL = PlanarKind(), SpatialKind()
 # grows to another trajectory); both read the events within the onset tolerance of the
 # constraints. masses (per body), minv (per velocity column: planar 1/m, 1/m, 1/J), inertia
 # and its inverse (per body, 3 x 3 in the body frame; planar: J in [0, 0]), gravity (D,
-# m/s^2), offsets (per body its first velocity column; the last entry their number).
+# m/s^2), offsets (per body its first velocity column; the last entry their number),
+# profile: the drive table's segments (SEG_*; none: an empty array).
 # speeds: impact speed per contact; latched: a flag per torsion element; mode: per contact 1
 # while an impulse contact is held; all updated in place by the integrator.
 Args = namedtuple("Args", [
     "kind", "nq", "like", "project_first", "masses", "minv", "inertia", "inertia_inv", "gravity",
     "offsets", "primitives", "baumgarte", "contacts", "speeds", "grid_log0", "grid_step", "tables",
-    "torsion", "latched", "mode"])
+    "torsion", "latched", "mode", "profile"])
 
 # The buffers of the right-hand side: a row per body of its kinematic state (the body kind's
 # layout), the velocity of every Jacobian column, the constraint rows (Jacobian against the

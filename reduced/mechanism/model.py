@@ -141,6 +141,7 @@ def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
     joints = clearance_joints(scene)
     closures = [closing(geometry, c) for c in joints] if ideal else []
     primitives, drive_row = geometry.primitives(closures)
+    profile = drive_segments(scene.drive)
     laws_data = None if ideal else laws_file(scene, base, source)
     # penetrations up to a tenth of the journal radius are tabulated; beyond, the run has blown up
     top = max((BLOW_UP_FRACTION * c.journal_radius for c in scene.clearance_joints), default=1.0)
@@ -169,7 +170,8 @@ def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
         speeds=np.full(contacts.shape[0], SPEED_FLOOR), grid_log0=grid_log0, grid_step=grid_step,
         tables=np.array(tables).reshape(len(tables), GRID_POINTS),
         torsion=torsion_rows(geometry, scene),
-        latched=np.zeros(len(scene.torsion)), mode=np.zeros(contacts.shape[0], np.int64))
+        latched=np.zeros(len(scene.torsion)), mode=np.zeros(contacts.shape[0], np.int64),
+        profile=profile)
     model = Model(scene, kind, names, args, [] if ideal else joints, rows, laws_data, drive_row, states,
                   closures=closures, geometry=geometry)
     model.y0 = geometry.place(model, [] if ideal else [(closing(geometry, c), c.start) for c in joints])
@@ -197,6 +199,24 @@ def resolvable(model: Model, source: str = "scene") -> None:
                          f"{needed:.3g} steps over the duration, more than {MAX_STEPS:.0e}: the "
                          "mass ratio cannot be resolved (make the body heavier or the duration "
                          "shorter)")
+
+
+def drive_segments(drive) -> np.ndarray:
+    """The segments (layout.SEG_*) of a drive's angle table (none without one): the cubic
+    spline through the table's angles, measured from the first, with SciPy's not-a-knot ends
+    (a motion cubic in time is followed exactly), and after the last pair a segment at the
+    last rate; one a pair, in the rows the drive's profile columns name."""
+    if drive is None or drive.angle_table is None:
+        return np.empty((0, layout.PROFILE_COLUMNS))
+    from scipy.interpolate import CubicSpline   # noqa: PLC0415
+
+    times = np.array([t for t, _ in drive.angle_table])
+    angles = np.radians([a for _, a in drive.angle_table])
+    spline = CubicSpline(times, angles - angles[0], bc_type="not-a-knot")
+    c3, c2, c1, c0 = spline.c
+    end = times[-1]
+    segments = np.column_stack([times[:-1], c0, c1, c2, c3])
+    return np.vstack([segments, [end, float(spline(end)), float(spline(end, 1)), 0.0, 0.0]])
 
 
 def closing(geometry, c) -> list:

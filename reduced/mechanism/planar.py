@@ -256,8 +256,9 @@ class Geometry:
                 rows.append(primitive(ANGLE, -1, b, angle0=math.radians(scene.bodies[b].angle_deg)))
         if scene.drive is None:
             return rows, None
-        rows.append(primitive(ANGLE, -1, index[scene.drive.body], speed=scene.drive.speed_rpm * 2 * math.pi / 60,
-                              angle0=math.radians(scene.drive.angle0_deg)))
+        rows.append(primitive(ANGLE, -1, index[scene.drive.body], speed=scene.drive.speed,
+                              angle0=math.radians(scene.drive.angle0_deg),
+                              profile=scene.drive.profile_columns()))
         return rows, len(rows) - 1
 
     def closing(self, c) -> list:
@@ -314,9 +315,10 @@ class Geometry:
 
 
 def primitive(kind, bi, bj, s_i=(0.0, 0.0), s_j=(0.0, 0.0), a_i=(0.0, 0.0), b_j=(0.0, 0.0),
-              c_i=(0.0, 0.0), speed=0.0, angle0=0.0) -> list:
-    """A primitive constraint's row (layout.PRIM_*) of planar vectors."""
-    return layout.row(layout.PRIMITIVE_COLUMNS, {
+              c_i=(0.0, 0.0), speed=0.0, angle0=0.0, profile=None) -> list:
+    """A primitive constraint's row (layout.PRIM_*) of planar vectors (`profile`: a drive's
+    profile columns)."""
+    return layout.row(layout.PRIMITIVE_COLUMNS, (profile or {}) | {
         layout.PRIM_KIND: kind, layout.PRIM_BODY_I: bi, layout.PRIM_BODY_J: bj,
         layout.PRIM_SPEED: speed, layout.PRIM_ANGLE0: angle0, layout.PRIM_S_I: list(s_i),
         layout.PRIM_S_J: list(s_j), layout.PRIM_A_I: list(a_i), layout.PRIM_B_J: list(b_j),

@@ -19,6 +19,7 @@ import numpy as np
 import pydantic
 
 from pinbore.core.scene import Strict
+from pinbore.reduced.mechanism import layout
 from pinbore.laws import elastic
 from pinbore.laws.elastic import PUBLISHED
 
@@ -412,11 +413,62 @@ class Prismatic(Strict):
     axis_deg: float = 0.0
 
 
-class Drive(Strict):
-    """Constant angular speed of a body: angle = angle0 + omega t."""
+class DriveProfile(Strict):
+    """How a drive's angle runs from its start, theta(t): at the constant speed speed_rpm
+    (theta = omega t); reaching speed_rpm by the smooth spin-up over spin_up_s (spin_up_angle,
+    then constant); or through the table angle_table of (time (s), angle (deg)) pairs from
+    time 0, a cubic spline through them (rate and acceleration continuous, a motion cubic in
+    time followed exactly; after the last pair the angle runs on at its last rate: its
+    acceleration steps to zero there), theta measured from the table's first angle."""
+
+    speed_rpm: float | None = None
+    spin_up_s: float | None = pydantic.Field(default=None, gt=0)
+    angle_table: list[Annotated[list[float], pydantic.Field(min_length=2, max_length=2)]] | None = None
+
+    @pydantic.model_validator(mode="after")
+    def _profile(self):
+        if (self.speed_rpm is None) == (self.angle_table is None):
+            raise ValueError("give speed_rpm (constant, or reached by spin_up_s) or angle_table, "
+                             "one of them")
+        if self.spin_up_s is not None and self.speed_rpm is None:
+            raise ValueError("spin_up_s: the spin-up reaches speed_rpm: give it")
+        table = self.angle_table
+        if table is not None:
+            times = [t for t, _ in table]
+            if len(table) < 2 or times[0] != 0:
+                raise ValueError("angle_table: at least two (time (s), angle (deg)) pairs, from "
+                                 "time 0")
+            if any(b <= a for a, b in zip(times, times[1:])):
+                raise ValueError("angle_table: the times must increase strictly")
+        return self
+
+    @property
+    def speed(self) -> float:
+        """The constant speed, or the one the spin-up reaches (rad/s); 0 for a table."""
+        return 0.0 if self.speed_rpm is None else self.speed_rpm * 2 * math.pi / 60
+
+    def profile_columns(self) -> dict:
+        """The drive primitive's profile columns (layout.PRIM_PROFILE...): a table's segments
+        are rows 0 .. n - 1 of Args.profile (reduced.mechanism.model.drive_segments: one a
+        pair, the last running on)."""
+        if self.angle_table is not None:
+            return {layout.PRIM_PROFILE: layout.TABLE, layout.PRIM_PROFILE_TIME: 0,
+                    layout.PRIM_PROFILE_ROWS: len(self.angle_table)}
+        if self.spin_up_s is not None:
+            return {layout.PRIM_PROFILE: layout.SPIN_UP, layout.PRIM_PROFILE_TIME: self.spin_up_s}
+        return {layout.PRIM_PROFILE: layout.CONSTANT_SPEED}
+
+    @property
+    def constant(self) -> bool:
+        """A drive at constant speed from the start (what a Poincare section per revolution
+        needs)."""
+        return self.angle_table is None and self.spin_up_s is None
+
+
+class Drive(DriveProfile):
+    """A body's angle driven: angle = angle0 + theta(t) (DriveProfile)."""
 
     body: str
-    speed_rpm: float
     angle0_deg: float = 0.0
 
 
@@ -590,12 +642,11 @@ class Joint(Strict):
         return self
 
 
-class SpatialDrive(Strict):
-    """The relative angle of a revolute or cylindrical joint's bodies about its axis turns at a
-    constant speed from its initial value: angle = speed t."""
+class SpatialDrive(DriveProfile):
+    """The relative angle of a revolute or cylindrical joint's bodies about its axis driven
+    from its initial value: angle = theta(t) (DriveProfile)."""
 
     joint: str
-    speed_rpm: float
 
 
 class SpatialClearanceJoint(JointMaterials, ContactLaw):

@@ -461,7 +461,7 @@ class Geometry:
         f, g = normals(u_i)
         rows.append(primitive(ANGLE, index[j.body_i], index[j.body_j], a_i=f,
                               b_j=rot[j.body_j].T @ rot[j.body_i] @ f, c_i=g,
-                              speed=self.scene.drive.speed_rpm * 2 * math.pi / 60))
+                              speed=self.scene.drive.speed, profile=self.scene.drive.profile_columns()))
         return rows, len(rows) - 1
 
     def closing(self, c) -> list:
@@ -582,9 +582,9 @@ def normals(u):
 
 
 def primitive(kind, bi, bj, s_i=(0, 0, 0), s_j=(0, 0, 0), a_i=(0, 0, 0), b_j=(0, 0, 0),
-              c_i=(0, 0, 0), speed=0.0, angle0=0.0) -> list:
-    """A primitive constraint's row (layout.PRIM_*)."""
-    out = layout.row(layout.PRIMITIVE_COLUMNS, {layout.PRIM_KIND: kind, layout.PRIM_BODY_I: bi,
+              c_i=(0, 0, 0), speed=0.0, angle0=0.0, profile=None) -> list:
+    """A primitive constraint's row (layout.PRIM_*; `profile`: a drive's profile columns)."""
+    out = layout.row(layout.PRIMITIVE_COLUMNS, (profile or {}) | {layout.PRIM_KIND: kind, layout.PRIM_BODY_I: bi,
                                                 layout.PRIM_BODY_J: bj, layout.PRIM_SPEED: speed,
                                                 layout.PRIM_ANGLE0: angle0})
     for column, v in ((layout.PRIM_S_I, s_i), (layout.PRIM_S_J, s_j), (layout.PRIM_A_I, a_i),
