@@ -89,6 +89,20 @@ DYNAMICS_KEYS = {"poincare": ("kind", "period", "lyapunov_per_s", "wall_time_s")
                  "bifurcation": ("counts", "wall_time_s"), "design": ("band", "wall_time_s")}
 
 
+def check_bifurcation_table(path: Path, summary: dict) -> None:
+    """bifurcation.csv read and checked against its summary: each swept value's class, as
+    many of each as summary.json counts."""
+    from pinbore.reduced.dynamics import plots, studies   # noqa: PLC0415
+
+    classes = {}
+    for row in plots.read_table(path, studies.BIFURCATION_COLUMNS):
+        classes.setdefault(row["value"], row["kind"])
+    counts = {k: list(classes.values()).count(k) for k in sorted(set(classes.values()))}
+    if counts != summary["counts"]:
+        raise InputError(f"{path}: kind: its points' classes {counts} are not those of "
+                         f"summary.json {summary['counts']} (run pinbore dynamics again)")
+
+
 def dynamics_section(build_dir: Path) -> str:
     """Nonlinear dynamics: Poincare map, bifurcation diagram, design map (build/dynamics)."""
     folder = build_dir / "dynamics"
@@ -122,6 +136,8 @@ def dynamics_section(build_dir: Path) -> str:
                  "design": lambda: "; ".join(f"{speed} rpm: " + (f"{b['low_m'] * 1e3:.3g}-{b['high_m'] * 1e3:.3g} mm"
                                                                  if b["low_m"] is not None else "none")
                                              for speed, b in s["band"].items())}[kind]()
+        if kind == "bifurcation":
+            check_bifurcation_table(folder / name / "bifurcation.csv", s)
         if s.get("disagreement"):
             facts += f"; NOTE: {s['disagreement']}"
         png = folder / name / f"{kind}.png"

@@ -175,6 +175,8 @@ def test_report_needs_a_build_directory(tmp_path):
     ("dynamics/bifurcation/summary.json", '{"counts": 3, "wall_time_s": 1.0}', "nonlinear dynamics"),
     ("impact/run/impact.json", '{"speed_m_per_s": 1.0}', "dynamic impacts"),
     ("modes/run/modes.json", "{}", "flexible bodies"),
+    ("dynamics/bifurcation/summary.json", '{"counts": {"chaotic": 2}, "wall_time_s": 1.0}',
+     "nonlinear dynamics"),   # and no bifurcation.csv beside it
 ])
 def test_report_builds_what_it_can_and_names_what_it_cannot(tmp_path, broken, text, section):
     build = tmp_path / "build"

@@ -148,3 +148,23 @@ def test_the_same_sweep_runs_on_a_dask_scheduler(tmp_path):
     with distributed.LocalCluster(n_workers=1, processes=False, dashboard_address=None) as cluster:
         rows = studies.sweep(duffing_point, values, tmp_path / "dask", 1, cluster.scheduler_address, "duffing")
     assert [(r["kind"], r["period"]) for r in rows] == [("periodic", 1), ("periodic", 2)]
+
+
+def test_the_report_checks_the_bifurcation_table_against_its_summary(tmp_path):
+    """bifurcation.csv is read by the report: its points' classes (one row at least per swept
+    value, a failed one included) must be those summary.json counts; another header or
+    other counts are one InputError line."""
+    from pinbore.core.errors import InputError
+    from pinbore.reduced import report
+    from pinbore.reduced.dynamics import plots
+
+    path = tmp_path / "bifurcation.csv"
+    rows = [[1e-4, "chaotic", "", 900.0, 1e-5, 2e-5], [1e-4, "chaotic", "", 900.0, 2e-5, 1e-5],
+            [2e-4, "periodic", 1, "", 3e-5, 0.0], [3e-4, "failed", "", "", None, None]]
+    plots.write_table(path, studies.BIFURCATION_COLUMNS, rows)
+    report.check_bifurcation_table(path, {"counts": {"chaotic": 1, "failed": 1, "periodic": 1}})
+    with pytest.raises(InputError, match="classes"):
+        report.check_bifurcation_table(path, {"counts": {"chaotic": 2, "periodic": 1}})
+    plots.write_table(path, ["value", "kind"], rows)
+    with pytest.raises(InputError, match="header"):
+        report.check_bifurcation_table(path, {"counts": {}})

@@ -16,6 +16,24 @@ def write_table(path, header, rows) -> None:
         out.writerows(rows)
 
 
+def read_table(path, header) -> list[dict]:
+    """The rows of a table write_table wrote with `header`, as dicts of strings; a file that
+    cannot be read or has another header is one InputError line naming it."""
+    from pinbore.core.errors import InputError   # noqa: PLC0415
+
+    again = "(written by another version of pinbore? run pinbore dynamics again)"
+    try:
+        with open(path, newline="") as f:
+            rows = list(csv.reader(f))
+    except (OSError, UnicodeDecodeError) as err:
+        raise InputError(f"{path}: cannot read ({err})") from None
+    if not rows or rows[0] != list(header):
+        raise InputError(f"{path}: header: not {', '.join(header)} {again}")
+    if any(len(row) != len(header) for row in rows[1:]):
+        raise InputError(f"{path}: a row has not {len(header)} cells {again}")
+    return [dict(zip(header, row)) for row in rows[1:]]
+
+
 def poincare(path, samples, clearance, title, observed) -> None:
     """Poincare samples of the observed point (the journal centre in its clearance circle, when
     there is one), and x against its rate."""

@@ -380,6 +380,9 @@ def periodic_orbit(target: SceneFile, options: ShootingOptions, tmp: Path) -> di
             "observed": flow.observed(orbit).tolist()}
 
 
+BIFURCATION_COLUMNS = ["value", "kind", "period", "lyapunov_per_s", "x_m", "y_m"]   # bifurcation.csv
+
+
 def bifurcation_diagram(target: SceneFile, options: BifurcationOptions, tmp: Path) -> dict:
     """The swept parameter's points, each classified from its Poincare samples."""
     values = np.linspace(options.range.low, options.range.high, options.points).tolist()
@@ -387,10 +390,9 @@ def bifurcation_diagram(target: SceneFile, options: BifurcationOptions, tmp: Pat
                             options.transient, options.periods)
     key = sweep_key(target.data, "bifurcation", options.parameter, options.transient, options.periods)
     rows = sweep(task, values, options.cache, options.workers, options.scheduler, key)
-    figures().write_table(tmp / "bifurcation.csv",
-                      ["value", "kind", "period", "lyapunov_per_s", "x_m", "y_m"],
+    figures().write_table(tmp / "bifurcation.csv", BIFURCATION_COLUMNS,
                       [[r["value"], r["kind"], r["period"], r["lyapunov_per_s"], *j[:2]]
-                       for r in rows for j in r["observed"]])
+                       for r in rows for j in (r["observed"] or [[None, None]])])   # a failed point: one row
     figures().bifurcation(tmp / "bifurcation.png", rows, options.parameter, PARAMETERS[options.parameter].label)
     kinds = [r["kind"] for r in rows]
     return {"parameter": options.parameter, "range": list(options.range), "points": options.points,
