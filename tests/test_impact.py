@@ -117,6 +117,7 @@ def test_energy_and_momentum_books():
     assert 0 < s.restitution < 1
 
 
+@pytest.mark.slow   # about 35 s: `make test-slow`
 def test_frictional_impact_book_holds_the_friction_work():
     """An oblique impact (60 degrees below the horizontal) with Coulomb friction mu = 0.2:
     the nodes slide as the arc opens and friction dissipates W_f > 0; the book
@@ -182,6 +183,7 @@ def hertz_first_yield_stress(force: float, data: dict) -> float:
     return math.sqrt(force * effective_modulus(data) / (math.pi * radius)) / 1.79
 
 
+@pytest.mark.slow   # about 35 s: `make test-slow`
 def test_a_yield_stress_never_reached_is_the_elastic_impact():
     """Y = 2 GPa, fourteen times the first-yield stress of the peak force (Hertz, Johnson):
     no point flows in any converged step and the plastic body's impact is the elastic one:

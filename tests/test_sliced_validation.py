@@ -42,6 +42,7 @@ def runs(tmp_path_factory):
     return root
 
 
+@pytest.mark.slow   # its four 3D FE runs take about 100 s: `make test-slow`
 def test_the_calibrated_3d_law_predicts_an_unseen_lug(runs):
     laws = lawsfile.read(runs / "calibration" / "laws.json")
     unseen = read(runs / "unseen" / "curve.csv", None)
