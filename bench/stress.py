@@ -365,12 +365,17 @@ def reduced_breaks(s: dict, scene: dict) -> list[str]:
     return broken
 
 
+def row_head(done: dict, outcome: str, data: dict | None) -> dict:
+    """The columns every row starts with: the point, its outcome and its run."""
+    return {"sweep": done["sweep"], "parameter": done["parameter"], "value": done["value"],
+            "outcome": outcome, "status": (data or {}).get("status", ""),
+            "exit_code": "" if done["exit_code"] is None else done["exit_code"],
+            "wall_time_s": f"{done['wall_s']:.2f}"}
+
+
 def reduced_row(done: dict) -> dict:
     outcome, s = outcome_of(done, "summary.json")
-    row = {"sweep": done["sweep"], "parameter": done["parameter"], "value": done["value"],
-           "outcome": outcome, "status": (s or {}).get("status", ""),
-           "exit_code": "" if done["exit_code"] is None else done["exit_code"],
-           "wall_time_s": f"{done['wall_s']:.2f}"}
+    row = row_head(done, outcome, s)
     nan = s is not None and any_nan(s)
     broken = []
     if s is not None and outcome != "crash":
@@ -430,11 +435,8 @@ def impact_breaks(s: dict) -> list[str]:
 
 def impact_row(done: dict) -> dict:
     outcome, s = outcome_of(done, "impact.json")
-    row = {"sweep": done["sweep"], "parameter": done["parameter"], "value": done["value"],
-           "outcome": outcome, "status": (s or {}).get("status", ""),
-           "exit_code": "" if done["exit_code"] is None else done["exit_code"],
-           "wall_time_s": f"{done['wall_s']:.2f}"}
-    nan = s is not None and any_nan({k: v for k, v in s.items() if k != "restitution"})
+    row = row_head(done, outcome, s)
+    nan = s is not None and any_nan(s)
     broken = []
     if s is not None and outcome != "crash":
         energy, estimate = s["energy"], s["estimate"]["contact_duration_s"]
@@ -488,11 +490,7 @@ def curve_nan(text: str) -> bool:
 def fem_row(done: dict) -> dict:
     outcome, r = outcome_of(done, "result.json")
     scene = done["scene"]
-    row = {"sweep": done["sweep"], "parameter": done["parameter"], "value": done["value"],
-           "method": scene["contact"]["method"], "outcome": outcome,
-           "status": (r or {}).get("status", ""),
-           "exit_code": "" if done["exit_code"] is None else done["exit_code"],
-           "wall_time_s": f"{done['wall_s']:.2f}"}
+    row = row_head(done, outcome, r) | {"method": scene["contact"]["method"]}
     nan = (r is not None and any_nan(r)) or ("curve.csv" in done["files"] and curve_nan(done["files"]["curve.csv"]))
     broken = []
     if r is not None and outcome != "crash":
