@@ -117,6 +117,8 @@ report: build/report/index.html ## build build/report/index.html from the result
 
 build/report/index.html: $(FEM_CURVES) $(MESHES) $(MODES_RUNS) build/calibration/laws.json $(REDUCED_RUNS) $(DYNAMICS) \
                          $(wildcard bench/*.csv) $(STAGE_CODE) $(MODES_CODE) $(wildcard pinbore/*.py calibration/*.py reduced/*.py) $(REDUCED_CODE) $(STAMP)
+	@# a report folder of a pinbore that wrote no output marker, holding its index.html alone
+	@if [ -d build/report ] && [ ! -e build/report/.pinbore-output ] && [ "$$(ls -A build/report)" = "index.html" ]; then rm -rf build/report; fi
 	$(PINBORE) report --build build --out build/report
 	@echo "report: $(abspath $@)"
 

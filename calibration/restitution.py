@@ -45,8 +45,9 @@ def read_impacts(paths) -> dict[str, tuple[lawsfile.ImpactJoint, list[lawsfile.I
         summary = impact_file.read_summary(p)
         if summary.status != "complete" or summary.restitution is None:
             raise InputError(f"{p}: status: the impact must be complete with a rebound to "
-                             f"calibrate a restitution (status {summary.status!r}, stop "
-                             f"{summary.stop!r})")
+                             f"calibrate a restitution (status {summary.status!r}, "
+                             + (f"verdict: {'; '.join(summary.verdict)})" if summary.verdict
+                                else f"stop {summary.stop!r})"))
         scene = summary.scene   # checked on read as an impact scene (hub_mass defaults)
         g, m = scene["geometry"], scene["materials"]
         e_star = 1 / ((1 - m["pin"]["nu"] ** 2) / m["pin"]["E"]

@@ -127,7 +127,8 @@ def test_a_table_follows_a_cubic_motion_exactly(bar):
     ({"speed_rpm": 10.0, "angle_table": [[0.0, 0.0], [1.0, 5.0]]}, "give speed_rpm"),
     ({}, "give speed_rpm"),
     ({"spin_up_s": 2.0, "angle_table": [[0.0, 0.0], [1.0, 5.0]]}, "spin_up_s: the spin-up reaches speed_rpm"),
-    ({"angle_table": [[0.5, 0.0], [1.0, 5.0]]}, "from time 0"),
+    ({"angle_table": [[0.5, 0.0], [1.0, 5.0]]}, "the first (0, 0)"),
+    ({"angle_table": [[0.0, 90.0], [1.0, 180.0]]}, "the first (0, 0)"),
     ({"angle_table": [[0.0, 0.0], [1.0, 5.0], [1.0, 6.0]]}, "the times must increase strictly"),
     ({"speed_rpm": 10.0, "spin_up_s": 0.0}, "spin_up_s: Input should be greater than 0"),
 ])

@@ -159,7 +159,7 @@ def test_geometric_stiffening_gives_the_southwell_coefficient(cantilever):
     K1 = np.trapezoid((1 - x ** 2) / 2 * np.gradient(phi, x) ** 2, x) / np.trapezoid(phi ** 2, x)
     modes = np.zeros((fe.nodes * fe.dim, 1))
     modes[interior, 0] = fixed.vectors[:, 0]
-    KG = reduction.geometric_stiffening(fe, scene, fixed.ksp, interior, modes, np.zeros(3))
+    KG = reduction.geometric_stiffening(fe, fixed.ksp, interior, modes, np.zeros(3))
     assert KG[2, 2, 0, 0] == pytest.approx(K1, rel=1e-3)
     assert not np.any(KG[:2]) and not np.any(KG[2, :2])   # a plane body turns about z only
 
@@ -220,6 +220,12 @@ def _rewrite(path, target, **changes):
     ({"psi": np.zeros((4, 3, 3))}, "psi: shape (4, 3, 3)"),
     ({"mass": np.nan}, "mass: must be a positive, finite number"),
     ({"nodes": None}, "psi: shape"),   # a node fewer
+    ({"dim": np.array([2, 2])}, "dim: not a single number"),
+    ({"version": "x"}, "version: x is not this pinbore's 1"),
+    ({"interfaces": np.array("a")}, "interfaces: not a list of names"),
+    ({"second_moments": -np.eye(3)}, "second_moments: not symmetric positive semi-definite"),
+    ({"translation_coupling": np.full((3, 3), 5.0)}, "translation_coupling: the modes move"),
+    ({"cells": None}, "cells: not node indices"),   # as floats
 ])
 def test_body_file_that_does_not_fit_is_one_line(written, tmp_path, changes, message):
     path, _ = written
@@ -227,6 +233,9 @@ def test_body_file_that_does_not_fit_is_one_line(written, tmp_path, changes, mes
         with np.load(path) as data:
             nodes = data["nodes"].copy()
         changes = {"nodes": nodes[:-1]}
+    if changes.get("cells", 1) is None:
+        with np.load(path) as data:
+            changes = {"cells": data["cells"].astype(float)}
     target = _rewrite(path, tmp_path / "body.npz", **changes)
     with pytest.raises(InputError, match=None) as err:
         body_file.read(target)
@@ -275,3 +284,20 @@ def test_bad_modes_scene_is_one_line(write_scene, tmp_path, scene, message):
 
     out = tmp_path / "out"
     expect_one_line(pinbore("modes", write_scene(scene), "--out", out), message, out)
+
+
+def test_the_stiffening_load_is_carried_by_the_held_interfaces_only():
+    """A bar with two end interfaces turning about its end "a": held at "a" alone (the
+    default) its axial stress is the cantilever's tension N(x) = rho A w^2 (L^2 - x^2) / 2, the
+    bending stiffening of its first mode that of a cantilever's (positive); held at both ends
+    the same load puts the outer part in compression (N(x) = rho A w^2 (L^2/6 - x^2/2)). The
+    two differ, and the first interface alone is what a link turning about its root carries."""
+    alone = reduction.reduce(bar(length=0.3, width=0.02, cell=0.005, interfaces=("a", "b"),
+                                 fixed=6, modes=3))
+    both = reduction.reduce(ModesScene.model_validate(
+        bar(length=0.3, width=0.02, cell=0.005, interfaces=("a", "b"), fixed=6, modes=3)
+        .model_dump() | {"reduction": {"interfaces": ["a", "b"], "fixed_interface_modes": 6,
+                                       "modes": 3, "stiffening_held": ["a", "b"]}}))
+    first_bending = 0
+    assert alone.stiffening[2, 2, first_bending, first_bending] > 0
+    assert alone.stiffening[2, 2, 0, 0] > 2 * abs(both.stiffening[2, 2, 0, 0])

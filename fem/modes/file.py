@@ -121,19 +121,28 @@ def read(path) -> ReducedBody:
         raise InputError(f"{source}: not a reduced body written by pinbore {COMMAND} ({err})") from None
     if str(arrays.get("format", "")) != FORMAT:
         raise InputError(f"{source}: format: not a reduced body written by pinbore {COMMAND}")
-    if int(arrays.get("version", -1)) != VERSION:
-        raise InputError(f"{source}: version: {int(arrays.get('version', -1))} is not this "
-                         f"pinbore's {VERSION}: run pinbore {COMMAND} again")
+    version = arrays.get("version", np.array(-1))
+    if version.ndim != 0 or version.dtype.kind != "i" or int(version) != VERSION:
+        raise InputError(f"{source}: version: {version} is not this pinbore's {VERSION}: run "
+                         f"pinbore {COMMAND} again")
     values = {}
     for f in fields(ReducedBody):
         if f.name not in arrays:
             raise InputError(f"{source}: {f.name}: required key is missing (run pinbore "
                              f"{COMMAND} again)")
         values[f.name] = arrays[f.name]
-    for key in ("scene", "scene_sha256"):
-        values[key] = str(values[key])
-    values["dim"], values["mass"] = int(values["dim"]), float(values["mass"])
+    scalars = {"scene": "U", "scene_sha256": "U", "dim": "i", "mass": "f"}
+    for key, kind in scalars.items():
+        value = values[key]
+        if value.ndim != 0 or value.dtype.kind != kind:
+            raise InputError(f"{source}: {key}: not a single {'text' if kind == 'U' else 'number'}")
+        values[key] = {"U": str, "i": int, "f": float}[kind](value)
+    if values["interfaces"].ndim != 1 or values["interfaces"].dtype.kind != "U":
+        raise InputError(f"{source}: interfaces: not a list of names")
     values["interfaces"] = tuple(str(name) for name in values["interfaces"])
+    for key, value in values.items():
+        if isinstance(value, np.ndarray) and value.dtype.kind not in "fi":
+            raise InputError(f"{source}: {key}: not an array of numbers")
     body = ReducedBody(**values)
     _check(body, source, str(arrays.get("mesh_sha256", "")))
     return body
@@ -160,8 +169,32 @@ def _check(body: ReducedBody, source: str, mesh_sha256: str) -> None:
         raise InputError(f"{source}: mass: must be a positive, finite number")
     if n == 0 or np.any(body.omega <= 0) or np.any(np.diff(body.omega) < 0):
         raise InputError(f"{source}: omega: the frequencies must be positive and ascending")
-    if body.cells.ndim != 2 or body.cells.size == 0 or body.cells.min() < 0 or body.cells.max() >= N:
+    for key in ("omega", "fixed_interface_omega", "full_omega"):
+        if getattr(body, key).ndim != 1:
+            raise InputError(f"{source}: {key}: not a list of frequencies")
+    if (body.cells.dtype.kind != "i" or body.cells.ndim != 2 or body.cells.size == 0
+            or body.cells.min() < 0 or body.cells.max() >= N):
         raise InputError(f"{source}: cells: not node indices of the {N} nodes")
+    if len(set(body.interfaces)) != k:
+        raise InputError(f"{source}: interfaces: a name is given twice")
+    I = body.second_moments
+    scale = np.trace(I)
+    if (not np.allclose(I, I.T, rtol=0, atol=1e-12 * scale)
+            or np.linalg.eigvalsh((I + I.T) / 2).min() < -1e-12 * scale):
+        raise InputError(f"{source}: second_moments: not symmetric positive semi-definite")
+    if not np.allclose(sum(body.S[a, a] for a in range(3)), np.eye(n), atol=1e-6):
+        raise InputError(f"{source}: S: the modes are not mass-normalised (sum_a S_aa = 1)")
+    gyration = np.sqrt(np.trace(I) / body.mass)
+    if np.abs(body.translation_coupling).max() > 1e-6 * np.sqrt(body.mass) * gyration:
+        raise InputError(f"{source}: translation_coupling: the modes move the centre of mass "
+                         "(not the mean-axis frame)")
+    K = body.stiffening
+    if not np.allclose(K, K.transpose(1, 0, 3, 2), rtol=0, atol=1e-9 * max(np.abs(K).max(), 1e-300)):
+        raise InputError(f"{source}: stiffening: not symmetric")
+    if body.dim == 2 and (np.any(body.nodes[:, 2]) or np.any(body.psi[:, 2])
+                          or np.any(body.interface_translation[:, 2])
+                          or np.any(body.interface_rotation[:, :2])):
+        raise InputError(f"{source}: dim: a plane body with motion out of its plane")
     if mesh_sha256 != body.mesh_sha256:
         raise InputError(f"{source}: mesh_sha256: the nodes and cells are not those the modes "
                          "were computed on")

@@ -48,9 +48,12 @@ terms) is a sum of these.
 the stress a fast-turning body carries (a spinning beam's bending stiffness grows with the
 centrifugal tension; without it the deflection grows without bound past the first
 frequency). For each product w_a w_b of the angular velocity, the centrifugal body force
-rho (delta_ab r_i - (delta_ia r_b + delta_ib r_a) / 2), r = x - x_root from the first
-interface's centre (the body turning about its root, as an appendage about its hinge), is
-carried by the held interfaces; its stress sigma_ab gives the geometric stiffness
+rho (delta_ab r_i - (delta_ia r_b + delta_ib r_a) / 2), r = x - x_root from the centre of
+the first interface of reduction.stiffening_held (default: the first interface; the body
+turning about its root, as an appendage about its hinge), is carried by those interfaces
+held (a link turning about one end is not held at the other: held at both, the centrifugal
+tension of a uniform bar would turn to compression over its outer part); its stress
+sigma_ab gives the geometric stiffness
 
     K_G,ab = Psi^T G(sigma_ab) Psi,   G(sigma)(u, v) = t int (grad u sigma) : grad v dx
 
@@ -389,7 +392,15 @@ def reduce(scene: ModesScene, fe: FEBody | None = None, progress=None) -> Reduce
     interface_rotation = np.stack([_rotation_pad(f[dim:], dim) for f in frames])
 
     clock = time.perf_counter()
-    stiffening = geometric_stiffening(fe, scene, fixed.ksp, interior, psi_dofs, centres[0])
+    if set(scene.held) == set(names):
+        ksp, free = fixed.ksp, interior
+    else:   # only some interfaces carry the load: K factored with those held alone
+        held = np.concatenate([(fe.interface_nodes(name)[:, None] * dim + np.arange(dim)).ravel()
+                               for name in scene.held])
+        free = np.setdiff1d(np.arange(n_dofs), held)
+        ksp, _ = factored(K[free][:, free])
+    root = np.asarray(scene.body.interfaces[scene.held[0]])
+    stiffening = geometric_stiffening(fe, ksp, free, psi_dofs, root)
     seconds["stiffening"] = time.perf_counter() - clock
     if progress:
         progress.update(1)
@@ -446,14 +457,29 @@ def centrifugal_fields(X: np.ndarray, root: np.ndarray, dim: int) -> dict:
     return fields
 
 
-def geometric_stiffening(fe: FEBody, scene: ModesScene, ksp, interior, psi_dofs, root) -> np.ndarray:
-    """K_G,ab (3, 3, n, n), symmetric in (a, b) (module docstring)."""
+def factored(A: sp.csr_matrix):
+    """A KSP that solves with A (MUMPS Cholesky), and the matrix it lives on."""
+    mat = _petsc(A)
+    ksp = PETSc.KSP().create(PETSc.COMM_SELF)
+    ksp.setOperators(mat)
+    ksp.setType(PETSc.KSP.Type.PREONLY)
+    pc = ksp.getPC()
+    pc.setType(PETSc.PC.Type.CHOLESKY)
+    pc.setFactorSolverType("mumps")
+    ksp.setUp()
+    return ksp, mat
+
+
+def geometric_stiffening(fe: FEBody, ksp, free, psi_dofs, root) -> np.ndarray:
+    """K_G,ab (3, 3, n, n), symmetric in (a, b) (module docstring): the centrifugal load
+    cases of the body turning about `root`, solved with `ksp` on the dofs `free` (the
+    others held: the interfaces that carry the load)."""
     n = psi_dofs.shape[1]
     out = np.zeros((3, 3, n, n))
     fields = centrifugal_fields(fe.X, root, fe.dim)
     loads = np.column_stack([fe.M @ f.ravel() for f in fields.values()])
     u = np.zeros((fe.nodes * fe.dim, loads.shape[1]))
-    u[interior] = solve_with(ksp, loads[interior])
+    u[free] = solve_with(ksp, loads[free])
     for k, (a, b) in enumerate(fields):
         G = fe.geometric_stiffness(u[:, k])
         KG = psi_dofs.T @ (G @ psi_dofs)

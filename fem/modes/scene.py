@@ -33,6 +33,10 @@ class Reduction(Strict):
     fixed_interface_modes: int = pydantic.Field(ge=1, le=200)
     modes: int = pydantic.Field(ge=1, le=200)
     degree: Literal[1, 2] = 2
+    stiffening_held: list[str] | None = pydantic.Field(default=None, description=(
+        "the interfaces that carry the centrifugal load of the geometric stiffening, the body "
+        "turning about the first of them (default: the first interface alone: a link turning "
+        "about its root; a panel on two hinge lugs names both)"))
     full_modes: int = pydantic.Field(default=0, ge=0, le=200, description=(
         "free modes of the whole FE model to solve beside the reduced body's, to measure "
         "the reduction's error (0: none)"))
@@ -50,6 +54,14 @@ class ModesScene(Strict):
             if name not in known:
                 raise ValueError(f"reduction.interfaces.{k}: {name!r} is not an interface of "
                                  f"this {self.body.shape} (it has {', '.join(known)})")
+        held = self.reduction.stiffening_held
+        if held is not None:
+            if not held or len(set(held)) != len(held):
+                raise ValueError("reduction.stiffening_held: one interface or more, each once")
+            for k, name in enumerate(held):
+                if name not in self.reduction.interfaces:
+                    raise ValueError(f"reduction.stiffening_held.{k}: {name!r} is not one of "
+                                     "reduction.interfaces")
         if len(set(self.reduction.interfaces)) != len(self.reduction.interfaces):
             raise ValueError("reduction.interfaces: an interface is named twice")
         most = self.most_modes
@@ -64,6 +76,11 @@ class ModesScene(Strict):
         """Rigid-body motions of the body, and the coordinates of an interface's frame: 3 in
         the plane (x, y, theta_z), 6 in space."""
         return 3 if self.body.dim == 2 else 6
+
+    @property
+    def held(self) -> list[str]:
+        """The interfaces the stiffening's load cases hold (the first: the turning axis')."""
+        return self.reduction.stiffening_held or self.reduction.interfaces[:1]
 
     @property
     def most_modes(self) -> int:

@@ -199,15 +199,19 @@ def spin_up(t, speed, duration):
 @numba.njit(cache=True, _nrt=False)
 def drive_profile(primitives, k, profile, t):
     """theta(t) of the ANGLE primitive k (layout.PRIM_PROFILE): its value (rad), rate and
-    acceleration; a table's segment found by a scan from its first (tables are short)."""
+    acceleration; a table's segment found by bisection."""
     kind, speed = int(primitives[k, PRIM_PROFILE]), primitives[k, PRIM_SPEED]
     if kind == SPIN_UP:
         return spin_up(t, speed, primitives[k, PRIM_PROFILE_TIME])
     if kind == TABLE:
-        first = int(primitives[k, PRIM_PROFILE_TIME])
-        i, last = first, first + int(primitives[k, PRIM_PROFILE_ROWS]) - 1
-        while i < last and profile[i + 1, SEG_TIME] <= t:
-            i += 1
+        i = int(primitives[k, PRIM_PROFILE_TIME])   # the last segment starting at or before t
+        last = i + int(primitives[k, PRIM_PROFILE_ROWS]) - 1
+        while i < last:
+            middle = (i + last + 1) // 2
+            if profile[middle, SEG_TIME] <= t:
+                i = middle
+            else:
+                last = middle - 1
         tau = t - profile[i, SEG_TIME]
         c1, c2, c3 = profile[i, SEG_C1], profile[i, SEG_C2], profile[i, SEG_C3]
         return (profile[i, SEG_C0] + tau * (c1 + tau * (c2 + tau * c3)),

@@ -435,9 +435,9 @@ class DriveProfile(Strict):
         table = self.angle_table
         if table is not None:
             times = [t for t, _ in table]
-            if len(table) < 2 or times[0] != 0:
-                raise ValueError("angle_table: at least two (time (s), angle (deg)) pairs, from "
-                                 "time 0")
+            if len(table) < 2 or table[0] != [0.0, 0.0]:
+                raise ValueError("angle_table: at least two (time (s), angle (deg)) pairs, the "
+                                 "first (0, 0): angles from the drive's start")
             if any(b <= a for a, b in zip(times, times[1:])):
                 raise ValueError("angle_table: the times must increase strictly")
         return self
