@@ -133,7 +133,7 @@ bench: $(STUDY_CURVES) $(STAMP) ## run the benchmarks: bench/*.csv and plots (a 
 	$(PY) bench/impact.py --out bench
 	$(PY) bench/modes.py --out bench
 
-stress: $(STAMP) ## the stress matrix: bench/stress_*.csv, bench/stress.png (about 3 min)
+stress: $(STAMP) ## the stress matrix: bench/stress_*.csv, bench/stress.png (about 7 min)
 	$(PY) bench/stress.py --out bench
 
 test: $(STAMP) ## run the test suite (what CI runs)

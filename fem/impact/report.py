@@ -11,7 +11,7 @@ from pinbore.fem.impact import file as impact_file
 
 def section(build_dir: Path, bench: Path) -> str:
     runs = sorted((build_dir / "impact").glob(f"*/{impact_file.SUMMARY}"))
-    parts = ["<h2>dynamic impacts</h2>",
+    parts = ["<h2>Dynamic impacts of the pin in its bore</h2>",
              "<p>The pin flies into its bore and rebounds (plane strain, per unit length; "
              "<code>pinbore impact</code>): the restitution e = rebound / impact speed, the "
              "contact duration, the peak force and the largest residual of the energy book.</p>"]

@@ -11,7 +11,7 @@ from pinbore.fem.modes import file as body_file
 
 def section(build_dir: Path, bench: Path) -> str:
     runs = sorted((build_dir / "modes").glob(f"*/{body_file.SUMMARY}"))
-    parts = ["<h2>flexible bodies</h2>",
+    parts = ["<h2>Flexible bodies: modes from the FE</h2>",
              "<p>Each body's FE model (Gmsh, DOLFINx) reduced by Craig-Bampton with its joint "
              "interfaces tied rigidly to their frames, then to the reduced body's own free modes "
              "in the mean-axis frame (<code>pinbore modes</code>). The whole model's free modes "
