@@ -93,6 +93,17 @@ def friction_table(law: str, mu: float) -> dict:
 FRICTION_LAWS = ["coulomb_ambrosio", "stribeck", "linear", "lugre", "dahl", "iwan_bilinear"]
 
 
+def adder(command: str, base: dict, points: list, parts=lambda scene: (scene,)):
+    """add(sweep, label, parameter, value, edit): a point of `command` on a copy of the scene
+    `base`, edited by edit(*parts(scene)), appended to `points`."""
+    def add(sweep, label, parameter, value, edit):
+        scene = copy.deepcopy(base)
+        edit(*parts(scene))
+        points.append({"command": command, "sweep": sweep, "label": label, "parameter": parameter,
+                       "value": value, "scene": scene})
+    return add
+
+
 def reduced_points() -> list[dict]:
     """(sweep, label, parameter, value, scene) of every multibody point."""
     base = tomllib.loads(REDUCED_SCENE.read_text())
@@ -100,11 +111,7 @@ def reduced_points() -> list[dict]:
     base["output"] = {"plots": False}
     points = []
 
-    def add(sweep, label, parameter, value, edit):
-        scene = copy.deepcopy(base)
-        edit(scene, scene["clearance_joints"][0])
-        points.append({"command": "reduced", "sweep": sweep, "label": label, "parameter": parameter,
-                       "value": value, "scene": scene})
+    add = adder("reduced", base, points, lambda s: (s, s["clearance_joints"][0]))
 
     for E in (1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13):
         add("contact modulus E (Pa)", f"{E:.0e}", "E", E, lambda s, j, E=E: j.update(E=E))
@@ -135,11 +142,7 @@ def spatial_points() -> list[dict]:
     base["output"] = {"plots": False}
     points = []
 
-    def add(sweep, label, parameter, value, edit):
-        scene = copy.deepcopy(base)
-        edit(scene)
-        points.append({"command": "reduced", "sweep": sweep, "label": label, "parameter": parameter,
-                       "value": value, "scene": scene})
+    add = adder("reduced", base, points)
 
     def slider(scene):
         return next(b for b in scene["bodies"] if b["name"] == "slider")
@@ -162,11 +165,7 @@ def impact_points() -> list[dict]:
     clearance = base["geometry"]["bore_radius"] - base["geometry"]["pin_radius"]
     points = []
 
-    def add(sweep, label, parameter, value, edit):
-        scene = copy.deepcopy(base)
-        edit(scene["impact"])
-        points.append({"command": "impact", "sweep": sweep, "label": label, "parameter": parameter,
-                       "value": value, "scene": scene})
+    add = adder("impact", base, points, lambda s: (s["impact"],))
 
     for mass in (0.0, 1.0, 1e2, 1e4):
         add("impact: hub mass (kg/m)", f"{mass:g}", "hub_mass", mass,
@@ -190,11 +189,7 @@ def fem_points() -> list[dict]:
     base["output"] = {"fields": False, "picture": False}
     points = []
 
-    def add(sweep, label, parameter, value, edit):
-        scene = copy.deepcopy(base)
-        edit(scene)
-        points.append({"command": "fem", "sweep": sweep, "label": label, "parameter": parameter,
-                       "value": value, "scene": scene})
+    add = adder("fem", base, points)
 
     for ratio in (1e-5, 1e-4, 1e-3, 1e-2, 5e-2, 0.2):
         add("c/R", f"{ratio:g}", "c/R", ratio, lambda s, ratio=ratio: s["geometry"].update(
