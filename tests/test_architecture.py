@@ -217,3 +217,20 @@ def test_the_scene_knows_every_damping_law():
     from pinbore.reduced.mechanism.scene import HYSTERESIS_LAWS
 
     assert sorted(HYSTERESIS_LAWS) == sorted(HYSTERESIS)
+
+
+def test_every_package_folder_is_installed():
+    """pyproject.toml lists the packages a wheel holds (`pip install .`): every folder of a
+    floor that holds Python modules is listed, so that a new room cannot work in the editable
+    install and be missing from a wheel."""
+    import tomllib
+
+    listed = set(tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
+    found = set()
+    for folder, (package, _) in FLOORS.items():
+        base = ROOT / folder
+        for path in [base, *sorted(p for p in base.rglob("*") if p.is_dir())]:
+            if "__pycache__" in path.parts or not any(path.glob("*.py")):
+                continue
+            found.add(".".join([package, *path.relative_to(base).parts]))
+    assert found == listed, (sorted(found - listed), sorted(listed - found))
