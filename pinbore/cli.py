@@ -113,6 +113,16 @@ class OneLineParser(argparse.ArgumentParser):
         sys.exit(2)
 
 
+def version() -> str:
+    """The installed pinbore's version (its package metadata)."""
+    from importlib.metadata import PackageNotFoundError, version as installed   # noqa: PLC0415
+
+    try:
+        return installed("pinbore")
+    except PackageNotFoundError:
+        return "unknown (not installed)"
+
+
 def positive_length(text: str) -> float:
     """A length in metres: a finite number above zero."""
     try:
@@ -167,6 +177,7 @@ def _dynamics_command(sub) -> None:
 
 def parser() -> argparse.ArgumentParser:
     p = OneLineParser(prog="pinbore", description=__doc__.splitlines()[0])
+    p.add_argument("--version", action="version", version=f"pinbore {version()}")
     sub = p.add_subparsers(dest="command", required=True, metavar="COMMAND")
     _scene_command(sub, "mesh", _mesh, "build the gmsh model of an FE scene: mesh.msh, preview.png",
                    "Build the 2D or 3D gmsh model of an FE scene; write DIR/mesh.msh and "

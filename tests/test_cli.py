@@ -176,3 +176,22 @@ def test_every_shipped_scene_is_valid():
     assert paths
     for path in paths:
         scene.load(FemScene, path)
+
+
+def test_version_is_the_packages():
+    """`pinbore --version` prints the installed package's version, that of pyproject.toml."""
+    import tomllib
+
+    done = pinbore("--version")
+    expected = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["version"]
+    assert done.returncode == 0 and done.stdout.strip() == f"pinbore {expected}"
+
+
+def test_the_lock_satisfies_the_stated_ranges():
+    """pyproject.toml states ranges, requirements.lock exact versions: each locked direct
+    dependency lies in its range (pip's own check of the environment built from the lock)."""
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-m", "pip", "check"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stdout + done.stderr
