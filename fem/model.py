@@ -13,6 +13,7 @@ from pinbore.fem.plasticity import ElastoPlastic
 from pinbore.fem.scene import FemScene
 from pinbore.fem.solver import LoadStepper
 from pinbore.meshes import pin_in_bore
+from pinbore.meshes.model import gmsh_session
 from pinbore.meshes.sizing import half_angle_at, law_forces
 
 DEFAULT_PENALTY_FACTOR = 100.0   # eps = factor E*/h
@@ -22,7 +23,7 @@ DEFAULT_GAP_TOLERANCE = 1e-4  # fraction of max_approach
 def mesh_of(scene: FemScene, comm=MPI.COMM_WORLD):
     """Build the gmsh model on rank 0 and distribute it: (MeshData, Sizing)."""
     sizing = scene.sizing
-    with pin_in_bore.session():
+    with gmsh_session():
         if comm.rank == 0:
             pin_in_bore.build(scene.geometry, sizing, scene.load.direction_deg, scene.mesh_options)
         data = dolfinx.io.gmsh.model_to_mesh(pin_in_bore.gmsh.model, comm, 0, gdim=scene.geometry.dim)

@@ -22,8 +22,6 @@ the mesh by its geometry (`interface_at`), so a bore is exactly the surface the 
 says, whatever the boolean operations made of Gmsh's entities.
 """
 
-import contextlib
-import math
 from typing import Literal
 
 import numpy as np
@@ -99,32 +97,6 @@ class BodyGeometry(Strict):
         """The body's largest extent (m)."""
         return max(self.length, self.width, self.thickness)
 
-    def contains(self, x: np.ndarray, tolerance: float = 0.0) -> np.ndarray:
-        """Whether the points x (n, 3; mesh frame) lie in the body (closed, within
-        `tolerance` m of it)."""
-        x = np.atleast_2d(np.asarray(x, dtype=float))
-        t = tolerance
-        if self.shape == "bar":
-            inside = ((x[:, 0] >= -t) & (x[:, 0] <= self.length + t)
-                      & (np.abs(x[:, 1]) <= self.width / 2 + t))
-            if self.eye_radius is not None:
-                for c in (0.0, self.length):
-                    r = np.hypot(x[:, 0] - c, x[:, 1])
-                    inside = (inside | (r <= self.width / 2 + t)) & (r >= self.eye_radius - t)
-            if self.dim == 3:
-                inside &= np.abs(x[:, 2]) <= self.thickness / 2 + t
-            return inside
-        inside = ((x[:, 0] >= -t) & (x[:, 0] <= self.length + t) & (x[:, 1] >= -t)
-                  & (x[:, 1] <= self.width + t) & (np.abs(x[:, 2]) <= self.thickness / 2 + t))
-        for y in self.lugs:
-            r = np.hypot(x[:, 0] + self.lug_radius, x[:, 2])
-            along = np.abs(x[:, 1] - y) <= self.lug_width / 2 + t
-            knuckle = (r <= self.lug_radius + t) | ((x[:, 0] >= -self.lug_radius - t)
-                                                   & (x[:, 0] <= t)
-                                                   & (np.abs(x[:, 2]) <= self.thickness / 2 + t))
-            inside |= along & knuckle & (r >= self.lug_bore_radius - t)
-        return inside
-
     def interface_at(self, name: str, x: np.ndarray) -> np.ndarray:
         """Whether the points x (dim, n) lie on the surface of interface `name` (DOLFINx's
         marker convention: one row per coordinate)."""
@@ -140,19 +112,6 @@ class BodyGeometry(Strict):
         y = self.lugs[int(name.removeprefix("lug")) - 1]
         return ((np.abs(np.hypot(x[0] + self.lug_radius, x[2]) - self.lug_bore_radius) <= t)
                 & (np.abs(x[1] - y) <= self.lug_width / 2 + t))
-
-
-@contextlib.contextmanager
-def session():
-    """A quiet gmsh session (errors only), finalized however the block ends."""
-    import gmsh   # noqa: PLC0415 (a scene is validated without Gmsh)
-
-    gmsh.initialize(interruptible=False)
-    gmsh.option.setNumber("General.Verbosity", 1)
-    try:
-        yield gmsh
-    finally:
-        gmsh.finalize()
 
 
 def build(gmsh, body: BodyGeometry) -> None:
@@ -208,22 +167,3 @@ def _panel(occ, body: BodyGeometry) -> list[int]:
              for y in body.lugs]
     shape, _ = occ.cut(shape, bores)
     return [tag for _, tag in shape]
-
-
-def volume(body: BodyGeometry) -> float:
-    """The body's volume (m^3; dim = 2: its area times the thickness), in closed form."""
-    L, w, t = body.length, body.width, body.thickness
-    if body.shape == "bar":
-        area = L * w
-        if body.eye_radius is not None:
-            area += math.pi * (w / 2) ** 2 - 2 * math.pi * body.eye_radius ** 2   # ends, eyes
-        return area * t
-    v = body.length * body.width * t
-    if body.lugs:
-        R = body.lug_radius
-        # a knuckle's section: the disk less its bore, and the web x in [-R, 0], |z| <= h/2
-        # less its overlap with the disk, int_{-h/2}^{h/2} sqrt(R^2 - z^2) dz
-        overlap = (t / 2) * math.sqrt(R * R - (t / 2) ** 2) + R * R * math.asin(t / (2 * R))
-        section = math.pi * (R * R - body.lug_bore_radius ** 2) + R * t - overlap
-        v += len(body.lugs) * body.lug_width * section
-    return v

@@ -1,5 +1,6 @@
 """The geometry and meshing tables of a scene, and the physical-group tags every stage uses."""
 
+import contextlib
 import math
 from typing import Literal
 
@@ -8,6 +9,20 @@ import pydantic
 
 from pinbore.core.scene import Strict
 from pinbore.laws.relief import Relief
+
+@contextlib.contextmanager
+def gmsh_session():
+    """A quiet gmsh session (errors only), finalized however the block ends; yields the gmsh
+    module (imported here: a scene is validated without Gmsh)."""
+    import gmsh   # noqa: PLC0415
+
+    gmsh.initialize(interruptible=False)
+    gmsh.option.setNumber("General.Verbosity", 1)
+    try:
+        yield gmsh
+    finally:
+        gmsh.finalize()
+
 
 # Physical groups (cells of each body, facets of each boundary). Stages downstream use these.
 PIN, HOUSING = 1, 2

@@ -19,7 +19,6 @@ of the full one below the mid-plane), and a tilted pin is turned about the axis 
 middle normal to the load.
 """
 
-import contextlib
 import math
 
 import gmsh
@@ -31,17 +30,6 @@ from pinbore.meshes.model import (BORE_SURFACE, DEFAULT_LAYERS, HOUSING, HOUSING
 from pinbore.meshes.sizing import Sizing, far_size, wall_size
 
 CANONICAL_DIRECTION_DEG = -90.0
-
-
-@contextlib.contextmanager
-def session():
-    """A quiet gmsh session (errors only), finalized however the block ends."""
-    gmsh.initialize(interruptible=False)
-    gmsh.option.setNumber("General.Verbosity", 1)
-    try:
-        yield
-    finally:
-        gmsh.finalize()
 
 
 def size_field(geometry, sizing: Sizing):

@@ -5,11 +5,12 @@ from pathlib import Path
 import gmsh
 
 from pinbore.meshes import pin_in_bore, preview
+from pinbore.meshes.model import gmsh_session
 
 
 def write(geometry, sizing, direction_deg, mesh, out: Path) -> None:
     """mesh.msh (gmsh 4.1, physical groups as in meshes.model) and preview.png into `out`."""
-    with pin_in_bore.session():
+    with gmsh_session():
         pin_in_bore.build(geometry, sizing, direction_deg, mesh)
         gmsh.write(str(out / "mesh.msh"))
         if geometry.dim == 2:

@@ -146,10 +146,11 @@ def test_the_cell_estimate_matches_gmsh(name):
     from pinbore.core import scene as scenes
     from pinbore.fem.scene import FemScene
     from pinbore.meshes import pin_in_bore
+    from pinbore.meshes.model import gmsh_session
     from pinbore.meshes.sizing import expected_cells
 
     scene = scenes.load(FemScene, ROOT / "scenes" / "fem" / f"{name}.toml")
-    with pin_in_bore.session():
+    with gmsh_session():
         pin_in_bore.build(scene.geometry, scene.sizing, scene.load.direction_deg, scene.mesh)
         kind = 2 if scene.geometry.dim == 2 else 4   # triangles, tetrahedra
         cells = len(gmsh.model.mesh.getElementsByType(kind)[0])

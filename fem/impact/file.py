@@ -14,7 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from pinbore.core.scene import Record, read_json
+from pinbore.core.errors import InputError
+from pinbore.core.scene import Record, read_json, validate
 from pinbore.fem.curve import Column, _float, _read, _write
 
 COMMAND = "impact"
@@ -171,9 +172,7 @@ def write_summary(path: Path, summary: ImpactSummary) -> None:
 def read_summary(path, source: str | None = None) -> ImpactSummary:
     """impact.json, checked: its keys, a positive impact speed and mass, a restitution
     (if any) in 0 < e <= 1, a scene record that reads as an impact scene."""
-    from pinbore.core.errors import InputError   # noqa: PLC0415
-    from pinbore.core.scene import validate   # noqa: PLC0415
-    from pinbore.fem.impact.scene import ImpactScene   # noqa: PLC0415
+    from pinbore.fem.impact.scene import ImpactScene   # noqa: PLC0415 (its laws compile)
 
     summary = read_json(ImpactSummary, path, COMMAND, source)
     where = str(path) if source is None else source

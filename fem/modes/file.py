@@ -88,6 +88,21 @@ class ReducedBody:
         return np.trace(self.second_moments) * np.eye(3) - self.second_moments
 
 
+MEAN_AXIS_TOLERANCE = 1e-6   # of mean_axis_residuals: round-off of a reduction is 1e-10
+
+
+def mean_axis_residuals(body) -> tuple[float, float]:
+    """How far the modes are from the mean-axis frame, as fractions: |1^T M_s Psi_a| /
+    (sqrt(m) rho_g) (the centre of mass moved) and |x~^T M Psi| / (sqrt(m) rho_g^2) (the body
+    turned), rho_g the radius of gyration (a mode is M-normalised: its own scale is 1)."""
+    gyration = np.sqrt(np.trace(body.second_moments) / body.mass)
+    scale = np.sqrt(body.mass) * gyration
+    s = body.s
+    turning = np.stack([s[1, 2] - s[2, 1], s[2, 0] - s[0, 2], s[0, 1] - s[1, 0]])
+    return (float(np.abs(body.translation_coupling).max() / scale),
+            float(np.abs(turning).max() / (scale * gyration)))
+
+
 def mesh_hash(nodes: np.ndarray, cells: np.ndarray) -> str:
     h = hashlib.sha256()
     h.update(np.ascontiguousarray(nodes, dtype="<f8").tobytes())
@@ -184,10 +199,12 @@ def _check(body: ReducedBody, source: str, mesh_sha256: str) -> None:
         raise InputError(f"{source}: second_moments: not symmetric positive semi-definite")
     if not np.allclose(sum(body.S[a, a] for a in range(3)), np.eye(n), atol=1e-6):
         raise InputError(f"{source}: S: the modes are not mass-normalised (sum_a S_aa = 1)")
-    gyration = np.sqrt(np.trace(I) / body.mass)
-    if np.abs(body.translation_coupling).max() > 1e-6 * np.sqrt(body.mass) * gyration:
+    moving, turning = mean_axis_residuals(body)
+    if moving > MEAN_AXIS_TOLERANCE:
         raise InputError(f"{source}: translation_coupling: the modes move the centre of mass "
                          "(not the mean-axis frame)")
+    if turning > MEAN_AXIS_TOLERANCE:
+        raise InputError(f"{source}: s: the modes turn the body (not the mean-axis frame)")
     K = body.stiffening
     if not np.allclose(K, K.transpose(1, 0, 3, 2), rtol=0, atol=1e-9 * max(np.abs(K).max(), 1e-300)):
         raise InputError(f"{source}: stiffening: not symmetric")

@@ -82,17 +82,19 @@ from petsc4py import PETSc
 from slepc4py import SLEPc
 
 from pinbore.core.errors import InputError
+from pinbore.fem.elasticity import lame
 from pinbore.fem.modes.scene import ModesScene
 from pinbore.meshes import body as body_mesh
+from pinbore.meshes.model import gmsh_session
 
 RIGID_ZERO = 1e-6      # a rigid mode's eigenvalue, of the first flexible one, at most
 EIGEN_TOLERANCE = 1e-10
 
 
 def lame_plane_stress(E: float, nu: float, dim: int) -> tuple[float, float]:
-    """Lame constants (Pa): lambda = E nu / ((1 + nu)(1 - 2 nu)), mu = E / (2 (1 + nu)); in
-    plane stress (dim = 2) lambda* = 2 lambda mu / (lambda + 2 mu) = E nu / (1 - nu^2)."""
-    lam, mu = E * nu / ((1 + nu) * (1 - 2 * nu)), E / (2 * (1 + nu))
+    """Lame constants (Pa, fem.elasticity.lame); in plane stress (dim = 2) lambda* =
+    2 lambda mu / (lambda + 2 mu) = E nu / (1 - nu^2)."""
+    lam, mu = lame(E, nu)
     if dim == 2:
         lam = 2 * lam * mu / (lam + 2 * mu)
     return lam, mu
@@ -100,7 +102,7 @@ def lame_plane_stress(E: float, nu: float, dim: int) -> tuple[float, float]:
 
 def mesh_of(scene: ModesScene, comm=MPI.COMM_SELF):
     """The body's DOLFINx mesh, meshed by Gmsh (meshes.body)."""
-    with body_mesh.session() as gmsh:
+    with gmsh_session() as gmsh:
         body_mesh.build(gmsh, scene.body)
         data = dolfinx.io.gmsh.model_to_mesh(gmsh.model, comm, 0, gdim=scene.body.dim)
     return data.mesh
@@ -157,6 +159,11 @@ class FEBody:
         u0.x.array[:] = displacement
         w, v = ufl.TrialFunction(self.V), ufl.TestFunction(self.V)
         return self._assemble(self.t * ufl.inner(ufl.grad(w) * self.sigma(u0), ufl.grad(v)) * ufl.dx)
+
+
+def node_dofs(nodes: np.ndarray, dim: int) -> np.ndarray:
+    """The dofs of `nodes` in the vector space (node i's component c: i dim + c)."""
+    return (nodes[:, None] * dim + np.arange(dim)).ravel()
 
 
 def rigid_tie(X: np.ndarray, centre: np.ndarray) -> np.ndarray:
@@ -281,8 +288,6 @@ class Reduced:
 
 def _pad(a: np.ndarray, dim: int) -> np.ndarray:
     """Vectors of `dim` components (on axis 1) as three."""
-    if dim == 3:
-        return a
     shape = list(a.shape)
     shape[1] = 3
     out = np.zeros(shape)
@@ -290,15 +295,11 @@ def _pad(a: np.ndarray, dim: int) -> np.ndarray:
     return out
 
 
-def _rotation_pad(a: np.ndarray, dim: int, translation: bool = False) -> np.ndarray:
-    """An interface frame's rotation coordinates (a row each: 1 in the plane, theta_z; 3 in
-    space), or its translation's (2 in the plane), as three rows."""
-    if dim == 3:
-        return a
+def _as_axes(a: np.ndarray, axes) -> np.ndarray:
+    """Rows of an interface frame's coordinates (one row a coordinate, a column a mode) as the
+    three rows of x, y, z: row k of `a` is axis axes[k] (the others zero)."""
     out = np.zeros((3, a.shape[1]))
-    out[:2 if translation else 2] = a if translation else 0.0
-    if not translation:
-        out[2] = a[0]
+    out[list(axes)] = a
     return out
 
 
@@ -310,7 +311,7 @@ def rigid_interfaces(fe: FEBody, scene: ModesScene) -> tuple[np.ndarray, sp.csr_
     rows, blocks = [], []
     for name in names:
         nodes = fe.interface_nodes(name)
-        rows.append((nodes[:, None] * dim + np.arange(dim)).ravel())
+        rows.append(node_dofs(nodes, dim))
         blocks.append(rigid_tie(fe.X[nodes], np.asarray(scene.body.interfaces[name])))
     boundary = np.concatenate(rows)
     if np.unique(boundary).size != boundary.size:
@@ -388,15 +389,15 @@ def reduce(scene: ModesScene, fe: FEBody | None = None, progress=None) -> Reduce
     translation = np.einsum("i,iak->ak", ones, MsPsi)
     centre3 = np.append(centre, [0.0] * (3 - dim))
     frames = keep[n_f:].reshape(len(names), R, n)
-    interface_translation = np.stack([_rotation_pad(f[:dim], dim, translation=True) for f in frames])
-    interface_rotation = np.stack([_rotation_pad(f[dim:], dim) for f in frames])
+    turning = (2,) if dim == 2 else (0, 1, 2)   # a plane body's frame turns about z alone
+    interface_translation = np.stack([_as_axes(f[:dim], range(dim)) for f in frames])
+    interface_rotation = np.stack([_as_axes(f[dim:], turning) for f in frames])
 
     clock = time.perf_counter()
     if set(scene.held) == set(names):
         ksp, free = fixed.ksp, interior
     else:   # only some interfaces carry the load: K factored with those held alone
-        held = np.concatenate([(fe.interface_nodes(name)[:, None] * dim + np.arange(dim)).ravel()
-                               for name in scene.held])
+        held = np.concatenate([node_dofs(fe.interface_nodes(name), dim) for name in scene.held])
         free = np.setdiff1d(np.arange(n_dofs), held)
         ksp, _ = factored(K[free][:, free])
     root = np.asarray(scene.body.interfaces[scene.held[0]])

@@ -37,7 +37,7 @@ def run(scene_path, out, scene: ModesScene | None = None) -> int:
             reduced = reduction.reduce(scene, progress=bar)
         body = body_of(reduced, scene_path)
         body_file.write(tmp / body_file.BODY, body)
-        summary = summarise(scene, scene_path, reduced, time.perf_counter() - start)
+        summary = summarise(scene, scene_path, reduced, body, time.perf_counter() - start)
         mode_shapes(tmp / "mode_shapes.png", body)
         body_file.write_summary(tmp / body_file.SUMMARY, summary)
     f = ", ".join(f"{v:.4g}" for v in summary.frequencies_Hz[:6])
@@ -59,19 +59,7 @@ def body_of(reduced, scene_path) -> body_file.ReducedBody:
         fixed_interface_omega=reduced.fixed_interface_omega, full_omega=reduced.full_omega)
 
 
-def mean_axis_residual(reduced) -> float:
-    """The frame's mean-axis conditions, as fractions: |1^T M_s Psi_a| / (sqrt(m) rho_g) and
-    |(x~^T M Psi)| / (sqrt(m) rho_g^2), rho_g the body's radius of gyration (a mode is
-    M-normalised: its own scale is 1)."""
-    gyration = np.sqrt(np.trace(reduced.second_moments) / reduced.mass)
-    scale = np.sqrt(reduced.mass) * gyration
-    s = reduced.s
-    turning = np.stack([s[1, 2] - s[2, 1], s[2, 0] - s[0, 2], s[0, 1] - s[1, 0]])
-    return float(max(np.abs(reduced.translation_coupling).max() / scale,
-                     np.abs(turning).max() / (scale * gyration)))
-
-
-def summarise(scene, scene_path, reduced, total) -> body_file.ModesSummary:
+def summarise(scene, scene_path, reduced, body, total) -> body_file.ModesSummary:
     hz = reduced.omega / (2 * np.pi)
     full = reduced.full_omega / (2 * np.pi)
     m = min(full.size, hz.size)
@@ -80,11 +68,12 @@ def summarise(scene, scene_path, reduced, total) -> body_file.ModesSummary:
         scene_file=str(scene_path), scene=scene.model_dump(mode="json"), dofs=reduced.dofs,
         nodes=reduced.X.shape[0], cells=reduced.cells.shape[0], mass_kg=reduced.mass,
         centre_m=reduced.centre.tolist(),
-        inertia_kg_m2=(np.trace(reduced.second_moments) * np.eye(3) - reduced.second_moments).tolist(),
+        inertia_kg_m2=body.inertia.tolist(),
         frequencies_Hz=hz.tolist(),
         fixed_interface_frequencies_Hz=(reduced.fixed_interface_omega / (2 * np.pi)).tolist(),
         full_frequencies_Hz=full.tolist(), reduction_error=(hz[:m] / full[:m] - 1).tolist(),
-        mean_axis_residual=mean_axis_residual(reduced), rigid_residual=reduced.rigid_residual,
+        mean_axis_residual=max(body_file.mean_axis_residuals(body)),
+        rigid_residual=reduced.rigid_residual,
         wall_time_s=seconds,
         platform={"python": platform.python_version(), "machine": platform.machine()})
 
@@ -120,15 +109,15 @@ def mode_shapes(path: Path, body: body_file.ReducedBody) -> None:
     columns = (count + rows - 1) // rows
     plotter = pyvista.Plotter(off_screen=True, shape=(rows, columns),
                               window_size=(450 * columns, 380 * rows))
+    types = np.full(tets.shape[0], pyvista.CellType.TETRA)
+    undeformed = pyvista.UnstructuredGrid(cells, types, body.nodes).extract_surface(
+        algorithm="dataset_surface")
     for k in range(count):
         plotter.subplot(k // columns, k % columns)
         x, magnitude = deformed(body, k)
-        undeformed = pyvista.UnstructuredGrid(cells, np.full(tets.shape[0], pyvista.CellType.TETRA),
-                                              body.nodes)
-        grid = pyvista.UnstructuredGrid(cells, np.full(tets.shape[0], pyvista.CellType.TETRA), x)
+        grid = pyvista.UnstructuredGrid(cells, types, x)
         grid.point_data["|u|"] = magnitude
-        plotter.add_mesh(undeformed.extract_surface(algorithm="dataset_surface"), color="lightgrey",
-                         opacity=0.25)
+        plotter.add_mesh(undeformed, color="lightgrey", opacity=0.25)
         plotter.add_mesh(grid.extract_surface(algorithm="dataset_surface"), scalars="|u|",
                          cmap="viridis", show_scalar_bar=False)
         plotter.add_text(f"mode {k + 1}: {body.omega[k] / (2 * np.pi):.5g} Hz", font_size=10)
