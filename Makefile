@@ -35,7 +35,7 @@ DYNAMICS_SCENE := scenes/reduced/slider_crank_flores2004.toml
 SPATIAL_DYNAMICS_SCENE := scenes/reduced/spatial_slider_crank_flores_misaligned.toml
 DYNAMICS := $(addprefix build/dynamics/,poincare/summary.json bifurcation/summary.json design/summary.json \
                                         spatial_poincare/summary.json spatial_bifurcation/summary.json)
-REDUCED_CODE := $(wildcard core/*.py laws/*.py calibration/lawsfile.py reduced/mechanism/*.py)
+REDUCED_CODE := $(wildcard core/*.py laws/*.py calibration/lawsfile.py fem/modes/file.py reduced/mechanism/*.py)
 DYNAMICS_CODE := $(wildcard pinbore/cli.py reduced/dynamics/*.py) $(REDUCED_CODE) $(STAMP)
 DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(DYNAMICS_CODE)
 SPATIAL_DYNAMICS_DEPS := $(SPATIAL_DYNAMICS_SCENE) $(DYNAMICS_CODE)
@@ -85,7 +85,7 @@ build/calibration/laws.json: $(STUDY_CURVES) $(STUDY3D_CURVES) $(STUDY_IMPACTS) 
 
 reduced: $(REDUCED_RUNS) ## run the mechanisms with clearance joints (build/reduced/<scene>/)
 
-build/reduced/%/summary.json: scenes/reduced/%.toml build/calibration/laws.json $(REDUCED_CODE) $(STAMP)
+build/reduced/%/summary.json: scenes/reduced/%.toml build/calibration/laws.json $(MODES_RUNS) $(REDUCED_CODE) $(STAMP)
 	$(PINBORE) reduced $< --out build/reduced/$*
 
 dynamics: $(DYNAMICS) ## Poincare maps, bifurcation diagrams and design map of the slider-crank, planar and misaligned spatial (build/dynamics/)

@@ -133,9 +133,8 @@ class MechanismFlow:
         first body that is not driven (x, y global)."""
         model = self.model
         if not model.joints:
-            b, per_body = self._free_body(), model.nq // len(model.names)
-            return np.array([*state.y[per_body * b:per_body * b + 2],
-                             *state.y[model.nq + per_body * b:model.nq + per_body * b + 2]])
+            c = model.geometry.coordinate(self._free_body())
+            return np.array([*state.y[c:c + 2], *state.y[model.nq + c:model.nq + c + 2]])
         args = model.args()
         return np.array(engine.relative_motion(state.y, args, engine.workspace(args),
                                                *self._observed_joint()))

@@ -11,12 +11,14 @@ its energy. A body kind implements each function below for its own arguments bun
 (its marker, layout.PLANAR or layout.SPATIAL) or for vectors of its dimension (reduced.mechanism.
 vectors), with numba.extending.overload; numba picks the implementation when it compiles.
 
-Where a third kind plugs in: a flexible body (modal coordinates in a floating frame) is a
-body whose points and vectors move with its deformation. It implements these same functions
-(a point's velocity and Jacobian then carry the modes' columns, its mass matrix is full) in
-a module of its own that registers them (`implement_kind`, for its marker), with its line in
-the registry reduced.mechanism.kinds; the joints, drives, springs and contacts, which call
-nothing else, work with it unchanged.
+Flexible bodies: a body of a kind may be flexible (its FE modes in a floating frame,
+reduced.mechanism.planar), so that one mechanism mixes rigid and flexible bodies; a body's
+row in the body states says which it is, and the kind's functions branch on it. A joint
+names the body point it acts at, and a vector the point whose frame holds it: on a flexible
+body that point's interface frame moves, turns and has its modes' Jacobian columns (`put`
+takes the point for them), its mass matrix is full (`fill_schur`, `state_rates`), its
+quadratic velocity, elastic and damping forces are `body_forces`'. The joints, drives,
+springs and contacts, which call nothing else, work with it unchanged.
 
 Bodies are numbered from 0; -1 is the ground (a point or vector of the ground is global).
 Angular quantities are floats in the plane (about its normal) and vectors in space.
@@ -28,12 +30,12 @@ import inspect
 HOT = {"point_state", "material_velocity", "put", "push", "row_rate"}   # inlined (below)
 
 # The interface a body kind implements: each function, and the argument (its position) whose
-# type picks a kind's implementation: "kind" (the arguments' marker), "vector" (a vector of
-# the kind's dimension) or "angular" (a torque: a float in the plane, a vector in space).
+# type picks a kind's implementation: "kind" (the arguments' marker) or "vector" (a vector
+# of the kind's dimension).
 INTERFACE = {
     "body_columns": ("vector", 0), "point_state": ("vector", 2), "vector_state": ("vector", 2),
-    "material_velocity": ("vector", 2), "put": ("vector", 3), "push": ("vector", 3),
-    "push_torque": ("angular", 2), "centripetal_gap": ("vector", 1),
+    "material_velocity": ("vector", 2), "put": ("vector", 4), "push": ("vector", 3),
+    "push_torque": ("vector", 3), "centripetal_gap": ("vector", 1),
     "relative_rotation": ("vector", 3), "rotation_axis": ("vector", 2), "row_rate": ("vector", 7),
     "turned": ("vector", 2), "unturned": ("vector", 2),
     "body_states": ("kind", 0), "body_forces": ("kind", 0), "fill_schur": ("kind", 0),
@@ -45,9 +47,8 @@ OPTIONAL = {"turned", "unturned"}   # a body frame's vectors turned (the spatial
 def implement_kind(namespace: dict, tests: dict) -> None:
     """Register a body kind: each function of INTERFACE that `namespace` (the kind's module)
     defines is the implementation where the argument INTERFACE names passes the kind's test
-    (`tests`: "kind", its marker; "vector", a vector of its dimension; "angular", a torque of
-    its dimension: a float in the plane, a vector in space). A kind without an OPTIONAL
-    function leaves it to the kinds that have one."""
+    (`tests`: "kind", its marker; "vector", a vector of its dimension). A kind without an
+    OPTIONAL function leaves it to the kinds that have one."""
     for name, (what, position) in INTERFACE.items():
         if name not in namespace and name in OPTIONAL:
             continue
@@ -87,29 +88,32 @@ point_state = _declared("point_state", """point_state(bodies, b, s): the body po
 frame): (its position P, velocity P', the velocity part of its acceleration (P'' less the
 part linear in the accelerations: w x (w x s) for a rigid body), the arm s = P - r from the
 body's reference point in global axes).""")
-vector_state = _declared("vector_state", """vector_state(bodies, b, a): the body vector a (body
-frame): (a in global axes, its rate a', the velocity part of a'').""")
+vector_state = _declared("vector_state", """vector_state(bodies, b, s, a): the body vector a (body
+frame) of the frame at the body point s (a flexible body's interface there; a rigid body's
+frame is one): (a in global axes, its rate a', the velocity part of a'').""")
 material_velocity = _declared("material_velocity", """material_velocity(bodies, b, x): the
 velocity of body b's material point at the global point x.""")
-put = _declared("put", """put(jac, row, b, linear, angular, sign, offsets): add sign times the
-rate coefficients of a point (linear: of the body's translation velocity; angular: of its
-angular velocity) to body b's columns of a constraint row.""")
+put = _declared("put", """put(jac, row, bodies, b, s, linear, angular, sign, offsets): add sign
+times the rate coefficients of the body point s (linear: of the body's translation velocity;
+angular: of its angular velocity, the point's arm x linear plus the rotation of a vector of the
+frame at s) to body b's columns of a constraint row (a flexible body's: its modes' too).""")
 push = _declared("push", """push(force, bodies, b, f, x, offsets): add the generalised forces
 of the force f (global) acting at the global point x to body b's columns.""")
-push_torque = _declared("push_torque", """push_torque(force, b, torque, offsets): add a torque
-(global) to body b's columns.""")
+push_torque = _declared("push_torque", """push_torque(force, bodies, b, s, torque, offsets): add
+a torque (global) on the frame at the body point s to body b's columns.""")
 centripetal_gap = _declared("centripetal_gap", """centripetal_gap(bodies, bi, si, bj, sj, a):
 a . (c_j - c_i), c the velocity part of the acceleration of the points s_i of body i and s_j
 of body j (point_state).""")
-relative_rotation = _declared("relative_rotation", """relative_rotation(bodies, bi, bj, a_i,
-b_j, c_i, offset, drift): the angle of body j relative to body i about the axis u_i = a_i x
-c_i (from a_i to b_j), less offset and then less drift (principal value where the body kind
+relative_rotation = _declared("relative_rotation", """relative_rotation(bodies, bi, bj, s_i,
+s_j, a_i, b_j, c_i, offset, drift): the angle of body j's frame at s_j relative to body i's at
+s_i about the axis u_i = a_i x c_i (from a_i to b_j), less offset and then less drift (principal value where the body kind
 measures angles modulo 2 pi): (angle, the coefficient k of w_i in its rate (-k of w_j), its
 rate, the velocity part of its second derivative).""")
 row_rate = _declared("row_rate", """row_rate(rate, jac, i, b, states, velocities, offsets, like): rate plus
 body b's part of constraint row i's rate (its Jacobian columns times their velocities).""")
-rotation_axis = _declared("rotation_axis", """rotation_axis(bodies, bi, a_i, c_i): the axis u_i =
-a_i x c_i of a relative rotation in global axes (in the plane: 1.0, the normal).""")
+rotation_axis = _declared("rotation_axis", """rotation_axis(bodies, bi, s_i, a_i, c_i): the axis
+u_i = a_i x c_i of the frame at s_i of a relative rotation in global axes (in the plane: 1.0,
+the normal).""")
 turned = _declared("turned", """turned(bodies, b, a): a body-frame vector of body b in global
 axes (spatial bodies).""")
 unturned = _declared("unturned", """unturned(bodies, b, a): a global vector in body b's axes
@@ -121,12 +125,14 @@ Work.bodies, the body kind's layout of its kinematic state.""")
 # ---- of the whole body (chosen by the type of `kind`, a marker of the body kind without
 # data: layout.PLANAR, layout.SPATIAL). Each receives the arrays it may need and no bundle:
 # numba counts the references of every array in a bundle a function receives.
-body_states = _declared("body_states", """body_states(kind, y, nq, inertia_inv, states,
-velocities): each body's kinematic state from y into its row of `states` (the kind's layout)
-and its velocity columns into `velocities`.""")
-body_forces = _declared("body_forces", """body_forces(kind, masses, minv, inertia, gravity, states,
-force): the forces every body feels of itself into `force`: gravity, and the gyroscopic terms
-of a spinning body.""")
+body_states = _declared("body_states", """body_states(kind, y, nq, inertia_inv, flex, offsets,
+states, velocities): each body's kinematic state from y into its row of `states` (the kind's
+layout; flex: a flexible body's modal constants, layout.Args) and its velocity columns into
+`velocities`.""")
+body_forces = _declared("body_forces", """body_forces(kind, masses, minv, inertia, gravity, flex,
+states, force): the forces every body feels of itself into `force`: gravity, the gyroscopic
+terms of a spinning body, a flexible body's quadratic velocity terms, elastic and damping
+forces; returns the power its modal damping dissipates.""")
 fill_schur = _declared("fill_schur", """fill_schur(kind, masses, minv, offsets, states, jac, mjac,
 schur, row_bodies, first, m): M^-1 D^T into mjac and the lower triangle of D M^-1 D^T of the
 first m constraint rows into schur, within the envelope `first`.""")
@@ -139,8 +145,8 @@ velocity_step = _declared("velocity_step", """velocity_step(kind, y, nq, minv, j
 m, scale): change the velocities by -scale M^-1 D^T x.""")
 normalise = _declared("normalise", """normalise(kind, y, nq, nb): coordinates back onto their own
 constraints (unit Euler parameters); nothing for coordinates that have none.""")
-kinetic_energy = _declared("kinetic_energy", """kinetic_energy(kind, y, nq, masses, minv, inertia):
-the bodies' kinetic energy (J).""")
+kinetic_energy = _declared("kinetic_energy", """kinetic_energy(kind, y, nq, masses, minv, inertia,
+flex, offsets): the bodies' kinetic energy (J).""")
 
 
 # ---- what the joints build of these, for every body kind
@@ -150,10 +156,10 @@ from pinbore.reduced.mechanism.vectors import cross, dot  # noqa: E402
 
 
 @numba.njit(cache=True, _nrt=False)
-def dot1(bodies, bi, a_i, bj, b_j):
-    """a_i . b_j of a vector of body i and one of body j ([Nikravesh1988] the dot-1
-    constraint): (value, coefficient k of w_i (-k: of w_j), rate, velocity part of its second
-    derivative)."""
-    a, ad, ac = vector_state(bodies, bi, a_i)
-    b, bd, bc = vector_state(bodies, bj, b_j)
+def dot1(bodies, bi, s_i, a_i, bj, s_j, b_j):
+    """a_i . b_j of a vector of body i (its frame at s_i) and one of body j (at s_j)
+    ([Nikravesh1988] the dot-1 constraint): (value, coefficient k of w_i (-k: of w_j), rate,
+    velocity part of its second derivative)."""
+    a, ad, ac = vector_state(bodies, bi, s_i, a_i)
+    b, bd, bc = vector_state(bodies, bj, s_j, b_j)
     return dot(a, b), cross(a, b), dot(ad, b) + dot(a, bd), dot(ac, b) + 2 * dot(ad, bd) + dot(a, bc)

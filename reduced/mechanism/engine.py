@@ -108,7 +108,7 @@ from pinbore.reduced.mechanism.layout import (
     PRIM_PROFILE, PRIM_PROFILE_ROWS, PRIM_PROFILE_TIME, PRIM_S_J, PRIM_SPEED, RADIAL, SEG_C0,
     SEG_C1, SEG_C2, SEG_C3, SEG_TIME, SPIN_UP, TABLE, REGULARISATION_V0, REGULARISATION_V1, SLICED, STATE_STRETCH,
     STATE_TRAVEL, STOP, STRIBECK, STRIBECK_MU_MIN, STRIBECK_MU_STATIC, STRIBECK_V_MIN,
-    TORSION_A_I, TORSION_B_J, TORSION_BODY_I, TORSION_BODY_J, TORSION_C_I, TORSION_DAMPING,
+    TORSION_A_I, TORSION_B_J, TORSION_BODY_I, TORSION_BODY_J, TORSION_C_I, TORSION_DAMPING, TORSION_S_I, TORSION_S_J,
     TORSION_FREE_ANGLE, TORSION_KIND, TORSION_STIFFNESS, WORK_IN, Contacts, Depth, Impulse, Work)
 from pinbore.reduced.mechanism.linalg import cholesky_solve
 from pinbore.reduced.mechanism.vectors import (
@@ -236,16 +236,17 @@ def constraint_rows(t, primitives, profile, contacts, mode, offsets, states, vel
             pj, _, cj, sj = point_state(states, bj, cell(primitives, k, PRIM_S_J, z))
             for c in range(len(z)):
                 unit = axis(c, z)
-                put(jac, row + c, bi, unit, cross(si, unit), 1.0, offsets)
-                put(jac, row + c, bj, unit, cross(sj, unit), -1.0, offsets)
+                put(jac, row + c, states, bi, cell(primitives, k, PRIM_S_I, z), unit, cross(si, unit), 1.0, offsets)
+                put(jac, row + c, states, bj, cell(primitives, k, PRIM_S_J, z), unit, cross(sj, unit), -1.0, offsets)
                 phi[row + c], phi_t[row + c], rhs_c[row + c] = pi[c] - pj[c], 0.0, cj[c] - ci[c]
             row += len(z)
             continue
         if kind == DOT1:
-            value, coefficient, _, acc = dot1(states, bi, cell(primitives, k, PRIM_A_I, z), bj,
-                                              cell(primitives, k, PRIM_B_J, z))
-            put(jac, row, bi, zero(z), coefficient, 1.0, offsets)
-            put(jac, row, bj, zero(z), coefficient, -1.0, offsets)
+            s_i, s_j = cell(primitives, k, PRIM_S_I, z), cell(primitives, k, PRIM_S_J, z)
+            value, coefficient, _, acc = dot1(states, bi, s_i, cell(primitives, k, PRIM_A_I, z), bj,
+                                              s_j, cell(primitives, k, PRIM_B_J, z))
+            put(jac, row, states, bi, s_i, zero(z), coefficient, 1.0, offsets)
+            put(jac, row, states, bj, s_j, zero(z), coefficient, -1.0, offsets)
             phi[row], phi_t[row], rhs_c[row] = value, 0.0, -acc
         elif kind == DOT2:
             value, gamma = dot2_row(jac, row, states, bi, cell(primitives, k, PRIM_S_I, z),
@@ -254,11 +255,13 @@ def constraint_rows(t, primitives, profile, contacts, mode, offsets, states, vel
             phi[row], phi_t[row], rhs_c[row] = value, 0.0, gamma
         else:   # ANGLE: the relative angle = angle0 + theta(t)
             theta, rate, acceleration = drive_profile(primitives, k, profile, t)
+            s_i, s_j = cell(primitives, k, PRIM_S_I, z), cell(primitives, k, PRIM_S_J, z)
             angle, coefficient, _, gamma = relative_rotation(
-                states, bi, bj, cell(primitives, k, PRIM_A_I, z), cell(primitives, k, PRIM_B_J, z),
-                cell(primitives, k, PRIM_C_I, z), primitives[k, PRIM_ANGLE0], theta)
-            put(jac, row, bi, zero(z), coefficient, 1.0, offsets)
-            put(jac, row, bj, zero(z), coefficient, -1.0, offsets)
+                states, bi, bj, s_i, s_j, cell(primitives, k, PRIM_A_I, z),
+                cell(primitives, k, PRIM_B_J, z), cell(primitives, k, PRIM_C_I, z),
+                primitives[k, PRIM_ANGLE0], theta)
+            put(jac, row, states, bi, s_i, zero(z), coefficient, 1.0, offsets)
+            put(jac, row, states, bj, s_j, zero(z), coefficient, -1.0, offsets)
             phi[row], phi_t[row], rhs_c[row] = angle, 0.0 - rate, gamma + acceleration
         row += 1
     for k in range(contacts.shape[0]):
@@ -275,12 +278,12 @@ def constraint_rows(t, primitives, profile, contacts, mode, offsets, states, vel
 def dot2_row(jac, row, states, bi, s_i, a_i, bj, s_j, offsets):
     """The dot-2 row a_i . (P_j - P_i) (a vector of body i normal to the line from a point of
     body i to one of body j) into row `row` of jac: (its value, its gamma)."""
-    a, ad, ac = vector_state(states, bi, a_i)
+    a, ad, ac = vector_state(states, bi, s_i, a_i)
     pi, vi, ci, si = point_state(states, bi, s_i)
     pj, vj, cj, sj = point_state(states, bj, s_j)
     d, dd = sub(pj, pi), sub(vj, vi)
-    put(jac, row, bi, scaled(a, -1.0), cross(a, add(d, si)), 1.0, offsets)
-    put(jac, row, bj, a, cross(sj, a), 1.0, offsets)
+    put(jac, row, states, bi, s_i, scaled(a, -1.0), cross(a, add(d, si)), 1.0, offsets)
+    put(jac, row, states, bj, s_j, a, cross(sj, a), 1.0, offsets)
     return dot(a, d), -(dot(ac, d) + 2 * dot(ad, dd) + centripetal_gap(states, a, bi, si, ci, bj, sj, cj))
 
 
@@ -302,14 +305,16 @@ def held_row(jac, mjac, phi, phi_t, rhs_c, row_bodies, row, states, contacts, k,
     # |e| - c with e = X - B, B the bearing point (or its foot on the bore's axis u):
     # delta'' = n.(c_J - c_B) + (|e'|^2 - s'(u.e') - (n.e')^2)/|e| - s' n.u' + D v'
     g = radial_geometry(states, contacts, k, z)
-    pj, vj, cj, sj = point_state(states, bj, cell(contacts, k, CONTACT_JOURNAL_POINT, z))
-    u, ud, _ = vector_state(states, bb, cell(contacts, k, CONTACT_BEARING_AXIS, z))
+    s_j = cell(contacts, k, CONTACT_JOURNAL_POINT, z)
+    pj, vj, cj, sj = point_state(states, bj, s_j)
+    u, ud, _ = vector_state(states, bb, cell(contacts, k, CONTACT_BEARING_POINT, z),
+                            cell(contacts, k, CONTACT_BEARING_AXIS, z))
     foot = add(cell(contacts, k, CONTACT_BEARING_POINT, z),
                scaled(cell(contacts, k, CONTACT_BEARING_AXIS, z), g.along))
     pb, vb, cb, sb = point_state(states, bb, foot)
     n = g.normal
-    put(jac, row, bj, n, cross(sj, n), 1.0, offsets)
-    put(jac, row, bb, n, cross(sb, n), -1.0, offsets)
+    put(jac, row, states, bj, s_j, n, cross(sj, n), 1.0, offsets)
+    put(jac, row, states, bb, foot, n, cross(sb, n), -1.0, offsets)
     e_dot = sub(vj, vb)
     along_rate = dot(ud, sub(pj, pb)) + dot(u, e_dot)
     size = g.delta + contacts[k, CONTACT_CLEARANCE]
@@ -339,7 +344,8 @@ def radial_geometry(states, contacts, k, z):
     e = sub(pj, pb)
     along = 0.0
     if int(contacts[k, CONTACT_KIND]) == AXIS_RADIAL:
-        u = vector_state(states, bb, cell(contacts, k, CONTACT_BEARING_AXIS, z))[0]
+        u = vector_state(states, bb, cell(contacts, k, CONTACT_BEARING_POINT, z),
+                         cell(contacts, k, CONTACT_BEARING_AXIS, z))[0]
         along = dot(u, e)
         pb = add(pb, scaled(u, along))
         e = sub(e, scaled(u, along))
@@ -362,7 +368,8 @@ def plane_geometry(states, contacts, k, z):
     s N.(v_J(X) - v_B(X)), the side and the relative velocity at X."""
     bb, bj = int(contacts[k, CONTACT_BEARING_BODY]), int(contacts[k, CONTACT_JOURNAL_BODY])
     p = point_state(states, bb, cell(contacts, k, CONTACT_BEARING_POINT, z))[0]
-    u = vector_state(states, bb, cell(contacts, k, CONTACT_BEARING_AXIS, z))[0]
+    u = vector_state(states, bb, cell(contacts, k, CONTACT_BEARING_POINT, z),
+                     cell(contacts, k, CONTACT_BEARING_AXIS, z))[0]
     x = point_state(states, bj, cell(contacts, k, CONTACT_JOURNAL_POINT, z))[0]
     s = dot(sub(x, p), u)
     side = contacts[k, CONTACT_SIDE]
@@ -615,9 +622,11 @@ def bore_section(states, contacts, k, z):
     journal's axis point X(z) = P_j + z u_j is off the bore's axis by a0 + z a1 across it."""
     bb, bj = int(contacts[k, CONTACT_BEARING_BODY]), int(contacts[k, CONTACT_JOURNAL_BODY])
     pb = point_state(states, bb, cell(contacts, k, CONTACT_BEARING_POINT, z))[0]
-    ub = vector_state(states, bb, cell(contacts, k, CONTACT_BEARING_AXIS, z))[0]
+    ub = vector_state(states, bb, cell(contacts, k, CONTACT_BEARING_POINT, z),
+                      cell(contacts, k, CONTACT_BEARING_AXIS, z))[0]
     pj = point_state(states, bj, cell(contacts, k, CONTACT_JOURNAL_POINT, z))[0]
-    uj = vector_state(states, bj, cell(contacts, k, CONTACT_JOURNAL_AXIS, z))[0]
+    uj = vector_state(states, bj, cell(contacts, k, CONTACT_JOURNAL_POINT, z),
+                      cell(contacts, k, CONTACT_JOURNAL_AXIS, z))[0]
     e, lean = sub(pj, pb), sub(uj, ub)
     return pj, uj, ub, sub(e, scaled(ub, dot(e, ub))), sub(lean, scaled(ub, dot(lean, ub)))
 
@@ -846,6 +855,7 @@ def torsion_angle(states, torsion, r, z):
     body j about body i's axis."""
     angle, _, rate, _ = relative_rotation(
         states, int(torsion[r, TORSION_BODY_I]), int(torsion[r, TORSION_BODY_J]),
+        cell(torsion, r, TORSION_S_I, z), cell(torsion, r, TORSION_S_J, z),
         cell(torsion, r, TORSION_A_I, z), cell(torsion, r, TORSION_B_J, z),
         cell(torsion, r, TORSION_C_I, z), torsion[r, TORSION_FREE_ANGLE], 0.0)
     return angle, rate
@@ -904,10 +914,11 @@ def torsion_forces(force, states, torsion, latched, offsets, dissipation, z):
     for r in range(torsion.shape[0]):
         angle, rate = torsion_angle(states, torsion, r, z)
         torque, power = torsion_law(angle, rate, torsion[r], latched[r] > 0)
-        u = rotation_axis(states, int(torsion[r, TORSION_BODY_I]), cell(torsion, r, TORSION_A_I, z),
+        s_i, s_j = cell(torsion, r, TORSION_S_I, z), cell(torsion, r, TORSION_S_J, z)
+        u = rotation_axis(states, int(torsion[r, TORSION_BODY_I]), s_i, cell(torsion, r, TORSION_A_I, z),
                           cell(torsion, r, TORSION_C_I, z))
-        push_torque(force, int(torsion[r, TORSION_BODY_J]), scaled(u, torque), offsets)
-        push_torque(force, int(torsion[r, TORSION_BODY_I]), scaled(u, -torque), offsets)
+        push_torque(force, states, int(torsion[r, TORSION_BODY_J]), s_j, scaled(u, torque), offsets)
+        push_torque(force, states, int(torsion[r, TORSION_BODY_I]), s_i, scaled(u, -torque), offsets)
         dissipation += power
     return dissipation
 
@@ -947,8 +958,8 @@ def rhs(t, y, dy, args, work):
     contacts, primitives, mode = args.contacts, args.primitives, args.mode
     states, force, normal, jac, mjac = work.bodies, work.force, work.normal, work.jac, work.mjac
     rhs_c, phi_t, row_bodies = work.rhs_c, work.phi_t, work.row_bodies
-    body_states(kind, y, nq, args.inertia_inv, states, work.velocities)
-    body_forces(kind, masses, minv, inertia, args.gravity, states, force)
+    body_states(kind, y, nq, args.inertia_inv, args.flex, offsets, states, work.velocities)
+    damping = body_forces(kind, masses, minv, inertia, args.gravity, args.flex, states, force)
     for i in range(2 * nq + ENERGY_STATES, y.size):
         dy[i] = 0.0   # friction states rest out of contact
     dissipation = contact_forces(force, y, dy, states, contacts, offsets, args.speeds, args.tables,
@@ -958,6 +969,7 @@ def rhs(t, y, dy, args, work):
             dy[i] = math.nan
         return
     dissipation = torsion_forces(force, states, args.torsion, args.latched, offsets, dissipation, z)
+    dissipation += damping
     m = constraint_rows(t, primitives, args.profile, contacts, mode, offsets, states, work.velocities, jac, mjac,
                         work.phi, phi_t, rhs_c, row_bodies, args.baumgarte, z)
     work_in = 0.0
@@ -1031,7 +1043,7 @@ def relative_motion(y, args, work, bb, s_b, bj, s_j, f, g):
     pj = point_state(states, bj, s_j)[0]
     e = sub(pj, point_state(states, bb, s_b)[0])
     v = sub(material_velocity(states, bj, pj), material_velocity(states, bb, pj))
-    ff, gg = vector_state(states, bb, f)[0], vector_state(states, bb, g)[0]
+    ff, gg = vector_state(states, bb, s_b, f)[0], vector_state(states, bb, s_b, g)[0]
     return dot(e, ff), dot(e, gg), dot(v, ff), dot(v, gg)
 
 
@@ -1072,7 +1084,8 @@ def slice_approaches(y, args, work, k, approaches, weights):
 @numba.njit(cache=True, _nrt=False)
 def refresh(y, args, work):
     """The body states of y into the workspace."""
-    body_states(args.kind, y, args.nq, args.inertia_inv, work.bodies, work.velocities)
+    body_states(args.kind, y, args.nq, args.inertia_inv, args.flex, args.offsets, work.bodies,
+                work.velocities)
 
 
 @numba.njit(cache=True, _nrt=False)
@@ -1094,7 +1107,8 @@ def solve_rows(args, work, m):
 
 @numba.njit(cache=True, _nrt=False)
 def energy_of(y, args):
-    return kinetic_energy(args.kind, y, args.nq, args.masses, args.minv, args.inertia)
+    return kinetic_energy(args.kind, y, args.nq, args.masses, args.minv, args.inertia, args.flex,
+                          args.offsets)
 
 
 @numba.njit(cache=True, _nrt=False)

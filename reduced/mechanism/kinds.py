@@ -4,8 +4,9 @@ here which kind a scene is and never branch on it themselves.
 A kind names its scene model (reduced.mechanism.scene: pure pydantic, so that a scene is
 validated without numba), its body kind's module (compiled: reduced.mechanism.planar or
 .spatial, loaded only to build a model) and what its state's coordinates are (recorded in
-summary.json). A new kind of body (a flexible body in the floating frame of its modes) is a
-body kind's module and a line here.
+summary.json). A flexible body (its FE modes in a floating frame) is a body of a kind, not a
+kind: a mechanism mixes rigid and flexible bodies, and the kind's body functions branch on the
+body (reduced.mechanism.bodies).
 """
 
 import importlib
@@ -39,9 +40,11 @@ class Kind:
 KINDS = {
     "reduced": Kind(
         "planar", "reduced", ReducedScene, "pinbore.reduced.mechanism.planar",
-        "x, y (m), phi (rad) of each body's centre of mass", 2, True, False,
-        "rigid bodies in the plane; revolute clearance joints (a journal in its bore) and "
-        "translational ones (a slider in its guide, four corner contacts)",
+        "x, y (m), phi (rad) of each body's centre of mass (a flexible body's mean-axis frame), "
+        "then a flexible body's modal coordinates eta (m sqrt(kg))", 2, True, False,
+        "rigid and flexible bodies in the plane (a flexible body: its FE modes in a floating "
+        "frame); revolute clearance joints (a journal in its bore) and translational ones (a "
+        "slider in its guide, four corner contacts)",
         "the journal centre inside the clearance circle and the normal contact force (a slider "
         "in its guide: its offset across the guide, its tilt and its four corners' normal forces)."),
     "spatial": Kind(

@@ -85,7 +85,8 @@ CONTINUOUS, NEWTON, POISSON = 0, 1, 2
 # them ([Nikravesh1988] ch. 7: the spherical, dot-1 and dot-2 constraints, and an angle)
 POINT, DOT1, DOT2, ANGLE = 0, 1, 2, 3      # rows: D (2 or 3), 1, 1, 1
 PRIM_KIND, PRIM_BODY_I, PRIM_BODY_J = 0, 1, 2
-PRIM_S_I, PRIM_S_J = 3, 6           # points s_i', s_j' (m, body frames; the ground: global)
+PRIM_S_I, PRIM_S_J = 3, 6           # points s_i', s_j' (m, body frames; the ground: global);
+#                                     of an ANGLE or DOT1, the point whose frame holds its vectors
 PRIM_A_I, PRIM_B_J = 9, 12          # unit vectors a_i' (body i), b_j' (body j)
 PRIM_C_I = 15                       # ANGLE: the second vector of body i, c_i' = u_i' x a_i'
 PRIM_SPEED, PRIM_ANGLE0 = 18, 19    # ANGLE: relative angle = angle0 + theta(t) (rad/s, rad)
@@ -106,7 +107,8 @@ TORSION_STIFFNESS, TORSION_DAMPING = 2, 3    # N m/rad, N m s/rad
 TORSION_FREE_ANGLE = 4                       # rad, relative to the bodies' initial relative angle
 TORSION_KIND = 5                             # SPRING, STOP, LATCH
 TORSION_A_I, TORSION_B_J, TORSION_C_I = 6, 9, 12
-TORSION_COLUMNS = 15
+TORSION_S_I, TORSION_S_J = 15, 18   # the points (body frames) whose frames the element joins:
+TORSION_COLUMNS = 21                # a flexible body's interface there (rigid bodies: unused)
 SPRING, STOP, LATCH = 0, 1, 2
 
 # ---- the state vector after q and q': the energy integrals, then the friction states
@@ -134,13 +136,14 @@ PLANAR, SPATIAL = PlanarKind(), SpatialKind()
 # constraints. masses (per body), minv (per velocity column: planar 1/m, 1/m, 1/J), inertia
 # and its inverse (per body, 3 x 3 in the body frame; planar: J in [0, 0]), gravity (D,
 # m/s^2), offsets (per body its first velocity column; the last entry their number),
-# profile: the drive table's segments (SEG_*; none: an empty array).
+# profile: the drive table's segments (SEG_*; none: an empty array), flex: per body the
+# constants of a flexible body's modes (the body kind's layout; a rigid body's row is zero).
 # speeds: impact speed per contact; latched: a flag per torsion element; mode: per contact 1
 # while an impulse contact is held; all updated in place by the integrator.
 Args = namedtuple("Args", [
     "kind", "nq", "like", "project_first", "masses", "minv", "inertia", "inertia_inv", "gravity",
     "offsets", "primitives", "baumgarte", "contacts", "speeds", "grid_log0", "grid_step", "tables",
-    "torsion", "latched", "mode", "profile"])
+    "torsion", "latched", "mode", "profile", "flex"])
 
 # The buffers of the right-hand side: a row per body of its kinematic state (the body kind's
 # layout), the velocity of every Jacobian column, the constraint rows (Jacobian against the

@@ -137,7 +137,7 @@ def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
     names = [b.name for b in scene.bodies]
     index = {name: i for i, name in enumerate(names)} | {GROUND: -1}
     check_connected(scene, names)
-    geometry = body_kind.Geometry(scene, index, source)
+    geometry = body_kind.Geometry(scene, index, source, base)
     joints = clearance_joints(scene)
     closures = [closing(geometry, c) for c in joints] if ideal else []
     primitives, drive_row = geometry.primitives(closures)
@@ -171,7 +171,7 @@ def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
         tables=np.array(tables).reshape(len(tables), GRID_POINTS),
         torsion=torsion_rows(geometry, scene),
         latched=np.zeros(len(scene.torsion)), mode=np.zeros(contacts.shape[0], np.int64),
-        profile=profile)
+        profile=profile, flex=geometry.flex())
     model = Model(scene, kind, names, args, [] if ideal else joints, rows, laws_data, drive_row, states,
                   closures=closures, geometry=geometry)
     model.y0 = geometry.place(model, [] if ideal else [(closing(geometry, c), c.start) for c in joints])
@@ -547,7 +547,8 @@ def shortest_period(model: Model) -> float:
     if it has none. A continuous contact: m the reduced mass of its two bodies, k the secant
     stiffness F(d)/d of its normal law at a penetration d equal to the clearance (the deepest
     a clean run reaches, reduced.mechanism.verdict; the stiffest point of a hardening law).
-    A torsion element: the reduced inertia of its bodies about its axis and its stiffness."""
+    A torsion element: the reduced inertia of its bodies about its axis and its stiffness. A
+    flexible body: its highest mode kept, 2 pi / omega_n."""
     geometry = model.geometry
     masses = model.base.masses
 
@@ -575,6 +576,7 @@ def shortest_period(model: Model) -> float:
             periods.append(2 * math.pi * math.sqrt(reduced(
                 t[TORSION_BODY_I], t[TORSION_BODY_J], lambda b: geometry.inverse_inertia(b, element))
                 / t[TORSION_STIFFNESS]))
+    periods += [2 * math.pi / f.body.omega[f.n - 1] for f in getattr(geometry, "flexible", {}).values()]
     return min(periods, default=math.inf)
 
 

@@ -68,7 +68,8 @@ def per_step(model, run):
     work = engine.workspace(args)
     dy, depth, offset = np.empty(states.shape[1]), np.empty(nc), np.zeros((nc, dimension))
     rates = np.empty((n, states.shape[1]))
-    bodies = np.empty((n,) + work.bodies.shape)
+    kept = model.kind.bodies().RIGID_COLUMNS   # of a body's row: its rigid motion
+    bodies = np.empty((n, work.bodies.shape[0], kept))
     depths, normals, frictions = np.empty((n, nc)), np.empty((n, nc)), np.empty((n, nc))
     offsets = np.empty((n, nc, dimension))
     drift, kinetic, elastic = np.empty(n), np.empty(n), np.zeros(n)
@@ -77,14 +78,14 @@ def per_step(model, run):
     for k in range(n):
         args = model.args(run.speeds[k, :nc], run.latched[k, :nt], run.modes[k, :nc])
         drift[k] = engine.observe(times[k], states[k], dy, args, work, depth, offset)
-        rates[k], bodies[k] = dy, work.bodies
+        rates[k], bodies[k] = dy, work.bodies[:, :kept]
         depths[k], normals[k], frictions[k], offsets[k] = depth, work.normal[:nc], work.friction[:nc], offset
         kinetic[k] = engine.energy_of(states[k], args)
         engine.torsion_angles(states[k], args, work, angle)
         angles[k] = angle
         elastic[k] = elastic_energy(model, states[k], args, work, depth)
     cols = {"time_s": times} | model.kind.bodies().motion_columns(
-        model.names, states[:, :nq], states[:, nq:2 * nq], rates[:, nq:2 * nq], bodies)
+        model, states[:, :nq], states[:, nq:2 * nq], rates[:, nq:2 * nq], bodies)
     for j, c in enumerate(model.joints):
         r = roles(model, j)
         main, axial = r["main"], r["axial"]
@@ -105,10 +106,10 @@ def per_step(model, run):
                 mine[f"corner{i + 1}_friction_force_N"] = frictions[:, k]
         cols |= {f"{c.name}_{key}": v for key, v in mine.items()}
     potential = np.zeros(n)
-    per_body = nq // len(model.names)
     for b in range(len(model.names)):
-        potential -= model.base.masses[b] * (states[:, per_body * b:per_body * b + dimension]
-                                             @ model.base.gravity)
+        c = model.geometry.coordinate(b)
+        potential -= model.base.masses[b] * (states[:, c:c + dimension] @ model.base.gravity)
+    potential += model.kind.bodies().strain_energy(model, states[:, :nq])
     for r, row in enumerate(model.torsion):   # springs, engaged stops and latches
         engaged = {SPRING: np.ones(n, bool), STOP: angles[:, r] > 0,
                    LATCH: run.latched[:, r] > 0}[int(row[TORSION_KIND])]

@@ -312,9 +312,20 @@ class Integrator(Strict):
         return self
 
 
+class OutputPoint(Strict):
+    """A named point of a body (`position` in the body frame, m, at the centre of mass): its
+    global position and its elastic displacement in the body's floating frame (a flexible
+    body's; a rigid body's is zero) are columns of the run's time series."""
+
+    name: str = pydantic.Field(pattern=r"^[A-Za-z0-9_]+$")
+    body: str
+    position: list[float] = pydantic.Field(min_length=2, max_length=3)
+
+
 class Output(Strict):
     sample_time: float = pydantic.Field(default=2e-5, gt=0, description="s between samples")
     plots: bool = True
+    points: list[OutputPoint] = []
 
 
 def check_fixed_steps(duration: float, step: float) -> None:
@@ -342,10 +353,14 @@ def check_names(scene, used) -> None:
     if len(set(names)) != len(names) or GROUND in names:
         raise ValueError(f"bodies: names must be unique and not {GROUND!r}")
     known = set(names) | {GROUND}
+    used = list(used) + [(p.body, "output.points.body") for p in scene.output.points]
+    points = [(p.body, p.name) for p in scene.output.points]
+    if len(set(points)) != len(points):
+        raise ValueError("output.points: a body's points must have different names")
     for name, key in used:
         if name not in known:
             raise ValueError(f"{key}: unknown body {name!r}; bodies: {', '.join(sorted(known))}")
-        if name == GROUND and key in ("drive.body", "joints.body"):
+        if name == GROUND and key in ("drive.body", "joints.body", "output.points.body"):
             raise ValueError(f"{key}: must be a moving body, not {GROUND!r}")
     joints = [c.name for c in clearance_joints(scene)]
     twice = sorted({n for n in joints if joints.count(n) > 1})
@@ -381,14 +396,56 @@ def body_references(scene) -> list[tuple[str, str]]:
 
 
 # ---- planar scenes (kind = "reduced")
+FLEXIBLE_MODES = 24   # at most, the modes a flexible body keeps (reduced.mechanism.planar.MODES)
+
+
 class Body(Strict):
+    """A rigid body (mass, inertia) or a flexible one (modes_file: the reduced body `pinbore
+    modes` wrote, body.npz; its mass and inertia come from there, its frame is the mean-axis
+    frame at its centre of mass, with the mesh's axes): the first `modes` of its modes (all
+    by default), each damped by damping_ratio (one ratio, or one a mode), with the geometric
+    stiffening of its spin unless stiffening = false. A joint, drive, spring or contact on a
+    flexible body acts on the frame of the body's interface nearest its point."""
+
     name: str
-    mass: float = pydantic.Field(gt=0, description="kg")
-    inertia: float = pydantic.Field(gt=0, description="kg m^2 about the centre of mass")
+    mass: float | None = pydantic.Field(default=None, gt=0, description="kg")
+    inertia: float | None = pydantic.Field(default=None, gt=0, description="kg m^2 about the centre of mass")
     position: Vector = [0.0, 0.0]
     angle_deg: float = 0.0
     velocity: Vector = [0.0, 0.0]
     omega: float = 0.0
+    modes_file: str | None = None
+    modes: int | None = pydantic.Field(default=None, ge=1, le=FLEXIBLE_MODES)
+    damping_ratio: float | list[Annotated[float, pydantic.Field(ge=0)]] = pydantic.Field(default=0.0)
+    stiffening: bool = True
+
+    @pydantic.model_validator(mode="after")
+    def _rigid_or_flexible(self):
+        if self.modes_file is None:
+            for key in ("mass", "inertia"):
+                if getattr(self, key) is None:
+                    raise ValueError(f"{key}: a rigid body needs its {key} (or a flexible body its "
+                                     "modes_file)")
+            if self.modes is not None or self.damping_ratio != 0.0 or not self.stiffening:
+                raise ValueError("modes, damping_ratio, stiffening: for a flexible body, with its "
+                                 "modes_file")
+            return self
+        for key in ("mass", "inertia"):
+            if getattr(self, key) is not None:
+                raise ValueError(f"{key}: a flexible body's {key} comes from its modes_file; "
+                                 "leave it out")
+        ratios = self.damping_ratio if isinstance(self.damping_ratio, list) else [self.damping_ratio]
+        if any(r < 0 or not math.isfinite(r) for r in ratios):
+            raise ValueError("damping_ratio: must be >= 0 (a ratio of critical damping)")
+        if isinstance(self.damping_ratio, list) and self.modes is not None \
+                and len(self.damping_ratio) != self.modes:
+            raise ValueError(f"damping_ratio: one ratio or one a mode ({self.modes} modes), "
+                             f"not {len(self.damping_ratio)}")
+        return self
+
+    @property
+    def flexible(self) -> bool:
+        return self.modes_file is not None
 
 
 class Revolute(Strict):
@@ -466,10 +523,13 @@ class DriveProfile(Strict):
 
 
 class Drive(DriveProfile):
-    """A body's angle driven: angle = angle0 + theta(t) (DriveProfile)."""
+    """A body's angle driven: angle = angle0 + theta(t) (DriveProfile); on a flexible body, the
+    angle of its frame at `point` (body frame; default: its first interface), the hub a
+    flexible appendage is clamped to."""
 
     body: str
     angle0_deg: float = 0.0
+    point: Vector | None = None
 
 
 class ClearanceJoint(JointMaterials, ContactLaw):
@@ -509,6 +569,10 @@ class TorsionSpring(Strict):
     stiffness: float = pydantic.Field(ge=0, description="N m / rad")
     damping: float = pydantic.Field(default=0.0, ge=0, description="N m s / rad")
     free_angle_deg: float = 0.0
+    # on a flexible body: the point (body frame) whose interface frame the element turns
+    # (default: the body's first interface)
+    point_i: Vector | None = None
+    point_j: Vector | None = None
 
 
 TranslationalJoint = translational_joint(Vector)

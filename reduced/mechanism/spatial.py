@@ -106,7 +106,7 @@ def unit_parameters(q, b):
 
 
 @numba.njit(cache=True, _nrt=False)
-def body_states(kind, y, nq, inertia_inv, states, velocities):
+def body_states(kind, y, nq, inertia_inv, flex, offsets, states, velocities):
     """Position, rotation matrix, velocity, global angular velocity w = A 2 G p' and global
     inverse inertia A J'^-1 A^T of every body into its row (BODY_*)."""
     for b in range(states.shape[0]):
@@ -173,7 +173,7 @@ def point_state(states, b, s_body):
 
 
 @numba.njit(cache=True, _nrt=False)
-def vector_state(states, b, a_body):
+def vector_state(states, b, s, a_body):
     if b < 0:
         return a_body, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
     a = turned(states, b, a_body)
@@ -190,7 +190,7 @@ def material_velocity(states, b, x):
 
 
 @numba.njit(cache=True, _nrt=False)
-def put(jac, row, b, linear, angular, sign, offsets):
+def put(jac, row, states, b, s, linear, angular, sign, offsets):
     if b < 0:
         return
     col = offsets[b]
@@ -211,7 +211,7 @@ def push(force, states, b, f, x, offsets):
 
 
 @numba.njit(cache=True, _nrt=False)
-def push_torque(force, b, torque, offsets):
+def push_torque(force, states, b, s, torque, offsets):
     if b < 0:
         return
     col = offsets[b]
@@ -220,11 +220,11 @@ def push_torque(force, b, torque, offsets):
 
 
 @numba.njit(cache=True, _nrt=False)
-def relative_rotation(states, bi, bj, a_i, b_j, c_i, offset, drift):
+def relative_rotation(states, bi, bj, s_i, s_j, a_i, b_j, c_i, offset, drift):
     """atan2(c_i . b_j, a_i . b_j) less offset and drift, modulo 2 pi, with its Jacobian
     coefficient, rate and the velocity part of its second derivative."""
-    c_, kc, cd, cacc = dot1(states, bi, a_i, bj, b_j)
-    s_, ks, sd, sacc = dot1(states, bi, c_i, bj, b_j)
+    c_, kc, cd, cacc = dot1(states, bi, s_i, a_i, bj, s_j, b_j)
+    s_, ks, sd, sacc = dot1(states, bi, s_i, c_i, bj, s_j, b_j)
     rho2 = s_ * s_ + c_ * c_
     coefficient = scaled(sub(scaled(ks, c_), scaled(kc, s_)), 1.0 / rho2)
     rate = (c_ * sd - s_ * cd) / rho2
@@ -244,8 +244,8 @@ def centripetal_gap(states, a, bi, arm_i, c_i, bj, arm_j, c_j):
 
 
 @numba.njit(cache=True, _nrt=False)
-def rotation_axis(states, bi, a_i, c_i):
-    return cross(vector_state(states, bi, a_i)[0], vector_state(states, bi, c_i)[0])
+def rotation_axis(states, bi, s_i, a_i, c_i):
+    return cross(vector_state(states, bi, s_i, a_i)[0], vector_state(states, bi, s_i, c_i)[0])
 
 
 @numba.njit(cache=True, _nrt=False)
@@ -272,7 +272,7 @@ def unturned_any(states, b, a):
 # ---- the whole body (the signatures of reduced.mechanism.bodies: the unused arrays are
 # other kinds')
 @numba.njit(cache=True, _nrt=False)
-def body_forces(kind, masses, minv, inertia, gravity, states, force):
+def body_forces(kind, masses, minv, inertia, gravity, flex, states, force):
     """Gravity and the gyroscopic torque -w x (J w) of each body."""
     for b in range(masses.size):
         w = row3(states, b, BODY_OMEGA)
@@ -281,6 +281,7 @@ def body_forces(kind, masses, minv, inertia, gravity, states, force):
         for c in range(3):
             force[COLUMNS * b + c] = masses[b] * gravity[c]
             force[COLUMNS * b + 3 + c] = -gyro[c]
+    return 0.0
 
 
 @numba.njit(cache=True, _nrt=False)
@@ -397,7 +398,7 @@ def velocity_step(kind, y, nq, minv, jac, mjac, x, states, m, scale):
 
 
 @numba.njit(cache=True, _nrt=False)
-def kinetic_energy(kind, y, nq, masses, minv, inertia):
+def kinetic_energy(kind, y, nq, masses, minv, inertia, flex, offsets):
     """1/2 m v.v + 1/2 w'.J' w' of every body (w' = 2 G p' in the body frame)."""
     energy = 0.0
     for b in range(masses.size):
@@ -412,11 +413,17 @@ def kinetic_energy(kind, y, nq, masses, minv, inertia):
 # spatial bodies implement reduced.mechanism.bodies for their marker and 3-vectors (the
 # ground's vectors global when turned)
 bodies.implement_kind(globals() | {"turned": turned_any, "unturned": unturned_any},
-                      {"kind": spatial, "vector": _space, "angular": _space})
+                      {"kind": spatial, "vector": _space})
+
+
+def strain_energy(model, q) -> np.ndarray:
+    """The bodies' strain energy at the steps (J): rigid bodies, none."""
+    return np.zeros(q.shape[0])
 
 
 # ---- a spatial scene as the model's arrays (reduced.mechanism.model.build asks these)
 MARKER = layout.SPATIAL
+RIGID_COLUMNS = BODY_OMEGA + 3   # what a run's record keeps of a body's row (its angular velocity)
 PROJECT_FIRST = True    # an accepted step is projected before its events are read (layout.Args)
 PARALLEL = 1e-9   # |1 - |u_b . u_j|| below which a journal's axis is aligned with its bore's
 
@@ -426,7 +433,7 @@ class Geometry:
     mass, the primitive constraints ([Nikravesh1988] ch. 7), the contacts of a cylindrical or
     spherical clearance joint, torsion elements, and the consistent initial state."""
 
-    def __init__(self, scene, index, source):
+    def __init__(self, scene, index, source, base=None):
         self.scene, self.index, self.source = scene, index, source
         self.nq = COORDINATES * len(scene.bodies)
         self.rot = {GROUND: np.eye(3)} | {b.name: rotation_matrix(b.parameters()) for b in scene.bodies}
@@ -439,6 +446,14 @@ class Geometry:
 
     def offsets(self) -> np.ndarray:
         return COLUMNS * np.arange(len(self.scene.bodies) + 1)
+
+    def coordinate(self, b: int) -> int:
+        """Body b's first coordinate in q."""
+        return COORDINATES * b
+
+    def flex(self) -> np.ndarray:
+        """Args.flex: no flexible bodies in space (yet): an empty row per body."""
+        return np.zeros((len(self.scene.bodies), 0))
 
     def primitives(self, closures):
         """Every ideal joint's primitives, the clearance joints closed by `closures`, then the
@@ -624,11 +639,21 @@ def joint_primitives(kind, bi, bj, s_i, s_j, u_i, u_j, a_i, a_j, source) -> list
 
 
 # ---- a spatial run's outputs (reduced.mechanism.outputs asks these)
-def motion_columns(names, q, qd, qdd, bodies) -> dict:
+def motion_columns(model, q, qd, qdd, bodies) -> dict:
     """Each body's position, Euler parameters, velocity, global angular velocity (from the
-    body states `bodies`, per step) and acceleration at the steps (columns by name)."""
+    body states `bodies`, per step) and acceleration at the steps (columns by name), and the
+    output points' positions (their elastic displacement: zero, the bodies are rigid)."""
     cols = {}
-    for b, name in enumerate(names):
+    for point in model.scene.output.points:
+        b = model.names.index(point.body)
+        p = q[:, COORDINATES * b + 3:COORDINATES * b + 7]
+        p = p / np.linalg.norm(p, axis=1)[:, None]
+        x = np.einsum("kij,j->ki", np.array([rotation_matrix(e) for e in p]).reshape(-1, 3, 3),
+                      np.asarray(point.position + [0.0] * (3 - len(point.position)), float))
+        for i, axis in enumerate("xyz"):
+            cols[f"{point.body}_{point.name}_u{axis}_m"] = np.zeros(q.shape[0])
+            cols[f"{point.body}_{point.name}_{axis}_m"] = q[:, COORDINATES * b + i] + x[:, i]
+    for b, name in enumerate(model.names):
         first = COORDINATES * b
         for i, key in enumerate(("x_m", "y_m", "z_m", "e0_1", "e1_1", "e2_1", "e3_1")):
             cols[f"{name}_{key}"] = q[:, first + i]
