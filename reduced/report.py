@@ -1,6 +1,8 @@
 """The report's section on the reduced (multibody) models."""
 
+import base64
 import html
+import io
 from pathlib import Path
 
 from pinbore.core.errors import InputError
@@ -50,8 +52,73 @@ def section(build_dir: Path, bench_dir: Path) -> str:
                                 "free-floating bus's attitude rates; an unactuated crank's speed), "
                                 "with the ideal joints (dashed)."))
         parts += joint_figures(folder, s, kinds.BY_NAME[s.model].joint_caption)
+        if (folder / "points.png").exists():
+            parts.append(figure(png_data(folder / "points.png"),
+                                f"Scene {folder.name}: the output points' elastic displacement "
+                                "in their flexible bodies' floating frames."))
+    parts += flexible_part(build_dir, summaries)
     parts += stress_part(bench_dir)
     return "".join(parts)
+
+
+FLEXIBLE = "_flexible"   # a scene X_flexible is scene X with flexible bodies
+
+
+def flexible_part(build_dir: Path, summaries: dict) -> list[str]:
+    """Rigid against flexible: each run X_flexible beside X, their peak contact forces and run
+    times, and a figure of the contact forces and the first body's angular velocity."""
+    pairs = [(folder.parent / folder.name.removesuffix(FLEXIBLE), folder) for folder in summaries
+             if folder.name.endswith(FLEXIBLE) and folder.parent / folder.name.removesuffix(FLEXIBLE) in summaries]
+    if not pairs:
+        return []
+    parts = ["<h3>Rigid against flexible bodies</h3>",
+             "<p>The same mechanism with its rigid bodies and with flexible ones (their FE modes "
+             "in a floating frame, <code>pinbore modes</code>): the contact forces and the "
+             "motions they disturb side by side.</p>"]
+    rows = [[flexible.name, f"{summaries[rigid].peak_normal_force_N:.4g}",
+             f"{summaries[flexible].peak_normal_force_N:.4g}", summaries[rigid].steps,
+             summaries[flexible].steps, f"{summaries[rigid].wall_time_s:.3f}",
+             f"{summaries[flexible].wall_time_s:.3f}"] for rigid, flexible in pairs]
+    parts.append(table(["scene", "peak contact force, rigid (N)", "flexible (N)", "steps, rigid",
+                        "flexible", "wall time, rigid (s)", "flexible (s)"], rows))
+    for rigid, flexible in pairs:
+        try:
+            png = comparison_figure(rigid, flexible)
+        except (OSError, ValueError, KeyError) as error:
+            parts.append(note(f"{flexible.name}: no comparison ({error})"))
+            continue
+        parts.append(figure(png, f"Scene {flexible.name} (flexible) against {rigid.name} (rigid): "
+                                 "contact forces and the first body's angular velocity."))
+    return parts
+
+
+def comparison_figure(rigid: Path, flexible: Path) -> str:
+    """The PNG (data URL) of the contact forces and the first body's angular velocity of two
+    runs' time series."""
+    import matplotlib   # noqa: PLC0415 (the report loads matplotlib only when it draws)
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt   # noqa: PLC0415
+    import numpy as np   # noqa: PLC0415
+
+    from pinbore.core.figures import save_png   # noqa: PLC0415
+
+    runs = {name: np.genfromtxt(folder / "timeseries.csv", delimiter=",", names=True)
+            for name, folder in (("rigid", rigid), ("flexible", flexible))}
+    names = runs["rigid"].dtype.names
+    forces = [k for k in names if k.endswith("_normal_force_N") and "_corner" not in k]
+    rates = [k for k in names if k.endswith("_omega_rad_per_s")][:1]
+    fig, axes = plt.subplots(len(forces) + len(rates), 1, figsize=(10, 2 + 2.5 * (len(forces) + len(rates))),
+                             sharex=True, squeeze=False)
+    for ax, key in zip(axes[:, 0], forces + rates):
+        for name, style in (("rigid", "k-"), ("flexible", "C1-")):
+            ax.plot(runs[name]["time_s"], runs[name][key], style, lw=0.6, label=name)
+        ax.set_ylabel(key.replace("_normal_force_N", " force (N)").replace("_omega_rad_per_s", " rate (rad/s)"))
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend()
+    axes[-1, 0].set_xlabel("time (s)")
+    buffer = io.BytesIO()   # drawn here, in memory: the report writes nothing into a run
+    save_png(fig, buffer, layout=True)
+    return base64.b64encode(buffer.getvalue()).decode()
 
 
 def joint_figures(folder: Path, s, caption: str) -> list[str]:

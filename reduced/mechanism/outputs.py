@@ -326,6 +326,27 @@ def plots(folder, model, series, twin) -> None:
         save_png(fig, folder / "attitude.png", layout=True)
     for j, c in enumerate(model.joints):
         joint_plot(folder, model, j, c, cols, x, x_label)
+    points_plot(folder, model, cols, x, x_label)
+
+
+def points_plot(folder, model, cols, x, x_label) -> None:
+    """The output points' elastic displacement in their bodies' frames against the driven
+    angle or time (points.png), when a flexible body has one."""
+    points = [p for p in model.scene.output.points if p.body in getattr(model.geometry, "flexible", {})]
+    if not points:
+        return
+    fig, axes = plt.subplots(len(points), 1, figsize=(10, 1.5 + 2.5 * len(points)), sharex=True,
+                             squeeze=False)
+    for ax, p in zip(axes[:, 0], points):
+        key = f"{p.body}_{p.name}"
+        for axis in "xy":
+            ax.plot(x, cols[f"{key}_u{axis}_m"] * 1e3, lw=0.6, label=f"u{axis}")
+        ax.set_ylabel(f"{key} (mm)")
+        ax.grid(alpha=0.3)
+        ax.legend()
+    axes[0, 0].set_title("elastic displacement in the body's floating frame")
+    axes[-1, 0].set_xlabel(x_label)
+    save_png(fig, folder / "points.png", layout=True)
 
 
 def joint_plot(folder, model, j, c, cols, x, x_label) -> None:

@@ -1,0 +1,165 @@
+"""Benchmark of flexible bodies in the mechanism: run time against the rigid model, and the
+answer against the modes kept.
+
+1. Rigid against flexible at the same tolerance: the Flores slider-crank (4 crank
+   revolutions) with its rigid rod and with the flexible link of scenes/modes/link_steel_2d;
+   the planar deployment with its rigid and its flexible panel. Wall time of the integration
+   (compiled code loaded: each run twice, the second timed), steps, right-hand sides, the peak
+   contact force.
+2. Mode truncation: the slider-crank's flexible rod reduced with 20 fixed-interface modes,
+   kept 1 .. 20 of its free modes: the peak contact force, the rod's largest mid-span
+   deflection and the wall time; the spin-up beam's peak tip deflection (hub frame) with
+   1 .. 6 modes.
+
+Writes OUT/flexible.csv, OUT/flexible_truncation.csv and OUT/flexible.png. Needs the modes
+of the shipped bodies (make modes).
+"""
+
+import argparse
+import csv
+import re
+import shutil
+import subprocess
+import sys
+import time
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from pinbore.core.figures import plt, save_png
+from pinbore.fem.modes import file as modes_file
+from pinbore.reduced.mechanism.engine import spin_up
+from pinbore.reduced.mechanism.model import build
+from pinbore.reduced.mechanism.outputs import per_step
+from pinbore.reduced.mechanism.run import simulate
+from pinbore.reduced.mechanism.scene import ReducedScene
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENES = ROOT / "scenes" / "reduced"
+PAIRS = [("slider_crank_flores2004", "slider_crank_flores2004_flexible"),
+         ("solar_panel_deployment", "solar_panel_deployment_flexible")]
+LINK_MODES = [1, 2, 4, 6, 8, 12, 16, 20]
+
+
+def scene_data(name: str) -> dict:
+    return tomllib.loads((SCENES / f"{name}.toml").read_text())
+
+
+def timed(data: dict) -> tuple:
+    """(model, trajectory, wall time of the second run)."""
+    model = build(ReducedScene.model_validate(data), "bench", SCENES)
+    simulate(model)
+    start = time.perf_counter()
+    trajectory = simulate(model)
+    return model, trajectory, time.perf_counter() - start
+
+
+def peak_force(model, trajectory) -> float:
+    cols = per_step(model, trajectory)[0]
+    return max(float(np.max(v)) for k, v in cols.items() if k.endswith("_normal_force_N"))
+
+
+def against_rigid() -> list[dict]:
+    rows = []
+    for rigid, flexible in PAIRS:
+        for name in (rigid, flexible):
+            model, trajectory, wall = timed(scene_data(name))
+            rows.append({"scene": name, "flexible": name == flexible, "wall_s": wall,
+                         "steps": trajectory.times.size, "rhs": int(trajectory.counters[2]),
+                         "peak_force_N": peak_force(model, trajectory)})
+        ratio = rows[-1]["wall_s"] / rows[-2]["wall_s"]
+        print(f"{flexible}: {rows[-1]['wall_s']:.3f} s, {ratio:.1f} x the rigid run "
+              f"({rows[-1]['steps']} against {rows[-2]['steps']} steps)")
+    return rows
+
+
+def link_truncation(out: Path) -> list[dict]:
+    """The slider-crank with the link reduced to 20 fixed-interface modes, 1 .. 20 kept."""
+    text = (ROOT / "scenes" / "modes" / "link_steel_2d.toml").read_text()
+    most = max(LINK_MODES)
+    text = re.sub(r"(?m)^fixed_interface_modes = \d+", f"fixed_interface_modes = {most}", text)
+    text = re.sub(r"(?m)^modes = \d+", f"modes = {most}", text)
+    work = out / "flexible_link"
+    work.mkdir(exist_ok=True)
+    (work / "link.toml").write_text(text)
+    subprocess.run([sys.executable, "-m", "pinbore.cli", "modes", str(work / "link.toml"), "--out",
+                    str(work / "modes")], check=True)
+    path = work / "modes" / "body.npz"
+    reduced = modes_file.read(path)
+    rows = []
+    for n in LINK_MODES:
+        scene = scene_data("slider_crank_flores2004_flexible")
+        scene["bodies"][1].update(modes_file=str(path), modes=n)
+        model, trajectory, wall = timed(scene)
+        cols = per_step(model, trajectory)[0]
+        rows.append({"body": "link", "modes": n, "highest_mode_rad_per_s": float(reduced.omega[n - 1]),
+                     "peak_force_N": peak_force(model, trajectory),
+                     "mid_deflection_m": float(np.abs(cols["rod_mid_uy_m"]).max()),
+                     "wall_s": wall, "steps": trajectory.times.size})
+        print(f"link, {n} modes: peak {rows[-1]['peak_force_N']:.4g} N in {wall:.2f} s")
+    shutil.rmtree(work)
+    return rows
+
+
+def spin_up_truncation() -> list[dict]:
+    rows = []
+    for n in range(1, 7):
+        scene = scene_data("flexible_spinup_beam")
+        scene["bodies"][0]["modes"] = n
+        model, trajectory, wall = timed(scene)
+        cols = per_step(model, trajectory)[0]
+        drive = model.scene.drive
+        theta = np.array([spin_up(t, drive.speed, drive.spin_up_s)[0] for t in cols["time_s"]])
+        deflection = -np.sin(theta) * cols["beam_tip_x_m"] + np.cos(theta) * cols["beam_tip_y_m"]
+        rows.append({"body": "spin-up beam", "modes": n, "peak_deflection_m": float(-deflection.min()),
+                     "wall_s": wall, "steps": trajectory.times.size})
+        print(f"spin-up beam, {n} modes: peak tip deflection {rows[-1]['peak_deflection_m']:.4f} m")
+    return rows
+
+
+def write(path: Path, rows: list[dict]) -> None:
+    keys = list(dict.fromkeys(k for row in rows for k in row))
+    with open(path, "w", newline="") as stream:
+        writer = csv.DictWriter(stream, keys)
+        writer.writeheader()
+        writer.writerows(rows)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, default=ROOT / "bench")
+    out = parser.parse_args().out
+    out.mkdir(parents=True, exist_ok=True)
+    rigid = against_rigid()
+    link, beam = link_truncation(out), spin_up_truncation()
+    write(out / "flexible.csv", rigid)
+    write(out / "flexible_truncation.csv", link + beam)
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.5))
+    ax = axes[0]
+    names = [r["scene"].replace("_flexible", "\n(flexible)") for r in rigid]
+    ax.bar(range(len(rigid)), [r["wall_s"] for r in rigid], color=["C0" if not r["flexible"] else "C1" for r in rigid])
+    ax.set_xticks(range(len(rigid)), names, fontsize=7)
+    ax.set_ylabel("integration wall time (s)")
+    ax.set_title("rigid (blue) against flexible (orange)")
+    ax = axes[1]
+    ax.plot([r["modes"] for r in link], [r["peak_force_N"] / 1e3 for r in link], "o-")
+    rigid_peak = rigid[0]["peak_force_N"] / 1e3
+    ax.axhline(rigid_peak, color="k", ls="--", lw=1, label="rigid rod")
+    ax.set_xlabel("modes of the rod kept")
+    ax.set_ylabel("peak contact force (kN)")
+    ax.set_title("slider-crank: truncation")
+    ax.legend()
+    ax.grid(alpha=0.3)
+    ax = axes[2]
+    ax.plot([r["modes"] for r in beam], [r["peak_deflection_m"] for r in beam], "o-")
+    ax.set_xlabel("modes of the beam kept")
+    ax.set_ylabel("peak tip deflection, hub frame (m)")
+    ax.set_title("spin-up beam: truncation")
+    ax.grid(alpha=0.3)
+    save_png(fig, out / "flexible.png", layout=True)
+    print(f"wrote {out / 'flexible.csv'}, {out / 'flexible_truncation.csv'}, {out / 'flexible.png'}")
+
+
+if __name__ == "__main__":
+    main()
