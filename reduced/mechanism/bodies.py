@@ -143,7 +143,7 @@ position_step = _declared("position_step", """position_step(kind, y, nq, minv, j
 m): move the coordinates by -M^-1 D^T x (x[:m]; least change in the mass metric).""")
 velocity_step = _declared("velocity_step", """velocity_step(kind, y, nq, minv, jac, mjac, x, states,
 m, scale): change the velocities by -scale M^-1 D^T x.""")
-normalise = _declared("normalise", """normalise(kind, y, nq, nb): coordinates back onto their own
+normalise = _declared("normalise", """normalise(kind, y, nq, offsets): coordinates back onto their own
 constraints (unit Euler parameters); nothing for coordinates that have none.""")
 kinetic_energy = _declared("kinetic_energy", """kinetic_energy(kind, y, nq, masses, minv, inertia,
 flex, offsets): the bodies' kinetic energy (J).""")

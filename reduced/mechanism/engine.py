@@ -1165,7 +1165,7 @@ def project_onto_constraints(t, y, args, work, tolerance, rate_tolerance):
     whether a constraint was projected; the body states of y are in the workspace either way."""
     z = args.like
     rhs_c = work.rhs_c
-    normalise(args.kind, y, args.nq, args.masses.size)
+    normalise(args.kind, y, args.nq, args.offsets)
     changed = False
     m = 0
     for level in range(2):

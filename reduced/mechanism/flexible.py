@@ -28,9 +28,10 @@ ON_BODY = 1e-9          # barycentric tolerance of a point on the mesh (its edge
 
 
 class Flexible:
-    """A planar flexible body: its modes file read and checked, the first n modes kept."""
+    """A flexible body of a mechanism of dimension `dim`: its modes file read and checked, the
+    first n modes kept."""
 
-    def __init__(self, body, base, source: str):
+    def __init__(self, body, base, source: str, dim: int):
         self.name = body.name
         path = Path(body.modes_file)
         if not path.is_absolute() and base is not None:
@@ -40,9 +41,10 @@ class Flexible:
             raise InputError(f"{key}: {path} is not a file (pinbore modes writes body.npz)")
         self.path = path
         self.body = reduced = modes_file.read(path)
-        if reduced.dim != 2:
-            raise InputError(f"{key}: {path} is a {reduced.dim}D body; a planar mechanism needs a "
-                             "plane-stress body (dim = 2)")
+        if reduced.dim != dim:
+            raise InputError(f"{key}: {path} is a {reduced.dim}D body; a "
+                             f"{'planar' if dim == 2 else 'spatial'} mechanism needs a "
+                             f"{'plane-stress (dim = 2)' if dim == 2 else 'solid (dim = 3)'} body")
         n = reduced.modes if body.modes is None else body.modes
         if n > reduced.modes:
             raise InputError(f"{source}: bodies.{body.name}.modes: {n} modes asked, {path} holds "
@@ -53,30 +55,23 @@ class Flexible:
             raise InputError(f"{source}: bodies.{body.name}.damping_ratio: one ratio or one a mode "
                              f"({n} modes), not {ratios.size}")
         self.n, self.ratios, self.stiffening = n, ratios, body.stiffening
+        self.dim = dim
         self.mass = float(reduced.mass)
-        self.inertia = float(reduced.second_moments[0, 0] + reduced.second_moments[1, 1])
-        self.centres = reduced.interface_centres[:, :2]
-        self.size = float(np.ptp(reduced.nodes[:, :2], axis=0).max())
+        self.inertia = reduced.inertia if dim == 3 else float(reduced.second_moments[0, 0]
+                                                               + reduced.second_moments[1, 1])
+        self.centres = reduced.interface_centres[:, :dim]
+        self.size = float(np.ptp(reduced.nodes[:, :dim], axis=0).max())
 
-    # ---- the engine's constants
-    def row(self) -> np.ndarray:
-        """The body's row of Args.flex (reduced.mechanism.planar.flex_column)."""
-        b, n = self.body, self.n
-        omega = b.omega[:n]
-        S = b.S[:, :, :n, :n]
-        k_g = b.stiffening[2, 2, :n, :n] if self.stiffening else np.zeros((n, n))
-        parts = [[n, len(b.interfaces), self.inertia], omega ** 2, 2 * self.ratios * omega,
-                 b.s[0, 0, :n] + b.s[1, 1, :n], (S[0, 0] + S[1, 1] - k_g).ravel(),
-                 (S[0, 1] - S[1, 0]).ravel()]
-        for k in range(len(b.interfaces)):
-            parts += [self.centres[k], b.interface_translation[k, 0, :n],
-                      b.interface_translation[k, 1, :n], b.interface_rotation[k, 2, :n]]
-        return np.concatenate([np.asarray(p, float).ravel() for p in parts])
+    @property
+    def stiffening_matrices(self) -> np.ndarray:
+        """K_G,ab of the kept modes (3, 3, n, n); zero without the stiffening."""
+        k_g = self.body.stiffening[:, :, :self.n, :self.n]
+        return k_g if self.stiffening else np.zeros_like(k_g)
 
     def interface_at(self, point, key: str) -> int:
         """The interface a body point acts on (its nearest); one InputError line when it is
         farther than INTERFACE_REACH of the body's size from every interface centre."""
-        d = np.hypot(*(self.centres - np.asarray(point, float)[:2]).T)
+        d = np.linalg.norm(self.centres - np.asarray(point, float)[:self.dim], axis=1)
         k = int(np.argmin(d))
         if d[k] > INTERFACE_REACH * self.size:
             raise InputError(
@@ -87,22 +82,24 @@ class Flexible:
         return k
 
     def shape_at(self, point, key: str) -> np.ndarray:
-        """(2, n): the modes' displacement at a body point, interpolated linearly on the mesh
-        cell that holds it; one InputError line for a point off the body."""
-        nodes, cells = self.body.nodes[:, :2], self.body.cells
-        corners = nodes[cells]                                  # (c, 3, 2)
-        p = np.asarray(point, float)[:2]
-        a, b, c = corners[:, 0], corners[:, 1], corners[:, 2]
-        v0, v1, v2 = b - a, c - a, p - a
-        det = v0[:, 0] * v1[:, 1] - v0[:, 1] * v1[:, 0]
-        l1 = (v2[:, 0] * v1[:, 1] - v2[:, 1] * v1[:, 0]) / det
-        l2 = (v0[:, 0] * v2[:, 1] - v0[:, 1] * v2[:, 0]) / det
-        weights = np.stack([1 - l1 - l2, l1, l2], axis=1)
-        inside = np.flatnonzero(weights.min(axis=1) >= -ON_BODY)
+        """(dim, n): the modes' displacement at a body point, interpolated linearly on the mesh
+        cell (triangle, tetrahedron) that holds it; one InputError line for a point off the
+        body."""
+        dim = self.dim
+        nodes, cells = self.body.nodes[:, :dim], self.body.cells
+        corners = nodes[cells]                                   # (c, dim + 1, dim)
+        p = np.asarray(point, float)[:dim]
+        edges = np.transpose(corners[:, 1:] - corners[:, :1], (0, 2, 1))   # (c, dim, dim)
+        det = np.linalg.det(edges)
+        good = np.abs(det) > 0
+        local = np.zeros((cells.shape[0], dim))
+        local[good] = np.linalg.solve(edges[good], (p - corners[good, 0])[..., None])[..., 0]
+        weights = np.concatenate([1 - local.sum(axis=1, keepdims=True), local], axis=1)
+        inside = np.flatnonzero(good & (weights.min(axis=1) >= -ON_BODY))
         if inside.size == 0:
             raise InputError(f"{key}: {list(point)} is not on flexible body {self.name!r} (its "
                              f"mesh spans {nodes.min(0).round(6).tolist()} to "
                              f"{nodes.max(0).round(6).tolist()} in its frame)")
         cell = inside[0]
-        psi = self.body.psi[cells[cell], :2, :self.n]             # (3, 2, n)
+        psi = self.body.psi[cells[cell], :dim, :self.n]           # (dim + 1, dim, n)
         return np.einsum("v,vdn->dn", weights[cell], psi)

@@ -49,8 +49,10 @@ KINDS = {
         "in its guide: its offset across the guide, its tilt and its four corners' normal forces)."),
     "spatial": Kind(
         "spatial", "spatial", SpatialScene, "pinbore.reduced.mechanism.spatial",
-        "x, y, z (m) of each body's centre of mass, Euler parameters e0..e3", 3, False, True,
-        "rigid bodies in 3D on Euler parameters, the same ideal joints, drive, torsion springs "
+        "x, y, z (m) of each body's centre of mass (a flexible body's mean-axis frame), Euler "
+        "parameters e0..e3, then a flexible body's modal coordinates eta (m sqrt(kg))", 3, False, True,
+        "rigid and flexible bodies in 3D on Euler parameters (a flexible body: its FE modes in a "
+        "floating frame), the same ideal joints, drive, torsion springs "
         "and latches; cylindrical clearance joints cut into slices along the bore (a tilted "
         "journal loads its edge and feels a tilting moment), with shoulders, spherical ones (a "
         "ball in its socket) and translational ones",

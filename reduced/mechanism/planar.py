@@ -466,7 +466,7 @@ def velocity_step(kind, y, nq, minv, jac, mjac, x, states, m, scale):
 
 
 @numba.njit(cache=True, _nrt=False)
-def normalise(kind, y, nq, nb):
+def normalise(kind, y, nq, offsets):
     pass
 
 
@@ -516,7 +516,7 @@ class Geometry:
         from pinbore.reduced.mechanism.flexible import Flexible   # noqa: PLC0415 (numpy only)
 
         self.scene, self.index, self.source = scene, index, source
-        self.flexible = {b.name: Flexible(b, base, source) for b in scene.bodies if b.flexible}
+        self.flexible = {b.name: Flexible(b, base, source, 2) for b in scene.bodies if b.flexible}
         for name, f in self.flexible.items():
             if f.n > MODES or len(f.centres) > INTERFACES:
                 raise InputError(f"{source}: bodies.{name}.modes_file: at most {MODES} modes and "
@@ -584,7 +584,7 @@ class Geometry:
 
     def flex(self) -> np.ndarray:
         """Args.flex: a row per body of its modal constants (flex_column; rigid: zero)."""
-        rows = [self.flexible[b.name].row() if b.name in self.flexible else np.zeros(3)
+        rows = [constants(self.flexible[b.name]) if b.name in self.flexible else np.zeros(3)
                 for b in self.scene.bodies]
         out = np.zeros((len(rows), max(r.size for r in rows)))
         for b, r in enumerate(rows):
@@ -674,6 +674,20 @@ class Geometry:
         closed = self.primitives(model.closures + [rows for rows, start in closings if start == "ideal"])[0]
         _, qd, _ = project(model, q, qd, closed, minv, movable=rigid)
         return np.concatenate([q, qd, np.zeros(layout.ENERGY_STATES), np.zeros(model.friction_states)])
+
+
+def constants(flexible) -> np.ndarray:
+    """A flexible body's row of Args.flex (flex_column)."""
+    b, n = flexible.body, flexible.n
+    omega = b.omega[:n]
+    S = b.S[:, :, :n, :n]
+    parts = [[n, len(b.interfaces), flexible.inertia], omega ** 2, 2 * flexible.ratios * omega,
+             b.s[0, 0, :n] + b.s[1, 1, :n], (S[0, 0] + S[1, 1] - flexible.stiffening_matrices[2, 2]).ravel(),
+             (S[0, 1] - S[1, 0]).ravel()]
+    for k in range(len(b.interfaces)):
+        parts += [flexible.centres[k], b.interface_translation[k, 0, :n],
+                  b.interface_translation[k, 1, :n], b.interface_rotation[k, 2, :n]]
+    return np.concatenate([np.asarray(p, float).ravel() for p in parts])
 
 
 def primitive(kind, bi, bj, s_i=(0.0, 0.0), s_j=(0.0, 0.0), a_i=(0.0, 0.0), b_j=(0.0, 0.0),

@@ -395,25 +395,18 @@ def body_references(scene) -> list[tuple[str, str]]:
     return used
 
 
-# ---- planar scenes (kind = "reduced")
-FLEXIBLE_MODES = 24   # at most, the modes a flexible body keeps (reduced.mechanism.planar.MODES)
+FLEXIBLE_MODES = 24   # at most, the modes a flexible body keeps (the body kinds' MODES)
 
 
-class Body(Strict):
-    """A rigid body (mass, inertia) or a flexible one (modes_file: the reduced body `pinbore
-    modes` wrote, body.npz; its mass and inertia come from there, its frame is the mean-axis
-    frame at its centre of mass, with the mesh's axes): the first `modes` of its modes (all
+class MaybeFlexible(Strict):
+    """What makes a body flexible, for both kinds: modes_file, the reduced body `pinbore
+    modes` wrote (body.npz; its mass and inertia come from there, its frame is the mean-axis
+    frame at its centre of mass, with the mesh's axes); the first `modes` of its modes (all
     by default), each damped by damping_ratio (one ratio, or one a mode), with the geometric
     stiffening of its spin unless stiffening = false. A joint, drive, spring or contact on a
-    flexible body acts on the frame of the body's interface nearest its point."""
+    flexible body acts on the frame of the body's interface nearest its point. Without
+    modes_file the body is rigid and needs its mass and inertia."""
 
-    name: str
-    mass: float | None = pydantic.Field(default=None, gt=0, description="kg")
-    inertia: float | None = pydantic.Field(default=None, gt=0, description="kg m^2 about the centre of mass")
-    position: Vector = [0.0, 0.0]
-    angle_deg: float = 0.0
-    velocity: Vector = [0.0, 0.0]
-    omega: float = 0.0
     modes_file: str | None = None
     modes: int | None = pydantic.Field(default=None, ge=1, le=FLEXIBLE_MODES)
     damping_ratio: float | list[Annotated[float, pydantic.Field(ge=0)]] = pydantic.Field(default=0.0)
@@ -446,6 +439,19 @@ class Body(Strict):
     @property
     def flexible(self) -> bool:
         return self.modes_file is not None
+
+
+# ---- planar scenes (kind = "reduced")
+class Body(MaybeFlexible):
+    """A rigid body (mass, inertia) or a flexible one (MaybeFlexible)."""
+
+    name: str
+    mass: float | None = pydantic.Field(default=None, gt=0, description="kg")
+    inertia: float | None = pydantic.Field(default=None, gt=0, description="kg m^2 about the centre of mass")
+    position: Vector = [0.0, 0.0]
+    angle_deg: float = 0.0
+    velocity: Vector = [0.0, 0.0]
+    omega: float = 0.0
 
 
 class Revolute(Strict):
@@ -616,15 +622,16 @@ class ReducedScene(MechanismScene):
 
 
 # ---- spatial scenes (kind = "spatial")
-class SpatialBody(Strict):
-    """A rigid body in space. Orientation: `orientation` (Euler parameters [e0, e1, e2, e3],
-    unit) or `rotation` (a 3 x 3 rotation matrix, rows), one or neither (identity). Inertia:
-    the 3 x 3 tensor about the centre of mass in the body frame (symmetric, positive definite,
-    its principal moments obeying the triangle inequality J1 + J2 >= J3)."""
+class SpatialBody(MaybeFlexible):
+    """A body in space, rigid or flexible (MaybeFlexible). Orientation: `orientation` (Euler
+    parameters [e0, e1, e2, e3], unit) or `rotation` (a 3 x 3 rotation matrix, rows), one or
+    neither (identity). Inertia of a rigid body: the 3 x 3 tensor about the centre of mass in
+    the body frame (symmetric, positive definite, its principal moments obeying the triangle
+    inequality J1 + J2 >= J3)."""
 
     name: str
-    mass: float = pydantic.Field(gt=0, description="kg")
-    inertia: Matrix3 = pydantic.Field(description="kg m^2, about the centre of mass, body frame")
+    mass: float | None = pydantic.Field(default=None, gt=0, description="kg")
+    inertia: Matrix3 | None = pydantic.Field(default=None, description="kg m^2, about the centre of mass, body frame")
     position: Vector3 = [0.0, 0.0, 0.0]
     orientation: Quaternion | None = None
     rotation: Matrix3 | None = None
@@ -633,6 +640,8 @@ class SpatialBody(Strict):
 
     @pydantic.model_validator(mode="after")
     def _physical(self):
+        if self.inertia is None:   # a flexible body's, from its modes file
+            return self._orientation()
         j = np.array(self.inertia)
         if not np.allclose(j, j.T, rtol=0, atol=1e-12 * max(np.abs(j).max(), 1e-300)):
             raise ValueError("inertia: the tensor must be symmetric")
@@ -643,6 +652,9 @@ class SpatialBody(Strict):
         if moments[0] + moments[1] < moments[2] * (1 - 1e-9):
             raise ValueError(f"inertia: principal moments {', '.join(f'{m:.3g}' for m in moments)} "
                              "break the triangle inequality J1 + J2 >= J3 (no rigid body has them)")
+        return self._orientation()
+
+    def _orientation(self):
         if self.orientation is not None and self.rotation is not None:
             raise ValueError("orientation and rotation: give one of them")
         if self.orientation is not None:
@@ -778,6 +790,10 @@ class Torsion(Strict):
     stiffness: float = pydantic.Field(ge=0, description="N m / rad")
     damping: float = pydantic.Field(default=0.0, ge=0, description="N m s / rad")
     free_angle_deg: float = 0.0
+    # on a flexible body: the point (body frame) whose interface frame the element turns
+    # (default: the body's first interface)
+    point_i: Vector3 | None = None
+    point_j: Vector3 | None = None
 
     @pydantic.model_validator(mode="after")
     def _axis(self):
