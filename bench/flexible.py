@@ -82,7 +82,7 @@ def link_truncation(out: Path) -> list[dict]:
     most = max(LINK_MODES)
     text = re.sub(r"(?m)^fixed_interface_modes = \d+", f"fixed_interface_modes = {most}", text)
     text = re.sub(r"(?m)^modes = \d+", f"modes = {most}", text)
-    work = out / "flexible_link"
+    work = (out / "flexible_link").resolve()
     work.mkdir(exist_ok=True)
     (work / "link.toml").write_text(text)
     subprocess.run([sys.executable, "-m", "pinbore.cli", "modes", str(work / "link.toml"), "--out",

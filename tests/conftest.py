@@ -6,6 +6,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -91,3 +92,16 @@ def write_scene(tmp_path):
         return path
 
     return write
+
+
+def compound_pendulum(t, mass, inertia, arm, gravity=9.81):
+    """The angle from +x (rad) of a compound pendulum released at rest from horizontal, its
+    pivot at `arm` from the centre of mass (inertia about the centre): with phi from the
+    downward vertical, sin(phi/2) = k sn(K(k) - w0 t, k), k = sin(45 deg), w0^2 = m g d / J_O
+    (Jacobi's elliptic sine: exact at any amplitude)."""
+    import scipy.special
+
+    w0 = math.sqrt(mass * gravity * arm / (inertia + mass * arm ** 2))
+    m = 0.5
+    sn = scipy.special.ellipj(scipy.special.ellipk(m) - w0 * t, m)[0]
+    return 2 * np.arcsin(math.sqrt(m) * sn) - math.pi / 2

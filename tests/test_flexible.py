@@ -22,8 +22,7 @@ import math
 
 import numpy as np
 import pytest
-import scipy.special
-from conftest import ROOT, pinbore
+from conftest import ROOT, compound_pendulum, pinbore
 
 from pinbore.fem.modes import file as modes_file
 from pinbore.reduced.mechanism import layout
@@ -74,16 +73,6 @@ def stiffer(path, out, factor):
     body = modes_file.read(path)
     modes_file.write(out, dataclasses.replace(body, omega=body.omega * math.sqrt(factor)))
     return out
-
-
-def compound_pendulum(t, mass, inertia, arm):
-    """The angle from +x of a compound pendulum released at rest from horizontal (pivot at
-    distance `arm` from the centre of mass, inertia about the centre): with phi from the
-    downward vertical, sin(phi/2) = k sn(K - w0 t, k), k = sin(45 deg), w0^2 = m g d / J_O."""
-    w0 = math.sqrt(mass * G * arm / (inertia + mass * arm ** 2))
-    m = 0.5
-    sn = scipy.special.ellipj(scipy.special.ellipk(m) - w0 * t, m)[0]
-    return 2 * np.arcsin(math.sqrt(m) * sn) - math.pi / 2
 
 
 def test_a_stiff_pendulum_swings_as_the_rigid_one(bodies, tmp_path):

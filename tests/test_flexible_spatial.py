@@ -17,8 +17,7 @@ import math
 
 import numpy as np
 import pytest
-import scipy.special
-from conftest import ROOT, pinbore
+from conftest import ROOT, compound_pendulum, pinbore
 
 from pinbore.fem.modes import file as modes_file
 from pinbore.reduced.mechanism.model import build
@@ -128,15 +127,6 @@ def pendulum(path, **body):
             "integrator": {"rtol": 1e-9, "atol": 1e-12, "max_step": 1e-4},
             "output": {"plots": False, "sample_time": 1e-3,
                        "points": [{"name": "tip", "body": "beam", "position": [half, 0.0, 0.0]}]}}
-
-
-def compound_pendulum(t, mass, inertia, arm):
-    """The angle from +x of a compound pendulum released at rest from horizontal (pivot at
-    `arm` from the centre of mass): sin(phi/2) = k sn(K - w0 t, k), k = sin(45 deg)."""
-    w0 = math.sqrt(mass * G * arm / (inertia + mass * arm ** 2))
-    m = 0.5
-    sn = scipy.special.ellipj(scipy.special.ellipk(m) - w0 * t, m)[0]
-    return 2 * np.arcsin(math.sqrt(m) * sn) - math.pi / 2
 
 
 def test_a_stiff_spatial_pendulum_swings_as_the_rigid_one(beam, tmp_path):

@@ -103,3 +103,64 @@ class Flexible:
         cell = inside[0]
         psi = self.body.psi[cells[cell], :dim, :self.n]           # (dim + 1, dim, n)
         return np.einsum("v,vdn->dn", weights[cell], psi)
+
+
+class FlexibleGeometry:
+    """What a body kind's Geometry (reduced.mechanism.planar, .spatial) knows of its flexible
+    bodies, written once: a kind sets DIM, RIGID_COLUMNS and RIGID_COORDINATES (a rigid body's
+    velocity columns and coordinates: a flexible body's modes follow them), MODES and
+    INTERFACES (the most its rows hold), and defines `attachments()` (the points its joints fix
+    on bodies), `coordinate(b)` and `constants(flexible)` (a body's row of Args.flex)."""
+
+    DIM = RIGID_COLUMNS = RIGID_COORDINATES = MODES = INTERFACES = 0
+
+    def read_flexible(self, scene, index, source: str, base) -> None:
+        """The flexible bodies read and checked (their modes and interfaces within the rows,
+        every point on a body at an interface, every output point on its body), each body's
+        first velocity column (`columns`) and the output points with their mode shapes."""
+        self.flexible = {b.name: Flexible(b, base, source, self.DIM) for b in scene.bodies if b.flexible}
+        for name, f in self.flexible.items():
+            if f.n > self.MODES or len(f.centres) > self.INTERFACES:
+                raise InputError(f"{source}: bodies.{name}.modes_file: at most {self.MODES} modes "
+                                 f"and {self.INTERFACES} interfaces a flexible body")
+        counts = [self.RIGID_COLUMNS + self.modes(b.name) for b in scene.bodies]
+        self.columns = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        for name, point, key in self.attachments():
+            if name in self.flexible:
+                self.flexible[name].interface_at(point, f"{source}: {key}")
+        self.points = [(p, index[p.body], self.flexible[p.body].shape_at(
+            p.position, f"{source}: output.points.position") if p.body in self.flexible else None)
+            for p in scene.output.points]
+
+    def modes(self, name) -> int:
+        return self.flexible[name].n if name in self.flexible else 0
+
+    def frame_point(self, name, point) -> list:
+        """The point whose frame a drive or torsion element turns: given, or a flexible body's
+        first interface (a rigid body's frame is one: its origin)."""
+        if point is not None:
+            return list(point)
+        return list(self.flexible[name].centres[0]) if name in self.flexible else [0.0] * self.DIM
+
+    def offsets(self) -> np.ndarray:
+        return self.columns.copy()
+
+    def flex(self) -> np.ndarray:
+        """Args.flex: a row per body of its modal constants (rigid: zero)."""
+        rows = [self.constants(self.flexible[b.name]) if b.name in self.flexible else np.zeros(3)
+                for b in self.scene.bodies]
+        out = np.zeros((len(rows), max(r.size for r in rows)))
+        for b, r in enumerate(rows):
+            out[b, :r.size] = r
+        return out
+
+    def strain_energy(self, names, q) -> np.ndarray:
+        """The flexible bodies' strain energy at the steps, sum of omega_j^2 eta_j^2 / 2 (J)
+        (q: coordinates per step; a body's modal coordinates after its rigid ones)."""
+        energy = np.zeros(q.shape[0])
+        for b, name in enumerate(names):
+            if name in self.flexible:
+                f = self.flexible[name]
+                c = self.coordinate(b) + self.RIGID_COORDINATES
+                energy += 0.5 * (q[:, c:c + f.n] ** 2) @ f.body.omega[:f.n] ** 2
+        return energy

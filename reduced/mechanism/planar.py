@@ -17,6 +17,7 @@ import numpy as np
 from pinbore.core.errors import InputError
 from pinbore.reduced.mechanism import bodies, layout
 from pinbore.reduced.mechanism.layout import ANGLE, DOT2, POINT
+from pinbore.reduced.mechanism.flexible import FlexibleGeometry
 from pinbore.reduced.mechanism.scene import GROUND
 from pinbore.reduced.mechanism.linalg import schur_within_envelope
 from pinbore.reduced.mechanism.vectors import _plane
@@ -506,61 +507,39 @@ MARKER = layout.PLANAR
 PROJECT_FIRST = False   # an accepted step's events are read before its projection (layout.Args)
 
 
-class Geometry:
+class Geometry(FlexibleGeometry):
     """A planar scene's bodies and ideal joints as the model's arrays: the coordinates (a
     flexible body's modal coordinates after its x, y, phi), the mass, the primitive
     constraints, a revolute clearance joint's contact, torsion elements, and the consistent
     initial state."""
 
+    DIM, RIGID_COLUMNS, RIGID_COORDINATES, MODES, INTERFACES = 2, COLUMNS, COLUMNS, MODES, INTERFACES
+
     def __init__(self, scene, index, source, base=None):
-        from pinbore.reduced.mechanism.flexible import Flexible   # noqa: PLC0415 (numpy only)
-
         self.scene, self.index, self.source = scene, index, source
-        self.flexible = {b.name: Flexible(b, base, source, 2) for b in scene.bodies if b.flexible}
-        for name, f in self.flexible.items():
-            if f.n > MODES or len(f.centres) > INTERFACES:
-                raise InputError(f"{source}: bodies.{name}.modes_file: at most {MODES} modes and "
-                                 f"{INTERFACES} interfaces a flexible body")
-        counts = [COLUMNS + self.modes(b.name) for b in scene.bodies]
-        self.columns = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        self.read_flexible(scene, index, source, base)
         self.nq = int(self.columns[-1])
-        for name, point, key in self.attachments():
-            self.flexible[name].interface_at(point, f"{source}: {key}")
-        self.points = [(p, index[p.body], self.flexible[p.body].shape_at(p.position, f"{source}: output.points.position")
-                        if p.body in self.flexible else None) for p in scene.output.points]
-
-    def modes(self, name) -> int:
-        return self.flexible[name].n if name in self.flexible else 0
 
     def attachments(self):
         """(body, point, key) of every point a joint, drive, spring or contact fixes on a
-        flexible body."""
+        body."""
         scene, found = self.scene, []
         for j in scene.joints:
             if j.type == "revolute":
                 found += [(j.body_i, j.point_i, "joints.point_i"), (j.body_j, j.point_j, "joints.point_j")]
             else:
                 found.append((j.body, j.point, "joints.point"))
-        for c in scene.clearance_joints:
-            found += [(c.bearing_body, c.bearing_point, "clearance_joints.bearing_point"),
-                      (c.journal_body, c.journal_point, "clearance_joints.journal_point")]
-        for c in scene.translational_joints:
-            found += [(c.bearing_body, c.bearing_point, "translational_joints.bearing_point"),
-                      (c.journal_body, c.journal_point, "translational_joints.journal_point")]
+        for table in ("clearance_joints", "translational_joints"):
+            for c in getattr(scene, table):
+                found += [(c.bearing_body, c.bearing_point, f"{table}.bearing_point"),
+                          (c.journal_body, c.journal_point, f"{table}.journal_point")]
         if scene.drive is not None:
             found.append((scene.drive.body, self.frame_point(scene.drive.body, scene.drive.point),
                           "drive.point"))
         for t in scene.torsion:
             found += [(t.body_i, self.frame_point(t.body_i, t.point_i), "torsion.point_i"),
                       (t.body_j, self.frame_point(t.body_j, t.point_j), "torsion.point_j")]
-        return [(b, p, key) for b, p, key in found if b in self.flexible]
-
-    def frame_point(self, name, point):
-        """The point whose frame a drive or torsion element turns: given, or a flexible body's
-        first interface (a rigid body's frame is one: its origin)."""
-        if point is not None:
-            return list(point)
-        return list(self.flexible[name].centres[0]) if name in self.flexible else [0.0, 0.0]
+        return found
 
     def mass(self):
         """(masses, 1/m, 1/m, 1/J per velocity column (a flexible body's at eta = 0: 1/m,
@@ -575,21 +554,13 @@ class Geometry:
             inertia[b, 0, 0] = j
         return np.array(masses, float), np.array(minv, float), inertia
 
-    def offsets(self) -> np.ndarray:
-        return self.columns.copy()
-
     def coordinate(self, b: int) -> int:
         """Body b's first coordinate in q."""
         return int(self.columns[b])
 
-    def flex(self) -> np.ndarray:
-        """Args.flex: a row per body of its modal constants (flex_column; rigid: zero)."""
-        rows = [constants(self.flexible[b.name]) if b.name in self.flexible else np.zeros(3)
-                for b in self.scene.bodies]
-        out = np.zeros((len(rows), max(r.size for r in rows)))
-        for b, r in enumerate(rows):
-            out[b, :r.size] = r
-        return out
+    @staticmethod
+    def constants(flexible) -> np.ndarray:
+        return constants(flexible)
 
     def primitives(self, closures):
         """The revolute joints (a point each), the clearance joints closed by `closures`,
@@ -761,14 +732,8 @@ def motion_columns(model, q, qd, qdd, bodies) -> dict:
 
 
 def strain_energy(model, q) -> np.ndarray:
-    """The flexible bodies' strain energy at the steps, sum of omega_j^2 eta_j^2 / 2 (J)."""
-    energy = np.zeros(q.shape[0])
-    geometry = model.geometry
-    for b, name in enumerate(model.names):
-        if name in geometry.flexible:
-            flexible, c = geometry.flexible[name], geometry.coordinate(b) + COLUMNS
-            energy += 0.5 * (q[:, c:c + flexible.n] ** 2) @ flexible.body.omega[:flexible.n] ** 2
-    return energy
+    """The flexible bodies' strain energy at the steps (J)."""
+    return model.geometry.strain_energy(model.names, q)
 
 
 def drive_angle(model, cols):

@@ -34,6 +34,7 @@ from pinbore.core.errors import InputError
 from pinbore.reduced.mechanism import bodies, layout
 from pinbore.reduced.mechanism.bodies import dot1
 from pinbore.reduced.mechanism.layout import ANGLE, DOT1, DOT2, POINT
+from pinbore.reduced.mechanism.flexible import FlexibleGeometry
 from pinbore.reduced.mechanism.scene import GROUND, rotation_matrix, unit_axis
 from pinbore.reduced.mechanism.linalg import schur_within_envelope
 from pinbore.reduced.mechanism.vectors import _space, add, cross, dot, scaled, sub
@@ -831,14 +832,8 @@ bodies.implement_kind(globals() | {"turned": turned_any, "unturned": unturned_an
 
 
 def strain_energy(model, q) -> np.ndarray:
-    """The flexible bodies' strain energy at the steps, sum of omega_j^2 eta_j^2 / 2 (J)."""
-    energy = np.zeros(q.shape[0])
-    geometry = model.geometry
-    for b, name in enumerate(model.names):
-        if name in geometry.flexible:
-            flexible, c = geometry.flexible[name], geometry.coordinate(b) + COORDINATES
-            energy += 0.5 * (q[:, c:c + flexible.n] ** 2) @ flexible.body.omega[:flexible.n] ** 2
-    return energy
+    """The flexible bodies' strain energy at the steps (J)."""
+    return model.geometry.strain_energy(model.names, q)
 
 
 def constants(flexible) -> np.ndarray:
@@ -859,35 +854,22 @@ PROJECT_FIRST = True    # an accepted step is projected before its events are re
 PARALLEL = 1e-9   # |1 - |u_b . u_j|| below which a journal's axis is aligned with its bore's
 
 
-class Geometry:
+class Geometry(FlexibleGeometry):
     """A spatial scene's bodies and ideal joints as the model's arrays: the coordinates, the
     mass, the primitive constraints ([Nikravesh1988] ch. 7), the contacts of a cylindrical or
     spherical clearance joint, torsion elements, and the consistent initial state."""
 
-    def __init__(self, scene, index, source, base=None):
-        from pinbore.reduced.mechanism.flexible import Flexible   # noqa: PLC0415 (numpy only)
+    DIM, RIGID_COLUMNS, RIGID_COORDINATES, MODES, INTERFACES = 3, COLUMNS, COORDINATES, MODES, INTERFACES
 
+    def __init__(self, scene, index, source, base=None):
         self.scene, self.index, self.source = scene, index, source
         self.rot = {GROUND: np.eye(3)} | {b.name: rotation_matrix(b.parameters()) for b in scene.bodies}
-        self.flexible = {b.name: Flexible(b, base, source, 3) for b in scene.bodies if b.flexible}
-        for name, f in self.flexible.items():
-            if f.n > MODES or len(f.centres) > INTERFACES:
-                raise InputError(f"{source}: bodies.{name}.modes_file: at most {MODES} modes and "
-                                 f"{INTERFACES} interfaces a flexible body")
-        counts = [COLUMNS + self.modes(b.name) for b in scene.bodies]
-        self.columns = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        self.read_flexible(scene, index, source, base)
         self.nq = int(self.columns[-1]) + len(scene.bodies)   # 7 + n coordinates a body
-        for name, point, key in self.attachments():
-            self.flexible[name].interface_at(point, f"{source}: {key}")
-        self.points = [(p, index[p.body], self.flexible[p.body].shape_at(p.position, f"{source}: output.points.position")
-                        if p.body in self.flexible else None) for p in scene.output.points]
-
-    def modes(self, name) -> int:
-        return self.flexible[name].n if name in self.flexible else 0
 
     def attachments(self):
-        """(body, point, key) of every point a joint, spring or contact fixes on a flexible
-        body (a drive turns its joint's points)."""
+        """(body, point, key) of every point a joint, spring or contact fixes on a body (a
+        drive turns its joint's points)."""
         scene, found = self.scene, []
         for j in scene.joints:
             found += [(j.body_i, j.point_i, "joints.point_i"), (j.body_j, j.point_j, "joints.point_j")]
@@ -898,14 +880,7 @@ class Geometry:
         for t in scene.torsion:
             found += [(t.body_i, self.frame_point(t.body_i, t.point_i), "torsion.point_i"),
                       (t.body_j, self.frame_point(t.body_j, t.point_j), "torsion.point_j")]
-        return [(b, p, key) for b, p, key in found if b in self.flexible]
-
-    def frame_point(self, name, point):
-        """The point whose frame a torsion element turns: given, or a flexible body's first
-        interface (a rigid body's frame is one: its origin)."""
-        if point is not None:
-            return list(point)
-        return list(self.flexible[name].centres[0]) if name in self.flexible else [0.0, 0.0, 0.0]
+        return found
 
     def mass(self):
         """(masses, no per-column inverse masses, inertia tensors in the body frames: a flexible
@@ -915,21 +890,13 @@ class Geometry:
         masses = [self.flexible[b.name].mass if b.flexible else b.mass for b in bodies]
         return (np.array(masses, float), np.zeros(int(self.columns[-1])), np.array(inertia, float))
 
-    def offsets(self) -> np.ndarray:
-        return self.columns.copy()
-
     def coordinate(self, b: int) -> int:
         """Body b's first coordinate in q."""
         return int(self.columns[b]) + b
 
-    def flex(self) -> np.ndarray:
-        """Args.flex: a row per body of its modal constants (flex_column; rigid: zero)."""
-        rows = [constants(self.flexible[b.name]) if b.name in self.flexible else np.zeros(2)
-                for b in self.scene.bodies]
-        out = np.zeros((len(rows), max(r.size for r in rows)))
-        for b, r in enumerate(rows):
-            out[b, :r.size] = r
-        return out
+    @staticmethod
+    def constants(flexible) -> np.ndarray:
+        return constants(flexible)
 
     def primitives(self, closures):
         """Every ideal joint's primitives, the clearance joints closed by `closures`, then the
