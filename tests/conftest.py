@@ -105,3 +105,15 @@ def compound_pendulum(t, mass, inertia, arm, gravity=9.81):
     m = 0.5
     sn = scipy.special.ellipj(scipy.special.ellipk(m) - w0 * t, m)[0]
     return 2 * np.arcsin(math.sqrt(m) * sn) - math.pi / 2
+
+
+def simulated(data: dict):
+    """(model, trajectory) of a mechanism scene dict of any kind, run whole (status 0)."""
+    from pinbore.reduced.mechanism import kinds
+    from pinbore.reduced.mechanism.model import build
+    from pinbore.reduced.mechanism.run import simulate
+
+    model = build(kinds.validate(data, "test"), "test", ROOT)
+    trajectory = simulate(model)
+    assert trajectory.status == 0
+    return model, trajectory

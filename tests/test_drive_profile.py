@@ -7,13 +7,11 @@ import math
 
 import numpy as np
 import pytest
-from conftest import ROOT
+from conftest import simulated
 
 from pinbore.core.errors import InputError
 from pinbore.reduced.mechanism import layout
-from pinbore.reduced.mechanism.model import build
-from pinbore.reduced.mechanism.run import simulate
-from pinbore.reduced.mechanism.scene import ReducedScene, SpatialScene
+from pinbore.reduced.mechanism.scene import ReducedScene
 
 MASS, LENGTH = 2.0, 1.0                  # kg, m: a bar pinned at one end
 J_C = MASS * LENGTH ** 2 / 12            # kg m^2 about its centre
@@ -71,14 +69,6 @@ def spatial_bar(drive, duration=2 * T_S):
             "integrator": {"rtol": 1e-10, "atol": 1e-12}, "output": {"plots": False}}
 
 
-def run(data):
-    scene = (ReducedScene if data["kind"] == "reduced" else SpatialScene).model_validate(data)
-    model = build(scene, "test", ROOT)
-    trajectory = simulate(model)
-    assert trajectory.status == 0
-    return model, trajectory
-
-
 def bar_motion(model, trajectory):
     """The bar's angle (from its position: the far end's direction) and the drive's work."""
     nq = model.nq
@@ -92,7 +82,7 @@ def bar_motion(model, trajectory):
 def test_a_spun_up_bar_follows_the_profile_and_takes_its_inertias_work(bar):
     """The bar turns through theta(t) (1e-7 rad) and the drive has done J_O theta'^2 / 2 of
     work (1e-7 of the final energy), through the spin-up and at constant speed after it."""
-    model, trajectory = run(bar({"speed_rpm": OMEGA_S * 60 / (2 * math.pi), "spin_up_s": T_S}))
+    model, trajectory = simulated(bar({"speed_rpm": OMEGA_S * 60 / (2 * math.pi), "spin_up_s": T_S}))
     angle, work = bar_motion(model, trajectory)
     theta, rate = spin_up_exact(trajectory.times)
     final = 0.5 * J_O * OMEGA_S ** 2
@@ -109,7 +99,7 @@ def test_a_table_follows_a_cubic_motion_exactly(bar):
     a, b = 20.0, 30.0   # deg/s^3, deg/s
     times = np.linspace(0.0, 1.0, 6)
     table = [[float(t), float(a * t ** 3 + b * t)] for t in times]
-    model, trajectory = run(bar({"angle_table": table}, duration=1.5))
+    model, trajectory = simulated(bar({"angle_table": table}, duration=1.5))
     angle, work = bar_motion(model, trajectory)
     t = trajectory.times
     during = t <= 1.0

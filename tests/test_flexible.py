@@ -22,13 +22,10 @@ import math
 
 import numpy as np
 import pytest
-from conftest import ROOT, compound_pendulum, pinbore
+from conftest import ROOT, compound_pendulum, pinbore, simulated
 
 from pinbore.fem.modes import file as modes_file
 from pinbore.reduced.mechanism import layout
-from pinbore.reduced.mechanism.model import build
-from pinbore.reduced.mechanism.run import simulate
-from pinbore.reduced.mechanism.scene import ReducedScene
 
 G = 9.81
 SMALL = 1e-2   # of gravity: a static load whose deflection is linear
@@ -59,13 +56,6 @@ def pendulum(path, duration=1.0, **body):
                        "points": [{"name": "tip", "body": "beam", "position": [0.5, 0.0]}]}}
 
 
-def run(data):
-    model = build(ReducedScene.model_validate(data), "test", ROOT)
-    trajectory = simulate(model)
-    assert trajectory.status == 0
-    return model, trajectory
-
-
 def stiffer(path, out, factor):
     """The body of `path` with its modulus times factor: its frequencies times sqrt(factor),
     its M-normalised modes, inertia and stiffening (a stress of body forces, independent of
@@ -81,7 +71,7 @@ def test_a_stiff_pendulum_swings_as_the_rigid_one(bodies, tmp_path):
     swing; the tip's elastic displacement is 1e4 times smaller than steel's."""
     stiff = stiffer(bodies["pendulum_beam_2d"], tmp_path / "stiff.npz", 1e4)
     body = modes_file.read(stiff)
-    model, trajectory = run(pendulum(stiff, modes=2))
+    model, trajectory = simulated(pendulum(stiff, modes=2))
     inertia = body.second_moments[0, 0] + body.second_moments[1, 1]
     exact = compound_pendulum(trajectory.times, body.mass, inertia, 0.5)
     assert np.abs(trajectory.states[:, 2] - exact).max() < 1e-6
@@ -93,7 +83,7 @@ def test_the_pendulum_keeps_its_energy_and_bends(bodies):
     a millimetre and more) while its frame swings within 2 mrad of the rigid pendulum's."""
     from pinbore.reduced.mechanism.outputs import per_step
 
-    model, trajectory = run(pendulum(bodies["pendulum_beam_2d"]))
+    model, trajectory = simulated(pendulum(bodies["pendulum_beam_2d"]))
     cols, energy, _ = per_step(model, trajectory)
     total = energy["kinetic"] + energy["potential"]
     gained = energy["kinetic"].max()
@@ -125,7 +115,7 @@ def test_a_free_mechanism_with_a_flexible_body_keeps_its_momenta(bodies):
                          "free_angle_deg": 20.0}],
             "integrator": {"rtol": 1e-10, "atol": 1e-12, "max_step": 1e-3},
             "output": {"plots": False}}
-    model, trajectory = run(data)
+    model, trajectory = simulated(data)
     b = modes_file.read(path)
     n = b.modes
     y, nq = trajectory.states, model.nq
@@ -188,7 +178,7 @@ def test_a_clamped_beam_settles_to_its_static_deflection(bodies):
     data = pendulum(bodies["pendulum_beam_2d"], duration=3.0, damping_ratio=1.0)
     data["drive"] = {"body": "beam", "speed_rpm": 0.0}
     data["gravity"] = [0.0, -G * SMALL]
-    model, trajectory = run(data)
+    model, trajectory = simulated(data)
     cols, _, _ = per_step(model, trajectory)
     E, width, thickness, rho = 2.1e11, 0.005, 0.020, 7850.0
     ei, rho_a = E * thickness * width ** 3 / 12, rho * width * thickness
@@ -257,7 +247,7 @@ def test_the_spin_up_beam_bends_quasi_statically_then_vibrates_at_the_rotating_f
     frequency of the rotating cantilever (4.51 rad/s, 19 % above the still one) within 1 %."""
     from pinbore.reduced.mechanism.engine import spin_up
 
-    model, trajectory = run(spin_up_beam(bodies["spinup_beam_2d"], duration=26.0))
+    model, trajectory = simulated(spin_up_beam(bodies["spinup_beam_2d"], duration=26.0))
     t, deflection = hub_deflection(model, trajectory)
     for when in (2.0, 3.0):
         alpha = spin_up(when, OMEGA_S, T_S)[2]
@@ -274,7 +264,7 @@ def test_without_stiffening_the_spin_up_beam_departs(bodies):
     spinning beam stiffens (after the spin-up it vibrates below the still cantilever's 3.8
     rad/s, 25 % and more off the rotating beam's frequency) and bends 15 % and more further
     during the spin-up."""
-    model, trajectory = run(spin_up_beam(bodies["spinup_beam_2d"], stiffening=False, duration=26.0))
+    model, trajectory = simulated(spin_up_beam(bodies["spinup_beam_2d"], stiffening=False, duration=26.0))
     t, deflection = hub_deflection(model, trajectory)
     _, _, frequency = after_spin_up(t, deflection)
     still = 1.8751 ** 2 * math.sqrt(EI / (RHO_A * L_BEAM ** 4))

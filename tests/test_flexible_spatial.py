@@ -13,16 +13,12 @@ its floating frame, against independent references.
 """
 
 import dataclasses
-import math
 
 import numpy as np
 import pytest
-from conftest import ROOT, compound_pendulum, pinbore
+from conftest import ROOT, compound_pendulum, pinbore, simulated
 
 from pinbore.fem.modes import file as modes_file
-from pinbore.reduced.mechanism.model import build
-from pinbore.reduced.mechanism.run import simulate
-from pinbore.reduced.mechanism.scene import SpatialScene
 
 G = 9.81
 LENGTH, WIDTH, THICKNESS = 0.3, 0.01, 0.02   # m: a steel beam, bending in y (its thin side)
@@ -58,13 +54,6 @@ def beam(tmp_path_factory):
     return out / "modes" / "body.npz"
 
 
-def run(data):
-    model = build(SpatialScene.model_validate(data), "test", ROOT)
-    trajectory = simulate(model)
-    assert trajectory.status == 0
-    return model, trajectory
-
-
 def invariants(b, eta, rate):
     """(J(eta) (t, 3, 3), G(eta) eta' (t, 3)) from the file's invariants."""
     second = (b.second_moments[None] + np.einsum("abk,tk->tab", b.s + b.s.transpose(1, 0, 2), eta)
@@ -96,7 +85,7 @@ def test_a_tumbling_flexible_beam_keeps_its_momenta_and_energy(beam):
                         "velocity": [0.1, -0.2, 0.05]}],
             "integrator": {"rtol": 1e-10, "atol": 1e-13, "max_step": 1e-4},
             "output": {"plots": False}}
-    model, trajectory = run(data)
+    model, trajectory = simulated(data)
     b = modes_file.read(beam)
     n, nq, y = b.modes, model.nq, trajectory.states
     eta, rate = y[:, 7:7 + n], y[:, nq + 7:nq + 7 + n]
@@ -135,7 +124,7 @@ def test_a_stiff_spatial_pendulum_swings_as_the_rigid_one(beam, tmp_path):
     body = modes_file.read(beam)
     stiff = tmp_path / "stiff.npz"
     modes_file.write(stiff, dataclasses.replace(body, omega=body.omega * 100.0))
-    model, trajectory = run(pendulum(stiff, modes=2))
+    model, trajectory = simulated(pendulum(stiff, modes=2))
     y = trajectory.states
     a = rotations(y[:, 3:7])
     angle = np.unwrap(np.arctan2(a[:, 1, 0], a[:, 0, 0]))
@@ -151,7 +140,7 @@ def test_the_spatial_pendulum_keeps_its_energy_and_bends(beam):
     of the mesh are not symmetric about the plane, so its modes mix a little)."""
     from pinbore.reduced.mechanism.outputs import per_step
 
-    model, trajectory = run(pendulum(beam))
+    model, trajectory = simulated(pendulum(beam))
     cols, energy, _ = per_step(model, trajectory)
     total = energy["kinetic"] + energy["potential"]
     assert np.abs(total - total[0]).max() < 1e-9 * energy["kinetic"].max()
