@@ -122,7 +122,7 @@ build/report/index.html: $(FEM_CURVES) $(MESHES) $(MODES_RUNS) build/calibration
 	$(PINBORE) report --build build --out build/report
 	@echo "report: $(abspath $@)"
 
-bench: $(STUDY_CURVES) $(STAMP) ## run the benchmarks: bench/*.csv and plots (a few minutes)
+bench: $(STUDY_CURVES) $(MODES_RUNS) $(STAMP) ## run the benchmarks: bench/*.csv and plots (a few minutes)
 	$(PY) bench/fem2d.py --out bench
 	$(PY) bench/fem3d.py --out bench
 	$(PY) bench/plastic.py --out bench
@@ -132,6 +132,7 @@ bench: $(STUDY_CURVES) $(STAMP) ## run the benchmarks: bench/*.csv and plots (a 
 	$(PY) bench/sweep.py --out bench
 	$(PY) bench/impact.py --out bench
 	$(PY) bench/modes.py --out bench
+	$(PY) bench/flexible.py --out bench
 
 stress: $(STAMP) ## the stress matrix: bench/stress_*.csv, bench/stress.png (about 7 min)
 	$(PY) bench/stress.py --out bench

@@ -10,7 +10,7 @@ answer against the modes kept.
 2. Mode truncation: the slider-crank's flexible rod reduced with 20 fixed-interface modes,
    kept 1 .. 20 of its free modes: the peak contact force, the rod's largest mid-span
    deflection and the wall time; the spin-up beam's peak tip deflection (hub frame) with
-   1 .. 6 modes.
+   1 .. 6 fixed-interface modes in its basis.
 
 Writes OUT/flexible.csv, OUT/flexible_truncation.csv and OUT/flexible.png. Needs the modes
 of the shipped bodies (make modes).
@@ -104,11 +104,22 @@ def link_truncation(out: Path) -> list[dict]:
     return rows
 
 
-def spin_up_truncation() -> list[dict]:
+def spin_up_truncation(out: Path) -> list[dict]:
+    """The spin-up beam reduced with 1 .. 6 fixed-interface modes, all its free modes kept (a
+    clamped beam's deflection needs the whole Craig-Bampton basis: its free-free modes alone
+    are no cantilever's; dropping free modes of a 6-mode basis lost 29 % of the peak)."""
+    text = (ROOT / "scenes" / "modes" / "spinup_beam_2d.toml").read_text()
+    work = (out / "flexible_beam").resolve()
+    work.mkdir(exist_ok=True)
     rows = []
     for n in range(1, 7):
+        basis = re.sub(r"(?m)^fixed_interface_modes = \d+", f"fixed_interface_modes = {n}", text)
+        basis = re.sub(r"(?m)^modes = \d+", f"modes = {n}", basis)
+        (work / f"beam{n}.toml").write_text(basis)
+        subprocess.run([sys.executable, "-m", "pinbore.cli", "modes", str(work / f"beam{n}.toml"),
+                        "--out", str(work / f"modes{n}")], check=True)
         scene = scene_data("flexible_spinup_beam")
-        scene["bodies"][0]["modes"] = n
+        scene["bodies"][0]["modes_file"] = str(work / f"modes{n}" / "body.npz")
         model, trajectory, wall = timed(scene)
         cols = per_step(model, trajectory)[0]
         drive = model.scene.drive
@@ -116,7 +127,9 @@ def spin_up_truncation() -> list[dict]:
         deflection = -np.sin(theta) * cols["beam_tip_x_m"] + np.cos(theta) * cols["beam_tip_y_m"]
         rows.append({"body": "spin-up beam", "modes": n, "peak_deflection_m": float(-deflection.min()),
                      "wall_s": wall, "steps": trajectory.times.size})
-        print(f"spin-up beam, {n} modes: peak tip deflection {rows[-1]['peak_deflection_m']:.4f} m")
+        print(f"spin-up beam, {n} fixed-interface modes: peak tip deflection "
+              f"{rows[-1]['peak_deflection_m']:.4f} m")
+    shutil.rmtree(work)
     return rows
 
 
@@ -134,20 +147,31 @@ def main() -> None:
     out = parser.parse_args().out
     out.mkdir(parents=True, exist_ok=True)
     rigid = against_rigid()
-    link, beam = link_truncation(out), spin_up_truncation()
+    link, beam = link_truncation(out), spin_up_truncation(out)
     write(out / "flexible.csv", rigid)
     write(out / "flexible_truncation.csv", link + beam)
+    draw(out, rigid, link, beam)
+    print(f"wrote {out / 'flexible.csv'}, {out / 'flexible_truncation.csv'}, {out / 'flexible.png'}")
+
+
+def draw(out: Path, rigid: list[dict], link: list[dict], beam: list[dict]) -> None:
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.5))
     ax = axes[0]
-    names = [r["scene"].replace("_flexible", "\n(flexible)") for r in rigid]
-    ax.bar(range(len(rigid)), [r["wall_s"] for r in rigid], color=["C0" if not r["flexible"] else "C1" for r in rigid])
-    ax.set_xticks(range(len(rigid)), names, fontsize=7)
+    labels = {"slider_crank_flores2004": "slider-crank", "solar_panel_deployment": "deployment",
+              "solar_panel_deployment_3d": "3D deployment"}
+    pairs = [(r, f) for r, f in zip(rigid[0::2], rigid[1::2])]
+    x = np.arange(len(pairs))
+    ax.bar(x - 0.2, [r["wall_s"] for r, _ in pairs], 0.4, label="rigid")
+    ax.bar(x + 0.2, [f["wall_s"] for _, f in pairs], 0.4, label="flexible")
+    for k, (r, f) in enumerate(pairs):
+        ax.text(k + 0.2, f["wall_s"], f"{f['wall_s'] / r['wall_s']:.0f}x", ha="center", va="bottom")
+    ax.set_xticks(x, [labels.get(r["scene"], r["scene"]) for r, _ in pairs])
     ax.set_ylabel("integration wall time (s)")
-    ax.set_title("rigid (blue) against flexible (orange)")
+    ax.set_title("rigid against flexible, same tolerance")
+    ax.legend()
     ax = axes[1]
     ax.plot([r["modes"] for r in link], [r["peak_force_N"] / 1e3 for r in link], "o-")
-    rigid_peak = rigid[0]["peak_force_N"] / 1e3
-    ax.axhline(rigid_peak, color="k", ls="--", lw=1, label="rigid rod")
+    ax.axhline(rigid[0]["peak_force_N"] / 1e3, color="k", ls="--", lw=1, label="rigid rod")
     ax.set_xlabel("modes of the rod kept")
     ax.set_ylabel("peak contact force (kN)")
     ax.set_title("slider-crank: truncation")
@@ -155,12 +179,11 @@ def main() -> None:
     ax.grid(alpha=0.3)
     ax = axes[2]
     ax.plot([r["modes"] for r in beam], [r["peak_deflection_m"] for r in beam], "o-")
-    ax.set_xlabel("modes of the beam kept")
+    ax.set_xlabel("fixed-interface modes of the beam's basis")
     ax.set_ylabel("peak tip deflection, hub frame (m)")
     ax.set_title("spin-up beam: truncation")
     ax.grid(alpha=0.3)
     save_png(fig, out / "flexible.png", layout=True)
-    print(f"wrote {out / 'flexible.csv'}, {out / 'flexible_truncation.csv'}, {out / 'flexible.png'}")
 
 
 if __name__ == "__main__":
