@@ -106,13 +106,15 @@ def comparison_figure(rigid: Path, flexible: Path) -> str:
             for name, folder in (("rigid", rigid), ("flexible", flexible))}
     names = runs["rigid"].dtype.names
     forces = [k for k in names if k.endswith("_normal_force_N") and "_corner" not in k]
-    rates = [k for k in names if k.endswith("_omega_rad_per_s")][:1]
+    first = next(k for k in names if k.endswith("_x_m")).removesuffix("_x_m")   # the first body
+    rates = [k for k in names if k.startswith(f"{first}_") and k.endswith("_rad_per_s")
+             and np.ptp(runs["rigid"][k]) > 0]
     fig, axes = plt.subplots(len(forces) + len(rates), 1, figsize=(10, 2 + 2.5 * (len(forces) + len(rates))),
                              sharex=True, squeeze=False)
     for ax, key in zip(axes[:, 0], forces + rates):
         for name, style in (("rigid", "k-"), ("flexible", "C1-")):
             ax.plot(runs[name]["time_s"], runs[name][key], style, lw=0.6, label=name)
-        ax.set_ylabel(key.replace("_normal_force_N", " force (N)").replace("_omega_rad_per_s", " rate (rad/s)"))
+        ax.set_ylabel(key.replace("_normal_force_N", " force (N)").replace("_rad_per_s", " (rad/s)"))
         ax.grid(alpha=0.3)
     axes[0, 0].legend()
     axes[-1, 0].set_xlabel("time (s)")

@@ -339,7 +339,7 @@ def points_plot(folder, model, cols, x, x_label) -> None:
                              squeeze=False)
     for ax, p in zip(axes[:, 0], points):
         key = f"{p.body}_{p.name}"
-        for axis in "xy":
+        for axis in "xyz"[:model.kind.dimension]:
             ax.plot(x, cols[f"{key}_u{axis}_m"] * 1e3, lw=0.6, label=f"u{axis}")
         ax.set_ylabel(f"{key} (mm)")
         ax.grid(alpha=0.3)
