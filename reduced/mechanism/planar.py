@@ -58,10 +58,6 @@ def flex_column(n, block, k):
     return 3 + 3 * n + 2 * n * n + k * (2 + 3 * n)
 
 
-def flex_width(n: int, faces: int) -> int:
-    return flex_column(n, 5, faces)
-
-
 def planar(kind) -> bool:
     return getattr(kind, "instance_class", None) is layout.PlanarKind
 
@@ -313,22 +309,30 @@ def body_states(kind, y, nq, inertia_inv, flex, offsets, states, velocities):
 
 
 @numba.njit(cache=True, _nrt=False)
+def inertia_terms(flex, b, n, y, q, k):
+    """(g_k = (S^T eta)_k, eta_k (2 s1_k + (Q eta)_k)): the k-th term of g and of J - I0 of
+    flexible body b, its modal coordinates from y[q]."""
+    s1, quad, gyro = flex_column(n, 2, 0), flex_column(n, 3, 0), flex_column(n, 4, 0)
+    g, qe = 0.0, 0.0
+    for j in range(n):
+        g += y[q + j] * flex[b, gyro + j * n + k]
+        qe += flex[b, quad + k * n + j] * y[q + j]
+    return g, y[q + k] * (2 * flex[b, s1 + k] + qe)
+
+
+@numba.njit(cache=True, _nrt=False)
 def flexible_state(y, nq, flex, b, q, n, states):
     """eta, eta', g = S^T eta, J(eta), sigma = J - g.g and the interfaces' frames into body
     b's row (its modal coordinates from y[q])."""
-    s1, quad, gyro = flex_column(n, 2, 0), flex_column(n, 3, 0), flex_column(n, 4, 0)
     inertia = flex[b, C_I0]
     gg = 0.0
     for j in range(n):
         states[b, ETA + j], states[b, ETA_RATE + j] = y[q + j], y[nq + q + j]
     for k in range(n):
-        g, qe = 0.0, 0.0
-        for j in range(n):
-            g += y[q + j] * flex[b, gyro + j * n + k]
-            qe += flex[b, quad + k * n + j] * y[q + j]
+        g, term = inertia_terms(flex, b, n, y, q, k)
         states[b, GVEC + k] = g
         gg += g * g
-        inertia += y[q + k] * (2 * flex[b, s1 + k] + qe)
+        inertia += term
     states[b, INERTIA], states[b, SIGMA] = inertia, inertia - gg
     faces = int(flex[b, C_FACES])
     states[b, NFACES] = faces
@@ -482,15 +486,11 @@ def kinetic_energy(kind, y, nq, masses, minv, inertia, flex, offsets):
             for i in range(c, c + COLUMNS):
                 energy += 0.5 * y[nq + i] ** 2 / minv[i]
             continue
-        s1, quad, gyro = flex_column(n, 2, 0), flex_column(n, 3, 0), flex_column(n, 4, 0)
         q, w = c + COLUMNS, y[nq + c + 2]
         inertia_, coupling, modal = flex[b, C_I0], 0.0, 0.0
         for k in range(n):
-            g, qe = 0.0, 0.0
-            for j in range(n):
-                g += y[q + j] * flex[b, gyro + j * n + k]
-                qe += flex[b, quad + k * n + j] * y[q + j]
-            inertia_ += y[q + k] * (2 * flex[b, s1 + k] + qe)
+            g, term = inertia_terms(flex, b, n, y, q, k)
+            inertia_ += term
             coupling += g * y[nq + q + k]
             modal += y[nq + q + k] ** 2
         energy += (0.5 * masses[b] * (y[nq + c] ** 2 + y[nq + c + 1] ** 2) + 0.5 * inertia_ * w * w
