@@ -138,32 +138,39 @@ def _dynamics_command(sub) -> None:
     """`pinbore dynamics`. Its options have no argparse defaults (an option left out is absent
     from the parsed arguments): the options model of the analysis holds the defaults and the
     rules, and rejects an option that the analysis does not use."""
-    from pinbore.reduced.dynamics.analyses import PARAMETERS, Sampled, Sweep
+    from pinbore.reduced.dynamics.analyses import PARAMETERS, ContinuationOptions, Sampled, Sweep
 
     def default(model, name):
         return model.model_fields[name].default
 
-    d = sub.add_parser("dynamics", help="Poincare maps, bifurcations, Lyapunov exponents, shooting, design maps",
-                       description="Nonlinear dynamics of a driven mechanism with clearance "
-                                   "joints, sampled once per drive revolution; write DIR/summary.json "
-                                   "with tables and plots of the analysis.",
+    d = sub.add_parser("dynamics", help="Poincare maps, bifurcations, Lyapunov exponents, shooting, "
+                       "continuation, design maps",
+                       description="Nonlinear dynamics of a periodically forced mechanism with "
+                                   "clearance joints (a drive at constant speed, a shaken drive, "
+                                   "harmonic loads), sampled once per forcing period; write "
+                                   "DIR/summary.json with tables and plots of the analysis.",
                        argument_default=argparse.SUPPRESS)
-    d.add_argument("scene", help="mechanism scene file (TOML, planar or spatial) with a [drive]")
+    d.add_argument("scene", help="mechanism scene file (TOML, planar or spatial) with a periodic forcing")
     d.add_argument("--analysis", required=True,
-                   choices=["poincare", "bifurcation", "lyapunov", "shooting", "design"])
+                   choices=["poincare", "bifurcation", "lyapunov", "shooting", "continuation", "design"])
     d.add_argument("--out", required=True, type=Path, metavar="DIR",
                    help="output directory (replaced when complete)")
     d.add_argument("--parameter", choices=list(PARAMETERS),
-                   help="bifurcation: the swept parameter (m, rpm, or mu)")
+                   help="bifurcation, continuation: the parameter (m, rpm, mu, Hz, or a factor)")
     d.add_argument("--range", type=float, nargs=2, metavar=("LOW", "HIGH"),
-                   help="bifurcation: parameter range; design: clearance range (m)")
-    d.add_argument("--points", type=int, help=f"sweep points (default {default(Sweep, 'points')})")
+                   help="bifurcation, continuation: parameter range; design: clearance range (m)")
+    d.add_argument("--points", type=int, help=f"sweep points (default {default(Sweep, 'points')}); "
+                   f"continuation: most orbits (default {default(ContinuationOptions, 'points')})")
+    d.add_argument("--step", type=float, help="continuation: first step in the parameter's units "
+                   "(default: 1/100 of the range)")
+    d.add_argument("--sweeps", type=int, help="continuation: values of an up- and a down-sweep by "
+                   "direct integration (default 0: none)")
     d.add_argument("--speeds", type=float, nargs=3, metavar=("LOW", "HIGH", "N"),
                    help="design: drive speeds (rpm)")
     d.add_argument("--transient", type=int,
                    help=f"drive periods discarded before sampling (default {default(Sampled, 'transient')})")
     d.add_argument("--periods", type=int, help=f"periods sampled (default {default(Sampled, 'periods')})")
-    d.add_argument("--multiple", type=int, help="shooting: orbit period in drive periods")
+    d.add_argument("--multiple", type=int, help="shooting, continuation: orbit period in forcing periods")
     d.add_argument("--max-force", type=float, help="design: threshold (N)")
     d.add_argument("--max-deviation", type=float,
                    help="design: threshold of the slider acceleration deviation (RMS / ideal RMS)")

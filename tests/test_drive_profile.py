@@ -131,9 +131,9 @@ def test_a_drive_profile_that_does_not_fit_is_one_line(drive, message):
 
 
 def test_nonlinear_dynamics_needs_a_drive_at_constant_speed():
-    """The Poincare section is taken once per drive revolution: a spin-up has no period."""
+    """The Poincare section is taken once per forcing period: a spin-up has no period."""
     from pinbore.reduced.dynamics import studies
 
     scene = ReducedScene.model_validate(planar_bar({"speed_rpm": 60.0, "spin_up_s": 1.0}))
     with pytest.raises(InputError, match="drive at constant speed"):
-        studies.require_drive(scene, "test")
+        studies.require_forcing(scene, "test")

@@ -55,7 +55,7 @@ BAD = [
     ([*BIFURCATION, *CLEARANCES, "--cache", "{tmp}/out/cache"], "--cache", "lies in --out"),
     # what an analysis needs
     (["--analysis", "bifurcation", *CLEARANCES], "--parameter",
-     "--analysis bifurcation needs it (one of clearance, speed, friction)"),
+     "--analysis bifurcation needs it (one of clearance, speed, friction, frequency, amplitude)"),
     ([*BIFURCATION], "--range", "--analysis bifurcation needs it"),
     (["--analysis", "design", *SPEEDS], "--range", "--analysis design needs it"),
     ([*DESIGN], "--speeds", "--analysis design needs it"),
@@ -68,6 +68,19 @@ BAD = [
     ([*BIFURCATION, *CLEARANCES, "--multiple", "2"], "--multiple", "not used by --analysis bifurcation"),
     ([*BIFURCATION, *CLEARANCES, *SPEEDS], "--speeds", "not used by --analysis bifurcation"),
     ([*DESIGN, *SPEEDS, "--parameter", "speed"], "--parameter", "not used by --analysis design"),
+    # continuation
+    (["--analysis", "continuation", "--parameter", "speed", "--range", "2000", "5000", "--step", "0"],
+     "--step", "must be a finite number > 0"),
+    (["--analysis", "continuation", "--parameter", "speed", "--range", "2000", "5000", "--step", "-5"],
+     "--step", "must be a finite number > 0"),
+    (["--analysis", "continuation", "--parameter", "frequency", "--range", "0", "5"], "--range",
+     "frequency must be > 0"),
+    (["--analysis", "continuation", "--parameter", "speed", "--range", "2000", "5000", "--sweeps", "-1"],
+     "--sweeps", "at least 0"),
+    (["--analysis", "continuation", "--parameter", "speed", "--range", "2000", "5000", "--workers", "2"],
+     "--workers", "not used by --analysis continuation"),
+    (["--analysis", "continuation", "--range", "2000", "5000"], "--parameter",
+     "--analysis continuation needs it"),
     # the scene at both ends of a swept range
     ([*BIFURCATION, "--range", "1e-4", "0.05"], "--range",
      "slider_crank_flores2004.toml with clearance 0.05: clearance_joints.0.journal_radius"),
@@ -98,7 +111,7 @@ def test_a_broken_rule_is_one_line_exit_2_and_nothing_written(tmp_path, capsys, 
 
 
 @pytest.mark.parametrize("edit, rule", [
-    (lambda d: d.pop("drive"), "drive: nonlinear-dynamics analyses need a driven mechanism"),
+    (lambda d: d.pop("drive"), "a periodic analysis needs a periodic forcing"),
     (lambda d: d["drive"].update(speed_rpm=0.0), "drive.speed_rpm: must not be 0"),
 ])
 def test_a_scene_without_a_turning_drive_is_one_line_exit_2(tmp_path, capsys, write_scene, edit, rule):
@@ -168,4 +181,31 @@ def test_an_unreachable_scheduler_is_one_line_and_leaves_nothing(tmp_path, capsy
                          "--scheduler", "tcp://127.0.0.1:9"], tmp_path, capsys)
     assert code == 2 and len(err.strip().splitlines()) == 1
     assert "--scheduler tcp://127.0.0.1:9: cannot reach the Dask scheduler" in err
+    assert nothing_written(tmp_path)
+
+
+IMPACT_OSCILLATOR = ROOT / "scenes" / "reduced" / "impact_oscillator.toml"
+
+
+@pytest.mark.parametrize("scene, edit, options, rule", [
+    (FLORES, None, ["--parameter", "frequency", "--range", "1", "5"],
+     "--parameter frequency: the scene has no harmonic loads or shaken drive"),
+    (IMPACT_OSCILLATOR, None, ["--parameter", "speed", "--range", "1", "5"],
+     "--parameter speed: the scene has no drive turning at constant speed"),
+    (IMPACT_OSCILLATOR, None, ["--parameter", "frequency", "--range", "15", "20"],
+     "--range: the branch starts at the scene's frequency 14, outside 15 20"),
+    (IMPACT_OSCILLATOR, lambda d: d["loads"][0].update(frequency_hz=0.0), ["--parameter", "amplitude",
+     "--range", "0.5", "2"], "loads.0.frequency_hz"),
+    (IMPACT_OSCILLATOR, lambda d: d["loads"].append(dict(d["loads"][0], frequency_hz=20.0)),
+     ["--parameter", "amplitude", "--range", "0.5", "2"], "frequency 20 Hz is not a whole multiple"),
+], ids=["frequency-without-excitation", "speed-without-drive", "start-outside-range", "frequency-zero",
+        "incommensurate"])
+def test_a_continuation_the_scene_cannot_take_is_one_line_exit_2(tmp_path, capsys, write_scene, scene, edit,
+                                                                 options, rule):
+    data = tomllib.loads(scene.read_text())
+    if edit:
+        edit(data)
+    code, err = run_cli(["--analysis", "continuation", *options], tmp_path, capsys, scene=write_scene(data))
+    assert code == 2 and len(err.strip().splitlines()) == 1, err
+    assert rule in err
     assert nothing_written(tmp_path)

@@ -7,13 +7,15 @@ needs. `parse` builds a model from the options given (keyed by field name: `--ma
 `max_force`) and turns the first broken rule into one line `--option: rule`.
 
 Models: `PoincareOptions`, `LyapunovOptions` and `ShootingOptions` (one run of the mechanism),
-`BifurcationOptions` and `DesignOptions` (sweeps, run in parallel and cached point by point).
+`ContinuationOptions` (a branch of periodic orbits), `BifurcationOptions` and `DesignOptions`
+(sweeps, run in parallel and cached point by point).
 Their shared bases: `Analysis` (--out, --transient), `Sampled` (+ --periods), `Sweep`
 (+ --points, --scheduler, --workers, --cache).
 
 Rules: counts are whole numbers (--transient >= 0; --periods, --multiple, --workers,
---speeds N >= 1; --points >= 2); a range LOW HIGH is finite with LOW < HIGH, and a swept
-parameter stays physical (clearance > 0 m, speed > 0 rpm, friction mu >= 0); a design
+--speeds N >= 1; --points >= 2; --sweeps >= 0); a range LOW HIGH is finite with LOW < HIGH,
+and a swept parameter stays physical (clearance > 0 m, speed > 0 rpm, friction mu >= 0,
+frequency > 0 Hz, amplitude factor > 0); a continuation's --step is finite and > 0; a design
 threshold is > 0 (inf, the default: no threshold); --workers goes with local processes, not
 with --scheduler, which needs the dask `distributed` package; the cache folder (--cache,
 default OUT-cache) is no existing file and lies outside OUT (replaced when a run completes).
@@ -43,7 +45,9 @@ class Parameter(NamedTuple):
 
 PARAMETERS = {"clearance": Parameter("m, radial clearance of every clearance joint", True),
               "speed": Parameter("rpm, the drive's speed", True),
-              "friction": Parameter("mu of every clearance joint's friction law", False)}
+              "friction": Parameter("mu of every clearance joint's friction law", False),
+              "frequency": Parameter("Hz, the forcing's fundamental (every harmonic in proportion)", True),
+              "amplitude": Parameter("x, a factor on every excitation amplitude (1: the scene's)", True)}
 
 
 def default_workers() -> int:
@@ -155,6 +159,39 @@ class ShootingOptions(Analysis):
     the state after the transient (it samples no periods)."""
 
     multiple: Annotated[int, at_least(1)] = 1
+
+
+class ContinuationOptions(Analysis):
+    """`--analysis continuation`: the periodic orbits of `multiple` forcing periods followed
+    in `parameter` from the scene's value across `range` both ways (pseudo-arclength, at
+    most `points` orbits; the first step `step` in the parameter's units, default 1/100 of
+    the range), with their Floquet multipliers and bifurcations; with `sweeps` N > 0, an
+    up- and a down-sweep of N values by direct integration too (each value starting from
+    the state the last one reached: `transient` periods, then `periods` sampled)."""
+
+    parameter: Literal[tuple(PARAMETERS)] = pydantic.Field(description=f"one of {', '.join(PARAMETERS)}")
+    range: Range = pydantic.Field(description="LOW HIGH of the continued parameter")
+    multiple: Annotated[int, at_least(1)] = 1
+    points: Annotated[int, at_least(2)] = 200
+    step: float | None = None
+    sweeps: Annotated[int, at_least(0)] = 0
+    periods: Annotated[int, at_least(1)] = 20
+
+    @pydantic.field_validator("range")
+    @classmethod
+    def _physical(cls, span: Span, info: pydantic.ValidationInfo) -> Span:
+        parameter = info.data.get("parameter")
+        return span if parameter is None else physical(parameter, span)
+
+    @pydantic.field_validator("step")
+    @classmethod
+    def _step(cls, step: float | None) -> float | None:
+        if step is not None and not (math.isfinite(step) and step > 0):
+            raise ValueError(f"must be a finite number > 0 (got {step})")
+        return step
+
+    def swept(self):
+        return [("range", self.parameter, self.range)]
 
 
 class Sweep(Sampled):

@@ -32,7 +32,8 @@ import numpy as np
 from tqdm import tqdm
 
 from pinbore.reduced.mechanism import engine
-from pinbore.reduced.mechanism.layout import OK, PRIM_ANGLE0, PRIM_BODY_I, PRIM_BODY_J, PRIM_SPEED
+from pinbore.reduced.mechanism.layout import (CONSTANT_SPEED, OK, PRIM_ANGLE0, PRIM_BODY_I, PRIM_BODY_J,
+                                              PRIM_PROFILE, PRIM_SPEED)
 from pinbore.reduced.mechanism.model import Model, translational_frames
 from pinbore.reduced.mechanism.run import simulate
 
@@ -49,19 +50,25 @@ class MechanismState:
 
 
 class MechanismFlow:
-    """A driven mechanism advanced by whole drive periods. Coordinates: the body kind's
-    positions and velocities (back-end `flow_coordinates`: a planar driven angle taken
+    """A periodically forced mechanism (a drive at constant speed, a shaken drive, harmonic
+    loads: the scene's forcing_period) advanced by whole periods. Coordinates: the body
+    kind's positions and velocities (back-end `flow_coordinates`: a planar driven angle taken
     relative to the drive, spatial Euler parameters of one sign), scaled by the smallest
-    clearance c and c omega (back-end `flow_scale`). A drive whose angle has no bound (the
-    planar one) turns its angle0 on by 2 pi each period, as the integration restarts at
-    t = 0; a spatial drive holds its relative angle modulo 2 pi and needs no shift."""
+    clearance c and c omega, omega = 2 pi / period (back-end `flow_scale`). A drive turning
+    at constant speed whose angle has no bound (the planar one) turns its angle0 on by 2 pi
+    each period, as the integration restarts at t = 0 (where every load's phase repeats); a
+    spatial drive holds its relative angle modulo 2 pi and needs no shift."""
 
     def __init__(self, model: Model):
         self.model = model
         self.back_end = model.kind.bodies()
-        self.drive = model.primitives[model.drive_row]
-        self.omega = self.drive[PRIM_SPEED]
-        self.period = 2 * math.pi / abs(self.omega)
+        self.period = model.scene.forcing_period()
+        self.omega = 2 * math.pi / self.period
+        self.drive = None if model.drive_row is None else model.primitives[model.drive_row]
+        self.turning = self.drive is not None and self.drive[PRIM_SPEED] != 0 and \
+            int(self.drive[PRIM_PROFILE]) == CONSTANT_SPEED
+        if self.turning:
+            self.omega = math.copysign(self.omega, self.drive[PRIM_SPEED])
         self.length = min((c.gap() for c in model.joints), default=1e-3)
         self.scale = self.back_end.flow_scale(model, self.length, self.omega)
         self.last = None   # the Trajectory of the last advance (for the design study)
@@ -72,7 +79,7 @@ class MechanismFlow:
 
     def _primitives(self, period: int) -> np.ndarray:
         primitives = self.model.primitives
-        if self.back_end.WRAPPED_ANGLES:
+        if self.back_end.WRAPPED_ANGLES or not self.turning:
             return primitives
         primitives = primitives.copy()
         primitives[self.model.drive_row, PRIM_ANGLE0] += 2 * math.pi * period * math.copysign(1.0, self.omega)
@@ -123,7 +130,7 @@ class MechanismFlow:
                 tuple(map(float, c.journal_point)), tuple(map(float, f)), tuple(map(float, g)))
 
     def _free_body(self) -> int:
-        driven = {int(self.drive[PRIM_BODY_I]), int(self.drive[PRIM_BODY_J])}
+        driven = set() if self.drive is None else {int(self.drive[PRIM_BODY_I]), int(self.drive[PRIM_BODY_J])}
         return next(b for b in range(len(self.model.names)) if b not in driven)
 
     def observed(self, state: MechanismState) -> np.ndarray:
@@ -139,11 +146,53 @@ class MechanismFlow:
         return np.array(engine.relative_motion(state.y, args, engine.workspace(args),
                                                *self._observed_joint()))
 
+    def orbit_measures(self) -> dict:
+        """What the last advance shows of its orbit: `amplitude`, half the peak-to-peak range
+        of the observed point's positions (m; the larger of its two directions),
+        `amplitudes` of each, and `gap`, the smallest distance to contact over the orbit (m;
+        minus the deepest penetration when it touches; None without clearance joints), the
+        deepest approach refined by the parabola through the step at it and its neighbours."""
+        model, run = self.model, self.last
+        args = model.args()
+        work = engine.workspace(args)
+        if model.joints:
+            joint = self._observed_joint()
+            positions = np.array([engine.relative_motion(y, args, work, *joint)[:2] for y in run.states])
+        else:
+            c = model.geometry.coordinate(self._free_body())
+            positions = run.states[:, c:c + 2]
+        amplitudes = 0.5 * (positions.max(axis=0) - positions.min(axis=0))
+        measures = {"amplitude": float(amplitudes.max()), "amplitudes": amplitudes.tolist(), "gap": None}
+        nc = model.contacts.shape[0]
+        if nc:
+            dy, depth, offset = np.empty(run.states.shape[1]), np.empty(nc), np.zeros((nc, model.kind.dimension))
+            deepest = np.empty(len(run.times))
+            for k, (t, y) in enumerate(zip(run.times, run.states)):
+                engine.observe(t, y, dy, args, work, depth, offset)
+                deepest[k] = depth.max()
+            measures["gap"] = -float(vertex(run.times, deepest))
+        return measures
+
     def observed_name(self) -> str:
         if self.model.joints:
             return (f"journal centre of {self.model.joints[0].name} relative to its bearing, "
                     "across the joint")
         return f"centre of body {self.model.names[self._free_body()]}"
+
+
+def vertex(t: np.ndarray, f: np.ndarray) -> float:
+    """The largest value of samples f(t), refined by the parabola through the largest and
+    its two neighbours (the largest sample at either end: itself)."""
+    i = int(np.argmax(f))
+    if i == 0 or i == f.size - 1:
+        return float(f[i])
+    (t0, t1, t2), (f0, f1, f2) = t[i - 1:i + 2], f[i - 1:i + 2]
+    a = ((f2 - f1) / (t2 - t1) - (f1 - f0) / (t1 - t0)) / (t2 - t0)
+    b = (f1 - f0) / (t1 - t0) - a * (t0 + t1)
+    if a >= 0:
+        return float(f1)
+    top = -b / (2 * a)
+    return float(f1 + (top - t1) * (b + a * (top + t1)))
 
 
 def poincare(flow, state, transient: int, periods: int, progress: bool = False):

@@ -97,3 +97,37 @@ def design(path, rows, clearances, speeds, max_force, max_deviation) -> None:
         ax.set_ylabel("drive speed (rpm)")
         ax.set_title(f"{label}; white: threshold {limit:g}", fontsize=9)
     save_png(fig, path, layout=True)
+
+
+SPECIAL_MARKERS = {"fold": ("s", "tab:orange"), "period_doubling": ("D", "tab:red"),
+                   "neimark_sacker": ("^", "tab:purple"), "grazing": ("o", "tab:green")}
+
+
+def response(path, rows, specials, sweeps, parameter, unit, title) -> None:
+    """The continued branch's amplitude against the parameter (stable solid, unstable
+    dashed), its bifurcations marked, and the direct up- and down-sweeps."""
+    fig, ax = plt.subplots(figsize=(9, 5))
+    values = np.array([r[1] for r in rows])
+    amplitude = np.array([r[2] for r in rows]) * 1e3
+    stable = np.array([bool(r[3]) for r in rows])
+    for k in range(len(rows) - 1):
+        ax.plot(values[k:k + 2], amplitude[k:k + 2], "-" if stable[k] and stable[k + 1] else "--",
+                color="tab:blue", lw=1.6)
+    ax.plot([], [], "-", color="tab:blue", label="continued, stable")
+    ax.plot([], [], "--", color="tab:blue", label="continued, unstable")
+    for direction, marker in (("up", "^"), ("down", "v")):
+        kept = [r for r in sweeps if r[0] == direction]
+        if kept:
+            ax.plot([r[1] for r in kept], [r[2] * 1e3 for r in kept], marker, ms=4, alpha=0.7,
+                    label=f"direct {direction}-sweep")
+    for kind, (marker, colour) in SPECIAL_MARKERS.items():
+        found = [s for s in specials if s.kind == kind]
+        if found:
+            ax.plot([s.p for s in found], [s.point.measures["amplitude"] * 1e3 for s in found], marker,
+                    color=colour, ms=8, mfc="none", mew=1.6, label=kind.replace("_", " "))
+    ax.set_xlabel(f"{parameter} ({unit})")
+    ax.set_ylabel("response amplitude (mm)")
+    ax.set_title(title, fontsize=9)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    save_png(fig, path, layout=True)

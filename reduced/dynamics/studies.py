@@ -14,6 +14,7 @@ resumes where it stopped.
 import concurrent.futures
 import contextlib
 import copy
+import dataclasses
 import hashlib
 import json
 import math
@@ -29,15 +30,24 @@ from tqdm import tqdm
 from pinbore.core import scene as scenes
 from pinbore.core.errors import InputError
 from pinbore.core.output import atomic_directory
-from pinbore.reduced.dynamics.analyses import (PARAMETERS, Analysis, BifurcationOptions, DesignOptions,
-                                               LyapunovOptions, PoincareOptions, Sampled, ShootingOptions)
+from pinbore.reduced.dynamics.analyses import (PARAMETERS, Analysis, BifurcationOptions, ContinuationOptions,
+                                               DesignOptions, LyapunovOptions, PoincareOptions, Sampled,
+                                               ShootingOptions)
 from pinbore.reduced.mechanism import kinds
 from pinbore.reduced.mechanism.layout import PRIM_ANGLE0
+from pinbore.reduced.mechanism.scene import clearance_joints
 
 
 def scene_model(data: dict) -> type:
     """The scene model of a mechanism scene's data of any kind (reduced.mechanism.kinds)."""
     return kinds.kind_of(data, "scene").scene
+
+
+def continuation():
+    """Pseudo-arclength continuation (reduced.dynamics.continuation)."""
+    from pinbore.reduced.dynamics import continuation as method   # noqa: PLC0415
+
+    return method
 
 
 def figures():
@@ -68,7 +78,31 @@ def with_parameter(data: dict, parameter: str, value: float, source: str) -> dic
         for joint in data.get("translational_joints", []):
             joint["clearance"] = value
     elif parameter == "speed":
+        if (data.get("drive") or {}).get("speed_rpm") is None:
+            raise InputError(f"{source}: --parameter speed: the scene has no drive turning at "
+                             "constant speed")
         data["drive"]["speed_rpm"] = value
+    elif parameter in ("frequency", "amplitude"):
+        drive = data.get("drive") or {}
+        excitations = data.get("loads", []) + drive.get("harmonics", [])
+        if not excitations:
+            raise InputError(f"{source}: --parameter {parameter}: the scene has no harmonic loads "
+                             "or shaken drive (drive.harmonics)")
+        if parameter == "frequency":
+            if drive.get("speed_rpm") is not None:
+                raise InputError(f"{source}: --parameter frequency: the drive turns at constant "
+                                 "speed and sets the period; continue in speed instead")
+            ratio = value / min(e["frequency_hz"] for e in excitations)
+            for e in excitations:
+                e["frequency_hz"] *= ratio
+        else:
+            for load in data.get("loads", []):
+                for key in ("force", "torque"):
+                    if key in load:
+                        load[key] = [value * f for f in load[key]] if isinstance(load[key], list) \
+                            else value * load[key]
+            for h in drive.get("harmonics", []):
+                h["amplitude_deg"] *= value
     elif parameter == "friction":
         if not joints or any("mu" not in (j.get("friction") or {}) for j in joints):
             raise InputError(f"{source}: --parameter friction: every clearance joint needs a "
@@ -78,17 +112,29 @@ def with_parameter(data: dict, parameter: str, value: float, source: str) -> dic
     return data
 
 
-def require_drive(scene, source: str) -> None:
-    """A drive that turns: the Poincare section is taken once per drive revolution."""
-    if scene.drive is None:
-        raise InputError(f"{source}: drive: nonlinear-dynamics analyses need a driven mechanism "
-                         "(the Poincare section is taken once per drive revolution)")
-    if not scene.drive.constant:
-        raise InputError(f"{source}: drive: nonlinear-dynamics analyses need a drive at constant "
-                         "speed (a spin-up or an angle table gives the motion no period)")
-    if scene.drive.speed_rpm == 0:
-        raise InputError(f"{source}: drive.speed_rpm: must not be 0 for nonlinear-dynamics "
-                         "analyses (a drive that stands still has no revolution to sample)")
+def parameter_value(scene, parameter: str) -> float:
+    """The scene's own value of a continued parameter: the first clearance joint's clearance,
+    the drive's speed, the first joint's friction coefficient, the forcing's fundamental
+    frequency, or the amplitude factor 1."""
+    joints = scene.clearance_joints
+    if parameter == "clearance":
+        return clearance_joints(scene)[0].gap()
+    if parameter == "speed":
+        return scene.drive.speed_rpm
+    if parameter == "friction":
+        return joints[0].friction.mu
+    if parameter == "frequency":
+        return 1.0 / scene.forcing_period()
+    return 1.0
+
+
+def require_forcing(scene, source: str) -> float:
+    """The period of the scene's forcing (s): the Poincare section is taken once a period
+    (MechanismScene.forcing_period; one InputError line when the forcing is not periodic)."""
+    try:
+        return scene.forcing_period()
+    except ValueError as err:
+        raise InputError(f"{source}: {err}") from None
 
 
 def mechanism_flow(data: dict, base: Path, source: str, ideal: bool = False):
@@ -97,7 +143,7 @@ def mechanism_flow(data: dict, base: Path, source: str, ideal: bool = False):
     from pinbore.reduced.mechanism.model import build   # noqa: PLC0415 (compiled)
 
     scene = scene_model(data).model_validate(data)
-    require_drive(scene, source)
+    require_forcing(scene, source)
     return dynamics().MechanismFlow(build(scene, source, base, ideal=ideal))
 
 
@@ -322,11 +368,19 @@ def check_scene(scene, target: SceneFile, options: Analysis) -> None:
     once per revolution); a valid scene at both ends of every swept range (e.g. a clearance
     below the bearing's radius, a friction law with a coefficient mu to set); a prismatic
     body for the design study to measure."""
-    require_drive(scene, target.source)
+    require_forcing(scene, target.source)
+    if isinstance(options, DesignOptions) and (scene.drive is None or scene.drive.speed_rpm is None):
+        raise InputError(f"{target.source}: drive: the design study sweeps the drive's speed; "
+                         "the scene has no drive turning at constant speed")
     for option, parameter, span in options.swept():
         for value in (span.low, span.high):
             scenes.validate(type(scene), with_parameter(target.data, parameter, value, target.source),
                             f"--{option}: {target.source} with {parameter} {value:g}")
+    if isinstance(options, ContinuationOptions):
+        value = parameter_value(scene, options.parameter)
+        if not options.range.low <= value <= options.range.high:
+            raise InputError(f"--range: the branch starts at the scene's {options.parameter} "
+                             f"{value:g}, outside {options.range.low:g} {options.range.high:g}")
     if isinstance(options, DesignOptions) and not any(j.type == "prismatic" for j in scene.joints):
         raise InputError(f"{target.source}: joints: the design study measures a prismatic body's "
                          "acceleration; the scene has no prismatic joint")
@@ -417,6 +471,147 @@ def design_map(target: SceneFile, options: DesignOptions, tmp: Path) -> dict:
             "band": design_band(rows, speeds, options.max_force, options.max_deviation)}
 
 
+class MechanismFamily:
+    """A scene's mechanisms over one parameter, as continuation needs them
+    (reduced.dynamics.continuation): the map of the scaled coordinates x over `multiple`
+    forcing periods at p, and the orbit's measures. x is scaled once, by the flow at the
+    scene's own value (a frequency changes the flow's own velocity scale); a state at p is
+    the template state (the last orbit's end: its impact speeds, contact modes, latches and
+    friction states) moved to x and onto the constraints. The models of the last few p are
+    kept (a model is rebuilt at a new p)."""
+
+    KEPT = 4
+
+    def __init__(self, target: "SceneFile", parameter: str, value: float):
+        self.target, self.parameter = target, parameter
+        self.flows = {}
+        reference = self.flow(value)
+        self.tolerance = 100 * reference.model.scene.integrator.rtol   # what a converged orbit resolves
+        self.scale = reference.scale.copy()
+        self.template = reference.start()
+
+    def flow(self, p: float):
+        if p not in self.flows:
+            if len(self.flows) >= self.KEPT:
+                self.flows.pop(next(iter(self.flows)))
+            data = with_parameter(self.target.data, self.parameter, p, self.target.source)
+            self.flows[p] = mechanism_flow(data, self.target.base, self.target.source)
+        return self.flows[p]
+
+    def coordinates(self, flow, state) -> np.ndarray:
+        return flow.coordinates(state) * flow.scale / self.scale
+
+    def state(self, flow, x):
+        return flow.perturb(self.template, x * self.scale / flow.scale - flow.coordinates(self.template))
+
+    def map(self, x, p, multiple):
+        flow = self.flow(p)
+        return self.coordinates(flow, flow.advance(self.state(flow, x), multiple))
+
+    def measure(self, x, p, multiple) -> dict:
+        """The orbit's measures (flow.orbit_measures); its end becomes the template."""
+        flow = self.flow(p)
+        end = flow.advance(self.state(flow, x), multiple)
+        self.template = dataclasses.replace(end, period=0)
+        return flow.orbit_measures()
+
+    def settle(self, p, periods, state=None):
+        """The state `periods` forcing periods on at p from `state` (default: the template),
+        its coordinates, and the measures of its last period (a direct sweep's value)."""
+        flow = self.flow(p)
+        if state is None:
+            state = self.template
+        state = flow.advance(dataclasses.replace(state, period=0), periods)
+        return state, self.coordinates(flow, state), flow.orbit_measures()
+
+
+def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dict:
+    """The branch of periodic orbits across the range, both ways from the scene's value, its
+    bifurcations, and the direct up- and down-sweeps; `converged: false` and the reason when
+    the branch could not be followed across the whole range (what converged is written)."""
+    scene = scene_model(target.data).model_validate(target.data)
+    start_value = parameter_value(scene, options.parameter)
+    low, high = options.range
+    family = MechanismFamily(target, options.parameter, start_value)
+    method = continuation()
+    line = method.Continuation(family, low, high, options.multiple)
+    ds = (options.step if options.step is not None else (high - low) / 100) / (high - low)
+    started = time.perf_counter()
+    state, x, _ = family.settle(start_value, options.transient)
+    try:
+        first = line.first(x, start_value, 1.0)
+    except FloatingPointError as err:
+        return {"converged": False, "reason": str(err), "parameter": options.parameter}
+    branches = []
+    for direction in (-1.0, 1.0):
+        if (direction < 0 and start_value <= low) or (direction > 0 and start_value >= high):
+            continue
+        way = dataclasses.replace(first, tangent=direction * first.tangent)
+        branches.append(line.run(way, ds, max(options.points // 2, 2), progress=True))
+    points = [p for b in branches for p in b.points]
+    cost = (time.perf_counter() - started) / max(len(points), 1)
+    down = branches[0] if len(branches) == 2 else None
+    rows = [point_row(0, p) for p in reversed(down.points)] if down else []
+    rows += [point_row(0, p) for p in branches[-1].points[(1 if down else 0):]]
+    specials = [s for b in branches for s in b.specials]
+    figures().write_table(tmp / "continuation.csv", CONTINUATION_COLUMNS, rows)
+    figures().write_table(tmp / "bifurcations.csv", SPECIAL_COLUMNS, [special_row(s) for s in specials])
+    sweeps = direct_sweeps(family, options) if options.sweeps else []
+    if sweeps:
+        figures().write_table(tmp / "sweeps.csv", SWEEP_COLUMNS, sweeps)
+    figures().response(tmp / "response.png", rows, specials, sweeps, options.parameter,
+                       PARAMETERS[options.parameter].label, f"{target.path.stem}: {family.flow(start_value).observed_name()}")
+    reasons = [b.reason for b in branches if not b.complete]
+    return {"parameter": options.parameter, "range": [low, high], "start": start_value,
+            "multiple": options.multiple, "points": len(rows), "seconds_per_point": cost,
+            "converged": not reasons, "reason": "; ".join(reasons),
+            "bifurcations": [{"kind": s.kind, "value": s.p, "amplitude_m": s.point.measures["amplitude"],
+                              "floquet_multipliers": [[m.real, m.imag] for m in s.point.multipliers]}
+                             for s in specials],
+            "stable_points": sum(r[3] for r in rows)}
+
+
+CONTINUATION_COLUMNS = ["branch", "value", "amplitude_m", "stable", "largest_multiplier_modulus", "gap_m",
+                        "x"]
+SPECIAL_COLUMNS = ["kind", "value", "amplitude_m", "gap_m", "multipliers"]
+SWEEP_COLUMNS = ["direction", "value", "amplitude_m", "gap_m"]
+
+
+def point_row(branch: int, p) -> list:
+    return [branch, p.p, p.measures["amplitude"], int(p.stable), float(np.max(np.abs(p.multipliers))),
+            p.measures["gap"], " ".join(f"{v:.9g}" for v in p.x)]
+
+
+def special_row(s) -> list:
+    return [s.kind, s.p, s.point.measures["amplitude"], s.point.measures["gap"],
+            " ".join(f"{m.real:.6g}{m.imag:+.6g}j" for m in s.point.multipliers)]
+
+
+def direct_sweeps(family: MechanismFamily, options: ContinuationOptions) -> list:
+    """Up- and down-sweep by direct integration, as on a shaker: each starts from the scene's
+    initial state at its first value; at each value the state the last value reached runs
+    `transient` periods, then the largest amplitude of `periods` periods is kept."""
+    values = np.linspace(options.range.low, options.range.high, options.sweeps)
+    rows = []
+    for direction, order in (("up", values), ("down", values[::-1])):
+        state = family.flow(float(order[0])).start()
+        for value in tqdm(order, desc=f"{direction}-sweep", unit="value"):
+            try:
+                state, _, _ = family.settle(float(value), options.transient, state)
+                amplitude, gap = 0.0, None
+                for _ in range(options.periods):
+                    state, _, measures = family.settle(float(value), 1, state)
+                    amplitude = max(amplitude, measures["amplitude"])
+                    if measures["gap"] is not None:
+                        gap = measures["gap"] if gap is None else min(gap, measures["gap"])
+            except FloatingPointError:
+                rows.append([direction, float(value), math.nan, math.nan])
+                state = family.flow(float(value)).start()
+                continue
+            rows.append([direction, float(value), amplitude, gap])
+    return rows
+
+
 def _finite(value):
     return value if value is not None and math.isfinite(value) else None
 
@@ -426,5 +621,6 @@ def _finite(value):
 ANALYSES = {"poincare": (PoincareOptions, poincare_map),
             "lyapunov": (LyapunovOptions, lyapunov_exponent),
             "shooting": (ShootingOptions, periodic_orbit),
+            "continuation": (ContinuationOptions, continued),
             "bifurcation": (BifurcationOptions, bifurcation_diagram),
             "design": (DesignOptions, design_map)}

@@ -105,14 +105,16 @@ from pinbore.reduced.mechanism.layout import (
     LOG_COLUMNS, LOG_IMPULSE, LOG_JOINT, LOG_RATE, LOG_TIME, LUGRE_SIGMA1, LUGRE_SIGMA2,
     LUGRE_STRIBECK_SPEED, NO_FRICTION, PLANE, POINT, POISSON,
     PRIM_A_I, PRIM_ANGLE0, PRIM_B_J, PRIM_BODY_I, PRIM_BODY_J, PRIM_C_I, PRIM_KIND, PRIM_S_I,
-    PRIM_PROFILE, PRIM_PROFILE_ROWS, PRIM_PROFILE_TIME, PRIM_S_J, PRIM_SPEED, RADIAL, SEG_C0,
-    SEG_C1, SEG_C2, SEG_C3, SEG_TIME, SPIN_UP, TABLE, REGULARISATION_V0, REGULARISATION_V1, SLICED, STATE_STRETCH,
+    HARM_AMPLITUDE, HARM_OMEGA, HARM_PHASE, HARMONIC, LOAD_BODY, LOAD_FORCE, LOAD_OMEGA,
+    LOAD_PHASE, LOAD_POINT, LOAD_TORQUE, PRIM_PROFILE, PRIM_PROFILE_ROWS, PRIM_PROFILE_TIME, PRIM_S_J, PRIM_SPEED, RADIAL, SEG_C0,
+    SEG_C1, SEG_C2, SEG_C3, SEG_TIME, SPIN_UP, SPRING_BODY_I, SPRING_BODY_J, SPRING_DAMPING,
+    SPRING_LENGTH, SPRING_S_I, SPRING_S_J, SPRING_STIFFNESS, TABLE, REGULARISATION_V0, REGULARISATION_V1, SLICED, STATE_STRETCH,
     STATE_TRAVEL, STOP, STRIBECK, STRIBECK_MU_MIN, STRIBECK_MU_STATIC, STRIBECK_V_MIN,
     TORSION_A_I, TORSION_B_J, TORSION_BODY_I, TORSION_BODY_J, TORSION_C_I, TORSION_DAMPING, TORSION_S_I, TORSION_S_J,
     TORSION_FREE_ANGLE, TORSION_KIND, TORSION_STIFFNESS, WORK_IN, Contacts, Depth, Impulse, Work)
 from pinbore.reduced.mechanism.linalg import cholesky_solve
 from pinbore.reduced.mechanism.vectors import (
-    _plane, _space, add, angular_zero, axis, cell, cross, direction, dot, negated, norm, scaled,
+    _plane, _space, add, angular_cell, angular_zero, axis, cell, cross, direction, dot, negated, norm, scaled,
     sub, tangent, zero)
 
 LATCH_TOL = 1e-8   # rad: a latch engages within this of its angle (the step is shortened to it)
@@ -199,10 +201,20 @@ def spin_up(t, speed, duration):
 @numba.njit(cache=True, _nrt=False)
 def drive_profile(primitives, k, profile, t):
     """theta(t) of the ANGLE primitive k (layout.PRIM_PROFILE): its value (rad), rate and
-    acceleration; a table's segment found by bisection."""
+    acceleration; a table's segment found by bisection, a harmonic drive's sum in closed form."""
     kind, speed = int(primitives[k, PRIM_PROFILE]), primitives[k, PRIM_SPEED]
     if kind == SPIN_UP:
         return spin_up(t, speed, primitives[k, PRIM_PROFILE_TIME])
+    if kind == HARMONIC:   # theta = sum A (sin(w t + phi) - sin phi): a support shaken
+        theta, rate, acceleration = 0.0, 0.0, 0.0
+        first = int(primitives[k, PRIM_PROFILE_TIME])
+        for i in range(first, first + int(primitives[k, PRIM_PROFILE_ROWS])):
+            a, w, phase = profile[i, HARM_AMPLITUDE], profile[i, HARM_OMEGA], profile[i, HARM_PHASE]
+            sine = math.sin(w * t + phase)
+            theta += a * (sine - math.sin(phase))
+            rate += a * w * math.cos(w * t + phase)
+            acceleration -= a * w * w * sine
+        return theta, rate, acceleration
     if kind == TABLE:
         i = int(primitives[k, PRIM_PROFILE_TIME])   # the last segment starting at or before t
         last = i + int(primitives[k, PRIM_PROFILE_ROWS]) - 1
@@ -924,6 +936,52 @@ def torsion_forces(force, states, torsion, latched, offsets, dissipation, z):
 
 
 @numba.njit(cache=True, _nrt=False)
+def spring_forces(force, states, springs, offsets, dissipation, z):
+    """Every linear spring-damper's force into `force`: the tension T = k (L - L0) + c L' pulls
+    its two points together along the line n from s_i to s_j (-T n on body j, T n on body i);
+    `dissipation` plus the damper's power c L'^2. Two points that coincide have no line: the
+    element is idle there (L0 > 0 keeps them apart in any sensible scene)."""
+    for r in range(springs.shape[0]):
+        bi, bj = int(springs[r, SPRING_BODY_I]), int(springs[r, SPRING_BODY_J])
+        x_i, v_i, _, _ = point_state(states, bi, cell(springs, r, SPRING_S_I, z))
+        x_j, v_j, _, _ = point_state(states, bj, cell(springs, r, SPRING_S_J, z))
+        d = sub(x_j, x_i)
+        length = norm(d)
+        if length == 0.0:
+            continue
+        n = scaled(d, 1.0 / length)
+        rate = dot(n, sub(v_j, v_i))
+        tension = springs[r, SPRING_STIFFNESS] * (length - springs[r, SPRING_LENGTH]) \
+            + springs[r, SPRING_DAMPING] * rate
+        push(force, states, bj, scaled(n, -tension), x_j, offsets)
+        push(force, states, bi, scaled(n, tension), x_i, offsets)
+        dissipation += springs[r, SPRING_DAMPING] * rate * rate
+    return dissipation
+
+
+@numba.njit(cache=True, _nrt=False)
+def load_forces(t, force, states, velocities, loads, offsets, z):
+    """Every harmonic load into `force`: F cos(w t + phi) at its body point and T cos(w t + phi)
+    on the body's frame there (global amplitudes); returns their power, the generalised
+    forces they add times the velocities of the same columns."""
+    power = 0.0
+    for r in range(loads.shape[0]):
+        b = int(loads[r, LOAD_BODY])
+        if b < 0:
+            continue
+        c = math.cos(loads[r, LOAD_OMEGA] * t + loads[r, LOAD_PHASE])
+        s = cell(loads, r, LOAD_POINT, z)
+        x = point_state(states, b, s)[0]
+        for col in range(offsets[b], offsets[b + 1]):
+            power -= force[col] * velocities[col]
+        push(force, states, b, scaled(cell(loads, r, LOAD_FORCE, z), c), x, offsets)
+        push_torque(force, states, b, s, angular_cell(loads, r, LOAD_TORQUE, c, z), offsets)
+        for col in range(offsets[b], offsets[b + 1]):
+            power += force[col] * velocities[col]
+    return power
+
+
+@numba.njit(cache=True, _nrt=False)
 def constrained_forces(force, jac, mjac, rhs_c, phi_t, schur, row_bodies, first, offsets, m):
     """Solve (D M^-1 D^T) lambda = D M^-1 Q - gamma~ (gamma~ in rhs_c, lambda into it), take
     D^T lambda from the forces Q, and return the power of the constraint forces."""
@@ -969,7 +1027,9 @@ def rhs(t, y, dy, args, work):
             dy[i] = math.nan
         return
     dissipation = torsion_forces(force, states, args.torsion, args.latched, offsets, dissipation, z)
+    dissipation = spring_forces(force, states, args.springs, offsets, dissipation, z)
     dissipation += damping
+    loaded = load_forces(t, force, states, work.velocities, args.loads, offsets, z)
     m = constraint_rows(t, primitives, args.profile, contacts, mode, offsets, states, work.velocities, jac, mjac,
                         work.phi, phi_t, rhs_c, row_bodies, args.baumgarte, z)
     work_in = 0.0
@@ -986,7 +1046,7 @@ def rhs(t, y, dy, args, work):
                 row += 1
     state_rates(kind, y, dy, nq, masses, minv, args.baumgarte, states, force)
     dy[2 * nq + DISSIPATED] = dissipation
-    dy[2 * nq + WORK_IN] = work_in
+    dy[2 * nq + WORK_IN] = work_in + loaded
 
 
 @numba.njit(cache=True)
@@ -1053,6 +1113,17 @@ def torsion_angles(y, args, work, angles):
     refresh(y, args, work)
     for r in range(args.torsion.shape[0]):
         angles[r] = torsion_angle(work.bodies, args.torsion, r, args.like)[0]
+
+
+@numba.njit(cache=True)
+def spring_lengths(y, args, work, lengths):
+    """Each spring-damper's length L beyond its free length L0 into `lengths` (m)."""
+    refresh(y, args, work)
+    z, springs = args.like, args.springs
+    for r in range(springs.shape[0]):
+        x_i = point_state(work.bodies, int(springs[r, SPRING_BODY_I]), cell(springs, r, SPRING_S_I, z))[0]
+        x_j = point_state(work.bodies, int(springs[r, SPRING_BODY_J]), cell(springs, r, SPRING_S_J, z))[0]
+        lengths[r] = norm(sub(x_j, x_i)) - springs[r, SPRING_LENGTH]
 
 
 @numba.njit(cache=True)

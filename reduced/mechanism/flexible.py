@@ -125,7 +125,10 @@ class FlexibleGeometry:
                                  f"and {self.INTERFACES} interfaces a flexible body")
         counts = [self.RIGID_COLUMNS + self.modes(b.name) for b in scene.bodies]
         self.columns = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-        for name, point, key in self.attachments():
+        attached = [(e.body_i, e.point_i, "springs.point_i") for e in scene.springs]
+        attached += [(e.body_j, e.point_j, "springs.point_j") for e in scene.springs]
+        attached += [(e.body, e.point, "loads.point") for e in scene.loads]
+        for name, point, key in self.attachments() + attached:
             if name in self.flexible:
                 self.flexible[name].interface_at(point, f"{source}: {key}")
         self.points = [(p, index[p.body], self.flexible[p.body].shape_at(

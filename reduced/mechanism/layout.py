@@ -93,12 +93,14 @@ PRIM_SPEED, PRIM_ANGLE0 = 18, 19    # ANGLE: relative angle = angle0 + theta(t) 
 PRIM_PROFILE = 20                   # ANGLE: theta(t) = speed t (CONSTANT_SPEED), the smooth
 PRIM_PROFILE_TIME = 21              # spin-up to `speed` over PRIM_PROFILE_TIME (s) (SPIN_UP),
 PRIM_PROFILE_ROWS = 22              # or the PRIM_PROFILE_ROWS segments of Args.profile from
-PRIMITIVE_COLUMNS = 23              # row PRIM_PROFILE_TIME (TABLE)
-CONSTANT_SPEED, SPIN_UP, TABLE = 0, 1, 2
+PRIMITIVE_COLUMNS = 23              # row PRIM_PROFILE_TIME (TABLE), or the sum of the harmonics
+CONSTANT_SPEED, SPIN_UP, TABLE, HARMONIC = 0, 1, 2, 3   # in those rows (HARMONIC)
 # a drive table's segments (Args.profile, a row each): from time SEG_TIME, theta = c0 + c1 tau
 # + c2 tau^2 + c3 tau^3 (rad), tau = t - SEG_TIME; the last segment runs on without end
 SEG_TIME, SEG_C0, SEG_C1, SEG_C2, SEG_C3 = 0, 1, 2, 3, 4
 PROFILE_COLUMNS = 5
+# a harmonic drive's harmonics (Args.profile, a row each): theta = sum A (sin(w t + phi) - sin phi)
+HARM_AMPLITUDE, HARM_OMEGA, HARM_PHASE = 0, 1, 2   # rad, rad/s, rad
 
 # ---- torsion spring, stop or latch (Model.torsion): a torque about body i's axis u_i' on
 # the relative angle from a_i' (body i) to b_j' (body j), measured like the ANGLE primitive
@@ -110,6 +112,22 @@ TORSION_A_I, TORSION_B_J, TORSION_C_I = 6, 9, 12
 TORSION_S_I, TORSION_S_J = 15, 18   # the points (body frames) whose frames the element joins:
 TORSION_COLUMNS = 21                # a flexible body's interface there (rigid bodies: unused)
 SPRING, STOP, LATCH = 0, 1, 2
+
+# ---- linear spring-dampers between two points (Model.springs): a tension T = k (L - L0) + c L'
+# pulls point s_i of body i and point s_j of body j together along the line between them
+SPRING_BODY_I, SPRING_BODY_J = 0, 1
+SPRING_S_I, SPRING_S_J = 2, 5                                # (3) body frames; the ground: global
+SPRING_STIFFNESS, SPRING_DAMPING, SPRING_LENGTH = 8, 9, 10   # N/m, N s/m, m (free length L0)
+SPRING_COLUMNS = 11
+
+# ---- harmonic loads (Model.loads): a force F cos(w t + phi) at a body point and a torque
+# T cos(w t + phi) on the body's frame there, both amplitudes global
+LOAD_BODY = 0
+LOAD_POINT = 1      # (3) m, body frame
+LOAD_FORCE = 4      # (3) N
+LOAD_TORQUE = 7     # (3) N m (a planar mechanism reads the third, about the plane's normal)
+LOAD_OMEGA, LOAD_PHASE = 10, 11   # rad/s, rad
+LOAD_COLUMNS = 12
 
 # ---- the state vector after q and q': the energy integrals, then the friction states
 DISSIPATED, WORK_IN = 0, 1
@@ -137,13 +155,14 @@ PLANAR, SPATIAL = PlanarKind(), SpatialKind()
 # and its inverse (per body, 3 x 3 in the body frame; planar: J in [0, 0]), gravity (D,
 # m/s^2), offsets (per body its first velocity column; the last entry their number),
 # profile: the drive table's segments (SEG_*; none: an empty array), flex: per body the
-# constants of a flexible body's modes (the body kind's layout; a rigid body's row is zero).
+# constants of a flexible body's modes (the body kind's layout; a rigid body's row is zero),
+# springs and loads: the spring-dampers' and the harmonic loads' rows (SPRING_*, LOAD_*).
 # speeds: impact speed per contact; latched: a flag per torsion element; mode: per contact 1
 # while an impulse contact is held; all updated in place by the integrator.
 Args = namedtuple("Args", [
     "kind", "nq", "like", "project_first", "masses", "minv", "inertia", "inertia_inv", "gravity",
     "offsets", "primitives", "baumgarte", "contacts", "speeds", "grid_log0", "grid_step", "tables",
-    "torsion", "latched", "mode", "profile", "flex"])
+    "torsion", "latched", "mode", "profile", "flex", "springs", "loads"])
 
 # The buffers of the right-hand side: a row per body of its kinematic state (the body kind's
 # layout), the velocity of every Jacobian column, the constraint rows (Jacobian against the

@@ -1,7 +1,8 @@
 """From a mechanism scene of any kind to the arrays of the compiled engine
 (reduced.mechanism.engine), with consistent initial conditions, written once: the laws file,
 the tables of the normal laws, the contacts of every clearance joint with their damping and
-friction, the torsion elements, the friction states, the fixed step. What only a kind knows
+friction, the torsion elements, the spring-dampers and harmonic loads, the friction states,
+the fixed step. What only a kind knows
 (its bodies' coordinates and mass, its ideal joints as primitive constraints, how a revolute,
 cylindrical or spherical clearance joint sits in its geometry, how a state is moved onto the
 constraints) comes from its body kind's module (reduced.mechanism.kinds: planar or spatial);
@@ -171,7 +172,8 @@ def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
         tables=np.array(tables).reshape(len(tables), GRID_POINTS),
         torsion=torsion_rows(geometry, scene),
         latched=np.zeros(len(scene.torsion)), mode=np.zeros(contacts.shape[0], np.int64),
-        profile=profile, flex=geometry.flex())
+        profile=profile, flex=geometry.flex(), springs=spring_rows(geometry, scene),
+        loads=load_rows(geometry, scene))
     model = Model(scene, kind, names, args, [] if ideal else joints, rows, laws_data, drive_row, states,
                   closures=closures, geometry=geometry)
     model.y0 = geometry.place(model, [] if ideal else [(closing(geometry, c), c.start) for c in joints])
@@ -203,10 +205,15 @@ def resolvable(model: Model, source: str = "scene") -> None:
 
 
 def drive_segments(drive) -> np.ndarray:
-    """The segments (layout.SEG_*) of a drive's angle table (none without one): the cubic
+    """A shaken drive's harmonics (layout.HARM_*), or the segments (layout.SEG_*) of a drive's
+    angle table (none without either): the cubic
     spline through the table's angles, measured from the first, with SciPy's not-a-knot ends
     (a motion cubic in time is followed exactly), and after the last pair a segment at the
     last rate; one a pair, in the rows the drive's profile columns name."""
+    if drive is not None and drive.harmonics is not None:   # a row a harmonic (layout.HARM_*)
+        return np.array([layout.row(layout.PROFILE_COLUMNS, {
+            layout.HARM_AMPLITUDE: math.radians(h.amplitude_deg), layout.HARM_OMEGA: 2 * math.pi * h.frequency_hz,
+            layout.HARM_PHASE: math.radians(h.phase_deg)}) for h in drive.harmonics])
     if drive is None or drive.angle_table is None:
         return np.empty((0, layout.PROFILE_COLUMNS))
     from scipy.interpolate import CubicSpline   # noqa: PLC0415
@@ -515,6 +522,28 @@ def torsion_rows(geometry, scene) -> np.ndarray:
     return np.array(rows, float).reshape(-1, TORSION_COLUMNS)
 
 
+def spring_rows(geometry, scene) -> np.ndarray:
+    """The linear spring-dampers (layout.SPRING_*)."""
+    rows = [row(layout.SPRING_COLUMNS, {
+        layout.SPRING_BODY_I: geometry.index[e.body_i], layout.SPRING_BODY_J: geometry.index[e.body_j],
+        layout.SPRING_S_I: list(e.point_i), layout.SPRING_S_J: list(e.point_j),
+        layout.SPRING_STIFFNESS: e.stiffness, layout.SPRING_DAMPING: e.damping,
+        layout.SPRING_LENGTH: e.free_length}) for e in scene.springs]
+    return np.array(rows, float).reshape(-1, layout.SPRING_COLUMNS)
+
+
+def load_rows(geometry, scene) -> np.ndarray:
+    """The harmonic loads (layout.LOAD_*): a planar torque about the plane's normal is the
+    third component of the row's torque."""
+    rows = [row(layout.LOAD_COLUMNS, {
+        layout.LOAD_BODY: geometry.index[e.body], layout.LOAD_POINT: list(e.point),
+        layout.LOAD_FORCE: list(e.force),
+        layout.LOAD_TORQUE: list(e.torque) if isinstance(e.torque, list) else [0.0, 0.0, e.torque],
+        layout.LOAD_OMEGA: 2 * math.pi * e.frequency_hz, layout.LOAD_PHASE: math.radians(e.phase_deg)})
+        for e in scene.loads]
+    return np.array(rows, float).reshape(-1, layout.LOAD_COLUMNS)
+
+
 def check_connected(scene, names) -> None:
     """Every body must be linked to the others (through joints, clearance joints, torsion
     elements, the drive, the ground)."""
@@ -525,6 +554,7 @@ def check_connected(scene, names) -> None:
                      else (j.body_i, j.body_j))
     pairs += [(c.bearing_body, c.journal_body) for c in clearance_joints(scene)]
     pairs += [(t.body_i, t.body_j) for t in scene.torsion]
+    pairs += [(e.body_i, e.body_j) for e in scene.springs]
     if scene.drive is not None and hasattr(scene.drive, "body"):
         pairs.append((scene.drive.body, GROUND))
     for a, b in pairs:
@@ -547,8 +577,8 @@ def shortest_period(model: Model) -> float:
     if it has none. A continuous contact: m the reduced mass of its two bodies, k the secant
     stiffness F(d)/d of its normal law at a penetration d equal to the clearance (the deepest
     a clean run reaches, reduced.mechanism.verdict; the stiffest point of a hardening law).
-    A torsion element: the reduced inertia of its bodies about its axis and its stiffness. A
-    flexible body: its highest mode kept, 2 pi / omega_n."""
+    A torsion element: the reduced inertia of its bodies about its axis and its stiffness; a
+    spring-damper: the reduced mass of its bodies and its stiffness. A flexible body: its highest mode kept, 2 pi / omega_n."""
     geometry = model.geometry
     masses = model.base.masses
 
@@ -576,6 +606,11 @@ def shortest_period(model: Model) -> float:
             periods.append(2 * math.pi * math.sqrt(reduced(
                 t[TORSION_BODY_I], t[TORSION_BODY_J], lambda b: geometry.inverse_inertia(b, element))
                 / t[TORSION_STIFFNESS]))
+    for e in model.base.springs:   # the reduced mass of its bodies along the line
+        if e[layout.SPRING_STIFFNESS] > 0:
+            periods.append(2 * math.pi * math.sqrt(reduced(
+                e[layout.SPRING_BODY_I], e[layout.SPRING_BODY_J], lambda b: 1 / masses[b])
+                / e[layout.SPRING_STIFFNESS]))
     periods += [2 * math.pi / f.body.omega[f.n - 1] for f in getattr(geometry, "flexible", {}).values()]
     return min(periods, default=math.inf)
 

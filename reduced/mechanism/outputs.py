@@ -11,11 +11,12 @@ revolute joint also gives its journal's offset from the bearing's centre; a slid
 corner's penetration and forces too. The body columns are the body kind's
 (reduced.mechanism.planar or .spatial `motion_columns`).
 
-The energy book: kinetic (the body kind's), potential of gravity and of the torsion springs,
-stops and latches (1/2 k angle^2 while engaged), elastic of the contacts (U(delta) of each
+The energy book: kinetic (the body kind's), potential of gravity, of the torsion springs,
+stops and latches (1/2 k angle^2 while engaged) and of the spring-dampers (1/2 k (L - L0)^2),
+elastic of the contacts (U(delta) of each
 tabulated law exactly, reduced.mechanism.model.table_energy; a sliced journal's slices with
-the far field's spring L |d|^2 / (2 c_b)), dissipated and the constraints' work (integrated
-with the motion).
+the far field's spring L |d|^2 / (2 c_b)), dissipated, and the work of the constraints (the drive) and of the
+harmonic loads (integrated with the motion).
 
 The peak normal force of a joint whose contacts are continuous is refined between the steps
 around the largest step value: on each step the state is the cubic Hermite interpolant of y
@@ -29,7 +30,7 @@ import csv
 import numpy as np
 
 from pinbore.core.figures import plt, save_png
-from pinbore.reduced.mechanism import engine
+from pinbore.reduced.mechanism import engine, layout
 from pinbore.reduced.mechanism.layout import (
     CONTACT_COMPLIANCE, CONTACT_IMPACT, CONTACT_KIND, CONTACT_LENGTH, CONTACT_SLICES, CONTINUOUS,
     DISSIPATED, LATCH, OK, LOG_IMPULSE, LOG_JOINT, LOG_RATE, PLANE, SLICED, SPRING, STOP, TORSION_KIND,
@@ -75,6 +76,7 @@ def per_step(model, run):
     drift, kinetic, elastic = np.empty(n), np.empty(n), np.zeros(n)
     angles = np.empty((n, nt))
     angle = np.empty(nt)
+    stretches, stretch = np.empty((n, args.springs.shape[0])), np.empty(args.springs.shape[0])
     for k in range(n):
         args = model.args(run.speeds[k, :nc], run.latched[k, :nt], run.modes[k, :nc])
         drift[k] = engine.observe(times[k], states[k], dy, args, work, depth, offset)
@@ -83,6 +85,8 @@ def per_step(model, run):
         kinetic[k] = engine.energy_of(states[k], args)
         engine.torsion_angles(states[k], args, work, angle)
         angles[k] = angle
+        engine.spring_lengths(states[k], args, work, stretch)
+        stretches[k] = stretch
         elastic[k] = elastic_energy(model, states[k], args, work, depth)
     cols = {"time_s": times} | model.kind.bodies().motion_columns(
         model, states[:, :nq], states[:, nq:2 * nq], rates[:, nq:2 * nq], bodies)
@@ -114,6 +118,7 @@ def per_step(model, run):
         engaged = {SPRING: np.ones(n, bool), STOP: angles[:, r] > 0,
                    LATCH: run.latched[:, r] > 0}[int(row[TORSION_KIND])]
         potential += np.where(engaged, 0.5 * row[TORSION_STIFFNESS] * angles[:, r] ** 2, 0.0)
+    potential += 0.5 * (stretches ** 2) @ model.base.springs[:, layout.SPRING_STIFFNESS]
     energy = {"kinetic": kinetic, "potential": potential, "elastic": elastic,
               "dissipated": states[:, 2 * nq + DISSIPATED], "work_in": states[:, 2 * nq + WORK_IN]}
     return cols, energy, drift

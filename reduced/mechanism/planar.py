@@ -772,6 +772,8 @@ def flow_coordinates(model, y, primitives) -> np.ndarray:
     """q and q', the driven body's angle taken relative to the drive's (angle0 of the
     period)."""
     x = y[:2 * model.nq].copy()
+    if model.drive_row is None:
+        return x
     row = primitives[model.drive_row]
     b = int(row[layout.PRIM_BODY_J])
     if b >= 0:

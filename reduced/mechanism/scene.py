@@ -3,7 +3,8 @@ of mass and inertia, angles in degrees), and `kind = "spatial"`, a spatial one (
 [x, y, z], 3 x 3 inertia tensors, orientations as Euler parameters or rotation matrices).
 What the two share is written once here: the contact laws of a clearance joint and its
 materials, the friction laws, the translational clearance joint, torsion springs, stops and
-latches, the integrator, the outputs, and the rules across a scene (names, run size).
+latches, linear spring-dampers, harmonic loads and a shaken drive, the integrator, the
+outputs, and the rules across a scene (names, run size, a periodic forcing).
 
 Body positions, angles and velocities are initial guesses for the centres of mass; pinbore
 makes them consistent with the joints before integrating (a clearance joint starts closed
@@ -291,6 +292,60 @@ def translational_joint(vector):
     return TranslationalJoint
 
 
+def spring(vector):
+    """The linear spring-damper of a planar (`vector` of 2) or spatial (3) scene."""
+
+    class Spring(Strict):
+        """A linear spring-damper between point_i of body_i and point_j of body_j (body frames;
+        on the ground, global): the tension T = k (L - L0) + c L' pulls the two points
+        together along the line between them (L their distance, L0 free_length)."""
+
+        body_i: str
+        point_i: vector
+        body_j: str
+        point_j: vector
+        stiffness: float = pydantic.Field(ge=0, description="N/m, k")
+        damping: float = pydantic.Field(default=0.0, ge=0, description="N s/m, c")
+        free_length: float = pydantic.Field(gt=0, description="m, L0")
+
+    return Spring
+
+
+def harmonic_load(vector, angular):
+    """The harmonic load of a planar (`vector` of 2, a torque about the plane's normal) or
+    spatial (3, a torque vector) scene."""
+
+    class HarmonicLoad(Strict):
+        """A force F cos(2 pi f t + phase) at `point` of `body` (body frame) and a torque
+        T cos(2 pi f t + phase) on the body, the amplitudes F (N) and T (N m) global; several
+        loads on one body sum their harmonics. On a flexible body the load acts at its
+        interface nearest the point."""
+
+        body: str
+        point: vector = [0.0] * (3 if vector is Vector3 else 2)
+        force: vector = [0.0] * (3 if vector is Vector3 else 2)
+        torque: angular = [0.0, 0.0, 0.0] if vector is Vector3 else 0.0
+        frequency_hz: float = pydantic.Field(gt=0, description="Hz, f")
+        phase_deg: float = 0.0
+
+        @pydantic.model_validator(mode="after")
+        def _acts(self):
+            torque = self.torque if isinstance(self.torque, list) else [self.torque]
+            if not any(self.force) and not any(torque):
+                raise ValueError("force, torque: a load needs a nonzero force or torque amplitude")
+            return self
+
+    return HarmonicLoad
+
+
+class Harmonic(Strict):
+    """One harmonic of a shaken drive: A sin(2 pi f t + phase)."""
+
+    amplitude_deg: float = pydantic.Field(gt=0, description="deg, A")
+    frequency_hz: float = pydantic.Field(gt=0, description="Hz, f")
+    phase_deg: float = 0.0
+
+
 class Integrator(Strict):
     """dopri5: explicit, adaptive, contact onsets located (the default); rosenbrock23: linearly
     implicit and L-stable (Shampine-Reichelt), for stiff contact laws or springs;
@@ -360,7 +415,7 @@ def check_names(scene, used) -> None:
     for name, key in used:
         if name not in known:
             raise ValueError(f"{key}: unknown body {name!r}; bodies: {', '.join(sorted(known))}")
-        if name == GROUND and key in ("drive.body", "joints.body", "output.points.body"):
+        if name == GROUND and key in ("drive.body", "joints.body", "output.points.body", "loads.body"):
             raise ValueError(f"{key}: must be a moving body, not {GROUND!r}")
     joints = [c.name for c in clearance_joints(scene)]
     twice = sorted({n for n in joints if joints.count(n) > 1})
@@ -392,6 +447,9 @@ def body_references(scene) -> list[tuple[str, str]]:
              for c in getattr(scene, table)]
     used += [(t.body_i, "torsion.body_i") for t in scene.torsion]
     used += [(t.body_j, "torsion.body_j") for t in scene.torsion]
+    used += [(s.body_i, "springs.body_i") for s in scene.springs]
+    used += [(s.body_j, "springs.body_j") for s in scene.springs]
+    used += [(load.body, "loads.body") for load in scene.loads]
     return used
 
 
@@ -482,17 +540,21 @@ class DriveProfile(Strict):
     then constant); or through the table angle_table of (time (s), angle (deg)) pairs from
     time 0, a cubic spline through them (rate and acceleration continuous, a motion cubic in
     time followed exactly; after the last pair the angle runs on at its last rate: its
-    acceleration steps to zero there), theta measured from the table's first angle."""
+    acceleration steps to zero there), theta measured from the table's first angle; or shaken,
+    the support's harmonic motion theta = sum A (sin(2 pi f t + phase) - sin(phase)) of the
+    `harmonics` (base excitation: a bus's attitude oscillation, a rotary shaker)."""
 
     speed_rpm: float | None = None
     spin_up_s: float | None = pydantic.Field(default=None, gt=0)
     angle_table: list[Annotated[list[float], pydantic.Field(min_length=2, max_length=2)]] | None = None
+    harmonics: list[Harmonic] | None = pydantic.Field(default=None, min_length=1)
 
     @pydantic.model_validator(mode="after")
     def _profile(self):
-        if (self.speed_rpm is None) == (self.angle_table is None):
-            raise ValueError("give speed_rpm (constant, or reached by spin_up_s) or angle_table, "
-                             "one of them")
+        given = [self.speed_rpm is not None, self.angle_table is not None, self.harmonics is not None]
+        if sum(given) != 1:
+            raise ValueError("give speed_rpm (constant, or reached by spin_up_s), angle_table or "
+                             "harmonics, one of them")
         if self.spin_up_s is not None and self.speed_rpm is None:
             raise ValueError("spin_up_s: the spin-up reaches speed_rpm: give it")
         table = self.angle_table
@@ -517,6 +579,9 @@ class DriveProfile(Strict):
         if self.angle_table is not None:
             return {layout.PRIM_PROFILE: layout.TABLE, layout.PRIM_PROFILE_TIME: 0,
                     layout.PRIM_PROFILE_ROWS: len(self.angle_table)}
+        if self.harmonics is not None:
+            return {layout.PRIM_PROFILE: layout.HARMONIC, layout.PRIM_PROFILE_TIME: 0,
+                    layout.PRIM_PROFILE_ROWS: len(self.harmonics)}
         if self.spin_up_s is not None:
             return {layout.PRIM_PROFILE: layout.SPIN_UP, layout.PRIM_PROFILE_TIME: self.spin_up_s}
         return {layout.PRIM_PROFILE: layout.CONSTANT_SPEED}
@@ -525,7 +590,7 @@ class DriveProfile(Strict):
     def constant(self) -> bool:
         """A drive at constant speed from the start (what a Poincare section per revolution
         needs)."""
-        return self.angle_table is None and self.spin_up_s is None
+        return self.speed_rpm is not None and self.spin_up_s is None
 
 
 class Drive(DriveProfile):
@@ -582,6 +647,8 @@ class TorsionSpring(Strict):
 
 
 TranslationalJoint = translational_joint(Vector)
+Spring = spring(Vector)
+Load = harmonic_load(Vector, float)
 
 
 class MechanismScene(Strict):
@@ -598,6 +665,41 @@ class MechanismScene(Strict):
         check_run_size(self)
         return self
 
+    def excitation_frequencies(self) -> list[float]:
+        """The frequencies (Hz) of the harmonic loads and of a shaken drive's harmonics."""
+        shaken = self.drive.harmonics if self.drive is not None and self.drive.harmonics else []
+        return [e.frequency_hz for e in self.loads] + [h.frequency_hz for h in shaken]
+
+    def forcing_period(self) -> float:
+        """The period (s) of the mechanism's forcing, what a periodic analysis samples once a
+        period: a drive at constant speed turns once in it, and every harmonic load and
+        shaken drive's harmonic repeats a whole number of times in it; without a drive, the
+        period of the lowest excitation frequency. ValueError with the rule when the forcing
+        is not periodic (none, a spin-up or an angle table, a drive standing still, or
+        frequencies that are not whole multiples of the fundamental)."""
+        frequencies = self.excitation_frequencies()
+        drive = self.drive
+        if drive is not None and drive.harmonics is None:
+            if not drive.constant:
+                raise ValueError("drive: a periodic analysis needs a drive at constant speed or "
+                                 "shaken (a spin-up or an angle table gives the motion no period)")
+            if drive.speed_rpm == 0:
+                raise ValueError("drive.speed_rpm: must not be 0 for a periodic analysis (a drive "
+                                 "that stands still has no revolution to sample)")
+            fundamental = abs(drive.speed_rpm) / 60.0
+        elif frequencies:
+            fundamental = min(frequencies)
+        else:
+            raise ValueError("a periodic analysis needs a periodic forcing: a drive at constant "
+                             "speed, a shaken drive (drive.harmonics) or harmonic loads (loads)")
+        for f in frequencies:
+            ratio = f / fundamental
+            if abs(ratio - round(ratio)) > 1e-9 * ratio or round(ratio) < 1:
+                raise ValueError(f"loads, drive.harmonics: frequency {f:g} Hz is not a whole "
+                                 f"multiple of the forcing's fundamental {fundamental:g} Hz: the "
+                                 "motion has no common period")
+        return 1.0 / fundamental
+
 
 class ReducedScene(MechanismScene):
     kind: Literal["reduced"]
@@ -608,6 +710,8 @@ class ReducedScene(MechanismScene):
     clearance_joints: list[ClearanceJoint] = []
     translational_joints: list[TranslationalJoint] = []
     torsion: list[TorsionSpring] = []
+    springs: list[Spring] = []
+    loads: list[Load] = []
 
     @pydantic.model_validator(mode="after")
     def _names(self):
@@ -802,6 +906,8 @@ class Torsion(Strict):
 
 
 SpatialTranslationalJoint = translational_joint(Vector3)
+SpatialSpring = spring(Vector3)
+SpatialLoad = harmonic_load(Vector3, Vector3)
 
 
 class SpatialScene(MechanismScene):
@@ -813,6 +919,8 @@ class SpatialScene(MechanismScene):
     clearance_joints: list[SpatialClearanceJoint] = []
     translational_joints: list[SpatialTranslationalJoint] = []
     torsion: list[Torsion] = []
+    springs: list[SpatialSpring] = []
+    loads: list[SpatialLoad] = []
 
     @pydantic.model_validator(mode="after")
     def _journals_fit(self):

@@ -151,7 +151,8 @@ def flexible(states, b):
 def body_states(kind, y, nq, inertia_inv, flex, offsets, states, velocities):
     """Position, rotation matrix, velocity, global angular velocity w = A 2 G p' and global
     inverse inertia A J'^-1 A^T of every body into its row (BODY_*); a flexible body's
-    modal state (flexible_state)."""
+    modal state (flexible_state); the velocity of each column (r', w, eta') into
+    `velocities`."""
     for b in range(states.shape[0]):
         c = offsets[b]
         q = c + b   # its first coordinate: 7 + n coordinates, 6 + n velocity columns a body
@@ -169,8 +170,11 @@ def body_states(kind, y, nq, inertia_inv, flex, offsets, states, velocities):
             states[b, BODY_POS + k] = y[q + k]
             states[b, BODY_VEL + k] = y[nq + q + k]
             states[b, BODY_OMEGA + k] = w[k]
+            velocities[c + k], velocities[c + 3 + k] = y[nq + q + k], w[k]
         n = offsets[b + 1] - c - COLUMNS
         states[b, FIRST], states[b, COORD], states[b, NMODES] = c, q, n
+        for j in range(n):
+            velocities[c + COLUMNS + j] = y[nq + q + COORDINATES + j]
         if n > 0:
             flexible_state(y, nq, flex, b, q + COORDINATES, n, states)
             continue

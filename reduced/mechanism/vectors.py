@@ -260,3 +260,20 @@ def _cell(a, r, i, like):
         return lambda a, r, i, like: (a[r, i], a[r, i + 1])
     if _space(like):
         return lambda a, r, i, like: (a[r, i], a[r, i + 1], a[r, i + 2])
+
+
+def angular_cell(a, r, i, k, like):
+    """k times the angular quantity stored in row r of a 2D array from column i, as a vector
+    of three: in the plane its third component (about the plane's normal), a float; in space
+    the vector."""
+    if len(like) == 2:
+        return k * float(a[r, i + 2])
+    return tuple(k * float(a[r, i + c]) for c in range(3))
+
+
+@overload(angular_cell)
+def _angular_cell(a, r, i, k, like):
+    if _plane(like):
+        return lambda a, r, i, k, like: k * a[r, i + 2]
+    if _space(like):
+        return lambda a, r, i, k, like: (k * a[r, i], k * a[r, i + 1], k * a[r, i + 2])
