@@ -33,8 +33,10 @@ STAGE_CODE := $(wildcard pinbore/cli.py core/*.py laws/*.py meshes/*.py fem/*.py
 MPIEXEC := $(if $(filter-out 1,$(NP)),$(VENV)/bin/mpiexec -n $(NP))
 DYNAMICS_SCENE := scenes/reduced/slider_crank_flores2004.toml
 SPATIAL_DYNAMICS_SCENE := scenes/reduced/spatial_slider_crank_flores_misaligned.toml
+CONTINUATION_SCENE := scenes/reduced/impact_oscillator.toml
 DYNAMICS := $(addprefix build/dynamics/,poincare/summary.json bifurcation/summary.json design/summary.json \
-                                        spatial_poincare/summary.json spatial_bifurcation/summary.json)
+                                        spatial_poincare/summary.json spatial_bifurcation/summary.json \
+                                        continuation/summary.json)
 REDUCED_CODE := $(wildcard core/*.py laws/*.py calibration/lawsfile.py fem/modes/file.py reduced/mechanism/*.py)
 DYNAMICS_CODE := $(wildcard pinbore/cli.py reduced/dynamics/*.py) $(REDUCED_CODE) $(STAMP)
 DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(DYNAMICS_CODE)
@@ -88,7 +90,7 @@ reduced: $(REDUCED_RUNS) ## run the mechanisms with clearance joints (build/redu
 build/reduced/%/summary.json: scenes/reduced/%.toml build/calibration/laws.json $(MODES_RUNS) $(REDUCED_CODE) $(STAMP)
 	$(PINBORE) reduced $< --out build/reduced/$*
 
-dynamics: $(DYNAMICS) ## Poincare maps, bifurcation diagrams and design map of the slider-crank, planar and misaligned spatial (build/dynamics/)
+dynamics: $(DYNAMICS) ## Poincare maps, bifurcation diagrams and design map of the slider-crank (planar, misaligned spatial); the impact oscillator's continued frequency response (build/dynamics/)
 
 # (the sweeps run their points on the local cores; their per-point caches make a rerun resume)
 build/dynamics/poincare/summary.json: $(DYNAMICS_DEPS)
@@ -113,6 +115,12 @@ build/dynamics/spatial_bifurcation/summary.json: $(SPATIAL_DYNAMICS_DEPS)
 	    --points 20 --transient 10 --periods 20 --out build/dynamics/spatial_bifurcation \
 	    --cache build/dynamics/cache
 
+# the frequency response of the impact oscillator: its periodic motions continued through
+# grazing and its bifurcations, beside direct up- and down-sweeps (the hysteresis)
+build/dynamics/continuation/summary.json: $(CONTINUATION_SCENE) $(DYNAMICS_CODE)
+	$(PINBORE) dynamics $< --analysis continuation --parameter frequency --range 10 30 --points 200 \
+	    --transient 30 --sweeps 41 --periods 5 --out build/dynamics/continuation
+
 report: build/report/index.html ## build build/report/index.html from the results
 
 build/report/index.html: $(FEM_CURVES) $(MESHES) $(MODES_RUNS) build/calibration/laws.json $(REDUCED_RUNS) $(DYNAMICS) \
@@ -133,6 +141,7 @@ bench: $(STUDY_CURVES) $(MODES_RUNS) $(STAMP) ## run the benchmarks: bench/*.csv
 	$(PY) bench/impact.py --out bench
 	$(PY) bench/modes.py --out bench
 	$(PY) bench/flexible.py --out bench
+	$(PY) bench/continuation.py --out bench
 
 stress: $(STAMP) ## the stress matrix: bench/stress_*.csv, bench/stress.png (about 7 min)
 	$(PY) bench/stress.py --out bench

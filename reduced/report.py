@@ -212,4 +212,41 @@ def dynamics_section(build_dir: Path) -> str:
         png = folder / name / f"{kind}.png"
         if png.exists():
             parts.append(figure(png_data(png), f"{caption} ({facts}; {s['wall_time_s']:.1f} s)."))
+    path = folder / "continuation" / "summary.json"
+    if path.exists():
+        parts.append(continuation_part(path))
+    return "".join(parts)
+
+
+CONTINUATION_KEYS = ("parameter", "start", "points", "converged", "reason", "bifurcations",
+                     "start_floquet_multipliers", "start_stable", "seconds_per_point", "wall_time_s")
+
+
+def continuation_part(path: Path) -> str:
+    """The continued frequency response of the impact oscillator: its figure, the periodic
+    orbit at the scene's own value with its Floquet multipliers, and the bifurcations."""
+    s = load_json(path, "dynamics")
+    for key in CONTINUATION_KEYS:
+        if key not in s:
+            raise InputError(f"{path}: {key}: required key is missing (run pinbore dynamics again)")
+    moduli = sorted((abs(complex(*m)) for m in s["start_floquet_multipliers"]), reverse=True)
+    parts = ["<h3>Frequency response by continuation: the impact oscillator</h3>",
+             f"<p>Periodic motions continued in {html.escape(s['parameter'])} (pseudo-arclength on "
+             f"the period map, {s['points']} orbits, {s['seconds_per_point']:.2f} s an orbit); "
+             f"stability from the Floquet multipliers. The orbit at the scene's own value "
+             f"({s['start']:g}) is {'stable' if s['start_stable'] else 'unstable'}: multiplier moduli "
+             + ", ".join(f"{m:.4g}" for m in moduli) + ".</p>"]
+    png = path.parent / "response.png"
+    if png.exists():
+        parts.append(figure(png_data(png), "Response amplitude across the guide: continued branch "
+                            f"(stable solid, unstable dashed), direct up- and down-sweeps, bifurcations "
+                            f"({s['wall_time_s']:.1f} s)."))
+    rows = [[b["kind"].replace("_", " "), f"{b['value']:.6g}", f"{b['amplitude_m'] * 1e3:.4g}",
+             ", ".join(f"{abs(complex(*m)):.3g}" for m in sorted(b["floquet_multipliers"],
+                                                                 key=lambda m: -abs(complex(*m)))[:3])]
+            for b in s["bifurcations"]]
+    if rows:
+        parts.append(table(["bifurcation", s["parameter"], "amplitude (mm)", "largest multiplier moduli"], rows))
+    if not s["converged"]:
+        parts.append(note(f"The branch stopped: {html.escape(s['reason'])}"))
     return "".join(parts)

@@ -55,7 +55,10 @@ the branch, until the parameter moves less than LOCATE_TOL of the range: fold, p
 doubling and Neimark-Sacker by Illinois regula falsi (bracketed); grazing by secant on the
 side without contact only, where the gap is smooth (on the other a stiff contact's shallow
 penetration keeps the test near zero over a range of the parameter: a bracketing secant
-stalls there, off the grazing point by 0.03 % of the frequency on the impact oscillator).
+stalls there, off the grazing point by 0.03 % of the frequency on the impact oscillator),
+by Newton at fixed p from the last orbit without contact (the branch may turn at grazing).
+A change of the multipliers or of t_q between two points where the orbit grazes is the
+grazing's (the multipliers jump there, and the branch may fold without smoothness).
 """
 
 import math
@@ -203,11 +206,13 @@ class Continuation:
             u = u - np.linalg.solve(jac, extended)
         return None
 
-    def run(self, start: Point, ds: float, max_points: int, progress: bool = False) -> Branch:
+    def run(self, start: Point, ds: float, max_points: int, progress: bool = False,
+            ds_max: float | None = None) -> Branch:
         """The branch from `start` (its tangent gives the direction) until it leaves [low,
-        high], has max_points points, or a step fails at ds_min = ds / 1000."""
+        high], has max_points points, or a step fails at ds_min = ds / 1000; steps up to
+        ds_max (default 50 ds)."""
         branch = Branch([start], multiple=self.multiple)
-        ds_min, ds_max = ds / 1000, ds * 50
+        ds_min, ds_max = ds / 1000, ds * 50 if ds_max is None else ds_max
         bar = tqdm(total=max_points, desc="continuation", unit="point", disable=not progress, initial=1)
         while len(branch.points) < max_points:
             last = branch.points[-1]
@@ -269,7 +274,8 @@ class Continuation:
         """The bifurcations between consecutive points a and b, located; a real multiplier
         passing +1 is the fold when t_q changes sign too, a branch point otherwise. Where the
         orbit grazes between them, the multipliers jump (the map's derivative is not
-        continuous there): their changes belong to the grazing, which reports them."""
+        continuous there) and the branch may turn (a nonsmooth fold): these changes belong
+        to the grazing, which reports them."""
         found = []
         folded = TESTS["fold"](a) * TESTS["fold"](b) < 0
         torus = _outside_complex(a) != _outside_complex(b)
@@ -277,7 +283,7 @@ class Continuation:
         for kind, test in TESTS.items():
             fa, fb = test(a), test(b)
             if fa is None or fb is None or fa * fb >= 0 or (kind == "branch_point" and folded) \
-                    or (kind == "neimark_sacker" and not torus) or (grazing and kind not in ("grazing", "fold")):
+                    or (kind == "neimark_sacker" and not torus) or (grazing and kind != "grazing"):
                 continue
             at = self.locate(kind, test, a, b, ds)
             found.append(Special(kind, at.p, at, index))
@@ -315,44 +321,52 @@ class Continuation:
         return best
 
     def one_sided(self, test, a: Point, b: Point, ds: float) -> Point:
-        """Grazing: the gap is smooth on the side without contact and flat on the other (a
-        stiff contact's shallow penetration), so the zero is found from the trials without
-        contact alone: the root of the polynomial through the last (up to three) of them,
-        within the bracket they make with the nearest trial with contact (or that did not
-        converge), its midpoint where the root falls outside it."""
-        outside = [(0.0, test(a), a)]
-        inside = ds
-        for _ in range(3 * LOCATE_ITERATIONS):
-            s = self.outside_root(outside, inside)
-            trial = self.trial(a, s)
-            f = None if trial is None else test(trial)
-            if f is None:   # no orbit found there (the map is singular at grazing): come back
-                inside = s
+        """Grazing: the gap is smooth along the orbits without contact and flat on the other
+        side (a stiff contact's shallow penetration), and the branch may turn there (a
+        nonsmooth fold: the grazing then lies beyond both points in p), so the zero is found
+        in p along the orbits without contact alone, each by Newton at fixed p from the
+        nearest one: the root of the polynomial through the last (up to three) of them,
+        within the bracket they make with the nearest p whose orbit touches (or where Newton
+        did not converge), its midpoint where the root falls outside it."""
+        if test(a) < 0:   # the branch comes from contact
+            a, b = b, a
+        outside = [(a.p, test(a), a)]
+        inside = None
+        step = 0.01 * (b.p - a.p) or LOCATE_TOL * self.width
+        for k in range(3 * LOCATE_ITERATIONS):
+            p = outside[-1][0] + step if k == 0 else self.outside_root(outside, inside, self.width)
+            try:
+                trial = self.first(outside[-1][2].x, p, 1.0)
+            except FloatingPointError:   # no orbit found there: come back
+                inside = p
                 continue
-            s = self.arclength(a, trial)
-            if f > 0:
-                moved = abs(trial.p - outside[-1][2].p) / self.width
-                outside.append((s, f, trial))
-                if moved < LOCATE_TOL:
-                    break
-            else:
-                inside = s
+            f = test(trial)
+            if f is None or f <= 0:
+                inside = p
+                continue
+            moved = abs(p - outside[-1][0]) / self.width
+            outside.append((p, f, trial))
+            if moved < LOCATE_TOL:
+                break
         return outside[-1][2]
 
     @staticmethod
-    def outside_root(outside, inside) -> float:
-        """The root of the polynomial through the last three (or two) points (s, gap) that
-        lies between the last of them and `inside`; else the midpoint."""
+    def outside_root(outside, inside, width) -> float:
+        """The root of the polynomial through the last three (or two) points (p, gap)
+        nearest the last of them, within the bracket it makes with `inside` (else the
+        bracket's midpoint) or, without one, within a tenth of the range of it."""
         near = outside[-1][0]
-        middle = 0.5 * (near + inside)
         points = outside[-3:]
-        if len(points) < 2:
-            return middle
         s, f = np.array([p[0] for p in points]), np.array([p[1] for p in points])
         roots = np.roots(np.polyfit(s - near, f, len(points) - 1)) + near
-        kept = [r.real for r in roots if abs(r.imag) < 1e-12 * max(1.0, abs(r)) and
-                min(near, inside) < r.real < max(near, inside)]
-        return min(kept, key=lambda r: abs(r - near)) if kept else middle
+        real = [r.real for r in roots if abs(r.imag) < 1e-12 * max(1.0, abs(r))]
+        if inside is not None:
+            kept = [r for r in real if min(near, inside) < r < max(near, inside)]
+            return min(kept, key=lambda r: abs(r - near)) if kept else 0.5 * (near + inside)
+        if not real:
+            return near
+        root = min(real, key=lambda r: abs(r - near))
+        return near + max(-0.1 * width, min(0.1 * width, root - near))
 
     def trial(self, a: Point, s: float) -> Point | None:
         """The branch point at arclength s from a (corrected), or None."""

@@ -476,8 +476,9 @@ class MechanismFamily:
     (reduced.dynamics.continuation): the map of the scaled coordinates x over `multiple`
     forcing periods at p, and the orbit's measures. x is scaled once, by the flow at the
     scene's own value (a frequency changes the flow's own velocity scale); a state at p is
-    the template state (the last orbit's end: its impact speeds, contact modes, latches and
-    friction states) moved to x and onto the constraints. The models of the last few p are
+    the template state (the last orbit's end: its impact speeds, contact modes, latches,
+    friction states and the periods elapsed, which a turning drive's angle counts) moved to
+    x and onto the constraints. The models of the last few p are
     kept (a model is rebuilt at a new p)."""
 
     KEPT = 4
@@ -511,8 +512,7 @@ class MechanismFamily:
     def measure(self, x, p, multiple) -> dict:
         """The orbit's measures (flow.orbit_measures); its end becomes the template."""
         flow = self.flow(p)
-        end = flow.advance(self.state(flow, x), multiple)
-        self.template = dataclasses.replace(end, period=0)
+        self.template = flow.advance(self.state(flow, x), multiple)
         return flow.orbit_measures()
 
     def settle(self, p, periods, state=None):
@@ -521,7 +521,7 @@ class MechanismFamily:
         flow = self.flow(p)
         if state is None:
             state = self.template
-        state = flow.advance(dataclasses.replace(state, period=0), periods)
+        state = flow.advance(state, periods)
         return state, self.coordinates(flow, state), flow.orbit_measures()
 
 
@@ -568,7 +568,9 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
             "bifurcations": [{"kind": s.kind, "value": s.p, "amplitude_m": s.point.measures["amplitude"],
                               "floquet_multipliers": [[m.real, m.imag] for m in s.point.multipliers]}
                              for s in specials],
-            "stable_points": sum(r[3] for r in rows)}
+            "stable_points": sum(r[3] for r in rows),
+            "start_floquet_multipliers": [[m.real, m.imag] for m in first.multipliers],
+            "start_stable": first.stable}
 
 
 CONTINUATION_COLUMNS = ["branch", "value", "amplitude_m", "stable", "largest_multiplier_modulus", "gap_m",
