@@ -79,6 +79,59 @@ def test_duffing_folds_against_the_harmonic_balance():
     assert all(p.stable for p in branch.points[:first - 1] + branch.points[second + 1:])
 
 
+class DoubleWell(Duffing):
+    """The double-well Duffing x'' + 0.3 x' - x + x^3 = gamma cos 1.2 t of tests/test_dynamics.py
+    (Jordan & Smith's set), continued in gamma."""
+
+    @staticmethod
+    def rhs(gamma):
+        return lambda t, z: [z[1], -0.3 * z[1] + z[0] - z[0] ** 3 + gamma * math.cos(1.2 * t)]
+
+    def orbit(self, x, gamma, periods, samples=2):
+        t = np.linspace(0, periods * 2 * math.pi / 1.2, samples)
+        return solve_ivp(self.rhs(gamma), (0, t[-1]), x, method="DOP853", rtol=1e-11, atol=1e-12, t_eval=t).y
+
+
+def test_period_doublings_by_continuation_agree_with_the_brute_force_attractors():
+    """Continued in gamma, the period-1 orbit doubles at gamma_1 and the doubled branch,
+    switched onto there, doubles again at gamma_2: the attractors found by brute force (a
+    transient of 400 periods, then Poincare samples) are period 1 just below gamma_1 and
+    period 2 just above, period 2 just below gamma_2 and period 4 just above (+-0.005, and
+    +-0.0025 at gamma_2, where the cascade's next doubling follows within 0.005; nearer, the
+    multiplier near -1 makes the transient slow); the doubled branch's orbit at
+    gamma = 0.28 is one of the period-2 attractor's pair of points (1e-6)."""
+    from pinbore.reduced.dynamics import flow
+
+    well = DoubleWell()
+    line = method.Continuation(well, 0.2, 0.3)
+    x = np.array([1.0, 0.0])
+    for _ in range(200):
+        x = well.map(x, 0.2, 1)
+    branch = line.run(line.first(x, 0.2, 1.0), 0.05, 60)
+    first = [s for s in branch.specials if s.kind == "period_doubling"]
+    assert len(first) == 1
+    doubled = line.doubled(first[0], 0.05, 40)
+    assert doubled is not None and doubled.multiple == 2
+    second = [s for s in doubled.specials if s.kind == "period_doubling"]
+    assert len(second) == 1
+    gamma_1, gamma_2 = first[0].p, second[0].p
+    assert 0.26 < gamma_1 < 0.27 < 0.28 < gamma_2 < 0.29   # tests/test_dynamics.py's attractors
+
+    def attractor_period(gamma):
+        state = np.array([1.0, 0.0])
+        for _ in range(400):
+            state = well.map(state, gamma, 1)
+        samples = [state := well.map(state, gamma, 1) for _ in range(16)]
+        return flow.period_of(np.array(samples), tol=1e-6), samples
+    for gamma, period in ((gamma_1 - 0.005, 1), (gamma_1 + 0.005, 2), (gamma_2 - 0.0025, 2), (gamma_2 + 0.0025, 4)):
+        assert attractor_period(gamma)[0] == period, gamma
+    _, samples = attractor_period(0.28)
+    on_branch = min(doubled.points, key=lambda p: abs(p.p - 0.28))
+    doubled_line = method.Continuation(well, 0.2, 0.3, 2)
+    orbit = doubled_line.first(on_branch.x, 0.28, 1.0).x
+    assert min(np.linalg.norm(orbit - samples[-1]), np.linalg.norm(orbit - samples[-2])) < 1e-6
+
+
 # ---- mechanisms
 def family_of(data, parameter, value, tmp_path):
     from pinbore.reduced.dynamics import studies

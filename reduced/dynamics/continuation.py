@@ -102,6 +102,7 @@ class Special:
     p: float
     point: Point
     after: int
+    side: float = 0.0   # period doubling: the direction in p where a multiplier lies beyond -1
 
 
 @dataclass
@@ -269,6 +270,37 @@ class Continuation:
             return None
         return Special("grazing", p, b, len(points))
 
+    # -- the doubled branch
+    def doubled(self, special: Special, ds: float, max_points: int, progress: bool = False) -> Branch | None:
+        """The period-2m branch born at a period doubling, by switching onto it: from the
+        orbit x* there along the eigenvector v of the multiplier nearest -1, the doubled
+        orbit at p* + h (h a hundredth of the range, towards where a multiplier lies beyond
+        -1: the supercritical side) is found by Newton on P^2m from x* +- e v (amplitudes e growing from 1e-3
+        to 1 of the orbit's size: it grows as sqrt(h)), kept when P^m moves it (a genuine
+        period 2m), and continued away from p*. None when no doubled orbit is found."""
+        point = special.point
+        if point.jacobian is None:
+            return None
+        mu, vectors = np.linalg.eig(point.jacobian[:, :-1] + np.eye(point.x.size))
+        k = int(np.argmin(np.abs(mu + 1.0)))
+        v = np.real(vectors[:, k])
+        v /= np.linalg.norm(v)
+        side = special.side or 1.0
+        twice = Continuation(self.family, self.low, self.high, 2 * self.multiple)
+        size = 1.0 + float(np.linalg.norm(point.x))
+        p = point.p + side * 0.01 * self.width
+        for amplitude in (1e-3, 1e-2, 1e-1, 1.0):
+            for sign in (1.0, -1.0):
+                try:
+                    start = twice.first(point.x + sign * amplitude * size * v, p, side)
+                except FloatingPointError:
+                    continue
+                once = self.family.map(start.x, p, self.multiple) - start.x
+                if np.linalg.norm(once) > 1e3 * NEWTON_TOL * size and \
+                        np.linalg.norm(once) > 10 * getattr(self.family, "tolerance", 0.0) * size:
+                    return twice.run(start, ds, max_points, progress)
+        return None
+
     # -- bifurcations
     def specials(self, a: Point, b: Point, ds: float, index: int) -> list:
         """The bifurcations between consecutive points a and b, located; a real multiplier
@@ -286,7 +318,8 @@ class Continuation:
                     or (kind == "neimark_sacker" and not torus) or (grazing and kind != "grazing"):
                 continue
             at = self.locate(kind, test, a, b, ds)
-            found.append(Special(kind, at.p, at, index))
+            beyond = b if any(_real(m) and m.real < -1 for m in b.multipliers) else a
+            found.append(Special(kind, at.p, at, index, math.copysign(1.0, beyond.p - at.p)))
         found.sort(key=lambda s: abs(s.p - a.p))
         return found
 
@@ -392,8 +425,12 @@ def _product(factors) -> float:
     return float(np.real(np.prod(factors)))
 
 
+def _real(m) -> bool:
+    return abs(m.imag) <= REAL * max(1.0, abs(m))
+
+
 def _outside_complex(pt) -> int:
-    return int(sum(1 for m in pt.multipliers if abs(m.imag) > REAL * max(1.0, abs(m)) and abs(m) > 1))
+    return int(sum(1 for m in pt.multipliers if not _real(m) and abs(m) > 1))
 
 
 def _pairs(mu) -> np.ndarray:

@@ -104,17 +104,23 @@ SPECIAL_MARKERS = {"fold": ("s", "tab:orange"), "period_doubling": ("D", "tab:re
 
 
 def response(path, rows, specials, sweeps, parameter, unit, title) -> None:
-    """The continued branch's amplitude against the parameter (stable solid, unstable
-    dashed), its bifurcations marked, and the direct up- and down-sweeps."""
+    """The continued branches' amplitude against the parameter (stable solid, unstable
+    dashed; a doubled branch in its own colour), the bifurcations marked, and the direct
+    up- and down-sweeps."""
     fig, ax = plt.subplots(figsize=(9, 5))
-    values = np.array([r[1] for r in rows])
-    amplitude = np.array([r[2] for r in rows]) * 1e3
-    stable = np.array([bool(r[3]) for r in rows])
-    for k in range(len(rows) - 1):
-        ax.plot(values[k:k + 2], amplitude[k:k + 2], "-" if stable[k] and stable[k + 1] else "--",
-                color="tab:blue", lw=1.6)
-    ax.plot([], [], "-", color="tab:blue", label="continued, stable")
-    ax.plot([], [], "--", color="tab:blue", label="continued, unstable")
+    colours = ["tab:blue", "tab:purple", "tab:brown", "tab:pink"]
+    for branch in sorted({r[0] for r in rows}):
+        mine = [r for r in rows if r[0] == branch]
+        values = np.array([r[2] for r in mine])
+        amplitude = np.array([r[3] for r in mine]) * 1e3
+        stable = np.array([bool(r[4]) for r in mine])
+        colour = colours[branch % len(colours)]
+        for k in range(len(mine) - 1):
+            ax.plot(values[k:k + 2], amplitude[k:k + 2], "-" if stable[k] and stable[k + 1] else "--",
+                    color=colour, lw=1.6)
+        what = "continued" if branch == 0 else f"period {mine[0][1]} (switched at a doubling)"
+        ax.plot([], [], "-", color=colour, label=f"{what}, stable")
+        ax.plot([], [], "--", color=colour, label=f"{what}, unstable")
     for direction, marker in (("up", "^"), ("down", "v")):
         kept = [r for r in sweeps if r[0] == direction]
         if kept:

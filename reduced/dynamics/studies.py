@@ -527,8 +527,9 @@ class MechanismFamily:
 
 def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dict:
     """The branch of periodic orbits across the range, both ways from the scene's value, its
-    bifurcations, and the direct up- and down-sweeps; `converged: false` and the reason when
-    the branch could not be followed across the whole range (what converged is written)."""
+    bifurcations, the doubled branch of each period doubling (switched onto there), and the
+    direct up- and down-sweeps; `converged: false` and the reason when a branch could not be
+    followed across the whole range (what converged is written)."""
     scene = scene_model(target.data).model_validate(target.data)
     start_value = parameter_value(scene, options.parameter)
     low, high = options.range
@@ -548,12 +549,18 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
             continue
         way = dataclasses.replace(first, tangent=direction * first.tangent)
         branches.append(line.run(way, ds, max(options.points // 2, 2), progress=True))
-    points = [p for b in branches for p in b.points]
+    specials = [s for b in branches for s in b.specials]
+    doubled = [line.doubled(s, ds, max(options.points // 4, 2), progress=True)
+               for s in specials if s.kind == "period_doubling"]
+    doubled = [b for b in doubled if b is not None]
+    points = [p for b in branches + doubled for p in b.points]
     cost = (time.perf_counter() - started) / max(len(points), 1)
     down = branches[0] if len(branches) == 2 else None
-    rows = [point_row(0, p) for p in reversed(down.points)] if down else []
-    rows += [point_row(0, p) for p in branches[-1].points[(1 if down else 0):]]
-    specials = [s for b in branches for s in b.specials]
+    rows = [point_row(0, options.multiple, p) for p in reversed(down.points)] if down else []
+    rows += [point_row(0, options.multiple, p) for p in branches[-1].points[(1 if down else 0):]]
+    for k, b in enumerate(doubled, start=1):   # each period doubling's doubled branch
+        rows += [point_row(k, b.multiple, p) for p in b.points]
+        specials += b.specials
     figures().write_table(tmp / "continuation.csv", CONTINUATION_COLUMNS, rows)
     figures().write_table(tmp / "bifurcations.csv", SPECIAL_COLUMNS, [special_row(s) for s in specials])
     sweeps = direct_sweeps(family, options) if options.sweeps else []
@@ -561,27 +568,30 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
         figures().write_table(tmp / "sweeps.csv", SWEEP_COLUMNS, sweeps)
     figures().response(tmp / "response.png", rows, specials, sweeps, options.parameter,
                        PARAMETERS[options.parameter].label, f"{target.path.stem}: {family.flow(start_value).observed_name()}")
-    reasons = [b.reason for b in branches if not b.complete]
+    reasons = [b.reason for b in branches + doubled if not b.complete]
     return {"parameter": options.parameter, "range": [low, high], "start": start_value,
             "multiple": options.multiple, "points": len(rows), "seconds_per_point": cost,
             "converged": not reasons, "reason": "; ".join(reasons),
+            "doubled_branches": len(doubled),
             "bifurcations": [{"kind": s.kind, "value": s.p, "amplitude_m": s.point.measures["amplitude"],
                               "floquet_multipliers": [[m.real, m.imag] for m in s.point.multipliers]}
                              for s in specials],
-            "stable_points": sum(r[3] for r in rows),
+            "stable_points": sum(r[4] for r in rows),
             "start_floquet_multipliers": [[m.real, m.imag] for m in first.multipliers],
             "start_stable": first.stable}
 
 
-CONTINUATION_COLUMNS = ["branch", "value", "amplitude_m", "stable", "largest_multiplier_modulus", "gap_m",
-                        "x"]
+CONTINUATION_COLUMNS = ["branch", "multiple", "value", "amplitude_m", "stable", "largest_multiplier_modulus",
+                        "gap_m", "x"]
 SPECIAL_COLUMNS = ["kind", "value", "amplitude_m", "gap_m", "multipliers"]
 SWEEP_COLUMNS = ["direction", "value", "amplitude_m", "gap_m"]
 
 
-def point_row(branch: int, p) -> list:
-    return [branch, p.p, p.measures["amplitude"], int(p.stable), float(np.max(np.abs(p.multipliers))),
-            p.measures["gap"], " ".join(f"{v:.9g}" for v in p.x)]
+def point_row(branch: int, multiple: int, p) -> list:
+    """A row of continuation.csv: the branch (0 the continued one, k the doubled branch of
+    the k-th period doubling), its period in forcing periods, the orbit."""
+    return [branch, multiple, p.p, p.measures["amplitude"], int(p.stable),
+            float(np.max(np.abs(p.multipliers))), p.measures["gap"], " ".join(f"{v:.9g}" for v in p.x)]
 
 
 def special_row(s) -> list:
