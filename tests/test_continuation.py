@@ -20,6 +20,58 @@ from pinbore.reduced.dynamics import continuation as method
 IMPACT = ROOT / "scenes" / "reduced" / "impact_oscillator.toml"
 
 
+# ---- the bifurcations' normal forms, as period maps with known points
+class NormalForm:
+    """A family given by its period map directly: the normal form of a bifurcation at p = 0
+    (x a vector), so that each test function is checked where it must vanish."""
+
+    tolerance = 1e-12
+
+    def __init__(self, step):
+        self.step = step
+
+    def map(self, x, p, multiple):
+        for _ in range(multiple):
+            x = self.step(np.asarray(x, float), p)
+        return x
+
+    def measure(self, x, p, multiple):
+        return {"amplitude": float(np.linalg.norm(x)), "gap": None}
+
+
+def rotation(angle):
+    return np.array([[math.cos(angle), -math.sin(angle)], [math.sin(angle), math.cos(angle)]])
+
+
+NORMAL_FORMS = {
+    # a saddle-node: x + p - x^2 has the fixed points x = +-sqrt(p), folding at p = 0
+    "fold": (lambda x, p: np.array([x[0] + p - x[0] ** 2, 0.5 * x[1]]), np.array([0.5, 0.0]), 0.25, -0.2),
+    # a pitchfork of the fixed point 0: x + p x - x^3, multiplier 1 + p passing +1 at p = 0
+    "branch_point": (lambda x, p: np.array([x[0] + p * x[0] - x[0] ** 3 + 1e-3 * p, 0.5 * x[1]]),
+                     np.array([0.0, 0.0]), -0.3, 0.3),
+    # a flip: -(1 + p) x + x^3, multiplier -(1 + p) passing -1 at p = 0
+    "period_doubling": (lambda x, p: np.array([-(1 + p) * x[0] + x[0] ** 3, 0.5 * x[1]]),
+                        np.array([0.0, 0.0]), -0.3, 0.3),
+    # a Neimark-Sacker: the pair (1 + p) exp(+-i 0.7) passing the unit circle at p = 0
+    "neimark_sacker": (lambda x, p: (1 + p) * rotation(0.7) @ x - (x @ x) * x, np.array([0.0, 0.0]), -0.3, 0.3),
+}
+
+
+@pytest.mark.parametrize("kind", list(NORMAL_FORMS))
+def test_each_bifurcation_is_found_where_its_normal_form_has_it(kind):
+    """Continued through p = 0, each normal form's branch shows its bifurcation there and no
+    other (located within 1e-5: the location's tolerance, 1e-6 of the range, and the
+    difference step), with the multiplier it passes."""
+    step, x, low, high = NORMAL_FORMS[kind]
+    family = NormalForm(step)
+    line = method.Continuation(family, min(low, high), max(low, high))
+    start = line.first(x, low, 1.0 if high > low else -1.0)
+    branch = line.run(start, 0.05, 200)
+    found = [(s.kind, s.p) for s in branch.specials]
+    assert [k for k, _ in found] == [kind], found
+    assert found[0][1] == pytest.approx(0.0, abs=1e-5)
+
+
 # ---- the hardening Duffing oscillator x'' + 2 zeta x' + x + beta x^3 = F cos(w t)
 ZETA, BETA, FORCE = 0.05, 0.1, 0.5
 
