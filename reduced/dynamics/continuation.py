@@ -17,24 +17,23 @@ point u_k with unit tangent t_k, predict u = u_k + ds t_k and correct by Newton 
     G(x, p) = 0,      t_k . (u - u_k) - ds = 0,
 
 with the Jacobian [P_x - I, P_q; t_k^T] of u_k (chord iterations; computed again at the
-iterate when the residual does not halve), until |G| <= tol (1 + |x|), tol the
-family's (what its integration resolves: 10 rtol for a mechanism, NEWTON_TOL at least).
-P_x, the monodromy matrix, and P_q by central differences of the map (steps `FD_STEP` in
-x, in scaled units, and of the range in q): each perturbed state meets its contact onsets
-at its own (shifted) instants, so the difference quotient is the derivative of the map
-through the impacts, the saltation of each onset included. Its step is set between what
-the integration resolves and the depth of an impact: on an impacting orbit of the impact
-oscillator (rtol 1e-8, 6.5 um deep into a 1 mm clearance) the trace and determinant of the
-monodromy's block across the guide are 0.13 % and 0.26 % off an independent integration
-at the step 1e-4 (0.1 um), 2.6 % and 5 % at 1e-5 and 21 % at 1e-6, where the noise of the
-onsets' location (the impact speed v0 of the damping law) takes over; smaller than an
-impact's depth, the step keeps the truncation error below that (the tests hold it). The tangent at a converged point is the null vector of [P_x - I, P_q], oriented
-along the previous one. Step control: ds grows by 1.5 after a corrector that needed at most
-four (chord) iterations, halves after one that needed more than seven or failed, up to
-50 times the first step; a failed step is
-retried down to ds_min, then once at two and four times the step (over a branch point,
-where the extended Jacobian is singular), and the branch stops with the reason, its points
-kept.
+iterate when the residual does not halve), until |G| <= tol (1 + |x|), tol the family's
+(what its integration resolves: 100 rtol for a mechanism, where at 10 rtol the corrector
+meets the noise of the impacts' location; NEWTON_TOL at least). P_x, the monodromy matrix,
+and P_q by central differences of the map (steps FD_STEP in x, in scaled units, and of the
+range in q): each perturbed state meets its contact onsets at its own (shifted) instants,
+so the difference quotient is the derivative of the map through the impacts, the saltation
+of each onset included. Its step lies between what the integration resolves and the depth
+of an impact: on an impacting orbit of the impact oscillator (rtol 1e-8, 6.5 um deep into a
+1 mm clearance) the trace and determinant of the monodromy's block across the guide are
+0.13 % and 0.26 % off an independent integration at the step 1e-4 (0.1 um), 2.6 % and 5 %
+at 1e-5 and 21 % at 1e-6, where the noise of the onsets' location (the impact speed v0 of
+the damping law) takes over. The tangent at a converged point is the null vector of
+[P_x - I, P_q], oriented along the previous one. Step control: ds grows by 1.5 after a
+corrector that needed at most four (chord) iterations and halves after one that needed
+more than seven, up to 50 times the first step; a failed step is retried down to ds_min,
+then once at two and four times the step (over a branch point, where the extended Jacobian
+is singular), and the branch stops with the reason, its points kept.
 
 Stability: the eigenvalues of P_x are the Floquet multipliers; the orbit is stable when all
 lie inside the unit circle. Bifurcations between consecutive points, each by a test
@@ -42,23 +41,23 @@ function that changes sign there:
 - fold (limit point, the jump of a frequency response): the tangent's q-component t_q;
 - branch point: a real multiplier passes +1 where the branch does not fold (a pitchfork,
   e.g. a symmetric orbit turning asymmetric): det(P_x - I) = prod (mu_i - 1);
-- period doubling: a real multiplier passes -1: det(P_x + I) = prod (mu_i + 1);
+- period doubling: a real multiplier passes -1: det(P_x + I) = prod (mu_i + 1); the
+  doubled branch is switched onto there (`doubled`);
 - Neimark-Sacker (torus): a complex pair passes the unit circle: prod_(i<j) (mu_i mu_j - 1)
   (the bialternate product's determinant), where the count of complex multipliers outside
   the circle changes (a real pair with mu_i mu_j = 1, a neutral saddle, is no torus);
-- grazing: the orbit's smallest gap to contact passes 0 (test: the gap), where impacting
-  motion is born; where no orbit continues the branch past it (the impacting orbits turn
-  back there, a nonsmooth fold), the branch stops at it, located by extrapolating the gap
-  of its last two points.
-Each is located on the arclength from the last point before it, every trial corrected onto
-the branch, until the parameter moves less than LOCATE_TOL of the range: fold, period
-doubling and Neimark-Sacker by Illinois regula falsi (bracketed); grazing by secant on the
-side without contact only, where the gap is smooth (on the other a stiff contact's shallow
-penetration keeps the test near zero over a range of the parameter: a bracketing secant
-stalls there, off the grazing point by 0.03 % of the frequency on the impact oscillator),
-by Newton at fixed p from the last orbit without contact (the branch may turn at grazing).
-A change of the multipliers or of t_q between two points where the orbit grazes is the
-grazing's (the multipliers jump there, and the branch may fold without smoothness).
+- grazing: the orbit's smallest gap to contact passes 0, where impacting motion is born.
+  A change of the multipliers or of t_q between two points where the orbit grazes is the
+  grazing's: the multipliers jump there, and the branch may turn without smoothness (a
+  nonsmooth fold). Where no orbit continues the branch past it, the branch stops at it,
+  located by extrapolating the gap of its last two points.
+Fold, branch point, period doubling and Neimark-Sacker are located on the arclength from
+the last point before them, every trial corrected onto the branch, by Illinois regula falsi
+(bracketed), until the parameter moves less than LOCATE_TOL of the range. Grazing is located
+along the orbits without contact alone, each by Newton at fixed p, where the gap is smooth:
+on the other side a stiff contact's shallow penetration keeps the gap near zero over a range
+of the parameter (a bracketing secant stalled there, 0.03 % of the frequency off on the
+impact oscillator), and at a nonsmooth fold the grazing lies beyond both points in p.
 """
 
 import math
@@ -132,7 +131,7 @@ class Continuation:
     def residual(self, x, p):
         return self.family.map(x, p, self.multiple) - x
 
-    def jacobian(self, x, p, g=None):
+    def jacobian(self, x, p):
         """[P_x - I, P_q] at (x, p) by central differences."""
         n = x.size
         jac = np.empty((n, n + 1))
@@ -145,9 +144,9 @@ class Continuation:
                      - self.family.map(x, self.p(q - FD_STEP), self.multiple)) / (2 * FD_STEP)
         return jac
 
-    def point(self, x, p, g, previous_tangent=None, iterations=0) -> Point:
+    def point(self, x, p, previous_tangent=None, iterations=0) -> Point:
         """The converged orbit at (x, p): monodromy, multipliers, tangent and measures."""
-        jac = self.jacobian(x, p, g)
+        jac = self.jacobian(x, p)
         tangent = null_vector(jac)
         if previous_tangent is not None and tangent @ previous_tangent < 0:
             tangent = -tangent
@@ -169,11 +168,11 @@ class Continuation:
             g = self.residual(x, p)
             history.append(float(np.linalg.norm(g)))
             if self.converged(g, x):
-                start = self.point(x, p, g)
+                start = self.point(x, p)
                 if start.tangent[-1] * direction < 0:
                     start.tangent = -start.tangent
                 return start
-            jac = self.jacobian(x, p, g)
+            jac = self.jacobian(x, p)
             x = x + np.linalg.lstsq(jac[:, :-1], -g, rcond=None)[0]
         raise FloatingPointError(f"the first periodic orbit at {p:.6g} did not converge "
                                  f"(residuals {', '.join(f'{r:.2e}' for r in history)})")
@@ -199,7 +198,7 @@ class Continuation:
                 return x, p, g, k
             if jac is None or norm > 0.5 * last:
                 try:
-                    jac = np.vstack([self.jacobian(x, p, g), t])
+                    jac = np.vstack([self.jacobian(x, p), t])
                 except FloatingPointError:
                     return None
             last = norm
@@ -238,9 +237,9 @@ class Continuation:
                     branch.reason = (f"a step from {last.p:.6g} did not converge down to ds = "
                                      f"{ds_min:.3g}; the points before it are kept")
                 break
-            x, p, g, iterations = found
+            x, p, _, iterations = found
             try:
-                new = self.point(x, p, g, last.tangent, iterations)
+                new = self.point(x, p, last.tangent, iterations)
             except FloatingPointError as err:
                 branch.complete, branch.reason = False, f"at {p:.6g}: {err}"
                 break
@@ -275,9 +274,10 @@ class Continuation:
         """The period-2m branch born at a period doubling, by switching onto it: from the
         orbit x* there along the eigenvector v of the multiplier nearest -1, the doubled
         orbit at p* + h (h a hundredth of the range, towards where a multiplier lies beyond
-        -1: the supercritical side) is found by Newton on P^2m from x* +- e v (amplitudes e growing from 1e-3
-        to 1 of the orbit's size: it grows as sqrt(h)), kept when P^m moves it (a genuine
-        period 2m), and continued away from p*. None when no doubled orbit is found."""
+        -1: the supercritical side) is found by Newton on P^2m from x* +- e v (amplitudes e
+        from 1e-3 to 1 of the orbit's size: the doubled orbit grows as sqrt(h)), kept when
+        P^m moves it (a genuine period 2m), and continued away from p*. None when no
+        doubled orbit is found."""
         point = special.point
         if point.jacobian is None:
             return None
@@ -406,8 +406,8 @@ class Continuation:
         found = self.correct(a, s)
         if found is None:
             return None
-        x, p, g, _ = found
-        return self.point(x, p, g, a.tangent)
+        x, p, _, _ = found
+        return self.point(x, p, a.tangent)
 
     def arclength(self, a: Point, b: Point) -> float:
         """b's distance from a along a's tangent (the corrector's constraint)."""
