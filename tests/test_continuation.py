@@ -144,6 +144,7 @@ class DoubleWell(Duffing):
         return solve_ivp(self.rhs(gamma), (0, t[-1]), x, method="DOP853", rtol=1e-11, atol=1e-12, t_eval=t).y
 
 
+@pytest.mark.slow
 def test_period_doublings_by_continuation_agree_with_the_brute_force_attractors():
     """Continued in gamma, the period-1 orbit doubles at gamma_1 and the doubled branch,
     switched onto there, doubles again at gamma_2: the attractors found by brute force (a
@@ -203,14 +204,27 @@ def linear_oscillator(f_hz):
             "integrator": {"rtol": 1e-11, "atol": 1e-14, "max_step": 1e-3}}
 
 
-def test_linear_oscillator_response_and_multipliers_in_closed_form(tmp_path):
+def spatial_linear_oscillator(f_hz):
+    """linear_oscillator in space: the guide a prismatic joint along y."""
+    data = linear_oscillator(f_hz)
+    data["kind"] = "spatial"
+    data["bodies"][0]["inertia"] = np.diag([0.01, 0.01, 0.01]).tolist()
+    data["joints"] = [{"type": "prismatic", "body_i": "ground", "point_i": [0.0, 0.0, 0.0], "axis_i": [0.0, 1.0, 0.0],
+                       "body_j": "block", "point_j": [0.0, 0.0, 0.0], "axis_j": [0.0, 1.0, 0.0]}]
+    data["springs"][0] |= {"point_i": [0.0, -1.0, 0.0], "point_j": [0.0, 0.0, 0.0]}
+    data["loads"][0]["force"] = [0.0, 3.0, 0.0]
+    return data
+
+
+@pytest.mark.parametrize("scene", [linear_oscillator, spatial_linear_oscillator], ids=["planar", "spatial"])
+def test_linear_oscillator_response_and_multipliers_in_closed_form(tmp_path, scene):
     """Along the continued branch, the orbit's state at t = 0 is the steady response
     y = A cos(w t - phi), A = F / sqrt((k - m w^2)^2 + (c w)^2), tan phi = c w / (k - m w^2),
     to 1e-6 of A (and of A w); the two multipliers of the block's motion have the modulus
     exp(-zeta w_n T) (to 1e-6: central differences of a linear map), the others (the
-    directions the guide projects away) vanish."""
+    directions the guide, or the Euler parameters' norm, project away) vanish."""
     m, k, c, force = 2.0, 800.0, 4.0, 3.0
-    family = family_of(linear_oscillator(3.0), "frequency", 3.0, tmp_path)
+    family = family_of(scene(3.0), "frequency", 3.0, tmp_path)
     line = method.Continuation(family, 2.0, 4.5)
     x = family.settle(3.0, 5)[1]
     branch = line.run(line.first(x, 3.0, 1.0), 0.04, 12)
