@@ -149,9 +149,11 @@ class MechanismFlow:
     def orbit_measures(self) -> dict:
         """What the last advance shows of its orbit: `amplitude`, half the peak-to-peak range
         of the observed point's positions (m; the larger of its two directions),
-        `amplitudes` of each, and `gap`, the smallest distance to contact over the orbit (m;
-        minus the deepest penetration when it touches; None without clearance joints), the
-        deepest approach refined by the parabola through the step at it and its neighbours."""
+        `amplitudes` of each, `gap`, the smallest distance to contact over the orbit (m;
+        minus the deepest penetration when it touches), and `peak_force`, the first clearance
+        joint's largest normal force (N, its contacts summed; both None without clearance
+        joints), each refined by the parabola through the step at its extreme and its
+        neighbours."""
         model, run = self.model, self.last
         args = model.args()
         work = engine.workspace(args)
@@ -162,15 +164,19 @@ class MechanismFlow:
             c = model.geometry.coordinate(self._free_body())
             positions = run.states[:, c:c + 2]
         amplitudes = 0.5 * (positions.max(axis=0) - positions.min(axis=0))
-        measures = {"amplitude": float(amplitudes.max()), "amplitudes": amplitudes.tolist(), "gap": None}
+        measures = {"amplitude": float(amplitudes.max()), "amplitudes": amplitudes.tolist(), "gap": None,
+                    "peak_force": None}
         nc = model.contacts.shape[0]
         if nc:
             dy, depth, offset = np.empty(run.states.shape[1]), np.empty(nc), np.zeros((nc, model.kind.dimension))
-            deepest = np.empty(len(run.times))
+            deepest, force = np.empty(len(run.times)), np.empty(len(run.times))
+            first = model.contact_rows[0]
             for k, (t, y) in enumerate(zip(run.times, run.states)):
                 engine.observe(t, y, dy, args, work, depth, offset)
                 deepest[k] = depth.max()
+                force[k] = work.normal[first.start:first.stop].sum()
             measures["gap"] = -float(vertex(run.times, deepest))
+            measures["peak_force"] = float(vertex(run.times, force))
         return measures
 
     def observed_name(self) -> str:

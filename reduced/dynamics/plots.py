@@ -106,21 +106,31 @@ SPECIAL_MARKERS = {"fold": ("s", "tab:orange"), "period_doubling": ("D", "tab:re
 def response(path, rows, specials, sweeps, parameter, unit, title) -> None:
     """The continued branches' amplitude against the parameter (stable solid, unstable
     dashed; a doubled branch in its own colour), the bifurcations marked, and the direct
-    up- and down-sweeps."""
-    fig, ax = plt.subplots(figsize=(9, 5))
+    up- and down-sweeps; below, the first clearance joint's largest normal force over each
+    orbit (where the mechanism has one)."""
+    forces = any(r[7] is not None for r in rows)
+    fig, axes = plt.subplots(2 if forces else 1, 1, figsize=(9, 8 if forces else 5), sharex=True, squeeze=False)
+    ax = axes[0, 0]
     colours = ["tab:blue", "tab:purple", "tab:brown", "tab:pink"]
     for branch in sorted({r[0] for r in rows}):
         mine = [r for r in rows if r[0] == branch]
         values = np.array([r[2] for r in mine])
-        amplitude = np.array([r[3] for r in mine]) * 1e3
         stable = np.array([bool(r[4]) for r in mine])
         colour = colours[branch % len(colours)]
-        for k in range(len(mine) - 1):
-            ax.plot(values[k:k + 2], amplitude[k:k + 2], "-" if stable[k] and stable[k + 1] else "--",
-                    color=colour, lw=1.6)
+        for column, scale, bx in ((3, 1e3, ax), (7, 1.0, axes[-1, 0] if forces else None)):
+            if bx is None:
+                continue
+            y = np.array([np.nan if r[column] is None else r[column] * scale for r in mine])
+            for k in range(len(mine) - 1):
+                bx.plot(values[k:k + 2], y[k:k + 2], "-" if stable[k] and stable[k + 1] else "--",
+                        color=colour, lw=1.6)
         what = "continued" if branch == 0 else f"period {mine[0][1]} (switched at a doubling)"
         ax.plot([], [], "-", color=colour, label=f"{what}, stable")
         ax.plot([], [], "--", color=colour, label=f"{what}, unstable")
+    if forces:
+        axes[-1, 0].set_ylabel("largest normal force over the orbit (N)")
+        axes[-1, 0].set_xlabel(f"{parameter} ({unit})")
+        axes[-1, 0].grid(alpha=0.3)
     for direction, marker in (("up", "^"), ("down", "v")):
         kept = [r for r in sweeps if r[0] == direction]
         if kept:

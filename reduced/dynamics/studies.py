@@ -582,7 +582,7 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
 
 
 CONTINUATION_COLUMNS = ["branch", "multiple", "value", "amplitude_m", "stable", "largest_multiplier_modulus",
-                        "gap_m", "x"]
+                        "gap_m", "peak_force_N", "x"]
 SPECIAL_COLUMNS = ["kind", "value", "amplitude_m", "gap_m", "multipliers"]
 SWEEP_COLUMNS = ["direction", "value", "amplitude_m", "gap_m"]
 
@@ -591,7 +591,8 @@ def point_row(branch: int, multiple: int, p) -> list:
     """A row of continuation.csv: the branch (0 the continued one, k the doubled branch of
     the k-th period doubling), its period in forcing periods, the orbit."""
     return [branch, multiple, p.p, p.measures["amplitude"], int(p.stable),
-            float(np.max(np.abs(p.multipliers))), p.measures["gap"], " ".join(f"{v:.9g}" for v in p.x)]
+            float(np.max(np.abs(p.multipliers))), p.measures["gap"], p.measures.get("peak_force"),
+            " ".join(f"{v:.9g}" for v in p.x)]
 
 
 def special_row(s) -> list:
