@@ -1,5 +1,6 @@
 r"""The mechanism, written once for every body kind and for the plane and space: ideal joints
-and the drive, torsion springs, stops and latches, clearance joints and their contacts, the
+and the drive, torsion springs, stops and latches, linear spring-dampers and harmonic loads
+(spring_forces, load_forces), clearance joints and their contacts, the
 equations of motion with their constraints, impacts, the projection onto the constraints and
 the integrator's hooks. A body is reached only through reduced.mechanism.bodies (a point's
 and a vector's position, velocity and Jacobian; a force pushed at a point), a vector only
@@ -56,8 +57,9 @@ contact: the constraint delta = 0 joins the ideal ones until its multiplier (the
 would pull. The normal force and every friction law are the functions of pinbore.laws.
 dissipative and pinbore.laws.friction, compiled in. While delta <= 0 no law is evaluated.
 
-Extra states integrate the energy dissipated in the contacts and torsion dampers and the work
-of the constraint forces (the drive), so the energy balance can be checked.
+Extra states integrate the energy dissipated in the contacts, torsion dampers and
+spring-dampers and the work of the constraint forces (the drive) and of the harmonic loads,
+so the energy balance can be checked.
 
 The integrators are reduced.mechanism.integrator's; this module implements its hooks. A step
 ends at its first event (event_fraction): a step that would carry a contact from free flight
@@ -97,25 +99,26 @@ from pinbore.reduced.mechanism.layout import (
     CONTACT_BEARING_POINT, CONTACT_CHI, CONTACT_CHI_LOG_SPEED, CONTACT_CHI_STEP, CONTACT_CHI_TABLE,
     CONTACT_CLEARANCE, CONTACT_COMPLIANCE, CONTACT_END_LENGTH, CONTACT_FRICTION_LAW,
     CONTACT_FRICTION_ON, CONTACT_IMPACT, CONTACT_JOINT, CONTACT_JOURNAL_AXIS, CONTACT_JOURNAL_BODY,
-    CONTACT_JOURNAL_POINT, CONTACT_KIND, CONTACT_LENGTH, CONTACT_RADIUS, CONTACT_REST_SPEED,
-    CONTACT_RESTITUTION, CONTACT_SCALE, CONTACT_SIDE, CONTACT_SLICES, CONTACT_STATE,
+    CONTACT_JOURNAL_POINT, CONTACT_KIND, CONTACT_LENGTH, CONTACT_RADIUS, CONTACT_RESTITUTION,
+    CONTACT_REST_SPEED, CONTACT_SCALE, CONTACT_SIDE, CONTACT_SLICES, CONTACT_STATE,
     CONTACT_STIFFNESS, CONTACT_TABLE, CONTINUOUS, COULOMB, COULOMB_MU, DAHL, DAHL_MU, DAHL_SIGMA,
-    DISSIPATED, DOT1, DOT2, ENERGY_STATES, IWAN, IWAN_K1, IWAN_K2, IWAN_MU, LATCH, LINEAR,
-    LINEAR_ALPHA, LINEAR_MU_STATIC, LUGRE, LUGRE_MU_COULOMB, LUGRE_MU_STATIC, LUGRE_SIGMA0,
-    LOG_COLUMNS, LOG_IMPULSE, LOG_JOINT, LOG_RATE, LOG_TIME, LUGRE_SIGMA1, LUGRE_SIGMA2,
-    LUGRE_STRIBECK_SPEED, NO_FRICTION, PLANE, POINT, POISSON,
-    PRIM_A_I, PRIM_ANGLE0, PRIM_B_J, PRIM_BODY_I, PRIM_BODY_J, PRIM_C_I, PRIM_KIND, PRIM_S_I,
-    HARM_AMPLITUDE, HARM_OMEGA, HARM_PHASE, HARMONIC, LOAD_BODY, LOAD_FORCE, LOAD_OMEGA,
-    LOAD_PHASE, LOAD_POINT, LOAD_TORQUE, PRIM_PROFILE, PRIM_PROFILE_ROWS, PRIM_PROFILE_TIME, PRIM_S_J, PRIM_SPEED, RADIAL, SEG_C0,
-    SEG_C1, SEG_C2, SEG_C3, SEG_TIME, SPIN_UP, SPRING_BODY_I, SPRING_BODY_J, SPRING_DAMPING,
-    SPRING_LENGTH, SPRING_S_I, SPRING_S_J, SPRING_STIFFNESS, TABLE, REGULARISATION_V0, REGULARISATION_V1, SLICED, STATE_STRETCH,
-    STATE_TRAVEL, STOP, STRIBECK, STRIBECK_MU_MIN, STRIBECK_MU_STATIC, STRIBECK_V_MIN,
-    TORSION_A_I, TORSION_B_J, TORSION_BODY_I, TORSION_BODY_J, TORSION_C_I, TORSION_DAMPING, TORSION_S_I, TORSION_S_J,
-    TORSION_FREE_ANGLE, TORSION_KIND, TORSION_STIFFNESS, WORK_IN, Contacts, Depth, Impulse, Work)
+    DISSIPATED, DOT1, DOT2, ENERGY_STATES, HARMONIC, HARM_AMPLITUDE, HARM_OMEGA, HARM_PHASE, IWAN,
+    IWAN_K1, IWAN_K2, IWAN_MU, LATCH, LINEAR, LINEAR_ALPHA, LINEAR_MU_STATIC, LOAD_BODY,
+    LOAD_FORCE, LOAD_OMEGA, LOAD_PHASE, LOAD_POINT, LOAD_TORQUE, LOG_COLUMNS, LOG_IMPULSE,
+    LOG_JOINT, LOG_RATE, LOG_TIME, LUGRE, LUGRE_MU_COULOMB, LUGRE_MU_STATIC, LUGRE_SIGMA0,
+    LUGRE_SIGMA1, LUGRE_SIGMA2, LUGRE_STRIBECK_SPEED, NO_FRICTION, PLANE, POINT, POISSON,
+    PRIM_ANGLE0, PRIM_A_I, PRIM_BODY_I, PRIM_BODY_J, PRIM_B_J, PRIM_C_I, PRIM_KIND, PRIM_PROFILE,
+    PRIM_PROFILE_ROWS, PRIM_PROFILE_TIME, PRIM_SPEED, PRIM_S_I, PRIM_S_J, RADIAL,
+    REGULARISATION_V0, REGULARISATION_V1, SEG_C0, SEG_C1, SEG_C2, SEG_C3, SEG_TIME, SLICED,
+    SPIN_UP, SPRING_BODY_I, SPRING_BODY_J, SPRING_DAMPING, SPRING_LENGTH, SPRING_STIFFNESS,
+    SPRING_S_I, SPRING_S_J, STATE_STRETCH, STATE_TRAVEL, STOP, STRIBECK, STRIBECK_MU_MIN,
+    STRIBECK_MU_STATIC, STRIBECK_V_MIN, TABLE, TORSION_A_I, TORSION_BODY_I, TORSION_BODY_J,
+    TORSION_B_J, TORSION_C_I, TORSION_DAMPING, TORSION_FREE_ANGLE, TORSION_KIND, TORSION_STIFFNESS,
+    TORSION_S_I, TORSION_S_J, WORK_IN, Contacts, Depth, Impulse, Work)
 from pinbore.reduced.mechanism.linalg import cholesky_solve
 from pinbore.reduced.mechanism.vectors import (
-    _plane, _space, add, angular_cell, angular_zero, axis, cell, cross, direction, dot, negated, norm, scaled,
-    sub, tangent, zero)
+    _plane, _space, add, angular_cell, angular_zero, axis, cell, cross, direction, dot, negated, norm,
+    scaled, sub, tangent, zero)
 
 LATCH_TOL = 1e-8   # rad: a latch engages within this of its angle (the step is shortened to it)
 
