@@ -939,6 +939,14 @@ def torsion_forces(force, states, torsion, latched, offsets, dissipation, z):
 
 
 @numba.njit(cache=True, _nrt=False)
+def spring_ends(states, springs, r, z):
+    """Spring-damper r's two points (positions, velocities) and its length |s_j - s_i|."""
+    x_i, v_i, _, _ = point_state(states, int(springs[r, SPRING_BODY_I]), cell(springs, r, SPRING_S_I, z))
+    x_j, v_j, _, _ = point_state(states, int(springs[r, SPRING_BODY_J]), cell(springs, r, SPRING_S_J, z))
+    return x_i, v_i, x_j, v_j, norm(sub(x_j, x_i))
+
+
+@numba.njit(cache=True, _nrt=False)
 def spring_forces(force, states, springs, offsets, dissipation, z):
     """Every linear spring-damper's force into `force`: the tension T = k (L - L0) + c L' pulls
     its two points together along the line n from s_i to s_j (-T n on body j, T n on body i);
@@ -946,13 +954,10 @@ def spring_forces(force, states, springs, offsets, dissipation, z):
     element is idle there (L0 > 0 keeps them apart in any sensible scene)."""
     for r in range(springs.shape[0]):
         bi, bj = int(springs[r, SPRING_BODY_I]), int(springs[r, SPRING_BODY_J])
-        x_i, v_i, _, _ = point_state(states, bi, cell(springs, r, SPRING_S_I, z))
-        x_j, v_j, _, _ = point_state(states, bj, cell(springs, r, SPRING_S_J, z))
-        d = sub(x_j, x_i)
-        length = norm(d)
+        x_i, v_i, x_j, v_j, length = spring_ends(states, springs, r, z)
         if length == 0.0:
             continue
-        n = scaled(d, 1.0 / length)
+        n = scaled(sub(x_j, x_i), 1.0 / length)
         rate = dot(n, sub(v_j, v_i))
         tension = springs[r, SPRING_STIFFNESS] * (length - springs[r, SPRING_LENGTH]) \
             + springs[r, SPRING_DAMPING] * rate
@@ -1122,11 +1127,8 @@ def torsion_angles(y, args, work, angles):
 def spring_lengths(y, args, work, lengths):
     """Each spring-damper's length L beyond its free length L0 into `lengths` (m)."""
     refresh(y, args, work)
-    z, springs = args.like, args.springs
-    for r in range(springs.shape[0]):
-        x_i = point_state(work.bodies, int(springs[r, SPRING_BODY_I]), cell(springs, r, SPRING_S_I, z))[0]
-        x_j = point_state(work.bodies, int(springs[r, SPRING_BODY_J]), cell(springs, r, SPRING_S_J, z))[0]
-        lengths[r] = norm(sub(x_j, x_i)) - springs[r, SPRING_LENGTH]
+    for r in range(args.springs.shape[0]):
+        lengths[r] = spring_ends(work.bodies, args.springs, r, args.like)[4] - args.springs[r, SPRING_LENGTH]
 
 
 @numba.njit(cache=True)
