@@ -218,19 +218,20 @@ def dynamics_section(build_dir: Path) -> str:
     return "".join(parts)
 
 
-CONTINUATION_KEYS = ("parameter", "start", "points", "converged", "reason", "bifurcations",
+CONTINUATION_KEYS = ("scene_file", "parameter", "start", "points", "converged", "reason", "bifurcations",
                      "start_floquet_multipliers", "start_stable", "seconds_per_point", "wall_time_s")
 
 
 def continuation_part(path: Path) -> str:
-    """The continued frequency response of the impact oscillator: its figure, the periodic
-    orbit at the scene's own value with its Floquet multipliers, and the bifurcations."""
+    """The continued response of a scene (make dynamics: the impact oscillator): its figure,
+    the periodic orbit at the scene's own value with its Floquet multipliers, and the
+    bifurcations."""
     s = load_json(path, "dynamics")
     for key in CONTINUATION_KEYS:
         if key not in s:
             raise InputError(f"{path}: {key}: required key is missing (run pinbore dynamics again)")
     moduli = sorted((abs(complex(*m)) for m in s["start_floquet_multipliers"]), reverse=True)
-    parts = ["<h3>Frequency response by continuation: the impact oscillator</h3>",
+    parts = [f"<h3>Response by continuation: {html.escape(Path(s['scene_file']).stem)}</h3>",
              f"<p>Periodic motions continued in {html.escape(s['parameter'])} (pseudo-arclength on "
              f"the period map, {s['points']} orbits, {s['seconds_per_point']:.2f} s an orbit); "
              f"stability from the Floquet multipliers. The orbit at the scene's own value "
@@ -238,9 +239,9 @@ def continuation_part(path: Path) -> str:
              + ", ".join(f"{m:.4g}" for m in moduli) + ".</p>"]
     png = path.parent / "response.png"
     if png.exists():
-        parts.append(figure(png_data(png), "Response amplitude across the guide: continued branch "
-                            f"(stable solid, unstable dashed), direct up- and down-sweeps, bifurcations "
-                            f"({s['wall_time_s']:.1f} s)."))
+        parts.append(figure(png_data(png), "Response amplitude of the first clearance joint and its "
+                            "largest contact force: continued branch (stable solid, unstable dashed), "
+                            f"direct up- and down-sweeps, bifurcations ({s['wall_time_s']:.1f} s)."))
     rows = [[b["kind"].replace("_", " "), f"{b['value']:.6g}", f"{b['amplitude_m'] * 1e3:.4g}",
              ", ".join(f"{abs(complex(*m)):.3g}" for m in sorted(b["floquet_multipliers"],
                                                                  key=lambda m: -abs(complex(*m)))[:3])]

@@ -112,6 +112,13 @@ def physical(parameter: str, span: Span | SpeedGrid) -> Span | SpeedGrid:
     return span
 
 
+def parameter_range(span: Span, info: pydantic.ValidationInfo) -> Span:
+    """A `range` validator: the range of the `parameter` given beside it, within its physical
+    bounds (physical)."""
+    parameter = info.data.get("parameter")
+    return span if parameter is None else physical(parameter, span)
+
+
 def _threshold(value: float) -> float:
     if not value > 0:
         raise ValueError(f"must be > 0, or inf for no threshold (got {value})")
@@ -177,11 +184,7 @@ class ContinuationOptions(Analysis):
     sweeps: Annotated[int, at_least(0)] = 0
     periods: Annotated[int, at_least(1)] = 20
 
-    @pydantic.field_validator("range")
-    @classmethod
-    def _physical(cls, span: Span, info: pydantic.ValidationInfo) -> Span:
-        parameter = info.data.get("parameter")
-        return span if parameter is None else physical(parameter, span)
+    _physical = pydantic.field_validator("range")(parameter_range)
 
     @pydantic.field_validator("step")
     @classmethod
@@ -248,11 +251,7 @@ class BifurcationOptions(Sweep):
     parameter: Literal[tuple(PARAMETERS)] = pydantic.Field(description=f"one of {', '.join(PARAMETERS)}")
     range: Range = pydantic.Field(description="LOW HIGH of the swept parameter")
 
-    @pydantic.field_validator("range")
-    @classmethod
-    def _physical(cls, span: Span, info: pydantic.ValidationInfo) -> Span:
-        parameter = info.data.get("parameter")
-        return span if parameter is None else physical(parameter, span)
+    _physical = pydantic.field_validator("range")(parameter_range)
 
     def swept(self):
         return [("range", self.parameter, self.range)]

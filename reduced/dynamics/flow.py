@@ -138,13 +138,22 @@ class MechanismFlow:
         relative to its bearing (guide) point (m) and its rate (m/s), along the bearing
         body's two directions across the joint; without clearance joints, the centre of the
         first body that is not driven (x, y global)."""
+        args = self.model.args()
+        return self._observed_at(state.y, args, engine.workspace(args), self._observed_where())
+
+    def _observed_where(self):
+        """What the observed point is measured from: the first clearance joint's bodies,
+        points and vectors (_observed_joint), or the coordinate of the first body that is not
+        driven."""
         model = self.model
-        if not model.joints:
-            c = model.geometry.coordinate(self._free_body())
-            return np.array([*state.y[c:c + 2], *state.y[model.nq + c:model.nq + c + 2]])
-        args = model.args()
-        return np.array(engine.relative_motion(state.y, args, engine.workspace(args),
-                                               *self._observed_joint()))
+        return self._observed_joint() if model.joints else model.geometry.coordinate(self._free_body())
+
+    def _observed_at(self, y, args, work, where) -> np.ndarray:
+        """The observed point's two positions (m) and their rates (m/s) at the state y."""
+        if not self.model.joints:
+            nq = self.model.nq
+            return np.array([*y[where:where + 2], *y[nq + where:nq + where + 2]])
+        return np.array(engine.relative_motion(y, args, work, *where))
 
     def orbit_measures(self) -> dict:
         """What the last advance shows of its orbit: `amplitude`, half the peak-to-peak range
@@ -157,12 +166,8 @@ class MechanismFlow:
         model, run = self.model, self.last
         args = model.args()
         work = engine.workspace(args)
-        if model.joints:
-            joint = self._observed_joint()
-            positions = np.array([engine.relative_motion(y, args, work, *joint)[:2] for y in run.states])
-        else:
-            c = model.geometry.coordinate(self._free_body())
-            positions = run.states[:, c:c + 2]
+        where = self._observed_where()
+        positions = np.array([self._observed_at(y, args, work, where)[:2] for y in run.states])
         amplitudes = 0.5 * (positions.max(axis=0) - positions.min(axis=0))
         measures = {"amplitude": float(amplitudes.max()), "amplitudes": amplitudes.tolist(), "gap": None,
                     "peak_force": None}

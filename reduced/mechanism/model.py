@@ -2,10 +2,10 @@
 (reduced.mechanism.engine), with consistent initial conditions, written once: the laws file,
 the tables of the normal laws, the contacts of every clearance joint with their damping and
 friction, the torsion elements, the spring-dampers and harmonic loads, the friction states,
-the fixed step. What only a kind knows
-(its bodies' coordinates and mass, its ideal joints as primitive constraints, how a revolute,
-cylindrical or spherical clearance joint sits in its geometry, how a state is moved onto the
-constraints) comes from its body kind's module (reduced.mechanism.kinds: planar or spatial);
+the fixed step. What only a kind knows (its bodies' coordinates and mass, its ideal joints
+as primitive constraints, how a revolute, cylindrical or spherical clearance joint sits in
+its geometry, how a state is moved onto the constraints) comes from its body kind's module
+(reduced.mechanism.kinds: planar or spatial);
 the translational clearance joint is written here once for both.
 """
 
@@ -205,14 +205,15 @@ def resolvable(model: Model, source: str = "scene") -> None:
 
 
 def drive_segments(drive) -> np.ndarray:
-    """A shaken drive's harmonics (layout.HARM_*), or the segments (layout.SEG_*) of a drive's
-    angle table (none without either): the cubic
-    spline through the table's angles, measured from the first, with SciPy's not-a-knot ends
-    (a motion cubic in time is followed exactly), and after the last pair a segment at the
-    last rate; one a pair, in the rows the drive's profile columns name."""
-    if drive is not None and drive.harmonics is not None:   # a row a harmonic (layout.HARM_*)
+    """A shaken drive's harmonics (layout.HARM_*, a row each), or the segments (layout.SEG_*)
+    of a drive's angle table (none without either): the cubic spline through the table's
+    angles, measured from the first, with SciPy's not-a-knot ends (a motion cubic in time is
+    followed exactly), and after the last pair a segment at the last rate; one a pair, in
+    the rows the drive's profile columns name."""
+    if drive is not None and drive.harmonics is not None:
         return np.array([layout.row(layout.PROFILE_COLUMNS, {
-            layout.HARM_AMPLITUDE: math.radians(h.amplitude_deg), layout.HARM_OMEGA: 2 * math.pi * h.frequency_hz,
+            layout.HARM_AMPLITUDE: math.radians(h.amplitude_deg),
+            layout.HARM_OMEGA: 2 * math.pi * h.frequency_hz,
             layout.HARM_PHASE: math.radians(h.phase_deg)}) for h in drive.harmonics])
     if drive is None or drive.angle_table is None:
         return np.empty((0, layout.PROFILE_COLUMNS))
@@ -578,7 +579,8 @@ def shortest_period(model: Model) -> float:
     stiffness F(d)/d of its normal law at a penetration d equal to the clearance (the deepest
     a clean run reaches, reduced.mechanism.verdict; the stiffest point of a hardening law).
     A torsion element: the reduced inertia of its bodies about its axis and its stiffness; a
-    spring-damper: the reduced mass of its bodies and its stiffness. A flexible body: its highest mode kept, 2 pi / omega_n."""
+    spring-damper: the reduced mass of its bodies and its stiffness. A flexible body: its
+    highest mode kept, 2 pi / omega_n."""
     geometry = model.geometry
     masses = model.base.masses
 

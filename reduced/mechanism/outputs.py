@@ -13,9 +13,9 @@ corner's penetration and forces too. The body columns are the body kind's
 
 The energy book: kinetic (the body kind's), potential of gravity, of the torsion springs,
 stops and latches (1/2 k angle^2 while engaged) and of the spring-dampers (1/2 k (L - L0)^2),
-elastic of the contacts (U(delta) of each
-tabulated law exactly, reduced.mechanism.model.table_energy; a sliced journal's slices with
-the far field's spring L |d|^2 / (2 c_b)), dissipated, and the work of the constraints (the drive) and of the
+elastic of the contacts (U(delta) of each tabulated law exactly,
+reduced.mechanism.model.table_energy; a sliced journal's slices with the far field's spring
+L |d|^2 / (2 c_b)), dissipated, and the work of the constraints (the drive) and of the
 harmonic loads (integrated with the motion).
 
 The peak normal force of a joint whose contacts are continuous is refined between the steps
