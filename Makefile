@@ -37,7 +37,7 @@ CONTINUATION_SCENE := scenes/reduced/impact_oscillator.toml
 DYNAMICS := $(addprefix build/dynamics/,poincare/summary.json bifurcation/summary.json design/summary.json \
                                         spatial_poincare/summary.json spatial_bifurcation/summary.json \
                                         continuation/summary.json)
-REDUCED_CODE := $(wildcard core/*.py laws/*.py calibration/lawsfile.py fem/modes/file.py reduced/mechanism/*.py)
+REDUCED_CODE := $(wildcard core/*.py laws/*.py laws/lawsfile.py fem/modes/file.py reduced/mechanism/*.py)
 DYNAMICS_CODE := $(wildcard pinbore/cli.py reduced/dynamics/*.py) $(REDUCED_CODE) $(STAMP)
 DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(DYNAMICS_CODE)
 SPATIAL_DYNAMICS_DEPS := $(SPATIAL_DYNAMICS_SCENE) $(DYNAMICS_CODE)

@@ -10,8 +10,8 @@ import time
 from pathlib import Path
 
 from pinbore.calibration.curves import read_curve
-from pinbore.calibration.lawsfile import LAWS
 from pinbore.calibration.run import evaluate, ranking
+from pinbore.laws.lawsfile import LAWS
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -10,11 +10,11 @@ from scipy.optimize import brentq
 from pinbore.core.figures import plt, save_png
 
 from pinbore.calibration import sliced
-from pinbore.calibration.lawsfile import law_force
 from pinbore.fem.curve import read_pressure
 from pinbore.laws import dissipative
 from pinbore.laws import sliced as sliced_law
 from pinbore.laws import tables
+from pinbore.laws.lawsfile import law_force
 
 COLOURS = dict(zip(["hertz", "johnson", "liu", "bai_zhao", "pereira", "radzimovsky",
                     "dubowsky_freudenstein", "esdu_78035", "linear"], plt.cm.tab10.colors))

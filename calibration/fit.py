@@ -13,13 +13,13 @@ For a power law K d^n this fits K and n. In logarithms the model is linear,
 ln(P_FE / P_law) = ln s + q ln(d / d_ref), so the fit is ordinary least squares on the
 relative error, in closed form, with 95 % confidence intervals from Student's t. The linear
 spring has no published stiffness: it is fitted as P = s E* d (s alone). The fitted law is a
-`Fit` of laws.json (calibration/lawsfile.py); its force is `Fit.force`.
+`Fit` of laws.json (laws/lawsfile.py); its force is `Fit.force`.
 """
 
 import numpy as np
 from scipy import stats
 
-from pinbore.calibration.lawsfile import MODEL, Errors, Fit, law_force
+from pinbore.laws.lawsfile import MODEL, Errors, Fit, law_force
 
 
 def errors(predicted, measured) -> Errors:

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from pinbore.calibration import lawsfile
 from pinbore.core.html import figure, png_data, table
+from pinbore.laws import lawsfile
 
 
 def _pct(value) -> str:

@@ -27,9 +27,9 @@ import math
 
 import numpy as np
 
-from pinbore.calibration import lawsfile
 from pinbore.core.errors import InputError
 from pinbore.fem.impact import file as impact_file
+from pinbore.laws import lawsfile
 
 
 MIN_IMPACTS = 2   # per joint: one more than the coefficients of the lowest degree (a constant)

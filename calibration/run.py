@@ -11,14 +11,14 @@ import warnings
 
 import numpy as np
 
-from pinbore.calibration import figures, lawsfile, restitution, sliced
+from pinbore.calibration import figures, restitution, sliced
 from pinbore.calibration.curves import Curve
 from pinbore.calibration.curves import read_all
 from pinbore.calibration.fit import NotFitted, errors, fit
-from pinbore.calibration.lawsfile import LAWS, law_force
 from pinbore.core.errors import InputError
 from pinbore.core.output import atomic_directory
-from pinbore.laws import elastic
+from pinbore.laws import elastic, lawsfile
+from pinbore.laws.lawsfile import LAWS, law_force
 
 
 def evaluate(curves):
@@ -68,7 +68,7 @@ def ranking(curves, table):
 
 
 def laws_json(curves, table, length, caught, seconds) -> lawsfile.LawsFile:
-    """The contents of laws.json (calibration/lawsfile.py)."""
+    """The contents of laws.json (laws/lawsfile.py)."""
     clearance = [c.joint.clearance for c in curves]
     validity = lawsfile.Validity(
         clearance_m=[min(clearance), max(clearance)],
@@ -96,7 +96,8 @@ def laws_json(curves, table, length, caught, seconds) -> lawsfile.LawsFile:
                                     housing_ratio=c.housing_ratio,
                                     similar_materials=c.similar_materials,
                                     approach_m=[float(c.approach.min()), float(c.approach.max())],
-                                    persson_half_angle_error_deg=persson_error(c))
+                                    persson_half_angle_error_deg=persson_error(c),
+                                    joint=lawsfile.JointRecord.of(c.joint))
                 for c in curves],
         laws=laws,
         sliced={},

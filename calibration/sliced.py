@@ -48,9 +48,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import optimize, stats
 
-from pinbore.calibration import lawsfile
 from pinbore.calibration.curves import Curve3D
 from pinbore.core.errors import InputError
+from pinbore.laws import lawsfile
 from pinbore.laws import sliced, tables
 
 FIT_SLICES = 64        # slices while fitting: F within 0.2 % of its limit (laws/sliced.py)

@@ -87,6 +87,12 @@ def _options_given(args) -> dict:
             for name, value in vars(args).items() if name not in skip}
 
 
+def _export(args) -> int:
+    from pinbore import export
+
+    return export.run(args.laws, args.to, args.out, args.scene, args.joint, args.law)
+
+
 def _report(args) -> int:
     from pinbore import report
 
@@ -235,6 +241,24 @@ def parser() -> argparse.ArgumentParser:
                    "\"spatial\") mechanism with clearance joints; write DIR/timeseries.csv, "
                    "DIR/summary.json and plots.")
     _dynamics_command(sub)
+    e = sub.add_parser("export", help="the calibrated laws as tables for another multibody code",
+                       description="Tabulate the calibrated contact laws of a laws file for one "
+                                   "joint (the file's curves' joint, or a mechanism scene's "
+                                   "clearance joint) on the multibody model's grid: "
+                                   "DIR/<law>.csv (approach, force), DIR/damping.csv (chi "
+                                   "against the impact speed), DIR/export.json (joint, units, "
+                                   "validity); --to exudyn adds DIR/pinbore_exudyn.py, the "
+                                   "clearance joint for Exudyn.")
+    e.add_argument("laws", help="laws.json written by `pinbore calibrate`")
+    e.add_argument("--to", required=True, choices=["table", "exudyn"],
+                   help="table: the CSV tables; exudyn: the tables and the Exudyn adapter")
+    e.add_argument("--out", required=True, metavar="DIR", help="output directory (replaced when complete)")
+    e.add_argument("--scene", default=None, help="a mechanism scene whose clearance joint the law is for")
+    e.add_argument("--joint", default=None, metavar="NAME",
+                   help="the scene's clearance joint (default: its only one)")
+    e.add_argument("--law", default=None, metavar="NAME",
+                   help="one fitted law (default: the joint's calibrated normal law, or every law)")
+    e.set_defaults(func=_export)
     r = sub.add_parser("report", help="build the HTML report from the results under build/",
                        description="Collect the results under BUILD into one self-contained "
                                    "HTML page, OUT/index.html.")
@@ -255,6 +279,8 @@ INPUTS = {
     "mesh": _scene_inputs, "fem": _scene_inputs, "impact": _scene_inputs,
     "modes": _scene_inputs, "reduced": _scene_inputs, "dynamics": _scene_inputs,
     "calibrate": lambda args: [*args.curves, *args.impacts],
+    "export": lambda args: [args.laws, *([args.scene, *referenced_files(args.scene)]
+                                         if args.scene else [])],
     "report": lambda args: [args.build, "bench"],
 }
 

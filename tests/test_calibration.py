@@ -10,12 +10,12 @@ import numpy as np
 import pytest
 from conftest import ROOT, pinbore, scene_dict
 
-from pinbore.calibration import lawsfile
 from pinbore.calibration.curves import Curve
 from pinbore.calibration.fit import errors, fit
-from pinbore.calibration.lawsfile import law_force
 from pinbore.calibration.run import evaluate, laws_json
+from pinbore.laws import lawsfile
 from pinbore.laws.elastic import Joint
+from pinbore.laws.lawsfile import law_force
 from pinbore.reduced.mechanism.layout import CONTACT_TABLE
 from pinbore.reduced.mechanism.model import build
 from pinbore.reduced.mechanism.scene import ReducedScene

@@ -16,8 +16,8 @@ from pinbore.core.scene import validate
 from pinbore.fem import curve
 from pinbore.fem.scene import FemScene
 from pinbore.laws.elastic import Joint
+from pinbore.laws.lawsfile import law_force
 from pinbore.laws.tables import largest_compliance
-from pinbore.calibration.lawsfile import law_force
 
 JOINT = Joint(10e-3, 9.97e-3, 210e9, 0.3, 210e9, 0.3, 0.02)
 
@@ -105,7 +105,7 @@ def test_the_planar_model_takes_the_straight_pin_force_of_a_3d_law(tmp_path):
     all sit at the same approach. The reference looks Liu's law up in a
     600-point log-log table over nine decades (step 0.035 in ln d): its interpolation error,
     of order step^2/8 times the change of the local exponent, is about 1e-6; asserted 1e-5."""
-    from pinbore.calibration import lawsfile
+    from pinbore.laws import lawsfile
     from pinbore.calibration.run import evaluate, laws_json
     from pinbore.laws import sliced as sliced_law
     from pinbore.laws import tables
@@ -174,7 +174,7 @@ def test_a_law_on_its_sections_fe_curve_holds_for_that_section_only(tmp_path):
     model takes it at those radii (the long pin: a = 1, e = 0 would be f L) and refuses
     other radii in one line naming the keys (a 30 um clearance curve says nothing of a
     0.5 mm one)."""
-    from pinbore.calibration import lawsfile
+    from pinbore.laws import lawsfile
     from pinbore.calibration.run import evaluate, laws_json
     from pinbore.core.errors import InputError
     from pinbore.reduced.mechanism.model import build

@@ -10,9 +10,9 @@ import pytest
 from conftest import ROOT, pinbore
 from test_impact import Impact, impact_scene
 
-from pinbore.calibration import lawsfile, restitution
+from pinbore.calibration import restitution
 from pinbore.fem.impact import file as impact_file
-from pinbore.laws import dissipative
+from pinbore.laws import dissipative, lawsfile
 from pinbore.reduced.mechanism.model import build
 from pinbore.reduced.mechanism.outputs import per_step, summary
 from pinbore.reduced.mechanism.run import simulate

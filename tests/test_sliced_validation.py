@@ -15,8 +15,9 @@ import pytest
 import tomli_w
 from conftest import ROOT, pinbore
 
-from pinbore.calibration import lawsfile, run, sliced
+from pinbore.calibration import run, sliced
 from pinbore.calibration.curves import read
+from pinbore.laws import lawsfile
 
 SCENES = ROOT / "scenes" / "fem"
 FITTED = ["study3d_steel_steel_L10mm_lug", "study3d_steel_steel_L20mm_lug"]

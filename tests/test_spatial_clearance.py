@@ -250,7 +250,7 @@ def test_planar_and_spatial_models_agree_on_a_sliced_law_with_bulk_compliance(tm
     on the model's grid), about 1e-6 each."""
     import test_calibration
     import test_calibration_3d
-    from pinbore.calibration import lawsfile
+    from pinbore.laws import lawsfile
     from pinbore.calibration import sliced as calibration
     from pinbore.calibration.run import evaluate, laws_json
 

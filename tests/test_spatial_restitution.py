@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 from conftest import ROOT, pinbore
 
-from pinbore.calibration import lawsfile
 from pinbore.core.errors import InputError
+from pinbore.laws import lawsfile
 from pinbore.reduced.mechanism import kinds
 from pinbore.reduced.mechanism.model import build
 from pinbore.reduced.mechanism.outputs import per_step, sample, summary

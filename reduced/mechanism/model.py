@@ -16,9 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from pinbore.calibration import lawsfile
 from pinbore.core.errors import InputError
-from pinbore.laws import dissipative, elastic
+from pinbore.laws import dissipative, elastic, lawsfile
+from pinbore.laws.lawsfile import per_length_force
 from pinbore.laws.sliced import sliced
 from pinbore.laws.tables import log_grid, split_compliance
 from pinbore.reduced.mechanism import kinds, layout
@@ -320,22 +320,9 @@ def damping_block(c, laws_data, source) -> dict:
 
 def calibrated_restitution(c, laws_data, source) -> lawsfile.RestitutionLaw:
     """The laws file's restitution law for the clearance joint c (damping_law =
-    "calibrated"): the one fitted on impacts of its radii and of its journal's and bearing's
-    E and nu; none, or several (joints differing only in densities or mass per length, which
-    the multibody joint does not know), is one InputError line."""
-    j = c.elastic_joint()
-    where = f"{source}: clearance_joints.{c.name}.damping_law: 'calibrated'"
-    if laws_data is None or not laws_data.restitution:
-        raise InputError(f"{where} needs a laws_file with a restitution law "
-                         "(pinbore calibrate --impacts IMPACT.json ...)")
-    found = laws_data.restitution_for(j.r_bore, j.r_pin, j.E_pin, j.nu_pin, j.E_bore, j.nu_bore)
-    if len(found) != 1:
-        what = "no restitution law" if not found else f"{len(found)} restitution laws"
-        raise InputError(f"{where}: {what} of the laws file fits the joint (bearing_radius "
-                         f"{j.r_bore:.6g} m, journal_radius {j.r_pin:.6g} m, journal E {j.E_pin:.4g} "
-                         f"Pa nu {j.nu_pin:.4g}, bearing E {j.E_bore:.4g} Pa nu {j.nu_bore:.4g}); "
-                         f"the file has: {'; '.join(laws_data.restitution)}")
-    return next(iter(found.values()))
+    "calibrated"), lawsfile.joint_restitution."""
+    return lawsfile.joint_restitution(laws_data, c.elastic_joint(),
+                                      f"{source}: clearance_joints.{c.name}.damping_law: 'calibrated'")
 
 
 # ---- the normal laws' tables
@@ -419,24 +406,6 @@ def sliced_parts(c, deltas, laws_data, source):
             f"{law.joint.r_pin:g} m); use those radii, or a sliced law calibrated with "
             "--per-length calibrated:<law>")
     return law, law.section.force(deltas)
-
-
-def per_length_force(name, laws_data, deltas, joint, where) -> np.ndarray:
-    """P(d) (N/m) of a per-length law of the laws file (calibrated:<law>) or a published one;
-    `where` names the key that gave `name` in the one-line error for an unknown law."""
-    if not name.startswith("calibrated:"):
-        if name not in elastic.PUBLISHED:
-            raise InputError(f"{where}: {name!r} is not a published law; valid: "
-                             f"{', '.join(elastic.PUBLISHED)}")
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")  # the range is enforced by the table (NaN beyond it)
-            return elastic.PUBLISHED[name](deltas, joint)
-    law = name.split(":", 1)[1]
-    fitted = laws_data.fitted()
-    if law not in fitted:
-        raise InputError(f"{where}: {name!r} is not a fitted law of the laws file; valid: "
-                         f"calibrated:{', calibrated:'.join(fitted)}")
-    return fitted[law].force(law, deltas, joint)
 
 
 def laws_path(scene, base: Path) -> Path | None:

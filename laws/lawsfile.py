@@ -19,14 +19,17 @@ run pinbore calibrate again)`. The file holds no version number: the model is th
 
 import json
 import math
+import warnings
+from dataclasses import replace
 from pathlib import Path
 from typing import Annotated, Literal
 
 import numpy as np
 import pydantic
 
+from pinbore.core.errors import InputError
 from pinbore.core.scene import Record, read_json
-from pinbore.laws import dissipative, elastic
+from pinbore.laws import elastic
 
 Range = Annotated[list[float], pydantic.Field(min_length=2, max_length=2)]   # [low, high]
 MODEL = "P = scale * P_law(d) * (d / reference_approach_m)^exponent_correction"
@@ -86,40 +89,6 @@ class Law(Record):
     fitted_to: list[str]                         # the curves' names
 
 
-class CurveEntry(Record):
-    """One FE curve the laws were calibrated on."""
-
-    name: str
-    points: int
-    clearance_m: float
-    bore_radius_m: float
-    effective_modulus_Pa: float
-    housing_ratio: float   # housing radius / bore radius
-    similar_materials: bool
-    approach_m: Range
-    persson_half_angle_error_deg: float | None   # None: dissimilar materials
-
-
-SLICED_MODEL = ("F = scale * (sum_i f_loc(delta_i) L/n + end_length (f_0 + f_n-1)), M likewise "
-                "with the arms z_i - L/2; delta_i = delta - bulk_compliance F / L + theta (z_i - "
-                "L/2) - relief(z_i); f_loc: the per-length law f with the bulk compliance taken "
-                "out, f(u + bulk_compliance f_loc(u)) = f_loc(u)")
-
-
-class Errors3D(Record):
-    """How far the sliced law is from one 3D FE curve."""
-
-    force_max_rel: float
-    moment_max_rel: float | None   # over the tilted steps; None: the curve has none
-    points: int
-
-
-class Validity3D(Record):
-    approach_m: Range
-    tilt_rad: Range
-    length_m: Range
-
-
 class JointRecord(Record):
     """The joint a per-length law was evaluated for (pinbore.laws.elastic.Joint): radii (m),
     moduli (Pa), Poisson's ratios, and the axial length (m) the laws that need one take."""
@@ -140,6 +109,41 @@ class JointRecord(Record):
         """This joint's materials and law length with the radii (m) of another joint."""
         return elastic.Joint(r_bore, r_pin, self.E_bore, self.nu_bore, self.E_pin, self.nu_pin,
                              self.length)
+
+
+class CurveEntry(Record):
+    """One FE curve the laws were calibrated on."""
+
+    name: str
+    points: int
+    clearance_m: float
+    bore_radius_m: float
+    effective_modulus_Pa: float
+    housing_ratio: float   # housing radius / bore radius
+    similar_materials: bool
+    approach_m: Range
+    persson_half_angle_error_deg: float | None   # None: dissimilar materials
+    joint: JointRecord | None = None   # radii, materials; None: a file of an older pinbore
+
+
+SLICED_MODEL = ("F = scale * (sum_i f_loc(delta_i) L/n + end_length (f_0 + f_n-1)), M likewise "
+                "with the arms z_i - L/2; delta_i = delta - bulk_compliance F / L + theta (z_i - "
+                "L/2) - relief(z_i); f_loc: the per-length law f with the bulk compliance taken "
+                "out, f(u + bulk_compliance f_loc(u)) = f_loc(u)")
+
+
+class Errors3D(Record):
+    """How far the sliced law is from one 3D FE curve."""
+
+    force_max_rel: float
+    moment_max_rel: float | None   # over the tilted steps; None: the curve has none
+    points: int
+
+
+class Validity3D(Record):
+    approach_m: Range
+    tilt_rad: Range
+    length_m: Range
 
 
 SECTION_REACH = 2.0   # the section law holds up to this multiple of the FE's last approach
@@ -284,6 +288,8 @@ class RestitutionLaw(Record):
 
     def restitution(self, speed: float) -> float:
         """e at the impact speed v0 (m/s)."""
+        from pinbore.laws import dissipative   # noqa: PLC0415 (compiled: not to read a file)
+
         return float(dissipative.restitution_of_speed(speed, np.asarray(self.coefficients, float),
                                                       *self.speed_range_m_per_s))
 
@@ -339,6 +345,22 @@ class LawsFile(Record):
         return {name: law.fitted for name, law in self.laws.items() if law.fitted is not None}
 
 
+def curves_joint(laws_data: LawsFile, source: str, remedy: str) -> elastic.Joint:
+    """The one joint (radii, materials, length) of a laws file's curves; a ValueError naming
+    the joints when they are several (the law then needs a joint to be evaluated for) and
+    the `remedy`."""
+    records = ({tuple(c.joint.model_dump().values()) for c in laws_data.curves}
+               if all(c.joint is not None for c in laws_data.curves) else set())
+    if len(records) != 1:
+        found = (f"{len(records)} joints (clearances "
+                 f"{', '.join(sorted({f'{c.clearance_m:.3g} m' for c in laws_data.curves}))})"
+                 if records else "no joint record (an older laws file)")
+        raise ValueError(f"{source}: the curves hold {found}: {remedy}")
+    record = laws_data.curves[0].joint
+    length = laws_data.length_m if laws_data.length_m is not None else record.length
+    return replace(record.joint(record.r_bore, record.r_pin), length=length)
+
+
 def write(path: Path, laws: LawsFile) -> None:
     path.write_text(json.dumps(laws.model_dump(), indent=2) + "\n")
 
@@ -346,3 +368,45 @@ def write(path: Path, laws: LawsFile) -> None:
 def read(path, source: str | None = None) -> LawsFile:
     """laws.json validated; `source` names it in errors (default: its path)."""
     return read_json(LawsFile, path, "calibrate", source)
+
+
+def per_length_force(name: str, laws_data: "LawsFile | None", deltas, joint: elastic.Joint,
+                     where: str) -> np.ndarray:
+    """P(d) (N/m) at the approaches `deltas` (m) of a per-length law by name: a published law
+    (pinbore.laws.elastic.PUBLISHED) or `calibrated:<law>`, the law of `laws_data` fitted on
+    the FE curves (Fit.force), for `joint`. An unknown name is one InputError line naming
+    `where` (the key that gave it) and the valid names. The one resolution of a law's name,
+    for the multibody model and for a Python user (pinbore.laws.load)."""
+    if not name.startswith("calibrated:"):
+        if name not in elastic.PUBLISHED:
+            raise InputError(f"{where}: {name!r} is not a published law; valid: "
+                             f"{', '.join(elastic.PUBLISHED)}")
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the range is the caller's (a table's NaN beyond it)
+            return elastic.PUBLISHED[name](deltas, joint)
+    law = name.split(":", 1)[1]
+    fitted = laws_data.fitted() if laws_data is not None else {}
+    if law not in fitted:
+        raise InputError(f"{where}: {name!r} is not a fitted law of the laws file; valid: "
+                         + (f"calibrated:{', calibrated:'.join(fitted)}" if fitted else "none"))
+    return fitted[law].force(law, deltas, joint)
+
+
+def joint_restitution(laws_data: "LawsFile | None", joint: elastic.Joint,
+                      where: str) -> RestitutionLaw:
+    """The restitution law of `laws_data` fitted on FE impacts of `joint`'s radii and of its
+    pin's and bore's E and nu; none, or several (joints differing only in densities or mass
+    per length, which a multibody joint does not know), is one InputError line naming
+    `where`."""
+    if laws_data is None or not laws_data.restitution:
+        raise InputError(f"{where} needs a laws_file with a restitution law "
+                         "(pinbore calibrate --impacts IMPACT.json ...)")
+    j = joint
+    found = laws_data.restitution_for(j.r_bore, j.r_pin, j.E_pin, j.nu_pin, j.E_bore, j.nu_bore)
+    if len(found) != 1:
+        what = "no restitution law" if not found else f"{len(found)} restitution laws"
+        raise InputError(f"{where}: {what} of the laws file fits the joint (bearing_radius "
+                         f"{j.r_bore:.6g} m, journal_radius {j.r_pin:.6g} m, journal E {j.E_pin:.4g} "
+                         f"Pa nu {j.nu_pin:.4g}, bearing E {j.E_bore:.4g} Pa nu {j.nu_bore:.4g}); "
+                         f"the file has: {'; '.join(laws_data.restitution)}")
+    return next(iter(found.values()))
