@@ -54,6 +54,9 @@ autodoc_typehints = "none"
 autodoc_member_order = "bysource"
 autodoc_default_options = {"members": True, "show-inheritance": False}
 
+# plain text unless a code block names its language (the docstrings, the scene tables' docstrings)
+highlight_language = "text"
+
 html_theme = "alabaster"
 html_title = "pinbore"
 html_static_path = []

@@ -58,7 +58,8 @@ def setup(app):
                     env.note_dependency(module.__file__)
                 section = nodes.section(ids=[nodes.make_id(f"module-section-{name}")],
                                         names=[nodes.fully_normalize_name(name)])
-                section += nodes.title(name, name)
+                title = f"{name} (the package)" if name == package else name
+                section += nodes.title(title, title)
                 text = StringList([f".. automodule:: {name}", ""], source=f"<{package}>")
                 self.state.nested_parse(text, self.content_offset, section)
                 out.append(section)

@@ -393,7 +393,9 @@ def setup(app):
                     sub = nodes.section(ids=[sid], names=[])
                     sub += nodes.title(label, label)
                     if table.doc:
-                        sub += nodes.literal_block(table.doc, table.doc, classes=["docstring"])
+                        block = nodes.literal_block(table.doc, table.doc, classes=["docstring"])
+                        block["language"] = "text"
+                        sub += block
                     rows = [[r.key, r.kind, r.unit, r.default, r.rule] for r in table.rows]
                     sub += grid(["key", "type", "unit", "default", "rule"], rows, [16, 14, 8, 12, 50])
                     (parent.append(sub) if parent is not None else out.append(sub))
