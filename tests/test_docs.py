@@ -84,3 +84,17 @@ def test_docs_build_without_warnings(tmp_path):
                            str(tmp_path / "html")], capture_output=True, text=True, cwd=ROOT)
     assert done.returncode == 0, done.stderr[-4000:]
     assert (tmp_path / "html" / "scenes" / "fem.html").exists()
+
+
+def test_the_docs_extra_admits_the_locked_versions():
+    """pyproject's `docs` extra states ranges, requirements.lock the exact versions `make`
+    installs: each locked documentation package lies in its range."""
+    from packaging.requirements import Requirement
+
+    extra = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["optional-dependencies"]["docs"]
+    locked = dict(line.lower().split("==") for line in (ROOT / "requirements.lock").read_text().split())
+    for text in extra:
+        req = Requirement(text)
+        version = locked.get(req.name.lower())
+        assert version is not None, f"{req.name} is not in requirements.lock"
+        assert req.specifier.contains(version), f"{req.name}=={version} is outside {req.specifier}"
