@@ -11,6 +11,10 @@ from pathlib import Path
 
 DOCS = Path(__file__).resolve().parent
 ROOT = DOCS.parent
+# The pages document the installed pinbore (`make` installs this checkout editable); the
+# repository's root, which `python -m sphinx` run there puts first on the path, holds the
+# roof's folder pinbore/ alone and would shadow it.
+sys.path[:] = [p for p in sys.path if Path(p or ".").resolve() != ROOT]
 sys.path.insert(0, str(DOCS / "_ext"))
 
 project = "pinbore"

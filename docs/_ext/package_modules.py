@@ -51,6 +51,9 @@ def setup(app):
         def run(self):
             package = self.arguments[0]
             env = self.state.document.settings.env
+            if not hasattr(env, "package_modules_docs"):
+                env.package_modules_docs = set()
+            env.package_modules_docs.add(env.docname)
             out = []
             for name in modules(package):
                 module = importlib.import_module(name)
@@ -66,5 +69,21 @@ def setup(app):
             return out
 
     app.add_directive("package-modules", PackageModules)
+
+    def always_outdated(app_, env, added, changed, removed):
+        """The API pages are read again at every build: a module added to a floor is no file
+        they depend on yet."""
+        return sorted(getattr(env, "package_modules_docs", set()) - set(removed))
+
+    def forget(app_, env, docname):
+        getattr(env, "package_modules_docs", set()).discard(docname)
+
+    def merge(app_, env, docnames, other):
+        env.package_modules_docs = getattr(env, "package_modules_docs", set()) | (
+            getattr(other, "package_modules_docs", set()) & set(docnames))
+
+    app.connect("env-get-outdated", always_outdated)
+    app.connect("env-purge-doc", forget)
+    app.connect("env-merge-info", merge)
     app.connect("autodoc-process-docstring", preformatted)
     return {"parallel_read_safe": True, "parallel_write_safe": True, "version": "1"}
