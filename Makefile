@@ -42,7 +42,7 @@ DYNAMICS_CODE := $(wildcard pinbore/cli.py reduced/dynamics/*.py) $(REDUCED_CODE
 DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(DYNAMICS_CODE)
 SPATIAL_DYNAMICS_DEPS := $(SPATIAL_DYNAMICS_SCENE) $(DYNAMICS_CODE)
 
-.PHONY: all venv mesh fem impact modes calibration reduced dynamics report bench stress test test-slow clean help
+.PHONY: all venv mesh fem impact modes calibration reduced dynamics report bench stress test test-slow docs clean help
 .DELETE_ON_ERROR:
 
 all: report ## set up .venv, run the default scenes, build the report (the main job)
@@ -151,6 +151,13 @@ test: $(STAMP) ## run the test suite (what CI runs)
 
 test-slow: $(STAMP) ## run the long tests too
 	$(PY) -m pytest -n 2 tests
+
+# the scenes' JSON Schemas (docs/schemas/) rewritten where a scene model changed, then the
+# site; -n: every reference must resolve; -W --keep-going: every warning shown, then a failure
+docs: $(STAMP) ## build the documentation into build/docs/html (Sphinx + MyST, offline; warnings are errors)
+	$(PY) docs/_ext/scene_reference.py
+	$(PY) -m sphinx -W --keep-going -n -q -b html -d build/docs/doctrees docs build/docs/html
+	@echo "docs: $(abspath build/docs/html/index.html)"
 
 clean: ## remove build/ (keeps .venv)
 	rm -rf build
