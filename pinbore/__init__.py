@@ -12,3 +12,22 @@ from the floors below it:
     pinbore.reduced      reduced/       multibody models with clearance joints, nonlinear dynamics
     pinbore.cli, pinbore.report  pinbore/   the roof: the `pinbore` command and the HTML report
 """
+
+API = ("scene", "run", "calibrate")   # pinbore.api: scenes and stages in process
+FLOORS = ("core", "laws", "meshes", "fem", "calibration", "reduced")
+
+
+def __getattr__(name):
+    """`pinbore.run(...)`, `pinbore.laws.load(...)`, `pinbore.__version__`: loaded on first use,
+    so that importing a floor (every floor is a subpackage of this one) loads none of them."""
+    import importlib   # noqa: PLC0415
+
+    if name in API:
+        return getattr(importlib.import_module("pinbore.api"), name)
+    if name in FLOORS:
+        return importlib.import_module(f"pinbore.{name}")
+    if name == "__version__":
+        from pinbore.cli import version   # noqa: PLC0415
+
+        return version()
+    raise AttributeError(f"module 'pinbore' has no attribute {name!r}")

@@ -1,0 +1,139 @@
+"""pinbore from Python: each stage run in process on a scene file or a dict, its result read
+back as a typed object (the model of the file the stage wrote, that the next stage reads).
+
+    import pinbore
+    curve = pinbore.run("fem", "scenes/fem/steel_c100um.toml", out="build/api/fem")   # Curve
+    laws = pinbore.calibrate(["build/api/fem/curve.csv"], out="build/api/cal")        # LawsFile
+    summary = pinbore.run("reduced", {"kind": "reduced", ...}, out="build/api/run")   # Summary
+    pinbore.laws.load("build/api/cal/laws.json")["liu"](2e-6)                         # N
+
+A stage is the command's own function (what `pinbore <command>` runs): the same checks, the
+same atomic output folder. Bad input raises pinbore.core.errors.InputError with the command's
+one line; a run that stops early (non-convergence, a blow-up) still returns what it kept,
+marked in its status (`result.status`, `summary.status`). A scene given as a dict is written
+as TOML beside nothing of the user's: to a temporary file, its `*_file` keys made absolute
+against `base` (default: the working folder), as a scene file's are against its folder.
+"""
+
+import tempfile
+from pathlib import Path
+
+from pinbore.core import scene as scenes
+from pinbore.core.output import declared_inputs
+
+def _absolute(node, base: Path):
+    """The dict with every `*_file` string and `*_files` list made absolute against base."""
+    if isinstance(node, dict):
+        out = {}
+        for key, value in node.items():
+            if key.endswith("_file") and isinstance(value, str):
+                out[key] = str(base / value)
+            elif key.endswith("_files") and isinstance(value, list):
+                out[key] = [str(base / v) if isinstance(v, str) else v for v in value]
+            else:
+                out[key] = _absolute(value, base)
+        return out
+    if isinstance(node, list):
+        return [_absolute(v, base) for v in node]
+    return node
+
+
+def _scene_file(scene, base) -> tuple[Path, tempfile.TemporaryDirectory | None]:
+    """(the scene's file, the temporary folder holding it when the scene is a dict)."""
+    if not isinstance(scene, dict):
+        return Path(scene), None
+    import tomli_w   # noqa: PLC0415
+
+    folder = tempfile.TemporaryDirectory(prefix="pinbore-scene-")
+    path = Path(folder.name) / "scene.toml"
+    path.write_text(tomli_w.dumps(_absolute(scene, Path(base or ".").resolve())))
+    return path, folder
+
+
+def scene(source, base=None):
+    """The validated scene model of a file or a dict, by its `kind` (fem, impact, reduced,
+    spatial; a modes scene has none, but a [body] table)."""
+    from pinbore.core.errors import InputError   # noqa: PLC0415
+
+    path, folder = _scene_file(source, base)
+    try:
+        data = scenes.read_toml(path)
+        kind = data.get("kind", "modes" if "body" in data else None)
+        if kind in ("reduced", "spatial"):
+            from pinbore.reduced.mechanism import kinds   # noqa: PLC0415
+
+            return kinds.load(path)
+        if kind == "fem":
+            from pinbore.fem.scene import FemScene as model   # noqa: PLC0415
+        elif kind == "impact":
+            from pinbore.fem.impact.scene import ImpactScene as model   # noqa: PLC0415
+        elif kind == "modes":
+            from pinbore.fem.modes.scene import ModesScene as model   # noqa: PLC0415
+        else:
+            raise InputError(f"{source if folder is None else 'scene'}: kind: {kind!r} is unknown; "
+                             "valid: fem, impact, reduced, spatial (a modes scene: a [body] table)")
+        return scenes.load(model, path)
+    finally:
+        if folder is not None:
+            folder.cleanup()
+
+
+def _fem(out):
+    from pinbore.fem import curve, run   # noqa: PLC0415
+
+    return run.run, lambda: curve.read(out / "curve.csv")
+
+
+def _impact(out):
+    from pinbore.fem.impact import file, run   # noqa: PLC0415
+
+    return run.run, lambda: file.read_summary(out / "impact.json")
+
+
+def _modes(out):
+    from pinbore.fem.modes import file, run   # noqa: PLC0415
+
+    return run.run, lambda: file.read(out / "body.npz")
+
+
+def _reduced(out):
+    from pinbore.reduced.mechanism import run, summary   # noqa: PLC0415
+
+    return run.run, lambda: summary.read(out / "summary.json")
+
+
+# stage -> (its run function, the reader of its result), and what the result is
+STAGES = {"fem": _fem,           # the load-approach curve, pinbore.fem.curve.Curve
+          "impact": _impact,     # the impact's summary, pinbore.fem.impact.file.ImpactSummary
+          "modes": _modes,       # the reduced body, pinbore.fem.modes.file.ReducedBody
+          "reduced": _reduced}   # the mechanism's summary, pinbore.reduced.mechanism.summary.Summary
+
+
+def run(stage: str, source, out, base=None):
+    """Run a scene (a file or a dict) through `stage` (fem, impact, modes, reduced) as
+    `pinbore <stage> SCENE --out OUT` would, in process (the scene and the files it names
+    declared as inputs, which `out` may not hold); its result, read back typed."""
+    if stage not in STAGES:
+        raise ValueError(f"stage: {stage!r} is unknown; valid: {', '.join(STAGES)}")
+    out = Path(out)
+    runner, result = STAGES[stage](out)
+    path, folder = _scene_file(source, base)
+    try:
+        with declared_inputs([path, *scenes.referenced_files(path)]):
+            runner(path, out)
+    finally:
+        if folder is not None:
+            folder.cleanup()
+    return result()
+
+
+def calibrate(curves, out, length=None, per_length=None, impacts=()):
+    """Fit and rank the laws on FE curves (curve.csv paths), the restitution on FE impacts
+    (impact.json paths): the laws file (pinbore.laws.lawsfile.LawsFile)."""
+    from pinbore.calibration import run   # noqa: PLC0415
+    from pinbore.laws import lawsfile   # noqa: PLC0415
+
+    curves, impacts = [str(c) for c in curves], [str(i) for i in impacts]
+    with declared_inputs([*curves, *impacts]):
+        run.run(curves, out, length, per_length, impacts)
+    return lawsfile.read(Path(out) / "laws.json")

@@ -1,0 +1,46 @@
+"""pinbore from Python (pinbore.api): the tour of the documentation run in process, mesh to
+FE to calibration to the multibody model, each result read back typed; a scene as a dict."""
+
+import math
+
+import pytest
+from conftest import ROOT, scene_dict
+
+import pinbore as pb   # `pinbore` is conftest's command
+from pinbore.core.errors import InputError
+
+
+def test_the_tour_in_process(tmp_path):
+    """FE curve -> laws -> the calibrated law: the law that calibrate ranks on the curve gives
+    the curve's forces within the error laws.json states for it (each stage's result as the
+    next stage reads it)."""
+    curve = pb.run("fem", scene_dict(load={"steps": 4}), tmp_path / "fem")
+    assert curve.dim == 2 and len(curve.approach) == 4
+    laws = pb.calibrate([tmp_path / "fem" / "curve.csv"], tmp_path / "cal")
+    law = pb.laws.load(tmp_path / "cal" / "laws.json")["liu"]
+    stated = max(e.max_rel for e in laws.laws["liu"].fitted_errors.values())
+    for d, p in zip(curve.approach, curve.force):
+        if d > 0:
+            assert law.per_length(d) == pytest.approx(p, rel=stated + 1e-9)
+
+
+def test_a_mechanism_from_a_dict(tmp_path):
+    """The Flores slider-crank as a dict (a tenth of a crank turn), run as `pinbore reduced`
+    runs it: its summary read back; the crank's constant speed gives the duration's angle."""
+    import tomllib
+    data = tomllib.loads((ROOT / "scenes/reduced/slider_crank_flores2004.toml").read_text())
+    data["duration"] = 0.0012
+    summary = pb.run("reduced", data, tmp_path / "run")
+    assert summary.status == "complete"
+    assert summary.time_reached_s == pytest.approx(0.0012)
+    assert type(pb.scene(data)).__name__ == "ReducedScene"
+    assert math.isfinite(summary.clearance_joints["rod_slider"].peak_normal_force_N)
+
+
+def test_a_bad_scene_dict_is_one_input_error(tmp_path):
+    with pytest.raises(InputError, match="kind: 'gearbox' is unknown"):
+        pb.scene({"kind": "gearbox"})
+    with pytest.raises(InputError, match="mass"):
+        pb.scene({"kind": "reduced", "duration": 1.0, "bodies": [{"name": "a", "mass": -1.0}]})
+    with pytest.raises(ValueError, match="stage: 'mesh' is unknown"):
+        pb.run("mesh", scene_dict(), tmp_path / "x")
