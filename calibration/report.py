@@ -22,6 +22,44 @@ def _pooled(errors: dict[str, lawsfile.Errors], points: dict) -> str:
     return _pct(np.sqrt(np.mean([e.rms_rel ** 2 for e in errors.values()])))
 
 
+def answers(build_dir: Path) -> list[tuple[str, str]]:
+    """The report's first screen: per materials pair, the calibrated law of least RMS error
+    over its FE curves (and its largest error), and per joint of the FE impacts, the
+    restitution over their speeds. Empty without a calibration."""
+    path = build_dir / "calibration" / "laws.json"
+    if not path.exists():
+        return []
+    data = lawsfile.read(path)
+    out = []
+    groups = {}
+    for c in data.curves:
+        label = (f"pin E {c.joint.E_pin / 1e9:.0f} GPa in bore E {c.joint.E_bore / 1e9:.0f} GPa"
+                 if c.joint is not None else f"E* {c.effective_modulus_Pa / 1e9:.0f} GPa")
+        groups.setdefault(label, []).append(c)
+    for label, curves in groups.items():
+        names = [c.name for c in curves]
+        scored = {name: (float(np.sqrt(np.mean([law.fitted_errors[n].rms_rel ** 2 for n in names]))),
+                         max(law.fitted_errors[n].max_rel for n in names))
+                  for name, law in data.laws.items()
+                  if law.fitted_errors and all(n in law.fitted_errors for n in names)}
+        if scored:
+            best = min(scored, key=lambda n: scored[n][0])
+            clear = [c.clearance_m for c in curves]
+            out.append((f"Contact law, {label} (c {min(clear) * 1e6:.0f}-{max(clear) * 1e6:.0f} &micro;m)",
+                        f"<code>calibrated:{best}</code>: RMS error {_pct(scored[best][0])}, "
+                        f"largest {_pct(scored[best][1])} over {len(curves)} FE curves"))
+    for key, law in data.restitution.items():
+        low, high = law.speed_range_m_per_s
+        joint = key.split(" | m=")[0] if law.joint is None else (
+            f"pin E {law.joint.pin_E_Pa / 1e9:.0f} GPa in bore E {law.joint.bore_E_Pa / 1e9:.0f} GPa"
+            f"{' (plastic)' if law.joint.bore_plasticity else ''}, "
+            f"c {(law.joint.bore_radius_m - law.joint.pin_radius_m) * 1e6:.0f} &micro;m")
+        out.append((f"Restitution, {joint}",
+                    f"e = {law.restitution(low):.3f} at {low:g} m/s to {law.restitution(high):.3f} "
+                    f"at {high:g} m/s (fit within {law.max_fit_error:.1e} of the FE impacts)"))
+    return out
+
+
 def section(build_dir: Path, bench_dir: Path) -> str:
     folder = build_dir / "calibration"
     parts = ["<h2>Contact laws calibrated on the FE curves</h2>"]

@@ -11,10 +11,9 @@ import warnings
 
 import numpy as np
 
-from pinbore.calibration import figures, restitution, sliced
+from pinbore.calibration import restitution
 from pinbore.calibration.curves import Curve
 from pinbore.calibration.curves import read_all
-from pinbore.calibration.fit import NotFitted, errors, fit
 from pinbore.core.errors import InputError
 from pinbore.core.output import atomic_directory
 from pinbore.laws import elastic, lawsfile
@@ -23,6 +22,8 @@ from pinbore.laws.lawsfile import LAWS, law_force
 
 def evaluate(curves):
     """Published and fitted errors of every law on every curve: {law: {...}}."""
+    from pinbore.calibration.fit import NotFitted, errors, fit   # noqa: PLC0415 (SciPy: after the checks)
+
     table = {}
     for name in LAWS:
         try:
@@ -42,6 +43,8 @@ def evaluate(curves):
 
 def ranking(curves, table):
     """Best published and best fitted law per curve and load range (lighter / heavier half)."""
+    from pinbore.calibration.fit import errors   # noqa: PLC0415
+
     rows = []
     for c in curves:
         half = c.approach.size // 2
@@ -113,12 +116,14 @@ def persson_error(curve):
     return float(np.max(np.abs(curve.half_angle - closed)))
 
 
-def per_length(name: str | None, table, curves, curves_3d) -> sliced.PerLength:
+def per_length(name: str | None, table, curves, curves_3d) -> "pinbore.calibration.sliced.PerLength":
     """The per-length law of the sliced 3D law: `name` is a published law, calibrated:<law>,
     or section (the 2D FE curve of each 3D curve's own plane section: radii, housing, hub,
     materials). None: section when every 3D curve has its section among the 2D curves (the
     exact plane-strain law of the joint: the calibrated laws miss it by 6-42 % at c/R = 3e-3),
     else the fitted law with the smallest mean RMS error over the 2D curves."""
+    from pinbore.calibration import sliced   # noqa: PLC0415
+
     sections = {c.section: c for c in curves}
     fitted = {n: e["fit"] for n, e in table.items() if e["fit"] is not None and n != "linear"}
     if name is None:
@@ -157,6 +162,8 @@ def per_length(name: str | None, table, curves, curves_3d) -> sliced.PerLength:
 def run(paths, out, length=None, per_length_name=None, impacts=()) -> int:
     read = read_all(paths, length)
     restitution_laws = restitution.fit_all(impacts) if impacts else {}
+    # the inputs read and checked: now the fits' and the figures' libraries
+    from pinbore.calibration import figures, sliced   # noqa: PLC0415
     curves = [c for c in read if isinstance(c, Curve)]
     curves_3d = [c for c in read if not isinstance(c, Curve)]
     if not curves:

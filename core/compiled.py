@@ -6,18 +6,21 @@ constants of other files would keep running stale code after an edit there alone
 calls `follow_compiled_in(globals(), files)` at its end: a digest of those files, kept
 beside the cache, drops the module's cache index when they change, and its functions
 compile afresh once.
+
+A module may also leave its functions uncompiled until first use (`compile_on_use`), so that
+importing it, e.g. to validate a scene, does not load numba.
 """
 
 import hashlib
 from pathlib import Path
-
-import numba
 
 
 def follow_compiled_in(namespace: dict, files) -> None:
     """Flush the cache of the compiled functions defined in the module whose globals are
     `namespace` if the files `files` (those its compiled code calls into) changed since the
     cache was last stamped."""
+    import numba   # noqa: PLC0415 (a module that calls this has loaded it)
+
     module = namespace["__name__"]
     compiled = [f for f in namespace.values()
                 if isinstance(f, numba.core.registry.CPUDispatcher) and f.py_func.__module__ == module]
@@ -33,3 +36,25 @@ def follow_compiled_in(namespace: dict, files) -> None:
         stamp.write_text(digest)
     except OSError:
         pass   # no writable cache: numba compiles afresh anyway
+
+
+def compile_on_use(namespace: dict, options: dict[str, dict]):
+    """The plain functions of a module (its globals `namespace`) named by `options` (name ->
+    numba.njit's options), compiled on first use: they leave the module's globals, and the
+    returned function, which the module takes as its __getattr__, compiles them all, in
+    `options`' order (one may call another, a global by then), the first time one is asked
+    for (`module.name` or `from module import name`) and returns it. Code of the module itself
+    reaches them through that function."""
+    plain = {name: namespace.pop(name) for name in options}
+
+    def compiled(name: str):
+        if name not in plain:
+            raise AttributeError(f"module {namespace['__name__']!r} has no attribute {name!r}")
+        if name not in namespace:
+            import numba   # noqa: PLC0415
+
+            for each, function in plain.items():
+                namespace[each] = numba.njit(**options[each])(function)
+        return namespace[name]
+
+    return compiled

@@ -10,18 +10,22 @@ import html
 import io
 from pathlib import Path
 
-from pinbore.core.figures import save_png
-
 STYLE = """
 body { font-family: system-ui, sans-serif; max-width: 1100px; margin: 2em auto; color: #222;
        line-height: 1.45; padding: 0 1em; }
 h1 { border-bottom: 2px solid #446; } h2 { margin-top: 2em; border-bottom: 1px solid #aaa; }
 figure { margin: 1.5em 0; } figure img { max-width: 100%; border: 1px solid #ddd; }
 figcaption { font-size: 0.92em; color: #444; }
-table { border-collapse: collapse; font-size: 0.9em; margin: 1em 0; }
+table { border-collapse: collapse; font-size: 0.9em; margin: 1em 0; display: block;
+        max-width: 100%; overflow-x: auto; }
 td, th { border: 1px solid #bbb; padding: 0.25em 0.6em; text-align: right; }
 th { background: #eef; } td:first-child, th:first-child { text-align: left; }
 .note { background: #f6f6f0; border-left: 4px solid #cc8; padding: 0.5em 1em; }
+pre, code { overflow-wrap: anywhere; } pre { white-space: pre-wrap; }
+details > summary { cursor: pointer; } details > summary h2 { display: inline-block; margin: 1em 0 0; }
+.answers { background: #f3f6fb; border: 1px solid #ccd; padding: 0 1em; }
+.answers h2 { margin-top: 0.5em; } .answers th { background: none; text-align: left; }
+.answers td { text-align: left; } nav ol { columns: 2; }
 """
 
 
@@ -32,6 +36,8 @@ def png_data(path: Path) -> str:
 
 def figure_data(fig) -> str:
     """A matplotlib figure as base64 PNG (through save_png: no metadata; closed)."""
+    from pinbore.core.figures import save_png   # noqa: PLC0415 (the page's style loads no matplotlib)
+
     buffer = io.BytesIO()
     save_png(fig, buffer, dpi=100)
     return base64.b64encode(buffer.getvalue()).decode()

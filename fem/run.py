@@ -16,9 +16,10 @@ from pinbore.fem import model, outputs
 from pinbore.fem.scene import FemScene
 
 
-def run(scene_path, out, comm=MPI.COMM_WORLD) -> int:
-    """Solve and write DIR; 0 when every step converged, 1 when the run stopped early."""
-    scene = scenes.load(FemScene, scene_path)
+def run(scene_path, out, comm=MPI.COMM_WORLD, scene: FemScene | None = None) -> int:
+    """Solve and write DIR; 0 when every step converged, 1 when the run stopped early.
+    `scene`: the scene file's model when the caller validated it already."""
+    scene = scenes.load(FemScene, scene_path) if scene is None else scene
     start = time.perf_counter()
     with atomic_directory(out, comm) as tmp:
         stepper, el, contact, sizing, data = model.build(scene, comm)

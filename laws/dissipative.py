@@ -10,11 +10,9 @@ named after their authors return chi(e). None of them reproduces its target e ex
 import math
 from typing import NamedTuple
 
-import numba
 import numpy as np
-from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
 
+from pinbore.core.compiled import compile_on_use
 from pinbore.laws.elastic import warn_once
 
 
@@ -78,7 +76,6 @@ HYSTERESIS = {f.__name__: f for f in (hunt_crossley, lankarani_nikravesh, lee_wa
                                        hu_guo)}
 
 
-@numba.njit(cache=True, _nrt=False)
 def hysteresis_force(elastic, rate, impact_speed, chi):
     """F = max(F_el (1 + chi d' / v0), 0): the Hunt-Crossley family (N, or N/m with F_el per
     length), never pulling (the bracket turns negative when the bodies separate faster than
@@ -131,6 +128,8 @@ def impact(force, mass, speed) -> Impact:
     """One impact of a mass m meeting a force law F(d, d') at speed v0: m d'' = -F, d(0) = 0,
     d'(0) = v0, until d returns to 0 (DOP853, rtol 1e-11). The effective restitution
     e = |d'_out| / v0, the contact duration and the largest approach (at d' = 0)."""
+    from scipy.integrate import solve_ivp   # noqa: PLC0415 (a scene validates without SciPy)
+
     def rhs(_, y):
         return [y[1], -force(y[0], y[1]) / mass]
 
@@ -161,7 +160,6 @@ def restitution(force, mass, speed):
 
 
 
-@numba.njit(cache=True)
 def hysteresis_for_restitution(e):
     """chi of the Hunt-Crossley force F = F_el(d) (1 + chi d'/v0) [HuntCrossley1975] that
     rebounds with exactly e, for any elastic law F_el (ours). With u = d'/v0 and the elastic
@@ -189,7 +187,6 @@ def hysteresis_for_restitution(e):
     return chi
 
 
-@numba.njit(cache=True)
 def restitution_of_speed(speed, coefficients, low, high):
     """e(v0) = sum_k a_k x^k, x = ln(v0 / 1 m/s), coefficients (a_0, a_1, ...): the
     restitution of FE impacts fitted against the impact speed (ours;
@@ -200,3 +197,10 @@ def restitution_of_speed(speed, coefficients, low, high):
     for k in range(len(coefficients) - 1, -1, -1):
         e = e * x + coefficients[k]
     return min(max(e, 1e-6), 1.0)
+
+
+# compiled on first use: a scene's validation reads the hysteresis laws without numba
+__getattr__ = compile_on_use(globals(), {
+    "hysteresis_force": {"cache": True, "_nrt": False},
+    "hysteresis_for_restitution": {"cache": True},
+    "restitution_of_speed": {"cache": True}})

@@ -8,17 +8,18 @@ cylinder, to `depth` d (m) more at the end face. At a distance x into the reliev
 
 R the arc's radius (r(l) = d fixes it). Plain geometry; the FE contact (pinbore.fem.contact)
 sees this exact profile, the sliced joint law (pinbore.laws.sliced) the same formula, compiled
-here once for both.
+here once for both. Compiled on first use (core.compiled.compile_on_use): a scene that names a
+relief validates without loading numba.
 """
 
 import math
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
+from pinbore.core.compiled import compile_on_use
 
-@numba.njit(cache=True)
+
 def relief_at(z, z_low, z_high, length, depth):
     """Extra radius r (m), its slope dr/dz (-) and curvature d2r/dz2 (1/m) at the axial
     position z of a bore spanning z_low <= z <= z_high, relieved over `length` (m) from each
@@ -31,7 +32,6 @@ def relief_at(z, z_low, z_high, length, depth):
     return r - root, side * into / root, r**2 / root**3 if into > 0 else 0.0
 
 
-@numba.njit(cache=True)
 def relief_profile(z, z_low, z_high, length, depth):
     """`relief_at` at every point of the 1-D array z: three arrays (m, -, 1/m)."""
     out = np.empty((3, z.size))
@@ -52,5 +52,11 @@ class Relief:
     def profile(self, z, z_low, z_high):
         """delta(z), delta'(z), delta''(z) (m, -, 1/m) of the bore between z_low and z_high."""
         z = np.asarray(z, dtype=float)
-        out = relief_profile(z.ravel(), float(z_low), float(z_high), self.length, self.depth)
+        out = __getattr__("relief_profile")(z.ravel(), float(z_low), float(z_high), self.length,
+                                          self.depth)
         return tuple(a.reshape(z.shape) for a in out)
+
+
+
+__getattr__ = compile_on_use(globals(), {"relief_at": {"cache": True},
+                                         "relief_profile": {"cache": True}})

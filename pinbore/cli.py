@@ -22,9 +22,10 @@ def _mesh(args) -> int:
     from pinbore.core import scene as scenes
     from pinbore.core.output import atomic_directory
     from pinbore.fem.scene import FemScene   # the scene model only: no DOLFINx to mesh
+
+    scene = scenes.load(FemScene, args.scene)   # validated before Gmsh and matplotlib load
     from pinbore.meshes import run as mesh_run
 
-    scene = scenes.load(FemScene, args.scene)
     with atomic_directory(args.out) as tmp:
         mesh_run.write(scene.geometry, scene.sizing, scene.load.direction_deg,
                        scene.mesh_options, tmp)
@@ -32,9 +33,13 @@ def _mesh(args) -> int:
 
 
 def _fem(args) -> int:
+    from pinbore.core import scene as scenes
+    from pinbore.fem.scene import FemScene   # the scene model only: no DOLFINx yet
+
+    scene = scenes.load(FemScene, args.scene)
     from pinbore.fem import run as fem_run
 
-    return fem_run.run(args.scene, args.out)
+    return fem_run.run(args.scene, args.out, scene=scene)
 
 
 def _impact(args) -> int:

@@ -6,27 +6,58 @@ function of the files it reads: built again from the same files it is the same.
 """
 
 import html
+import importlib
+import re
 from pathlib import Path
 
-from pinbore.calibration import report as calibration_report
 from pinbore.core.errors import InputError
 from pinbore.core.html import STYLE
 from pinbore.core.output import atomic_directory
-from pinbore.fem import report as fem_report
-from pinbore.fem.impact import report as impact_report
-from pinbore.fem.modes import report as modes_report
-from pinbore.reduced import report as reduced_report
 
-
-# (heading, section): each a function of what its stage wrote under build/ (and of bench/)
+# (heading, module, function): each section a function of what its stage wrote under build/
+# (and of bench/), imported when the page is built (a bad --build answers before any loads)
 SECTIONS = [
-    ("FE contact", lambda build, bench: fem_report.section(build, bench)),
-    ("dynamic impacts", lambda build, bench: impact_report.section(build, bench)),
-    ("flexible bodies", lambda build, bench: modes_report.section(build, bench)),
-    ("calibration", lambda build, bench: calibration_report.section(build, bench)),
-    ("reduced models", lambda build, bench: reduced_report.section(build, bench)),
-    ("nonlinear dynamics", lambda build, bench: reduced_report.dynamics_section(build)),
+    ("FE contact", "pinbore.fem.report", "section"),
+    ("dynamic impacts", "pinbore.fem.impact.report", "section"),
+    ("flexible bodies", "pinbore.fem.modes.report", "section"),
+    ("calibration", "pinbore.calibration.report", "section"),
+    ("reduced models", "pinbore.reduced.report", "section"),
+    ("nonlinear dynamics", "pinbore.reduced.report", "dynamics_section"),
 ]
+# the first screen's answers: (module, function) -> [(question, answer HTML)]
+ANSWERS = [("pinbore.calibration.report", "answers"), ("pinbore.reduced.report", "answers")]
+HEADING = re.compile(r"^<h2>(.*?)</h2>", re.S)
+
+
+def _call(module: str, function: str, *args):
+    return getattr(importlib.import_module(module), function)(*args)
+
+
+def folded(index: int, heading: str, content: str) -> tuple[str, str]:
+    """(the section as a <details> block that folds, open, under its own heading, with an
+    anchor; its entry in the table of contents)."""
+    match = HEADING.match(content)
+    title = match.group(1) if match else html.escape(heading)
+    body = content[match.end():] if match else content
+    anchor = f"section-{index}"
+    return (f"<details open id='{anchor}'><summary><h2>{title}</h2></summary>{body}</details>",
+            f"<li><a href='#{anchor}'>{title}</a></li>")
+
+
+def answers_box(build_dir: Path) -> str:
+    """The first screen: what the results answer, each with its number (a stage without
+    results says nothing here)."""
+    rows = []
+    for module, function in ANSWERS:
+        try:
+            rows += _call(module, function, build_dir)
+        except Exception:   # noqa: BLE001 (its section, reading the same files, says why)
+            rows.append((html.escape(module.split(".")[1]), "not available: its files do not "
+                         "read (see its section)"))
+    if not rows:
+        return "<p class='note'>No results to answer from yet: run <code>make</code>.</p>"
+    items = "".join(f"<tr><th>{q}</th><td>{a}</td></tr>" for q, a in rows)
+    return f"<section class='answers'><h2>Answers</h2><table>{items}</table></section>"
 
 
 def build(build_dir, out) -> tuple[Path, list[str]]:
@@ -41,22 +72,28 @@ def build(build_dir, out) -> tuple[Path, list[str]]:
     if not build_dir.is_dir():
         raise InputError(f"--build {build_dir}: not a directory of results (run make first)")
     bench = Path("bench")
-    sections, problems = [], []
-    for heading, section in SECTIONS:
+    sections, contents, problems = [], [], []
+    for index, (heading, module, function) in enumerate(SECTIONS):
         try:
-            sections.append(section(build_dir, bench))
+            content = _call(module, function, build_dir, *(() if function == "dynamics_section" else (bench,)))
         except Exception as err:   # noqa: BLE001 (a section fails alone, whatever broke it)
             why = str(err) if isinstance(err, InputError) else (
                 f"its files do not read as expected ({type(err).__name__}: {err})")
             problems.append(f"{heading} section left out: {why}")
-            sections.append(f"<h2>{html.escape(heading)}</h2><p class='note'>Not built: "
-                            f"{html.escape(why)}</p>")
+            content = (f"<h2>{html.escape(heading)}</h2><p class='note'>Not built: "
+                       f"{html.escape(why)}</p>")
+        block, entry = folded(index, heading, content)
+        sections.append(block)
+        contents.append(entry)
     page = ("<!DOCTYPE html><html lang='en'><head><meta charset='utf-8'>"
+            "<meta name='viewport' content='width=device-width, initial-scale=1'>"
             f"<title>pinbore report</title><style>{STYLE}</style></head><body>"
             "<h1>pinbore: contact in pin-in-bore (revolute clearance) joints</h1>"
             "<p>Finite-element contact of a pin in a bore (DOLFINx), calibration of the contact "
             "laws and reduced multibody models. Units SI; 2D forces are per unit length "
-            "(N/m).</p>" + "".join(sections) + "</body></html>\n")
+            "(N/m).</p>" + answers_box(build_dir)
+            + f"<nav><h2>Contents</h2><ol>{''.join(contents)}</ol></nav>"
+            + "".join(sections) + "</body></html>\n")
     with atomic_directory(out) as tmp:
         (tmp / "index.html").write_text(page, encoding="utf-8")
     return Path(out) / "index.html", problems

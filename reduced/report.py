@@ -11,6 +11,36 @@ from pinbore.core.scene import load_json
 from pinbore.reduced.mechanism import kinds, summary
 
 
+def answers(build_dir: Path) -> list[tuple[str, str]]:
+    """The report's first screen: for each mechanism run on a calibrated law beside its twin
+    on the published law (scenes X_calibrated and X), the peak contact force of both; the
+    continued response's bifurcations."""
+    out = []
+    runs = {path.parent.name: path for path in sorted((build_dir / "reduced").glob("*/summary.json"))}
+    for name, path in runs.items():
+        twin = name.removesuffix("_calibrated")
+        if twin == name or twin not in runs:
+            continue
+        calibrated, published = summary.read(path), summary.read(runs[twin])
+        change = calibrated.peak_normal_force_N / published.peak_normal_force_N - 1
+        out.append((f"Peak joint force, {html.escape(twin)}",
+                    f"{calibrated.peak_normal_force_N / 1e3:.3g} kN on the calibrated law, "
+                    f"{published.peak_normal_force_N / 1e3:.3g} kN on the published one "
+                    f"({change:+.0%}); {calibrated.impacts} impacts"))
+    path = build_dir / "dynamics" / "continuation" / "summary.json"
+    if path.exists():
+        s = load_json(path, "dynamics")
+        kinds_found = {}
+        for b in s.get("bifurcations", []):
+            kinds_found.setdefault(b["kind"].replace("_", " "), []).append(f"{b['value']:.4g}")
+        unit = {"frequency": " Hz", "speed": " rpm", "clearance": " m"}.get(s["parameter"], "")
+        out.append((f"Periodic response, {html.escape(Path(s['scene_file']).stem)}",
+                    f"{s['points']} orbits over {html.escape(s['parameter'])}; "
+                    + ("; ".join(f"{k} at {', '.join(v)}{unit}" for k, v in kinds_found.items())
+                       or "no bifurcation")))
+    return out
+
+
 def section(build_dir: Path, bench_dir: Path) -> str:
     runs = sorted((build_dir / "reduced").glob("*/summary.json"))
     parts = ["<h2>Mechanisms with clearance joints (reduced model)</h2>",

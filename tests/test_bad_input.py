@@ -215,3 +215,39 @@ def test_report_out_that_cannot_be_written_is_one_line(tmp_path):
     done = pinbore("report", "--build", tmp_path / "build", "--out", tmp_path / "a_file" / "report")
     assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1
     assert "is a file, not a directory" in done.stderr and (tmp_path / "a_file").read_text() == "x"
+
+
+# every command answers bad input in well under a second of CPU: the scene models and the
+# seams validate before numba, DOLFINx, SciPy's solvers, Gmsh or matplotlib load. Measured
+# 0.3-0.8 s here (most of it Python, NumPy, pydantic and MPI starting); 1.2 s leaves room for
+# a slower machine's imports while a command that loaded any of those (1.5-3 s) fails.
+BAD = {
+    "mesh": ("bad.toml", 'kind = "fem"\n[geometry]\nbore_radius = -1.0\n'),
+    "fem": ("bad.toml", 'kind = "fem"\n[geometry]\nbore_radius = -1.0\n'),
+    "impact": ("bad.toml", 'kind = "impact"\n'),
+    "modes": ("bad.toml", '[body]\nshape = "bar"\n'),
+    "reduced": ("bad.toml", 'kind = "reduced"\nduration = 1.0\n[[bodies]]\nname = "a"\nmass = -1.0\n'),
+    "dynamics": ("bad.toml", 'kind = "reduced"\nduration = 1.0\n[[bodies]]\nname = "a"\nmass = -1.0\n'),
+    "calibrate": ("curve.csv", "approach_m\n1\n"),
+    "export": ("laws.json", "{}"),
+    "report": ("absent", None),
+}
+
+
+@pytest.mark.parametrize("command", list(BAD))
+def test_bad_input_is_answered_in_well_under_a_second_of_cpu(tmp_path, command):
+    import resource
+    name, text = BAD[command]
+    if text is not None:
+        (tmp_path / name).write_text(text)
+    args = {"dynamics": ["--analysis", "poincare"], "export": ["--to", "table"]}.get(command, [])
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    if command == "report":
+        done = pinbore("report", "--build", tmp_path / name, "--out", tmp_path / "out")
+    else:
+        done = pinbore(command, tmp_path / name, *args, "--out", tmp_path / "out")
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stderr
+    assert cpu < 1.2, f"{command}: {cpu:.2f} s of CPU to refuse bad input"
+    assert not (tmp_path / "out").exists()
