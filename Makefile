@@ -7,6 +7,9 @@ PY := $(VENV)/bin/python
 PINBORE := $(VENV)/bin/pinbore
 STAMP := $(VENV)/.installed
 NP ?= 1
+# parallel jobs by default, one per core (JOBS=1 for one job at a time, in order)
+JOBS ?= $(shell nproc 2>/dev/null || echo 1)
+MAKEFLAGS += --jobs=$(JOBS)
 
 # Python 3.12 (DOLFINx wheels need >= 3.12): the first candidate that runs and is 3.12
 # (a pyenv shim on PATH may not run), from PATH, then the pyenv installs, newest first.
@@ -49,7 +52,7 @@ all: report ## set up .venv, run the default scenes, build the report (the main 
 
 help: ## list the targets
 	@grep -E '^[a-z-]+:.*## ' $(MAKEFILE_LIST) | awk -F':.*## ' '{printf "  make %-10s %s\n", $$1, $$2}'
-	@echo "  variables: NP=N runs FE scenes on N MPI ranks (make fem NP=2)"
+	@echo "  variables: NP=N runs FE scenes on N MPI ranks (make fem NP=2); JOBS=N jobs at once (default: the cores)"
 
 venv: $(STAMP) ## create .venv with Python 3.12 and the pinned dependencies
 
