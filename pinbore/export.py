@@ -57,6 +57,9 @@ def selected(laws_data, laws_path: str, scene_path: str | None, joint_name: str 
             raise InputError(str(err)) from None
         return [(name, joint, None, None) for name in ([law_name] if law_name else fitted)]
     scene = kinds.load(scene_path)
+    if kinds.of_scene(scene).dimension != 2:
+        raise InputError(f"{scene_path}: --scene: a planar mechanism (kind = \"reduced\"): the "
+                         "tables are a revolute joint's force F = L P(d), a pin without tilt")
     joints = {c.name: c for c in clearance_joints(scene) if hasattr(c, "elastic_joint")}
     if joint_name is None and len(joints) == 1:
         joint_name = next(iter(joints))

@@ -185,6 +185,8 @@ def test_export_without_a_scene_writes_every_law_of_the_files_joint(tmp_path):
      "normal_law: 'hertz_point' is not a fitted law"),
     (["--scene", ROOT / "scenes/reduced/slider_crank_flores2004.toml", "--joint", "crank"],
      "--joint: 'crank' is not a revolute clearance joint of the scene; valid: rod_slider"),
+    (["--scene", ROOT / "scenes/reduced/spatial_slider_crank_flores.toml"],
+     "--scene: a planar mechanism"),
 ])
 def test_bad_export_is_one_line_exit_2(tmp_path, extra, message):
     done = pinbore("export", synthetic_laws_file(tmp_path), "--to", "table", "--out",
