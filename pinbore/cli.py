@@ -87,6 +87,14 @@ def _options_given(args) -> dict:
             for name, value in vars(args).items() if name not in skip}
 
 
+def _study(args) -> int:
+    from pinbore import study
+
+    options = study.options({"out": args.out, "workers": args.workers,
+                             "scheduler": args.scheduler, "cache": args.cache})
+    return study.run(args.study, options)
+
+
 def _report(args) -> int:
     from pinbore import report
 
@@ -174,12 +182,18 @@ def _dynamics_command(sub) -> None:
     d.add_argument("--max-force", type=float, help="design: threshold (N)")
     d.add_argument("--max-deviation", type=float,
                    help="design: threshold of the slider acceleration deviation (RMS / ideal RMS)")
-    d.add_argument("--workers", type=int, help="local processes (default: the cores)")
-    d.add_argument("--scheduler", metavar="ADDRESS",
-                   help="run the sweep on this Dask scheduler instead of local processes")
-    d.add_argument("--cache", type=Path, metavar="DIR",
-                   help="per-point results, for resuming (default: OUT-cache)")
+    _runner_options(d)
     d.set_defaults(func=_dynamics)
+
+
+def _runner_options(command) -> None:
+    """--workers, --scheduler, --cache of a command whose points run in parallel, cached
+    (pinbore.core.parallel)."""
+    command.add_argument("--workers", type=int, help="local processes (default: the cores)")
+    command.add_argument("--scheduler", metavar="ADDRESS",
+                         help="run the points on this Dask scheduler instead of local processes")
+    command.add_argument("--cache", type=Path, metavar="DIR",
+                         help="per-point results, for reruns and resuming (default: OUT-cache)")
 
 
 def parser() -> argparse.ArgumentParser:
@@ -235,6 +249,19 @@ def parser() -> argparse.ArgumentParser:
                    "\"spatial\") mechanism with clearance joints; write DIR/timeseries.csv, "
                    "DIR/summary.json and plots.")
     _dynamics_command(sub)
+    st = sub.add_parser("study", help="run a scene over a grid or a sample of its parameters: "
+                        "results.csv, statistics.json, sobol.csv, tolerance.json",
+                        description="Run the base scene of a study file (TOML: base, [parameters], "
+                                    "[sampling], [[collect]], [limit], [tolerance]) at every point "
+                                    "of its grid or sample, in parallel and cached by content; "
+                                    "write DIR/results.csv, DIR/statistics.json (confidence "
+                                    "intervals, exceedance), DIR/sobol.csv (saltelli plans), "
+                                    "DIR/tolerance.json and plots. See docs/study.md.")
+    st.add_argument("study", help="study file (TOML)")
+    st.add_argument("--out", required=True, type=Path, metavar="DIR",
+                    help="output directory (replaced when complete)")
+    _runner_options(st)
+    st.set_defaults(func=_study)
     r = sub.add_parser("report", help="build the HTML report from the results under build/",
                        description="Collect the results under BUILD into one self-contained "
                                    "HTML page, OUT/index.html.")
@@ -249,12 +276,20 @@ def _scene_inputs(args) -> list:
     return [args.scene, *referenced_files(args.scene)]
 
 
+def _study_inputs(path) -> list:
+    """A study file, its base scene and every file that names."""
+    from pinbore import study
+
+    return study.inputs(path)
+
+
 # What each command reads, which its --out must not hold (core.output.declared_inputs): every
 # command has its line (tests/test_outputs.py enumerates the parser's commands against it).
 INPUTS = {
     "mesh": _scene_inputs, "fem": _scene_inputs, "impact": _scene_inputs,
     "modes": _scene_inputs, "reduced": _scene_inputs, "dynamics": _scene_inputs,
     "calibrate": lambda args: [*args.curves, *args.impacts],
+    "study": lambda args: _study_inputs(args.study),
     "report": lambda args: [args.build, "bench"],
 }
 
