@@ -35,7 +35,8 @@ Every point's scene is validated before any run (a point that breaks a rule is o
 naming the point, the key and the rule; exit 2, nothing written). The points run in parallel
 through the one runner of the package (pinbore.core.parallel: long-lived local processes or a
 Dask cluster), cached by content: the name of a point's cache file is the SHA-256 of its kind,
-its whole scene, the files the scene names and the source of the code that runs it, so a
+its whole scene, the files the scene names and the source of the code that runs it (every
+floor below the roof, and the class Point here), so a
 rerun runs only new or changed points, and a killed study resumes. A failed point is marked
 in results.csv with its reason; the command then exits 1 and keeps the others.
 
@@ -46,6 +47,7 @@ pinbore.core.uq, over the points whose status is "complete".
 """
 
 import hashlib
+import inspect
 import json
 import math
 import sys
@@ -66,10 +68,11 @@ from pinbore.core.parallel import (cached_map, check_cache, check_scheduler, che
 from pinbore.core.scene import Strict
 
 SPEC_KEYS = ("values", "grid", "distribution")
-# the packages whose source decides a point's result, per kind of scene
-CODE = {"mechanism": ("pinbore.core", "pinbore.laws", "pinbore.reduced"),
-        "fem": ("pinbore.core", "pinbore.laws", "pinbore.meshes", "pinbore.fem"),
-        "impact": ("pinbore.core", "pinbore.laws", "pinbore.meshes", "pinbore.fem")}
+# the packages whose source may decide a point's result: every floor below the roof (a
+# mechanism reads a laws file through calibration/ and a flexible body through fem/modes/),
+# and the class that runs a point (Point; not the rest of this module: a new plot reruns nothing)
+CODE = ("pinbore.core", "pinbore.laws", "pinbore.meshes", "pinbore.fem", "pinbore.calibration",
+        "pinbore.reduced")
 
 
 class Grid(Strict):
@@ -367,7 +370,7 @@ class Plan:
             self.scenes.append(data)
         self.check_collect()
         files = digest_files(scenes.referenced_files(self.base_path))
-        code = source_hash(*CODE[self.kind]) + hashlib.sha256(Path(__file__).read_bytes()).hexdigest()
+        code = source_hash(*CODE) + hashlib.sha256(inspect.getsource(Point).encode()).hexdigest()
         self.keys = [hashlib.sha256(json.dumps([self.kind, d, files, code], sort_keys=True)
                                     .encode()).hexdigest() for d in self.scenes]
 
