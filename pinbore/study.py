@@ -464,8 +464,12 @@ class Point:
             code = command(path, Path(folder) / "out")
             if not (Path(folder) / "out").is_dir():
                 return "failed", f"the run wrote nothing (exit {code})", {}
-            return ("complete" if code == 0 else "failed",
-                    "" if code == 0 else f"exit {code}", read(Path(folder) / "out", code))
+            result = read(Path(folder) / "out", code)
+        if code == 0:
+            return "complete", "", result
+        status = result.get("status") if result.get("status") in ("incomplete", "suspect") else "failed"
+        reason = "; ".join(result.get("verdict") or []) or str(result.get("stop") or f"exit {code}")
+        return status, reason, result
 
 
 # ---- the command

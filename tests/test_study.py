@@ -316,3 +316,36 @@ def test_an_fe_study_scales_with_the_elastic_moduli(tmp_path):
     force = {(float(r["materials.pin.E"]), float(r["materials.bore.E"])): float(r["force"])
              for r in rows_of(tmp_path / "out")}
     assert force[(210e9, 210e9)] == pytest.approx(3 * force[(70e9, 70e9)], rel=1e-6)
+
+
+@pytest.mark.slow
+def test_an_impact_study_is_the_impact_command_at_each_point(tmp_path):
+    """An impact scene's points (kind "impact"): each point's restitution, peak force and pin
+    mass are those of `pinbore impact` on a scene file written with that density (the
+    command itself, another path to the same solve: to 1e-9), and differ between the
+    densities (the substitution reached the model)."""
+    import tomllib
+
+    import tomli_w
+
+    scene = ROOT / "scenes/impact/study_steel_c10um_v1000mm_s.toml"
+    study = tmp_path / "study.toml"
+    study.write_text(f'base = "{scene}"\n[parameters."materials.pin.density"]\nvalues = [7850.0, 2700.0]\n'
+                     '[[collect]]\nname = "restitution"\npath = "restitution"\n'
+                     '[[collect]]\nname = "peak_force"\npath = "peak_force_N_per_m"\n'
+                     '[[collect]]\nname = "pin_mass"\npath = "pin_mass_kg_per_m"\n')
+    done = pinbore("study", study, "--out", tmp_path / "out", "--workers", "2")
+    assert done.returncode == 0, done.stderr
+    rows = rows_of(tmp_path / "out")
+    assert float(rows[1]["pin_mass"]) < 0.5 * float(rows[0]["pin_mass"])
+    for row in rows:
+        data = tomllib.loads(scene.read_text())
+        data["materials"]["pin"]["density"] = float(row["materials.pin.density"])
+        direct = tmp_path / f"direct_{row['point']}.toml"
+        direct.write_text(tomli_w.dumps(data))
+        run = pinbore("impact", direct, "--out", tmp_path / f"direct_{row['point']}")
+        assert run.returncode == 0, run.stderr
+        reference = json.loads((tmp_path / f"direct_{row['point']}" / "impact.json").read_text())
+        for name, key in (("restitution", "restitution"), ("peak_force", "peak_force_N_per_m"),
+                          ("pin_mass", "pin_mass_kg_per_m")):
+            assert float(row[name]) == pytest.approx(reference[key], rel=1e-9)
