@@ -45,7 +45,7 @@ DYNAMICS_CODE := $(wildcard pinbore/cli.py reduced/dynamics/*.py) $(REDUCED_CODE
 DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(DYNAMICS_CODE)
 SPATIAL_DYNAMICS_DEPS := $(SPATIAL_DYNAMICS_SCENE) $(DYNAMICS_CODE)
 
-.PHONY: all venv mesh fem impact modes calibration reduced dynamics report bench stress test test-slow docs clean help
+.PHONY: all venv mesh fem impact modes calibration reduced dynamics study report bench stress test test-slow docs clean help
 .DELETE_ON_ERROR:
 
 all: report ## set up .venv, run the default scenes, build the report (the main job)
@@ -95,6 +95,11 @@ build/reduced/%/summary.json: scenes/reduced/%.toml build/calibration/laws.json 
 
 dynamics: $(DYNAMICS) ## Poincare maps, bifurcation diagrams and design map of the slider-crank (planar, misaligned spatial); the impact oscillator's continued frequency response (build/dynamics/)
 
+study: build/study/slider_crank_monte_carlo/summary.json ## Monte Carlo of the Flores slider-crank over clearance, friction and restitution: statistics, exceedance, tolerance band (build/study/)
+
+build/study/slider_crank_monte_carlo/summary.json: studies/slider_crank_monte_carlo.toml $(DYNAMICS_SCENE) $(REDUCED_CODE) pinbore/study.py $(STAMP)
+	$(PINBORE) study $< --out build/study/slider_crank_monte_carlo --cache build/study/cache
+
 # (the sweeps run their points on the local cores; their per-point caches make a rerun resume)
 build/dynamics/poincare/summary.json: $(DYNAMICS_DEPS)
 	$(PINBORE) dynamics $< --analysis poincare --transient 50 --periods 100 --out build/dynamics/poincare
@@ -141,6 +146,7 @@ bench: $(STUDY_CURVES) $(MODES_RUNS) $(STAMP) ## run the benchmarks: bench/*.csv
 	$(PY) bench/calibrate.py --out bench
 	$(PY) bench/multibody.py --out bench
 	$(PY) bench/sweep.py --out bench
+	$(PY) bench/study.py --out bench
 	$(PY) bench/impact.py --out bench
 	$(PY) bench/modes.py --out bench
 	$(PY) bench/flexible.py --out bench

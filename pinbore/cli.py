@@ -98,6 +98,14 @@ def _export(args) -> int:
     return export.run(args.laws, args.to, args.out, args.scene, args.joint, args.law)
 
 
+def _study(args) -> int:
+    from pinbore import study
+
+    options = study.options({"out": args.out, "workers": args.workers,
+                             "scheduler": args.scheduler, "cache": args.cache})
+    return study.run(args.study, options)
+
+
 def _report(args) -> int:
     from pinbore import report
 
@@ -185,12 +193,18 @@ def _dynamics_command(sub) -> None:
     d.add_argument("--max-force", type=float, help="design: threshold (N)")
     d.add_argument("--max-deviation", type=float,
                    help="design: threshold of the slider acceleration deviation (RMS / ideal RMS)")
-    d.add_argument("--workers", type=int, help="local processes (default: the cores)")
-    d.add_argument("--scheduler", metavar="ADDRESS",
-                   help="run the sweep on this Dask scheduler instead of local processes")
-    d.add_argument("--cache", type=Path, metavar="DIR",
-                   help="per-point results, for resuming (default: OUT-cache)")
+    _runner_options(d)
     d.set_defaults(func=_dynamics)
+
+
+def _runner_options(command) -> None:
+    """--workers, --scheduler, --cache of a command whose points run in parallel, cached
+    (pinbore.core.parallel)."""
+    command.add_argument("--workers", type=int, help="local processes (default: the cores)")
+    command.add_argument("--scheduler", metavar="ADDRESS",
+                         help="run the points on this Dask scheduler instead of local processes")
+    command.add_argument("--cache", type=Path, metavar="DIR",
+                         help="per-point results, for reruns and resuming (default: OUT-cache)")
 
 
 def parser() -> argparse.ArgumentParser:
@@ -264,6 +278,19 @@ def parser() -> argparse.ArgumentParser:
     e.add_argument("--law", default=None, metavar="NAME",
                    help="one fitted law (default: the joint's calibrated normal law, or every law)")
     e.set_defaults(func=_export)
+    st = sub.add_parser("study", help="run a scene over a grid or a sample of its parameters: "
+                        "results.csv, statistics.json, sobol.csv, tolerance.json",
+                        description="Run the base scene of a study file (TOML: base, [parameters], "
+                                    "[sampling], [[collect]], [limit], [tolerance]) at every point "
+                                    "of its grid or sample, in parallel and cached by content; "
+                                    "write DIR/results.csv, DIR/statistics.json (confidence "
+                                    "intervals, exceedance), DIR/sobol.csv (saltelli plans), "
+                                    "DIR/tolerance.json and plots. See docs/study.md.")
+    st.add_argument("study", help="study file (TOML)")
+    st.add_argument("--out", required=True, type=Path, metavar="DIR",
+                    help="output directory (replaced when complete)")
+    _runner_options(st)
+    st.set_defaults(func=_study)
     r = sub.add_parser("report", help="build the HTML report from the results under build/",
                        description="Collect the results under BUILD into one self-contained "
                                    "HTML page, OUT/index.html.")
@@ -278,6 +305,13 @@ def _scene_inputs(args) -> list:
     return [args.scene, *referenced_files(args.scene)]
 
 
+def _study_inputs(path) -> list:
+    """A study file, its base scene and every file that names."""
+    from pinbore import study
+
+    return study.inputs(path)
+
+
 # What each command reads, which its --out must not hold (core.output.declared_inputs): every
 # command has its line (tests/test_outputs.py enumerates the parser's commands against it).
 INPUTS = {
@@ -286,6 +320,7 @@ INPUTS = {
     "calibrate": lambda args: [*args.curves, *args.impacts],
     "export": lambda args: [args.laws, *([args.scene, *referenced_files(args.scene)]
                                          if args.scene else [])],
+    "study": lambda args: _study_inputs(args.study),
     "report": lambda args: [args.build, "bench"],
 }
 

@@ -81,6 +81,16 @@ def pinbore(*args, cwd=None) -> subprocess.CompletedProcess:
                           capture_output=True, text=True, cwd=cwd)
 
 
+def main_in_child(*argv) -> subprocess.CompletedProcess:
+    """pinbore.cli.main(argv) in a fresh interpreter, which fails (an AssertionError) if numba
+    or DOLFINx got loaded; its stdout is the child's CPU time (s), import of the CLI included."""
+    code = ("import resource, sys; from pinbore.cli import main; "
+            f"code = main({[str(a) for a in argv]!r}); "
+            "assert not any(m.split('.')[0] in ('numba', 'dolfinx') for m in sys.modules), 'loaded'; "
+            "u = resource.getrusage(resource.RUSAGE_SELF); print(u.ru_utime + u.ru_stime); sys.exit(code)")
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+
+
 @pytest.fixture
 def write_scene(tmp_path):
     """Write a scene dict (or raw text) to a TOML file and return its path."""

@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 import pytest
-from conftest import ROOT
+from conftest import ROOT, main_in_child
 
 # folder -> (package, floor); the roof is pinbore/ itself
 FLOORS = {"core": ("pinbore.core", 0), "laws": ("pinbore.laws", 1), "meshes": ("pinbore.meshes", 2),
@@ -170,11 +170,7 @@ def test_a_bad_mechanism_scene_costs_well_under_a_second(tmp_path, command):
     bad = tmp_path / "bad.toml"
     bad.write_text(scene.replace("mass = 0.30", "mass = -0.30"))
     extra = ["--analysis", "poincare"] if command == "dynamics" else []
-    code = ("import resource, sys; from pinbore.cli import main; "
-            f"code = main([{command!r}, {str(bad)!r}, '--out', {str(tmp_path / 'out')!r}, *{extra!r}]); "
-            "assert not any(m.split('.')[0] in ('numba', 'dolfinx') for m in sys.modules), 'loaded'; "
-            "u = resource.getrusage(resource.RUSAGE_SELF); print(u.ru_utime + u.ru_stime); sys.exit(code)")
-    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    run = main_in_child(command, bad, "--out", tmp_path / "out", *extra)
     assert run.returncode == 2, run.stderr
     assert "bodies" in run.stderr and "mass" in run.stderr and len(run.stderr.strip().splitlines()) == 1
     assert float(run.stdout) < 1.0

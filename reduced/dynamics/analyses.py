@@ -23,15 +23,14 @@ What the options need of the scene (a drive, a valid scene at both ends of every
 range) is checked against the scene by `pinbore.reduced.dynamics.studies`.
 """
 
-import importlib.util
 import math
-import os
 from pathlib import Path
 from typing import Annotated, Literal, NamedTuple
 
 import pydantic
 
 from pinbore.core.errors import InputError
+from pinbore.core.parallel import check_cache, check_scheduler, check_workers, default_workers
 from pinbore.core.scene import Strict
 
 
@@ -48,11 +47,6 @@ PARAMETERS = {"clearance": Parameter("m, radial clearance of every clearance joi
               "friction": Parameter("mu of every clearance joint's friction law", False),
               "frequency": Parameter("Hz, the forcing's fundamental (every harmonic in proportion)", True),
               "amplitude": Parameter("x, a factor on every excitation amplitude (1: the scene's)", True)}
-
-
-def default_workers() -> int:
-    """The cores this process may run on."""
-    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
 
 
 def at_least(minimum: int) -> pydantic.AfterValidator:
@@ -217,31 +211,18 @@ class Sweep(Sampled):
     @pydantic.field_validator("scheduler")
     @classmethod
     def _cluster(cls, address: str | None) -> str | None:
-        if address is None:
-            return None
-        if not address.strip():
-            raise ValueError("must be a scheduler's address, e.g. tcp://host:8786")
-        if importlib.util.find_spec("distributed") is None:
-            raise ValueError("needs the dask 'distributed' package")
-        return address
+        return check_scheduler(address)
 
     @pydantic.field_validator("workers")
     @classmethod
     def _local(cls, workers: int, info: pydantic.ValidationInfo) -> int:
         """Local processes only (a field validator runs on given values, not on the default)."""
-        if info.data.get("scheduler") is not None:
-            raise ValueError("not used with --scheduler (the cluster has its own workers)")
-        return workers
+        return check_workers(workers, info.data.get("scheduler"))
 
     @pydantic.field_validator("cache")
     @classmethod
     def _cache_folder(cls, folder: Path, info: pydantic.ValidationInfo) -> Path:
-        if folder.exists() and not folder.is_dir():
-            raise ValueError(f"{folder} is an existing file, not a folder")
-        out = info.data.get("out")
-        if out is not None and (folder.resolve() == out.resolve() or out.resolve() in folder.resolve().parents):
-            raise ValueError(f"{folder} lies in --out {out}, which is replaced when the run completes")
-        return folder
+        return check_cache(folder, info.data.get("out"))
 
 
 class BifurcationOptions(Sweep):

@@ -11,14 +11,11 @@ is cached as JSON under the cache folder as soon as it is done, so an interrupte
 resumes where it stopped.
 """
 
-import concurrent.futures
-import contextlib
 import copy
 import dataclasses
 import hashlib
 import json
 import math
-import multiprocessing
 import sys
 import time
 from dataclasses import dataclass
@@ -30,6 +27,7 @@ from tqdm import tqdm
 from pinbore.core import scene as scenes
 from pinbore.core.errors import InputError
 from pinbore.core.output import atomic_directory
+from pinbore.core.parallel import cached_map, source_hash
 from pinbore.reduced.dynamics.analyses import (PARAMETERS, Analysis, BifurcationOptions, ContinuationOptions,
                                                DesignOptions, LyapunovOptions, PoincareOptions, Sampled,
                                                ShootingOptions)
@@ -204,65 +202,17 @@ class BifurcationPoint:
 
 
 def sweep(task, values, cache: Path, workers: int, scheduler: str | None, key: str) -> list[dict]:
-    """task(value) for every value, in parallel, each result cached in `cache` (resumable; a
-    cached point that does not read is computed again)."""
-    results, todo = {}, []
-    for value in values:
-        try:
-            results[value] = json.loads((cache / f"{key}_{value!r}.json").read_text())
-        except (OSError, ValueError):
-            todo.append(value)
-    if todo:
-        with _executor(workers, scheduler) as executor:   # before the cache exists: a scheduler
-            cache.mkdir(parents=True, exist_ok=True)       # that cannot be reached leaves nothing
-            futures = {executor.submit(task, v): v for v in todo}
-            for future in tqdm(concurrent.futures.as_completed(futures), total=len(futures),
-                               desc="sweep", unit="point", initial=len(values) - len(todo)):
-                value = futures[future]
-                result = future.result()
-                tmp = cache / f".{key}_{value!r}.json.tmp"
-                tmp.write_text(json.dumps(result))
-                tmp.rename(cache / f"{key}_{value!r}.json")
-                results[value] = result
-    return [results[v] for v in values]
-
-
-SCHEDULER_TIMEOUT = 10   # s to connect to a Dask scheduler
-
-
-@contextlib.contextmanager
-def _executor(workers: int, scheduler: str | None):
-    """An executor of local processes or of a Dask cluster for the block. A stop (Ctrl-C,
-    SIGTERM, an error) cancels the points not yet started instead of waiting for them; the
-    Dask client is closed."""
-    if scheduler is None:
-        # spawned, not forked: the parent runs threads (numba, tqdm) that fork would copy mid-state
-        executor = concurrent.futures.ProcessPoolExecutor(
-            max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
-        try:
-            yield executor
-        except BaseException:
-            executor.shutdown(wait=False, cancel_futures=True)
-            raise
-        executor.shutdown()
-        return
-    from distributed import Client   # noqa: PLC0415 (optional: the --scheduler rule checks it is there)
-    try:
-        client = Client(scheduler, timeout=SCHEDULER_TIMEOUT)
-    except (OSError, TimeoutError) as err:
-        raise InputError(f"--scheduler {scheduler}: cannot reach the Dask scheduler within "
-                         f"{SCHEDULER_TIMEOUT} s ({type(err).__name__})") from None
-    try:
-        yield client.get_executor()
-    finally:
-        client.close()
+    """task(value) for every value, in parallel, each result cached in `cache` as
+    `<key>_<value>.json` (core.parallel.cached_map: resumable; a cached point that does not
+    read is computed again)."""
+    return cached_map(task, values, [f"{key}_{value!r}" for value in values], cache, workers,
+                      scheduler)[0]
 
 
 def sweep_key(data: dict, analysis: str, parameter: str, transient: int, periods: int) -> str:
     """Cache key: the scene, the settings that change a point's result, and the code of the
     model (a changed model never reads old points)."""
-    code = [f.read_bytes().hex() for package in ("laws", "reduced")
-            for f in sorted((Path(__file__).resolve().parent.parent / package).glob("*.py"))]
+    code = source_hash("pinbore.laws", "pinbore.reduced")
     text = json.dumps([data, analysis, parameter, transient, periods, code], sort_keys=True)
     return f"{analysis}_{parameter}_{hashlib.sha256(text.encode()).hexdigest()[:12]}"
 

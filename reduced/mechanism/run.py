@@ -82,17 +82,13 @@ def run(scene_path, out) -> int:
     from pinbore.reduced.mechanism import outputs   # noqa: PLC0415 (compiled)
     from pinbore.reduced.mechanism.model import build, laws_path   # noqa: PLC0415
 
-    model = build(scene, str(scene_path), scene_path.parent)
-    trajectory = simulate(model)
+    model, trajectory, series, result = summarised(scene, str(scene_path), scene_path.parent)
     twin = None
     if model.joints and scene.output.plots:
         twin_model = build(scene, str(scene_path), scene_path.parent, ideal=True)
         twin = (twin_model, simulate(twin_model))
     with atomic_directory(out, inputs=[laws_path(scene, scene_path.parent)]) as tmp:
-        series = outputs.sample(model, trajectory)
         outputs.write_timeseries(tmp / "timeseries.csv", series)
-        result = judged(outputs.summary(model, series, trajectory, STATUS[trajectory.status],
-                                        str(scene_path)), scene)
         summary.write(tmp / "summary.json", result)
         if scene.output.plots:
             outputs.plots(tmp, model, series, twin)
@@ -105,6 +101,21 @@ def run(scene_path, out) -> int:
               f"(written to {out}, marked suspect)", file=sys.stderr)
         return 1
     return 0
+
+
+def summarised(scene, source: str, base: Path):
+    """Integrate a validated scene in this process: its model, Trajectory, sampled series
+    (outputs.sample) and judged summary (what `pinbore reduced` writes, and what a study's
+    point reads without writing files)."""
+    from pinbore.reduced.mechanism import outputs   # noqa: PLC0415 (compiled)
+    from pinbore.reduced.mechanism.model import build   # noqa: PLC0415
+
+    model = build(scene, source, base)
+    trajectory = simulate(model)
+    series = outputs.sample(model, trajectory)
+    result = judged(outputs.summary(model, series, trajectory, STATUS[trajectory.status], source),
+                    scene)
+    return model, trajectory, series, result
 
 
 def judged(result: summary.Summary, scene) -> summary.Summary:

@@ -1,0 +1,136 @@
+"""Tasks run in parallel and cached point by point: the one runner of every sweep and study
+(`pinbore dynamics` sweeps, `pinbore study`).
+
+`cached_map(task, items, names, cache, workers, scheduler)` calls `task(item)` for every item
+whose result is not yet in `cache` (one JSON file per item, named by `names`), in parallel: on
+local processes (a pool of `workers` long-lived processes: each imports the code and compiles
+numba once, then runs point after point in process), or on a Dask cluster (`scheduler`: its
+address, through the client's executor). Each result is written atomically (a temporary file
+renamed into place) as soon as it arrives, so a run stopped in any way, SIGKILL included,
+resumes with every finished point kept and none computed twice; the points under way when it
+stopped are computed again. Items of one name are computed once.
+
+The rules of the options (`default_workers`, `check_scheduler`, `check_workers`,
+`check_cache`) are here too, for the options models of the commands to share.
+"""
+
+import concurrent.futures
+import contextlib
+import hashlib
+import importlib.util
+import json
+import multiprocessing
+import os
+from pathlib import Path
+
+from tqdm import tqdm
+
+from pinbore.core.errors import InputError
+
+SCHEDULER_TIMEOUT = 10   # s to connect to a Dask scheduler
+
+
+def default_workers() -> int:
+    """The cores this process may run on."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1)
+
+
+def check_scheduler(address: str | None) -> str | None:
+    """A Dask scheduler's address (None: local processes); ValueError naming the rule."""
+    if address is None:
+        return None
+    if not address.strip():
+        raise ValueError("must be a scheduler's address, e.g. tcp://host:8786")
+    if importlib.util.find_spec("distributed") is None:
+        raise ValueError("needs the dask 'distributed' package")
+    return address
+
+
+def check_workers(workers: int, scheduler: str | None) -> int:
+    """Local processes go with no scheduler (the cluster has its own workers)."""
+    if scheduler is not None:
+        raise ValueError("not used with --scheduler (the cluster has its own workers)")
+    return workers
+
+
+def check_cache(folder: Path, out: Path | None) -> Path:
+    """A cache folder: no existing file, and outside the output directory (which a run
+    replaces whole when it completes)."""
+    if folder.exists() and not folder.is_dir():
+        raise ValueError(f"{folder} is an existing file, not a folder")
+    if out is not None and (folder.resolve() == out.resolve() or out.resolve() in folder.resolve().parents):
+        raise ValueError(f"{folder} lies in --out {out}, which is replaced when the run completes")
+    return folder
+
+
+def source_hash(*packages: str) -> str:
+    """SHA-256 of the source of the named packages (every .py file below each package's
+    folder, by relative path and content), found without importing them: a cache keyed on it
+    never serves a result of other code."""
+    digest = hashlib.sha256()
+    for package in packages:
+        spec = importlib.util.find_spec(package)
+        folder = Path(next(iter(spec.submodule_search_locations))).resolve()
+        for path in sorted(folder.rglob("*.py")):
+            digest.update(f"{package}/{path.relative_to(folder)}\0".encode())
+            digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def cached_map(task, items, names, cache: Path, workers: int, scheduler: str | None,
+               desc: str = "sweep") -> tuple[list, list[bool]]:
+    """task(item) for every item, in parallel, each result cached as `cache/<name>.json`
+    (JSON-able results; a cached file that does not read is computed again). Returns the
+    results in the order of `items` and, per item, whether it was computed by this call
+    (False: read from the cache)."""
+    names = list(names)
+    results, todo = {}, {}
+    for item, name in zip(items, names, strict=True):
+        if name in results or name in todo:
+            continue
+        try:
+            results[name] = json.loads((cache / f"{name}.json").read_text())
+        except (OSError, ValueError):
+            todo[name] = item
+    done_before = set(results)
+    if todo:
+        with executor(workers, scheduler) as pool:   # before the cache exists: a scheduler
+            cache.mkdir(parents=True, exist_ok=True)  # that cannot be reached leaves nothing
+            futures = {pool.submit(task, item): name for name, item in todo.items()}
+            for future in tqdm(concurrent.futures.as_completed(futures), total=len(futures),
+                               desc=desc, unit="point", initial=len(done_before)):
+                name = futures[future]
+                result = future.result()
+                tmp = cache / f".{name}.{os.getpid()}.json.tmp"
+                tmp.write_text(json.dumps(result))
+                tmp.rename(cache / f"{name}.json")
+                results[name] = result
+    return [results[n] for n in names], [n not in done_before for n in names]
+
+
+@contextlib.contextmanager
+def executor(workers: int, scheduler: str | None):
+    """An executor of local processes or of a Dask cluster for the block. A stop (Ctrl-C,
+    SIGTERM, an error) cancels the points not yet started instead of waiting for them; the
+    Dask client is closed. An unreachable scheduler is one InputError line."""
+    if scheduler is None:
+        # spawned, not forked: the parent runs threads (numba, tqdm) that fork would copy mid-state
+        pool = concurrent.futures.ProcessPoolExecutor(
+            max_workers=workers, mp_context=multiprocessing.get_context("spawn"))
+        try:
+            yield pool
+        except BaseException:
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+        pool.shutdown()
+        return
+    from distributed import Client   # noqa: PLC0415 (optional: check_scheduler checks it is there)
+    try:
+        client = Client(scheduler, timeout=SCHEDULER_TIMEOUT)
+    except (OSError, TimeoutError) as err:
+        raise InputError(f"--scheduler {scheduler}: cannot reach the Dask scheduler within "
+                         f"{SCHEDULER_TIMEOUT} s ({type(err).__name__})") from None
+    try:
+        yield client.get_executor()
+    finally:
+        client.close()

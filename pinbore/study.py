@@ -1,0 +1,661 @@
+"""`pinbore study STUDY.toml --out DIR`: a scene's parameters swept or sampled, every point run,
+the quantities it collects tabulated, with their statistics, Sobol indices and tolerance band.
+
+The study file (a strict model: unknown keys are refused):
+
+    base = "../scenes/reduced/slider_crank_flores2004.toml"   # relative to the study file
+    confidence = 0.95                                          # of every interval
+    [set]                          # fixed changes to the base scene (a key may be new)
+    duration = 0.012
+    [parameters."clearance_joints.0.journal_radius"]           # a dotted key of the scene
+    distribution = { kind = "uniform", low = 9.4e-3, high = 9.6e-3 }
+    [parameters."clearance_joints.0.restitution"]
+    values = [0.7, 0.9]            # or grid = { start, stop, num }
+    [sampling]
+    method = "monte_carlo"         # grid | monte_carlo | lhs | sobol | saltelli
+    points = 200                   # random plans (saltelli: N base rows, N (d + 2) runs)
+    seed = 1
+    [[collect]]
+    name = "peak_force_N"
+    path = "clearance_joints.rod_slider.peak_normal_force_N"   # into the point's result
+    [limit]                        # optional: P(quantity > threshold), against target
+    quantity = "peak_force_N"
+    threshold = 2.0e4
+    target = 0.05
+    [tolerance]                    # optional: the widest band of a uniform parameter
+    parameter = "clearance_joints.0.journal_radius"
+    limit = { quantity = "peak_force_N", threshold = 5.0e4 }
+    target = 0.01
+
+A point's result is what its command writes: the summary of `pinbore reduced` (summary.json,
+computed in process, no files), impact.json of `pinbore impact`, result.json of `pinbore fem`
+with the last row of its curve under `curve_last`. The base scene's `kind` says which.
+
+Every point's scene is validated before any run (a point that breaks a rule is one line
+naming the point, the key and the rule; exit 2, nothing written). The points run in parallel
+through the one runner of the package (pinbore.core.parallel: long-lived local processes or a
+Dask cluster), cached by content: the name of a point's cache file is the SHA-256 of its kind,
+its whole scene, the files the scene names and the source of the code that runs it (every
+floor below the roof, and the class Point here), so a
+rerun runs only new or changed points, and a killed study resumes. A failed point is marked
+in results.csv with its reason; the command then exits 1 and keeps the others.
+
+Writes DIR/results.csv, DIR/summary.json, DIR/statistics.json, DIR/histograms.png,
+DIR/exceedance.png and, for a saltelli plan, DIR/sobol.csv and DIR/sobol.png, for a
+tolerance DIR/tolerance.json and DIR/tolerance.png. The statistics are those of
+pinbore.core.uq, over the points whose status is "complete".
+"""
+
+import hashlib
+import inspect
+import json
+import math
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+import pydantic
+
+from pinbore.core import scene as scenes
+from pinbore.core import uq
+from pinbore.core.errors import InputError
+from pinbore.core.output import atomic_directory
+from pinbore.core.parallel import (cached_map, check_cache, check_scheduler, check_workers,
+                                   default_workers, source_hash)
+from pinbore.core.scene import Strict
+
+SPEC_KEYS = ("values", "grid", "distribution")
+# the packages whose source may decide a point's result: every floor below the roof (a
+# mechanism reads a laws file through calibration/ and a flexible body through fem/modes/),
+# and the class that runs a point (Point; not the rest of this module: a new plot reruns nothing)
+CODE = ("pinbore.core", "pinbore.laws", "pinbore.meshes", "pinbore.fem", "pinbore.calibration",
+        "pinbore.reduced")
+
+
+class Grid(Strict):
+    start: float
+    stop: float
+    num: int = pydantic.Field(ge=2)
+
+    def values(self) -> list[float]:
+        return np.linspace(self.start, self.stop, self.num).tolist()
+
+
+class Distribution(Strict):
+    """uniform (low, high), normal (mean, std), lognormal (median, sigma of ln), truncnormal
+    (mean, std, low, high)."""
+
+    kind: Literal["uniform", "normal", "lognormal", "truncnormal"]
+    low: float | None = None
+    high: float | None = None
+    mean: float | None = None
+    std: float | None = pydantic.Field(default=None, gt=0)
+    median: float | None = pydantic.Field(default=None, gt=0)
+    sigma: float | None = pydantic.Field(default=None, gt=0)
+
+    @pydantic.model_validator(mode="after")
+    def _keys(self):
+        needed = {"uniform": ("low", "high"), "normal": ("mean", "std"),
+                  "lognormal": ("median", "sigma"), "truncnormal": ("mean", "std", "low", "high")}[self.kind]
+        given = {k for k in ("low", "high", "mean", "std", "median", "sigma") if getattr(self, k) is not None}
+        if set(needed) != given:
+            raise ValueError(f"a {self.kind} distribution takes {', '.join(needed)} (given: "
+                             f"{', '.join(sorted(given)) or 'none'})")
+        if "low" in needed and not self.low < self.high:
+            raise ValueError(f"low must be below high (got {self.low:g}, {self.high:g})")
+        return self
+
+    def frozen(self):
+        return uq.distribution(self.kind, **self.model_dump(exclude_none=True, exclude={"kind"}))
+
+
+class Parameter(Strict):
+    """One of: a list of values, a grid, or a distribution."""
+
+    values: list[float] | None = pydantic.Field(default=None, min_length=1)
+    grid: Grid | None = None
+    distribution: Distribution | None = None
+
+    @pydantic.model_validator(mode="after")
+    def _one(self):
+        given = [k for k in SPEC_KEYS if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError(f"give exactly one of values, grid, distribution (given: {', '.join(given) or 'none'})")
+        return self
+
+
+class Sampling(Strict):
+    method: Literal["grid", "monte_carlo", "lhs", "sobol", "saltelli"] = "grid"
+    points: int | None = pydantic.Field(default=None, ge=1)
+    seed: int = 0
+
+
+class Collect(Strict):
+    name: str = pydantic.Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]*$")
+    path: str = pydantic.Field(min_length=1)
+
+
+class Threshold(Strict):
+    quantity: str
+    threshold: float
+
+
+class Limit(Threshold):
+    target: float = pydantic.Field(default=0.01, gt=0, lt=1)
+
+
+class Tolerance(Strict):
+    parameter: str
+    limit: Threshold
+    target: float = pydantic.Field(default=0.01, gt=0, lt=1)
+    confidence: float = pydantic.Field(default=0.95, gt=0, lt=1)
+
+
+class Study(Strict):
+    base: str
+    confidence: float = pydantic.Field(default=0.95, gt=0, lt=1)
+    set: dict[str, object] = {}
+    parameters: dict[str, Parameter] = pydantic.Field(min_length=1)
+    sampling: Sampling = Sampling()
+    collect: list[Collect] = pydantic.Field(min_length=1)
+    limit: Limit | None = None
+    tolerance: Tolerance | None = None
+
+    @pydantic.model_validator(mode="after")
+    def _plan(self):
+        method, specs = self.sampling.method, self.parameters
+        if method == "grid":
+            wrong = [k for k, p in specs.items() if p.distribution is not None]
+            if wrong:
+                raise ValueError(f"sampling.method: grid takes values or a grid; {wrong[0]} has a distribution")
+            if self.sampling.points is not None:
+                raise ValueError("sampling.points: a grid runs every combination of the values; "
+                                 "give no points")
+        else:
+            wrong = [k for k, p in specs.items() if p.distribution is None]
+            if wrong:
+                raise ValueError(f"sampling.method: {method} samples distributions; {wrong[0]} has none")
+            if self.sampling.points is None:
+                raise ValueError(f"sampling.points: {method} needs the number of points")
+        names = [c.name for c in self.collect]
+        if len(set(names)) != len(names):
+            raise ValueError("collect: two quantities have one name")
+        for where, quantity in (("limit", self.limit), ("tolerance.limit", self.tolerance and self.tolerance.limit)):
+            if quantity is not None and quantity.quantity not in names:
+                raise ValueError(f"{where}.quantity: {quantity.quantity!r} is not collected "
+                                 f"(collect: {', '.join(names)})")
+        if self.tolerance is not None:
+            spec = specs.get(self.tolerance.parameter)
+            if spec is None or spec.distribution is None or spec.distribution.kind != "uniform":
+                raise ValueError(f"tolerance.parameter: {self.tolerance.parameter!r} must be a "
+                                 "parameter with a uniform distribution (its widest band)")
+            if method != "monte_carlo":
+                raise ValueError("tolerance: needs sampling.method monte_carlo (the binomial "
+                                 "bound holds for independent draws)")
+        return self
+
+
+class Options(Strict):
+    """The command line's options."""
+
+    out: Path
+    workers: int = pydantic.Field(default_factory=default_workers, ge=1)
+    scheduler: str | None = None
+    cache: Path
+
+    @pydantic.model_validator(mode="before")
+    @classmethod
+    def _default_cache(cls, data):
+        if isinstance(data, dict) and data.get("cache") is None:
+            return data | {"cache": Path(f"{data['out']}-cache")}
+        return data
+
+    @pydantic.field_validator("scheduler")
+    @classmethod
+    def _cluster(cls, address):
+        return check_scheduler(address)
+
+    @pydantic.field_validator("workers")
+    @classmethod
+    def _local(cls, workers, info: pydantic.ValidationInfo):
+        return check_workers(workers, info.data.get("scheduler"))
+
+    @pydantic.field_validator("cache")
+    @classmethod
+    def _cache_folder(cls, folder, info: pydantic.ValidationInfo):
+        return check_cache(folder, info.data.get("out"))
+
+
+def options(given: dict) -> Options:
+    """The command line's options validated; a broken rule is one InputError line
+    `--option: rule`."""
+    try:
+        return Options.model_validate({k: v for k, v in given.items() if v is not None})
+    except pydantic.ValidationError as err:
+        first = err.errors()[0]
+        option = "--" + str(first["loc"][0]).replace("_", "-") if first["loc"] else "options"
+        raise InputError(f"{option}: {first['msg'].removeprefix('Value error, ')}") from None
+
+
+def inputs(study_file) -> list[Path]:
+    """The files a study reads: itself, its base scene and the files that names (none when
+    the study cannot be read: running it says why)."""
+    path = Path(study_file)
+    try:
+        base = path.parent / scenes.read_toml(path)["base"]
+    except (InputError, KeyError, TypeError):
+        return [path]
+    return [path, base, *scenes.referenced_files(base)]
+
+
+# ---- the study file and its points
+
+def flatten(table: dict, prefix: str = "", stop=lambda value: False) -> dict:
+    """Nested TOML tables as dotted keys (`a.0.b = 1` or `[a."0"] b = 1` -> {"a.0.b": 1});
+    a table for which stop(table) holds is a value."""
+    flat = {}
+    for key, value in table.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, dict) and not stop(value):
+            flat |= flatten(value, name + ".", stop)
+        else:
+            flat[name] = value
+    return flat
+
+
+def load(path: Path) -> Study:
+    """The study file validated (one InputError line naming the key and the rule)."""
+    data = scenes.read_toml(path)
+    if isinstance(data.get("parameters"), dict):
+        data["parameters"] = flatten(data["parameters"],
+                                     stop=lambda t: any(k in t for k in SPEC_KEYS))
+    if isinstance(data.get("set"), dict):
+        data["set"] = flatten(data["set"])
+    return scenes.validate(Study, data, str(path))
+
+
+def put(data: dict, key: str, value, create: bool = False) -> None:
+    """Set a dotted key of a scene's data in place (list items by index). KeyError naming the
+    part of the key that is not in the scene (`create`: the last part may be new, and tables
+    on the way are made)."""
+    parts = key.split(".")
+    node = data
+    for i, part in enumerate(parts):
+        last = i == len(parts) - 1
+        if isinstance(node, list):
+            if not part.isdigit() or int(part) >= len(node):
+                raise KeyError(f"{'.'.join(parts[:i + 1])}: no such item (the list has {len(node)})")
+            part = int(part)
+        elif not isinstance(node, dict):
+            raise KeyError(f"{'.'.join(parts[:i])}: holds a value, not a table")
+        elif part not in node:
+            if not create:
+                raise KeyError(f"{'.'.join(parts[:i + 1])}: no such key in the base scene")
+            node[part] = value if last else {}
+        if last:
+            if not create and (not isinstance(node[part], (int, float)) or isinstance(node[part], bool)):
+                raise KeyError(f"{key}: not a number in the base scene")
+            node[part] = value
+        else:
+            node = node[part]
+
+
+def get(result: dict, path: str):
+    """A dotted path into a point's result (list items by index); KeyError when absent."""
+    node = result
+    for part in path.split("."):
+        if isinstance(node, list) and part.isdigit() and int(part) < len(node):
+            node = node[int(part)]
+        elif isinstance(node, dict) and part in node:
+            node = node[part]
+        else:
+            raise KeyError(path)
+    return node
+
+
+def scene_kind(data: dict, source: str):
+    """(kind name for CODE, scene model) of a scene's data."""
+    kind = data.get("kind")
+    if kind == "fem":
+        from pinbore.fem.scene import FemScene   # noqa: PLC0415 (pydantic only)
+        return "fem", FemScene
+    if kind == "impact":
+        from pinbore.fem.impact.scene import ImpactScene   # noqa: PLC0415 (pydantic only)
+        return "impact", ImpactScene
+    from pinbore.reduced.mechanism import kinds   # noqa: PLC0415 (pydantic only)
+    return "mechanism", kinds.kind_of(data, source).scene
+
+
+def matrix(study: Study) -> np.ndarray:
+    """The plan: one row per point, one column per parameter (in the study's order)."""
+    specs = list(study.parameters.values())
+    s = study.sampling
+    if s.method == "grid":
+        return uq.grid([p.values if p.values is not None else p.grid.values() for p in specs])
+    return uq.plan(s.method, [p.distribution.frozen() for p in specs], s.points, s.seed)
+
+
+class Plan:
+    """The study's points: the plan's values and each point's validated scene data."""
+
+    def __init__(self, path: Path, study: Study):
+        self.path, self.study = Path(path), study
+        self.base_path = (self.path.parent / study.base)
+        base = scenes.read_toml(self.base_path)
+        source = str(self.base_path)
+        for key, value in study.set.items():
+            try:
+                put(base, key, value, create=True)
+            except KeyError as err:
+                raise InputError(f"{path}: set.{key}: {err.args[0]}") from None
+        self.kind, self.model = scene_kind(base, source)
+        scenes.validate(self.model, base, f"{path}: the base scene {source} with [set]")
+        self.names = list(study.parameters)
+        for name in self.names:
+            try:
+                put(json.loads(json.dumps(base)), name, 0.0)
+            except KeyError as err:
+                raise InputError(f"{path}: parameters.{name}: {err.args[0]}") from None
+        self.values = matrix(study)
+        self.scenes = []
+        for i, row in enumerate(self.values):
+            data = json.loads(json.dumps(base))
+            for name, value in zip(self.names, row):
+                put(data, name, float(value))
+            where = ", ".join(f"{n} = {v:.6g}" for n, v in zip(self.names, row))
+            scenes.validate(self.model, data, f"{path}: point {i} ({where})")
+            self.scenes.append(data)
+        self.check_collect()
+        files = digest_files(scenes.referenced_files(self.base_path))
+        code = source_hash(*CODE) + hashlib.sha256(inspect.getsource(Point).encode()).hexdigest()
+        self.keys = [hashlib.sha256(json.dumps([self.kind, d, files, code], sort_keys=True)
+                                    .encode()).hexdigest() for d in self.scenes]
+
+    def check_collect(self) -> None:
+        """A mechanism's summary is known before the run: every collected path must name one
+        of its keys (a joint by its name)."""
+        if self.kind != "mechanism":
+            return
+        from pinbore.reduced.mechanism.summary import JointPeaks, Summary   # noqa: PLC0415
+        joints = {j["name"] for j in self.scenes[0].get("clearance_joints", [])} | \
+                 {j["name"] for j in self.scenes[0].get("translational_joints", [])}
+        for i, c in enumerate(self.study.collect):
+            parts = c.path.split(".")
+            ok = parts[0] in Summary.model_fields
+            if ok and parts[0] == "clearance_joints":
+                ok = len(parts) == 3 and parts[1] in joints and parts[2] in JointPeaks.model_fields
+            elif ok and parts[0] == "energy_balance":
+                ok = len(parts) == 2
+            elif ok:
+                ok = len(parts) == 1
+            if not ok:
+                raise InputError(f"{self.path}: collect.{i}.path: {c.path!r} is no number of a "
+                                 "mechanism's summary.json (e.g. clearance_joints.<joint name>."
+                                 "peak_normal_force_N, impacts, energy_balance.dissipated_J)")
+
+
+def digest_files(paths) -> list[str]:
+    """SHA-256 of each file a scene names (its laws file ...)."""
+    return [hashlib.sha256(Path(p).read_bytes()).hexdigest() if Path(p).is_file() else str(p)
+            for p in paths]
+
+
+# ---- one point, in a worker
+
+class Point:
+    """Runs one point's scene data in this process and returns {"status", "reason",
+    "seconds", "result"}: status "complete", "suspect" (the run's verdict doubts it),
+    "incomplete" (it stopped early) or "failed" (an error; reason says which)."""
+
+    def __init__(self, kind: str, base: Path, source: str):
+        self.kind, self.base, self.source = kind, Path(base), source
+
+    def __call__(self, data: dict) -> dict:
+        start = time.perf_counter()
+        try:
+            status, reason, result = getattr(self, self.kind)(data)
+        except Exception as err:   # noqa: BLE001 (a point that fails is marked, the study goes on)
+            status, reason, result = "failed", f"{type(err).__name__}: {err}", {}
+        return {"status": status, "reason": reason, "seconds": time.perf_counter() - start,
+                "result": result}
+
+    def mechanism(self, data):
+        from pinbore.reduced.mechanism import kinds   # noqa: PLC0415
+        from pinbore.reduced.mechanism.run import summarised   # noqa: PLC0415 (compiled)
+
+        *_, summary = summarised(kinds.validate(data, self.source), self.source, self.base)
+        stop = summary.stop.reason if summary.stop else "; ".join(summary.verdict)
+        return summary.status, stop, json.loads(summary.model_dump_json())
+
+    def fem(self, data):
+        from pinbore.fem import run as fem_run   # noqa: PLC0415
+
+        def read(out, code):
+            result = json.loads((out / "result.json").read_text())
+            rows = (out / "curve.csv").read_text().splitlines()
+            result["curve_last"] = {k: float(v) for k, v in zip(rows[0].split(","), rows[-1].split(","))
+                                    if k != "stage"}
+            return result
+        return self._in_folder(data, lambda path, out: fem_run.run(path, out), read)
+
+    def impact(self, data):
+        from pinbore.fem.impact import run as impact_run   # noqa: PLC0415
+        from pinbore.fem.impact.scene import ImpactScene   # noqa: PLC0415
+
+        return self._in_folder(
+            data, lambda path, out: impact_run.run(path, out, scenes.load(ImpactScene, path)),
+            lambda out, code: json.loads((out / "impact.json").read_text()))
+
+    def _in_folder(self, data, command, read):
+        """Run a command that writes files on the point's scene, written as TOML in a
+        temporary folder (names of files made absolute), and read its result."""
+        import tomli_w   # noqa: PLC0415
+
+        data = json.loads(json.dumps(data))
+        for key, value in flatten(data).items():
+            if key.endswith("_file") and isinstance(value, str) and not Path(value).is_absolute():
+                put(data, key, str(self.base / value), create=True)
+        with tempfile.TemporaryDirectory(prefix="pinbore-study-") as folder:
+            path = Path(folder) / "scene.toml"
+            path.write_text(tomli_w.dumps(data))
+            code = command(path, Path(folder) / "out")
+            if not (Path(folder) / "out").is_dir():
+                return "failed", f"the run wrote nothing (exit {code})", {}
+            result = read(Path(folder) / "out", code)
+        if code == 0:
+            return "complete", "", result
+        status = result.get("status") if result.get("status") in ("incomplete", "suspect") else "failed"
+        reason = "; ".join(result.get("verdict") or []) or str(result.get("stop") or f"exit {code}")
+        return status, reason, result
+
+
+# ---- the command
+
+def run(study_file, options: Options) -> int:
+    """`pinbore study`: validate the study and every point, run them (cached), write the
+    outputs. 0, or 1 when a point failed (the others are kept)."""
+    path = Path(study_file)
+    study = load(path)
+    plan = Plan(path, study)
+    start = time.perf_counter()
+    task = Point(plan.kind, plan.base_path.parent, str(plan.base_path))
+    records, fresh = cached_map(task, plan.scenes, plan.keys, options.cache, options.workers,
+                                options.scheduler, desc="study")
+    wall = time.perf_counter() - start
+    rows = table(plan, records, fresh)
+    with atomic_directory(options.out, inputs=[path, plan.base_path, options.cache]) as tmp:
+        write_results(tmp / "results.csv", plan, rows)
+        stats = statistics(plan, rows)
+        (tmp / "statistics.json").write_text(json.dumps(stats, indent=2) + "\n")
+        figures_of(tmp, plan, rows, stats)
+        failed = [r for r in rows if r["status"] != "complete"]
+        summary = {"study_file": str(path), "base": str(plan.base_path), "kind": plan.kind,
+                   "points": len(rows), "ran": sum(fresh), "from_cache": len(rows) - sum(fresh),
+                   "complete": len(rows) - len(failed), "failed": len(failed),
+                   "wall_time_s": wall, "point_seconds": sum(r["seconds"] for r in rows if r["ran"]),
+                   "cache": str(options.cache)}
+        if study.tolerance is not None:
+            answer = tolerance(plan, rows)
+            (tmp / "tolerance.json").write_text(json.dumps(answer, indent=2) + "\n")
+            tolerance_figure(tmp / "tolerance.png", answer)
+            summary["tolerance_half_width"] = answer["half_width"]
+        (tmp / "summary.json").write_text(json.dumps(summary, indent=2) + "\n")
+    if failed:
+        print(f"pinbore study: {path}: {len(failed)} of {len(rows)} points did not complete "
+              f"(first: point {failed[0]['point']}: {failed[0]['status']}: {failed[0]['reason']}); "
+              f"see {options.out}/results.csv", file=sys.stderr)
+        return 1
+    return 0
+
+
+def table(plan: Plan, records: list[dict], fresh: list[bool]) -> list[dict]:
+    """One row per point: its values, status, reason, quantities, whether it ran now."""
+    rows = []
+    for i, (values, record, ran, key) in enumerate(zip(plan.values, records, fresh, plan.keys)):
+        row = {"point": i, **dict(zip(plan.names, map(float, values))),
+               "status": record["status"], "reason": record["reason"], "ran": ran,
+               "seconds": record["seconds"], "key": key[:16]}
+        for c in plan.study.collect:
+            try:
+                row[c.name] = float(get(record["result"], c.path))
+            except (KeyError, TypeError, ValueError):
+                row[c.name] = math.nan
+                if row["status"] == "complete":
+                    row["status"], row["reason"] = "failed", f"{c.path}: not in the result"
+        rows.append(row)
+    return rows
+
+
+def write_results(path: Path, plan: Plan, rows: list[dict]) -> None:
+    from pinbore.reduced.dynamics.plots import write_table   # noqa: PLC0415
+
+    header = ["point", *plan.names, *(c.name for c in plan.study.collect), "status", "reason",
+              "ran", "seconds", "key"]
+    write_table(path, header, [[r[h] for h in header] for r in rows])
+
+
+def complete(rows, name) -> np.ndarray:
+    return np.array([r[name] for r in rows if r["status"] == "complete"], dtype=float)
+
+
+def statistics(plan: Plan, rows: list[dict]) -> dict:
+    """Per quantity: uq.describe over the complete points; the limit's exceedance; Sobol
+    indices for a saltelli plan (every point must be complete: a hole breaks the blocks)."""
+    study, conf = plan.study, plan.study.confidence
+    out = {"confidence": conf, "method": study.sampling.method,
+           "complete_points": sum(r["status"] == "complete" for r in rows), "points": len(rows),
+           "quantities": {}}
+    for c in study.collect:
+        y = complete(rows, c.name)
+        out["quantities"][c.name] = uq.describe(y, conf) if len(y) else {"points": 0}
+    if study.limit is not None and out["complete_points"]:
+        lim = study.limit
+        e = uq.exceedance(complete(rows, lim.quantity), lim.threshold, conf)
+        upper = uq.clopper_pearson(e.exceeding, e.points, conf, "upper")[1]
+        out["limit"] = {"quantity": lim.quantity, "threshold": lim.threshold, "target": lim.target,
+                        "probability": e.probability, "interval": [e.low, e.high],
+                        "exceeding": e.exceeding, "points": e.points, "upper_bound": upper,
+                        "meets_target": upper <= lim.target}
+    if study.sampling.method == "saltelli":
+        out["sobol"] = {}
+        if out["complete_points"] == len(rows):
+            for c in study.collect:
+                s = uq.sobol([r[c.name] for r in rows], len(plan.names), conf, seed=study.sampling.seed)
+                out["sobol"][c.name] = {
+                    name: {"first": s["first"][j], "first_interval": s["first_interval"][j].tolist(),
+                           "total": s["total"][j], "total_interval": s["total_interval"][j].tolist()}
+                    for j, name in enumerate(plan.names)}
+        else:
+            out["sobol_missing"] = "not every point completed: the Saltelli blocks have holes"
+    return json.loads(json.dumps(out, default=float))
+
+
+def tolerance(plan: Plan, rows: list[dict]) -> dict:
+    """The widest band of the tolerance's parameter that meets its target (uq.tolerance_band)
+    over the complete points."""
+    t = plan.study.tolerance
+    d = plan.study.parameters[t.parameter].distribution
+    ok = [r for r in rows if r["status"] == "complete"]
+    answer = uq.tolerance_band([r[t.parameter] for r in ok], [r[t.limit.quantity] for r in ok],
+                               0.5 * (d.low + d.high), 0.5 * (d.high - d.low), t.limit.threshold,
+                               t.target, t.confidence)
+    return {"parameter": t.parameter, "centre": 0.5 * (d.low + d.high), "quantity": t.limit.quantity,
+            "threshold": t.limit.threshold, "target": t.target, "confidence": t.confidence,
+            "method": "the sampled points inside each narrower band (independent uniform draws "
+                      "over it); one-sided Clopper-Pearson upper bound <= target", **answer}
+
+
+# ---- figures
+
+def figures_of(folder: Path, plan: Plan, rows: list[dict], stats: dict) -> None:
+    from pinbore.core.figures import plt, save_png   # noqa: PLC0415
+
+    names = [c.name for c in plan.study.collect]
+    conf = plan.study.confidence
+    fig, axes = plt.subplots(1, len(names), figsize=(4.5 * len(names), 3.5), squeeze=False)
+    for ax, name in zip(axes[0], names):
+        y = complete(rows, name)
+        if len(y):
+            ax.hist(y, bins=max(5, min(50, int(math.sqrt(len(y))))), color="tab:blue", alpha=0.8)
+            ax.axvline(stats["quantities"][name]["mean"], color="k", label="mean")
+        ax.set_xlabel(name)
+        ax.set_ylabel("points")
+    save_png(fig, folder / "histograms.png", layout=True)
+    fig, axes = plt.subplots(1, len(names), figsize=(4.5 * len(names), 3.5), squeeze=False)
+    for ax, name in zip(axes[0], names):
+        y = complete(rows, name)
+        if len(y):
+            curve = uq.exceedance_curve(y, conf)
+            ax.step(curve[:, 0], curve[:, 1], where="post", label="P(Y > y)")
+            ax.fill_between(curve[:, 0], curve[:, 2], curve[:, 3], step="post", alpha=0.3,
+                            label=f"{conf:.0%} Clopper-Pearson")
+            ax.set_yscale("log")
+        lim = plan.study.limit
+        if lim is not None and lim.quantity == name:
+            ax.axvline(lim.threshold, color="r", ls="--")
+            ax.axhline(lim.target, color="r", ls=":")
+        ax.set_xlabel(name)
+        ax.set_ylabel("exceedance probability")
+        ax.legend(fontsize=7)
+    save_png(fig, folder / "exceedance.png", layout=True)
+    if stats.get("sobol"):
+        sobol_outputs(folder, plan, stats["sobol"], plt, save_png)
+
+
+def sobol_outputs(folder, plan, sobol, plt, save_png) -> None:
+    from pinbore.reduced.dynamics.plots import write_table   # noqa: PLC0415
+
+    write_table(folder / "sobol.csv", ["quantity", "parameter", "first", "first_low", "first_high",
+                                       "total", "total_low", "total_high"],
+                [[q, p, s["first"], *s["first_interval"], s["total"], *s["total_interval"]]
+                 for q, by in sobol.items() for p, s in by.items()])
+    fig, axes = plt.subplots(1, len(sobol), figsize=(5 * len(sobol), 3.5), squeeze=False)
+    x = np.arange(len(plan.names))
+    for ax, (q, by) in zip(axes[0], sobol.items()):
+        for shift, order in ((-0.2, "first"), (0.2, "total")):
+            v = np.array([by[p][order] for p in plan.names])
+            ci = np.array([by[p][f"{order}_interval"] for p in plan.names])
+            ax.bar(x + shift, v, 0.4, yerr=[v - ci[:, 0], ci[:, 1] - v], capsize=3, label=order)
+        ax.set_xticks(x, plan.names, rotation=20, fontsize=7)
+        ax.set_title(q)
+        ax.legend()
+    save_png(fig, folder / "sobol.png", layout=True)
+
+
+def tolerance_figure(path: Path, answer: dict) -> None:
+    from pinbore.core.figures import plt, save_png   # noqa: PLC0415
+
+    fig, ax = plt.subplots(figsize=(5, 3.5))
+    if answer["curve"]:
+        c = np.array(answer["curve"], dtype=float)
+        ax.plot(c[:, 0], c[:, 3], label="upper bound on P(exceed)")
+    ax.axhline(answer["target"], color="r", ls=":", label="target")
+    if answer["half_width"] is not None:
+        ax.axvline(answer["half_width"], color="k", ls="--", label="largest band")
+    ax.set_xlabel(f"half-width of {answer['parameter']}")
+    ax.set_yscale("log")
+    ax.legend(fontsize=7)
+    save_png(fig, path, layout=True)

@@ -1,0 +1,351 @@
+"""`pinbore study` and the statistics under it (pinbore.core.uq): each against an independent
+reference: the Ishigami function's closed-form Sobol indices, the moments of a linear model of
+Gaussian inputs, scipy's exact binomial interval, a tolerance band known in closed form, and
+the clearance c = R_bearing - R_journal for the runner's substitutions; the runner's cache,
+resume after SIGKILL and Dask cluster against counts of the runs and an uninterrupted run."""
+
+import csv
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+from conftest import ROOT, main_in_child, pinbore
+from scipy import stats
+
+from pinbore.core import uq
+
+ISHIGAMI_FIRST = np.array([0.3139, 0.4424, 0.0])     # a = 7, b = 0.1 (Ishigami & Homma 1990;
+ISHIGAMI_TOTAL = np.array([0.5576, 0.4424, 0.2437])  # Saltelli et al. 2008, table 4.3)
+BOUNDS = [stats.uniform(-math.pi, 2 * math.pi)] * 3
+
+
+def ishigami(x, a=7.0, b=0.1):
+    return np.sin(x[:, 0]) + a * np.sin(x[:, 1]) ** 2 + b * x[:, 2] ** 4 * np.sin(x[:, 0])
+
+
+def ishigami_indices(n, seed):
+    return uq.sobol(ishigami(uq.plan("saltelli", BOUNDS, n, seed)), 3, 0.95, resamples=300, seed=seed)
+
+
+def test_sobol_indices_of_the_ishigami_function_converge_to_the_closed_form():
+    """At N = 1024 and 16384 base rows (3 seeds each), every 95 % bootstrap interval holds the
+    closed-form index (the references are given to 4 digits: 5e-5, far inside the
+    intervals' half-widths of >= 0.02). The intervals shrink as N^-1/2 (order 0.5 +- 0.05: the
+    bootstrap of a mean); the errors at least as fast (observed order >= 0.4, mean of 3 seeds:
+    a scrambled Sobol' plan converges faster than Monte Carlo's 0.5)."""
+    errors, widths = {}, {}
+    for n in (1024, 16384):
+        err, width = [], []
+        for seed in (1, 2, 3):
+            s = ishigami_indices(n, seed)
+            for est, ci, ref in ((s["first"], s["first_interval"], ISHIGAMI_FIRST),
+                                 (s["total"], s["total_interval"], ISHIGAMI_TOTAL)):
+                assert np.all(ci[:, 0] - 5e-5 <= ref) and np.all(ref <= ci[:, 1] + 5e-5), (n, seed, est, ci)
+                err.append(np.max(np.abs(est - ref)))
+                width.append(np.max(ci[:, 1] - ci[:, 0]) / 2)
+        errors[n], widths[n] = np.mean(err), np.mean(width)
+    assert errors[16384] < 0.005
+    assert math.log(widths[1024] / widths[16384]) / math.log(16) == pytest.approx(0.5, abs=0.05)
+    assert math.log(errors[1024] / errors[16384]) / math.log(16) >= 0.4
+
+
+def test_mean_and_spread_of_a_linear_model_of_gaussian_inputs():
+    """y = c . x, x_i ~ N(mu_i, s_i) independent: E y = c . mu, std y = sqrt(sum c_i^2 s_i^2).
+    At 99.9 % confidence the Student-t and chi-square intervals of 4000 Monte Carlo and LHS
+    samples hold them (a miss has probability 1e-3 per seed); the intervals' half-widths
+    match their closed forms t s / sqrt(n) and the chi-square quantiles."""
+    c, mu, sd = np.array([2.0, -1.0, 0.5]), np.array([1.0, 3.0, -2.0]), np.array([0.1, 0.4, 2.0])
+    dists = [uq.distribution("normal", mean=m, std=s) for m, s in zip(mu, sd)]
+    mean_ref, std_ref = c @ mu, math.sqrt(np.sum((c * sd) ** 2))
+    for method in ("monte_carlo", "lhs"):
+        y = uq.plan(method, dists, 4000, seed=11) @ c
+        mean, lo, hi = uq.mean_interval(y, 0.999)
+        assert lo <= mean_ref <= hi
+        assert (hi - lo) / 2 == pytest.approx(stats.t.ppf(0.9995, 3999) * np.std(y, ddof=1) / math.sqrt(4000), rel=1e-12)
+        std, slo, shi = uq.std_interval(y, 0.999)
+        assert slo <= std_ref <= shi
+        assert slo < std < shi and shi / slo < 1.1   # sqrt(chi2 ratio) at n = 4000: 1.076
+    described = uq.describe(uq.plan("monte_carlo", dists, 4000, seed=3) @ c, 0.999)
+    q = stats.norm(mean_ref, std_ref).ppf([0.05, 0.5, 0.95])
+    for key, ref in zip(("q05", "q50", "q95"), q):   # distribution-free order-statistic intervals
+        assert described[f"{key}_interval"][0] <= ref <= described[f"{key}_interval"][1]
+
+
+@pytest.mark.parametrize("k, n", [(0, 10), (1, 10), (7, 50), (50, 50), (3, 1000), (500, 1000)])
+@pytest.mark.parametrize("confidence", [0.9, 0.95, 0.99])
+def test_clopper_pearson_is_scipys_exact_binomial_interval(k, n, confidence):
+    """Two-sided and one-sided upper, against scipy.stats.binomtest's exact intervals (the same
+    beta quantiles: rel 1e-9)."""
+    ref = stats.binomtest(k, n).proportion_ci(confidence, method="exact")
+    assert uq.clopper_pearson(k, n, confidence) == pytest.approx((ref.low, ref.high), rel=1e-9, abs=1e-12)
+    upper = stats.binomtest(k, n, alternative="less").proportion_ci(confidence, method="exact")
+    assert uq.clopper_pearson(k, n, confidence, "upper")[1] == pytest.approx(upper.high, rel=1e-9)
+    assert uq.exceedance(np.r_[np.ones(k), np.zeros(n - k)], 0.5, confidence).probability == k / n
+
+
+def test_tolerance_band_of_a_known_exceedance():
+    """x uniform on [-1, 1], y = |x|: inside the band |x| <= h, P(y > 0.5) = (h - 0.5) / h
+    (0 for h <= 0.5), so the widest band with P <= 0.01 is h* = 0.5 / 0.99 = 0.50505. The
+    95 % upper bound answer lies between 0.5 (where the bound on k = 0 of ~10 000 points is
+    3e-4) and h* (it is conservative)."""
+    x = np.random.default_rng(5).uniform(-1, 1, 20000)
+    answer = uq.tolerance_band(x, np.abs(x), 0.0, 1.0, 0.5, 0.01, 0.95)
+    assert 0.5 <= answer["half_width"] <= 0.5 / 0.99
+    assert answer["upper_bound"] <= 0.01
+    # the fewest independent points that can show P <= 1 % at 95 %: (1 - 0.01)^n <= 0.05
+    assert answer["fewest_points_needed"] == 299
+
+
+# ---- the runner, on a short slider-crank (a half revolution: tens of ms a point once compiled)
+
+FLORES = ROOT / "scenes/reduced/slider_crank_flores2004.toml"
+
+
+def study_text(journal_radii=None, distribution=None, points=None, duration=0.006, friction=False,
+               extra=""):
+    parameter = (f"values = {list(journal_radii)!r}" if journal_radii is not None
+                 else f"distribution = {distribution}")
+    sampling = (f'method = "monte_carlo"\npoints = {points}\nseed = 4' if points else 'method = "grid"')
+    fric = '"clearance_joints.0.friction" = { law = "coulomb_ambrosio", mu = 0.05 }\n' if friction else ""
+    return f"""base = "{FLORES}"
+[set]
+duration = {duration}
+{fric}
+[parameters."clearance_joints.0.journal_radius"]
+{parameter}
+[sampling]
+{sampling}
+[[collect]]
+name = "peak_force_N"
+path = "clearance_joints.rod_slider.peak_normal_force_N"
+[[collect]]
+name = "clearance_m"
+path = "clearance_joints.rod_slider.clearance_m"
+{extra}"""
+
+
+def rows_of(out):
+    with open(out / "results.csv") as f:
+        return list(csv.DictReader(f))
+
+
+def quantities(rows):
+    return [(r["clearance_joints.0.journal_radius"], r["peak_force_N"], r["status"]) for r in rows]
+
+
+def test_a_study_reruns_only_what_changed(tmp_path):
+    """Four journal radii: every point runs, and the clearance each reports is 10 mm - r (the
+    substitution reached the scene); a second run runs none (the cache files untouched); one
+    radius changed runs that point only."""
+    study = tmp_path / "study.toml"
+    radii = [9.50e-3, 9.55e-3, 9.60e-3, 9.65e-3]
+    study.write_text(study_text(radii))
+    done = pinbore("study", study, "--out", tmp_path / "out", "--workers", "2")
+    assert done.returncode == 0, done.stderr
+    rows = rows_of(tmp_path / "out")
+    assert [r["ran"] for r in rows] == ["True"] * 4
+    for r, radius in zip(rows, radii):
+        assert float(r["clearance_m"]) == pytest.approx(10.0e-3 - radius, rel=1e-9)
+    cache = tmp_path / "out-cache"
+    stamps = {p.name: p.stat().st_mtime_ns for p in cache.iterdir()}
+    done = pinbore("study", study, "--out", tmp_path / "out", "--workers", "2")
+    assert done.returncode == 0, done.stderr
+    assert [r["ran"] for r in rows_of(tmp_path / "out")] == ["False"] * 4
+    assert quantities(rows_of(tmp_path / "out")) == quantities(rows)
+    assert {p.name: p.stat().st_mtime_ns for p in cache.iterdir()} == stamps
+    study.write_text(study_text([9.50e-3, 9.55e-3, 9.62e-3, 9.65e-3]))
+    done = pinbore("study", study, "--out", tmp_path / "out", "--workers", "2")
+    assert done.returncode == 0, done.stderr
+    assert [r["ran"] for r in rows_of(tmp_path / "out")] == ["False", "False", "True", "False"]
+    assert len(list(cache.glob("*.json"))) == 5
+
+
+def test_a_killed_study_resumes_without_losing_or_repeating_a_point(tmp_path):
+    """SIGKILL (the whole process group: the study and its workers) once some points are
+    cached; the rerun runs exactly the others, leaves the cached ones untouched, and its table
+    equals that of an uninterrupted run."""
+    study = tmp_path / "study.toml"
+    study.write_text(study_text(distribution='{ kind = "uniform", low = 9.45e-3, high = 9.6e-3 }',
+                                points=16, duration=0.024, friction=True))
+    whole = pinbore("study", study, "--out", tmp_path / "whole", "--workers", "2", "--cache", tmp_path / "c1")
+    assert whole.returncode == 0, whole.stderr
+    cache = tmp_path / "c2"
+    child = subprocess.Popen([sys.executable, "-m", "pinbore.cli", "study", study, "--out", tmp_path / "out",
+                              "--workers", "2", "--cache", cache], start_new_session=True,
+                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.monotonic() + 300
+    while len(list(cache.glob("*.json"))) < 4 and time.monotonic() < deadline and child.poll() is None:
+        time.sleep(0.02)
+    os.killpg(child.pid, signal.SIGKILL)
+    child.wait()
+    kept = {p.name: p.stat().st_mtime_ns for p in cache.glob("*.json")}
+    assert 4 <= len(kept) < 16 and not (tmp_path / "out").exists()
+    done = pinbore("study", study, "--out", tmp_path / "out", "--workers", "2", "--cache", cache)
+    assert done.returncode == 0, done.stderr
+    rows = rows_of(tmp_path / "out")
+    assert sum(r["ran"] == "True" for r in rows) == 16 - len(kept)
+    assert {p.name: p.stat().st_mtime_ns for p in cache.glob("*.json") if p.name in kept} == kept
+    assert quantities(rows) == quantities(rows_of(tmp_path / "whole"))
+
+
+def test_a_saltelli_study_finds_what_a_quantity_depends_on(tmp_path):
+    """The clearance each point reports is 10 mm - journal radius, a function of the radius
+    alone: its Sobol indices are exactly 0 for the restitution (the AB block that swaps the
+    restitution reproduces A) and 1 for the radius (within the bootstrap interval, which must
+    hold 1), 16 x 4 points through the runner."""
+    study = tmp_path / "study.toml"
+    study.write_text(study_text(distribution='{ kind = "uniform", low = 9.45e-3, high = 9.6e-3 }')
+                     .replace('method = "grid"', 'method = "saltelli"\npoints = 16\nseed = 3')
+                     + '[parameters."clearance_joints.0.restitution"]\n'
+                       'distribution = { kind = "uniform", low = 0.7, high = 0.95 }\n')
+    done = pinbore("study", study, "--out", tmp_path / "out", "--workers", "2")
+    assert done.returncode == 0, done.stderr
+    assert len(rows_of(tmp_path / "out")) == 16 * 4
+    with open(tmp_path / "out" / "sobol.csv") as f:
+        sobol = {(r["quantity"], r["parameter"]): r for r in csv.DictReader(f)}
+    radius = sobol[("clearance_m", "clearance_joints.0.journal_radius")]
+    restitution = sobol[("clearance_m", "clearance_joints.0.restitution")]
+    assert float(restitution["first"]) == 0 and float(restitution["total"]) == 0
+    for order in ("first", "total"):
+        assert float(radius[f"{order}_low"]) <= 1.0 <= float(radius[f"{order}_high"])
+
+
+@pytest.mark.slow
+def test_a_dask_cluster_gives_the_table_of_local_processes(tmp_path):
+    """A local Dask cluster of 2 worker processes (each compiles or loads the engine once)
+    computes the same points as the local pool, to the bit."""
+    distributed = pytest.importorskip("distributed")
+    study = tmp_path / "study.toml"
+    study.write_text(study_text([9.50e-3, 9.58e-3, 9.65e-3]))
+    local = pinbore("study", study, "--out", tmp_path / "local", "--workers", "2")
+    assert local.returncode == 0, local.stderr
+    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
+                                  dashboard_address=None) as cluster:
+        done = pinbore("study", study, "--out", tmp_path / "dask", "--scheduler", cluster.scheduler_address)
+    assert done.returncode == 0, done.stderr
+    assert quantities(rows_of(tmp_path / "dask")) == quantities(rows_of(tmp_path / "local"))
+    assert [r["ran"] for r in rows_of(tmp_path / "dask")] == ["True"] * 3
+
+
+def test_a_failed_point_is_marked_and_the_others_kept(tmp_path):
+    """A journal radius of 9.999 mm leaves 1 um of clearance: a point the engine stops early
+    on (penetration beyond its range) or whose verdict doubts it is marked with its reason;
+    exit 1; the other points' results are in the table."""
+    study = tmp_path / "study.toml"
+    study.write_text(study_text([9.5e-3, 9.99999e-3]))
+    done = pinbore("study", study, "--out", tmp_path / "out", "--workers", "1")
+    rows = rows_of(tmp_path / "out")
+    if rows[1]["status"] == "complete":
+        pytest.skip("the engine completed the 10 nm clearance")
+    assert done.returncode == 1 and "did not complete" in done.stderr
+    assert rows[0]["status"] == "complete" and rows[1]["reason"]
+
+
+# ---- bad input: one line, exit 2, nothing written, before numba is loaded
+
+BAD = [
+    ("unknown key", lambda t: t.replace("[sampling]", "colour = 3\n[sampling]"), "colour: unknown key"),
+    ("no such scene key", lambda t: t.replace("journal_radius\"]", "journal_radios\"]"),
+     "clearance_joints.0.journal_radios: no such key"),
+    ("low above high", lambda t: t.replace("low = 9.45e-3, high = 9.6e-3", "low = 9.6e-3, high = 9.45e-3"),
+     "low must be below high"),
+    ("sigma <= 0", lambda t: t.replace('{ kind = "uniform", low = 9.45e-3, high = 9.6e-3 }',
+                                       '{ kind = "lognormal", median = 9.5e-3, sigma = -0.1 }'), "sigma"),
+    ("std <= 0", lambda t: t.replace('{ kind = "uniform", low = 9.45e-3, high = 9.6e-3 }',
+                                     '{ kind = "normal", mean = 9.5e-3, std = 0.0 }'), "std"),
+    ("a point outside the scene's rules", lambda t: t.replace("high = 9.6e-3", "high = 10.2e-3"), "point "),
+    ("a quantity the summary lacks", lambda t: t.replace("peak_normal_force_N", "peak_force"), "collect.0.path"),
+]
+
+
+@pytest.mark.parametrize("name, edit, message", BAD, ids=[b[0] for b in BAD])
+def test_a_bad_study_is_one_line_before_numba(tmp_path, name, edit, message):
+    study = tmp_path / "study.toml"
+    study.write_text(edit(study_text(distribution='{ kind = "uniform", low = 9.45e-3, high = 9.6e-3 }',
+                                     points=50)))
+    run = main_in_child("study", study, "--out", tmp_path / "out")
+    assert run.returncode == 2, run.stderr
+    assert message in run.stderr and len(run.stderr.strip().splitlines()) == 1, run.stderr
+    assert not (tmp_path / "out").exists() and not (tmp_path / "out-cache").exists()
+
+
+def test_an_unreachable_scheduler_is_one_line_and_writes_nothing(tmp_path):
+    pytest.importorskip("distributed")
+    study = tmp_path / "study.toml"
+    study.write_text(study_text([9.5e-3]))
+    done = pinbore("study", study, "--out", tmp_path / "out", "--scheduler", "tcp://127.0.0.1:9")
+    assert done.returncode == 2, done.stderr
+    assert "--scheduler" in done.stderr and len(done.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists() and not (tmp_path / "out-cache").exists()
+
+
+def test_the_shipped_study_validates(tmp_path):
+    """studies/slider_crank_monte_carlo.toml: every one of its 1000 points is a valid scene."""
+    from pinbore import study
+
+    path = ROOT / "studies/slider_crank_monte_carlo.toml"
+    plan = study.Plan(path, study.load(path))
+    assert len(plan.scenes) == 1000 and len(set(plan.keys)) == 1000
+    radii = plan.values[:, 0]
+    assert 9.4e-3 <= radii.min() and radii.max() <= 9.6e-3
+
+
+@pytest.mark.slow
+def test_an_fe_study_scales_with_the_elastic_moduli(tmp_path):
+    """An FE scene's points (kind "fem": pinbore fem on each point's scene, its curve's last
+    row collected): at a fixed approach, frictionless small-strain contact is linear in the
+    moduli when both scale together, so E_pin = E_bore = 210 GPa gives 3 times the force per
+    length of 70 GPa (rel 1e-6: the same mesh and contact set; the solver's tolerance)."""
+    import tomli_w
+    from conftest import scene_dict
+
+    base = tmp_path / "base.toml"
+    base.write_text(tomli_w.dumps(scene_dict(load={"steps": 2})))
+    study = tmp_path / "study.toml"
+    study.write_text('base = "base.toml"\n[parameters."materials.pin.E"]\nvalues = [70e9, 210e9]\n'
+                     '[parameters."materials.bore.E"]\nvalues = [70e9, 210e9]\n'
+                     '[[collect]]\nname = "force"\npath = "curve_last.force_per_length_N_per_m"\n')
+    done = pinbore("study", study, "--out", tmp_path / "out", "--workers", "2")
+    assert done.returncode == 0, done.stderr
+    force = {(float(r["materials.pin.E"]), float(r["materials.bore.E"])): float(r["force"])
+             for r in rows_of(tmp_path / "out")}
+    assert force[(210e9, 210e9)] == pytest.approx(3 * force[(70e9, 70e9)], rel=1e-6)
+
+
+@pytest.mark.slow
+def test_an_impact_study_is_the_impact_command_at_each_point(tmp_path):
+    """An impact scene's points (kind "impact"): each point's restitution, peak force and pin
+    mass are those of `pinbore impact` on a scene file written with that density (the
+    command itself, another path to the same solve: to 1e-9), and differ between the
+    densities (the substitution reached the model)."""
+    import tomllib
+
+    import tomli_w
+
+    scene = ROOT / "scenes/impact/study_steel_c10um_v1000mm_s.toml"
+    study = tmp_path / "study.toml"
+    study.write_text(f'base = "{scene}"\n[parameters."materials.pin.density"]\nvalues = [7850.0, 2700.0]\n'
+                     '[[collect]]\nname = "restitution"\npath = "restitution"\n'
+                     '[[collect]]\nname = "peak_force"\npath = "peak_force_N_per_m"\n'
+                     '[[collect]]\nname = "pin_mass"\npath = "pin_mass_kg_per_m"\n')
+    done = pinbore("study", study, "--out", tmp_path / "out", "--workers", "2")
+    assert done.returncode == 0, done.stderr
+    rows = rows_of(tmp_path / "out")
+    assert float(rows[1]["pin_mass"]) < 0.5 * float(rows[0]["pin_mass"])
+    for row in rows:
+        data = tomllib.loads(scene.read_text())
+        data["materials"]["pin"]["density"] = float(row["materials.pin.density"])
+        direct = tmp_path / f"direct_{row['point']}.toml"
+        direct.write_text(tomli_w.dumps(data))
+        run = pinbore("impact", direct, "--out", tmp_path / f"direct_{row['point']}")
+        assert run.returncode == 0, run.stderr
+        reference = json.loads((tmp_path / f"direct_{row['point']}" / "impact.json").read_text())
+        for name, key in (("restitution", "restitution"), ("peak_force", "peak_force_N_per_m"),
+                          ("pin_mass", "pin_mass_kg_per_m")):
+            assert float(row[name]) == pytest.approx(reference[key], rel=1e-9)
