@@ -23,9 +23,11 @@ SECTIONS = [
     ("calibration", "pinbore.calibration.report", "section"),
     ("reduced models", "pinbore.reduced.report", "section"),
     ("nonlinear dynamics", "pinbore.reduced.report", "dynamics_section"),
+    ("studies", "pinbore.study", "section"),
 ]
 # the first screen's answers: (module, function) -> [(question, answer HTML)]
-ANSWERS = [("pinbore.calibration.report", "answers"), ("pinbore.reduced.report", "answers")]
+ANSWERS = [("pinbore.calibration.report", "answers"), ("pinbore.reduced.report", "answers"),
+           ("pinbore.study", "answers")]
 HEADING = re.compile(r"^<h2>(.*?)</h2>", re.S)
 
 

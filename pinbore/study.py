@@ -659,3 +659,67 @@ def tolerance_figure(path: Path, answer: dict) -> None:
     ax.set_yscale("log")
     ax.legend(fontsize=7)
     save_png(fig, path, layout=True)
+
+
+# ---- the report's section on the studies under build/study (make study)
+def _studies(build_dir: Path) -> list[Path]:
+    return sorted(p.parent for p in (Path(build_dir) / "study").glob("*/summary.json"))
+
+
+def answers(build_dir: Path) -> list[tuple[str, str]]:
+    """The report's first screen: each study's [limit] (the exceedance probability with its
+    interval, against its target) and [tolerance] (the widest band) answers."""
+    out = []
+    for folder in _studies(build_dir):
+        stats = json.loads((folder / "statistics.json").read_text())
+        limit = stats.get("limit")
+        if limit:
+            low, high = limit["interval"]
+            out.append((f"P({limit['quantity']} &gt; {limit['threshold']:.4g}), {folder.name}",
+                        f"{limit['probability']:.3f} [{low:.3f}, {high:.3f}] against a target of "
+                        f"{limit['target']:g}: {'met' if limit['meets_target'] else 'not shown to be met'} "
+                        f"({limit['points']} points, {stats['confidence']:.0%} confidence)"))
+        if (folder / "tolerance.json").exists():
+            t = json.loads((folder / "tolerance.json").read_text())
+            band = (f"&plusmn;{t['half_width']:.3g} about {t['centre']:.4g}" if t["half_width"]
+                    else "no band of the sample")
+            out.append((f"Tolerance of {t['parameter']}, {folder.name}",
+                        f"{band} keeps P({t['quantity']} &gt; {t['threshold']:.4g}) &le; "
+                        f"{t['target']:g} with {t['confidence']:.0%} confidence "
+                        f"({t['exceeding_in_band']} of {t['points_in_band']} points in it above)"))
+    return out
+
+
+def section(build_dir: Path, bench_dir: Path) -> str:
+    """Each study's statistics (mean, spread and quantiles with their intervals), its
+    figures and its answers."""
+    import html as markup   # noqa: PLC0415
+
+    from pinbore.core.html import figure, note, png_data, table   # noqa: PLC0415
+
+    parts = ["<h2>Studies: uncertainty and tolerance</h2>",
+             "<p>A scene run over a sample of its inputs (<code>pinbore study</code>): the "
+             "statistics of each collected quantity with their confidence intervals, the "
+             "exceedance of a limit, Sobol indices and the tolerance band (docs/study.md).</p>"]
+    studies = _studies(build_dir)
+    if not studies:
+        return "".join(parts) + note("No studies under build/study: run <code>make study</code>.")
+    for folder in studies:
+        s = json.loads((folder / "summary.json").read_text())
+        stats = json.loads((folder / "statistics.json").read_text())
+        parts.append(f"<h3>{markup.escape(folder.name)}</h3><p>{s['complete']} of {s['points']} "
+                     f"points complete ({stats['method']}), base scene "
+                     f"<code>{markup.escape(str(s['base']))}</code>.</p>")
+        rows = [[name, f"{q['mean']:.4g} [{q['mean_interval'][0]:.4g}, {q['mean_interval'][1]:.4g}]",
+                 f"{q['std']:.3g}", f"{q['q05']:.4g}", f"{q['q50']:.4g}",
+                 f"{q['q95']:.4g} [{q['q95_interval'][0]:.4g}, {q['q95_interval'][1]:.4g}]"]
+                for name, q in stats["quantities"].items()]
+        parts.append(table(["quantity", f"mean [{stats['confidence']:.0%}]", "std", "5 %",
+                            "median", f"95 % quantile [{stats['confidence']:.0%}]"], rows))
+        for png, caption in (("histograms.png", "histograms of the collected quantities"),
+                             ("exceedance.png", "exceedance curve: P(quantity > x)"),
+                             ("sobol.png", "Sobol indices, first and total order"),
+                             ("tolerance.png", "the exceedance's upper bound against the band")):
+            if (folder / png).exists():
+                parts.append(figure(png_data(folder / png), f"{markup.escape(folder.name)}: {caption}."))
+    return "".join(parts)
