@@ -40,10 +40,19 @@ CONTINUATION_SCENE := scenes/reduced/impact_oscillator.toml
 DYNAMICS := $(addprefix build/dynamics/,poincare/summary.json bifurcation/summary.json design/summary.json \
                                         spatial_poincare/summary.json spatial_bifurcation/summary.json \
                                         continuation/summary.json)
-REDUCED_CODE := $(wildcard core/*.py laws/*.py laws/lawsfile.py fem/modes/file.py reduced/mechanism/*.py)
+REDUCED_CODE := $(wildcard core/*.py laws/*.py fem/modes/file.py reduced/mechanism/*.py)
 DYNAMICS_CODE := $(wildcard pinbore/cli.py reduced/dynamics/*.py) $(REDUCED_CODE) $(STAMP)
-DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(DYNAMICS_CODE)
-SPATIAL_DYNAMICS_DEPS := $(SPATIAL_DYNAMICS_SCENE) $(DYNAMICS_CODE)
+# numba compiles the multibody engine once per body kind into its on-disk cache: the first run
+# of each kind goes before the other runs of that kind and before the analyses, which then load
+# it instead of each compiling it again at the same time; only the runs whose scene reads the
+# laws file wait for the calibration
+REDUCED_OF = $(patsubst scenes/reduced/%.toml,build/reduced/%/summary.json,$(shell grep -l $(1) scenes/reduced/*.toml))
+SPATIAL_RUNS := $(call REDUCED_OF,'^kind = "spatial"')
+LAWS_RUNS := $(call REDUCED_OF,'^laws_file')
+PLANAR_FIRST := build/reduced/slider_crank_flores2004/summary.json
+SPATIAL_FIRST := build/reduced/spatial_slider_crank_flores/summary.json
+DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(DYNAMICS_CODE) $(PLANAR_FIRST)
+SPATIAL_DYNAMICS_DEPS := $(SPATIAL_DYNAMICS_SCENE) $(DYNAMICS_CODE) $(SPATIAL_FIRST)
 
 .PHONY: all venv mesh fem impact modes calibration reduced dynamics study report bench stress test test-slow docs clean help
 .DELETE_ON_ERROR:
@@ -90,7 +99,10 @@ build/calibration/laws.json: $(STUDY_CURVES) $(STUDY3D_CURVES) $(STUDY_IMPACTS) 
 
 reduced: $(REDUCED_RUNS) ## run the mechanisms with clearance joints (build/reduced/<scene>/)
 
-build/reduced/%/summary.json: scenes/reduced/%.toml build/calibration/laws.json $(MODES_RUNS) $(REDUCED_CODE) $(STAMP)
+$(filter-out $(PLANAR_FIRST) $(SPATIAL_RUNS),$(REDUCED_RUNS)): $(PLANAR_FIRST)
+$(filter-out $(SPATIAL_FIRST),$(SPATIAL_RUNS)): $(SPATIAL_FIRST)
+$(LAWS_RUNS): build/calibration/laws.json
+build/reduced/%/summary.json: scenes/reduced/%.toml $(MODES_RUNS) $(REDUCED_CODE) $(STAMP)
 	$(PINBORE) reduced $< --out build/reduced/$*
 
 dynamics: $(DYNAMICS) ## Poincare maps, bifurcation diagrams and design map of the slider-crank (planar, misaligned spatial); the impact oscillator's continued frequency response (build/dynamics/)
@@ -125,7 +137,7 @@ build/dynamics/spatial_bifurcation/summary.json: $(SPATIAL_DYNAMICS_DEPS)
 
 # the frequency response of the impact oscillator: its periodic motions continued through
 # grazing and its bifurcations, beside direct up- and down-sweeps (the hysteresis)
-build/dynamics/continuation/summary.json: $(CONTINUATION_SCENE) $(DYNAMICS_CODE)
+build/dynamics/continuation/summary.json: $(CONTINUATION_SCENE) $(DYNAMICS_CODE) $(PLANAR_FIRST)
 	$(PINBORE) dynamics $< --analysis continuation --parameter frequency --range 10 30 --points 200 \
 	    --transient 30 --sweeps 41 --periods 5 --out build/dynamics/continuation
 
