@@ -52,7 +52,7 @@ def shipped_scenes():
         yield pytest.param(path.stem, marks=[pytest.mark.slow] if flexible else [])
 
 
-@pytest.mark.parametrize("name", shipped_scenes())
+@pytest.mark.parametrize("name", list(shipped_scenes()))
 def test_shipped_scenes_are_clean(name, tmp_path):
     """At their own tolerances every shipped scene passes every rule (a scene whose files,
     the laws file or a modes file, `make` builds is checked when they are there: make runs
