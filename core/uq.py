@@ -39,16 +39,16 @@ import warnings
 from typing import NamedTuple
 
 import numpy as np
-from scipy import stats
-from scipy.stats import qmc
 
 METHODS = ("grid", "monte_carlo", "lhs", "sobol", "saltelli")
 
 
-def distribution(kind: str, **p) -> stats.rv_continuous:
+def distribution(kind: str, **p) -> "scipy.stats.rv_continuous":
     """The frozen scipy distribution of an input: uniform (low, high), normal (mean, std),
     lognormal (median, sigma: the standard deviation of ln Y), truncnormal (mean, std, low,
     high)."""
+    from scipy import stats   # noqa: PLC0415 (loaded when used)
+
     if kind == "uniform":
         return stats.uniform(loc=p["low"], scale=p["high"] - p["low"])
     if kind == "normal":
@@ -64,6 +64,8 @@ def distribution(kind: str, **p) -> stats.rv_continuous:
 def unit_plan(method: str, dims: int, points: int, seed: int) -> np.ndarray:
     """`points` rows in [0, 1)^dims (saltelli: `points` base rows, N (dims + 2) in all, in the
     blocks A, B, AB_1 .. AB_dims)."""
+    from scipy.stats import qmc   # noqa: PLC0415 (loaded when used)
+
     if method == "monte_carlo":
         return np.random.default_rng(seed).random((points, dims))
     if method == "lhs":
@@ -84,6 +86,8 @@ def unit_plan(method: str, dims: int, points: int, seed: int) -> np.ndarray:
 
 def _sobol(dims: int, points: int, seed: int) -> np.ndarray:
     """A scrambled Sobol' sequence's first `points` points (balanced at powers of 2)."""
+    from scipy.stats import qmc   # noqa: PLC0415 (loaded when used)
+
     with warnings.catch_warnings():   # scipy warns when `points` is no power of 2
         warnings.simplefilter("ignore", UserWarning)
         return qmc.Sobol(d=dims, scramble=True, seed=seed).random(points)
@@ -105,6 +109,8 @@ def grid(values: list[list[float]]) -> np.ndarray:
 
 def mean_interval(y, confidence: float) -> tuple[float, float, float]:
     """The sample mean and its two-sided Student-t interval."""
+    from scipy import stats   # noqa: PLC0415 (loaded when used)
+
     y = np.asarray(y, dtype=float)
     n, mean = len(y), float(np.mean(y))
     if n < 2:
@@ -115,6 +121,8 @@ def mean_interval(y, confidence: float) -> tuple[float, float, float]:
 
 def std_interval(y, confidence: float) -> tuple[float, float, float]:
     """The sample standard deviation and its chi-square interval (exact for normal data)."""
+    from scipy import stats   # noqa: PLC0415 (loaded when used)
+
     y = np.asarray(y, dtype=float)
     n = len(y)
     if n < 2:
@@ -128,6 +136,8 @@ def std_interval(y, confidence: float) -> tuple[float, float, float]:
 def clopper_pearson(k: int, n: int, confidence: float, side: str = "two-sided") -> tuple[float, float]:
     """The exact binomial interval of a probability from k successes in n trials: two-sided,
     or one-sided "upper" ((0, high]) or "lower" ([low, 1))."""
+    from scipy import stats   # noqa: PLC0415 (loaded when used)
+
     alpha = 1 - confidence if side != "two-sided" else (1 - confidence) / 2
     low = 0.0 if k == 0 or side == "upper" else float(stats.beta.ppf(alpha, k, n - k + 1))
     high = 1.0 if k == n or side == "lower" else float(stats.beta.ppf(1 - alpha, k + 1, n - k))
@@ -138,6 +148,8 @@ def quantile_interval(y, p: float, confidence: float) -> tuple[float, float, flo
     """The p-quantile and its distribution-free interval between two order statistics:
     the number of samples below the true quantile is Binomial(n, p), so
     [Y_(l), Y_(u)] covers it with probability >= confidence (nan where n is too small)."""
+    from scipy import stats   # noqa: PLC0415 (loaded when used)
+
     y = np.sort(np.asarray(y, dtype=float))
     n = len(y)
     q = float(np.quantile(y, p))

@@ -230,8 +230,14 @@ BAD = {
     "dynamics": ("bad.toml", 'kind = "reduced"\nduration = 1.0\n[[bodies]]\nname = "a"\nmass = -1.0\n'),
     "calibrate": ("curve.csv", "approach_m\n1\n"),
     "export": ("laws.json", "{}"),
+    "study": ("study.toml", 'base = "absent.toml"\n'),
     "report": ("absent", None),
 }
+
+
+def test_every_command_is_held_to_it():
+    from pinbore.cli import INPUTS
+    assert set(BAD) == set(INPUTS)
 
 
 @pytest.mark.parametrize("command", list(BAD))
