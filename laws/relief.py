@@ -57,6 +57,5 @@ class Relief:
         return tuple(a.reshape(z.shape) for a in out)
 
 
-
 __getattr__ = compile_on_use(globals(), {"relief_at": {"cache": True},
                                          "relief_profile": {"cache": True}})
