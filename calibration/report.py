@@ -14,12 +14,17 @@ def _pct(value) -> str:
     return "–" if value is None or not np.isfinite(value) else f"{100 * value:.1f} %"
 
 
+def pooled_rms(errors) -> float:
+    """The RMS relative error over several curves' errors (lawsfile.Errors)."""
+    return float(np.sqrt(np.mean([e.rms_rel ** 2 for e in errors])))
+
+
 def _pooled(errors: dict[str, lawsfile.Errors], points: dict) -> str:
     """RMS over the curves, or where the law has no solution on some curve, which ones."""
     short = [name for name, e in errors.items() if e.points < points[name]]
     if short:
         return f"no solution at some approaches of {len(short)} curve(s)"
-    return _pct(np.sqrt(np.mean([e.rms_rel ** 2 for e in errors.values()])))
+    return _pct(pooled_rms(errors.values()))
 
 
 def answers(build_dir: Path) -> list[tuple[str, str]]:
@@ -38,7 +43,7 @@ def answers(build_dir: Path) -> list[tuple[str, str]]:
         groups.setdefault(label, []).append(c)
     for label, curves in groups.items():
         names = [c.name for c in curves]
-        scored = {name: (float(np.sqrt(np.mean([law.fitted_errors[n].rms_rel ** 2 for n in names]))),
+        scored = {name: (pooled_rms(law.fitted_errors[n] for n in names),
                          max(law.fitted_errors[n].max_rel for n in names))
                   for name, law in data.laws.items()
                   if law.fitted_errors and all(n in law.fitted_errors for n in names)}

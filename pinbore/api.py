@@ -15,6 +15,7 @@ as TOML beside nothing of the user's: to a temporary file, its `*_file` keys mad
 against `base` (default: the working folder), as a scene file's are against its folder.
 """
 
+import contextlib
 import tempfile
 from pathlib import Path
 
@@ -38,16 +39,19 @@ def _absolute(node, base: Path):
     return node
 
 
-def _scene_file(scene, base) -> tuple[Path, tempfile.TemporaryDirectory | None]:
-    """(the scene's file, the temporary folder holding it when the scene is a dict)."""
+@contextlib.contextmanager
+def _scene_file(scene, base):
+    """The scene's file for the block: its own, or a dict's written to a temporary folder
+    (removed after the block)."""
     if not isinstance(scene, dict):
-        return Path(scene), None
+        yield Path(scene)
+        return
     import tomli_w   # noqa: PLC0415
 
-    folder = tempfile.TemporaryDirectory(prefix="pinbore-scene-")
-    path = Path(folder.name) / "scene.toml"
-    path.write_text(tomli_w.dumps(_absolute(scene, Path(base or ".").resolve())))
-    return path, folder
+    with tempfile.TemporaryDirectory(prefix="pinbore-scene-") as folder:
+        path = Path(folder) / "scene.toml"
+        path.write_text(tomli_w.dumps(_absolute(scene, Path(base or ".").resolve())))
+        yield path
 
 
 def scene(source, base=None):
@@ -55,8 +59,7 @@ def scene(source, base=None):
     spatial; a modes scene has none, but a [body] table)."""
     from pinbore.core.errors import InputError   # noqa: PLC0415
 
-    path, folder = _scene_file(source, base)
-    try:
+    with _scene_file(source, base) as path:
         data = scenes.read_toml(path)
         kind = data.get("kind", "modes" if "body" in data else None)
         if kind in ("reduced", "spatial"):
@@ -70,12 +73,10 @@ def scene(source, base=None):
         elif kind == "modes":
             from pinbore.fem.modes.scene import ModesScene as model   # noqa: PLC0415
         else:
-            raise InputError(f"{source if folder is None else 'scene'}: kind: {kind!r} is unknown; "
-                             "valid: fem, impact, reduced, spatial (a modes scene: a [body] table)")
+            raise InputError(f"{'scene' if isinstance(source, dict) else source}: kind: {kind!r} is "
+                             "unknown; valid: fem, impact, reduced, spatial (a modes scene: a "
+                             "[body] table)")
         return scenes.load(model, path)
-    finally:
-        if folder is not None:
-            folder.cleanup()
 
 
 def _fem(out):
@@ -117,13 +118,8 @@ def run(stage: str, source, out, base=None):
         raise ValueError(f"stage: {stage!r} is unknown; valid: {', '.join(STAGES)}")
     out = Path(out)
     runner, result = STAGES[stage](out)
-    path, folder = _scene_file(source, base)
-    try:
-        with declared_inputs([path, *scenes.referenced_files(path)]):
-            runner(path, out)
-    finally:
-        if folder is not None:
-            folder.cleanup()
+    with _scene_file(source, base) as path, declared_inputs([path, *scenes.referenced_files(path)]):
+        runner(path, out)
     return result()
 
 

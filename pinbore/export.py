@@ -29,7 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from pinbore.core.errors import InputError
-from pinbore.laws import lawsfile
+from pinbore.laws import contact, lawsfile
 from pinbore.reduced.mechanism import kinds
 from pinbore.reduced.mechanism.layout import CHI_POINTS
 from pinbore.reduced.mechanism.scene import clearance_joints
@@ -148,8 +148,6 @@ def run(laws_path: str, to: str, out, scene_path=None, joint_name=None, law_name
 
     laws_data = lawsfile.read(Path(laws_path), laws_path)
     chosen = selected(laws_data, laws_path, scene_path, joint_name, law_name)
-    from pinbore.laws import contact   # noqa: PLC0415 (compiled damping laws: after the checks)
-
     try:
         laws = [contact.law_of(laws_data, *row, source=scene_path or laws_path) for row in chosen]
     except ValueError as err:

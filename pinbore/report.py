@@ -77,7 +77,7 @@ def build(build_dir, out) -> tuple[Path, list[str]]:
     sections, contents, problems = [], [], []
     for index, (heading, module, function) in enumerate(SECTIONS):
         try:
-            content = _call(module, function, build_dir, *(() if function == "dynamics_section" else (bench,)))
+            content = _call(module, function, build_dir, bench)
         except Exception as err:   # noqa: BLE001 (a section fails alone, whatever broke it)
             why = str(err) if isinstance(err, InputError) else (
                 f"its files do not read as expected ({type(err).__name__}: {err})")

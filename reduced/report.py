@@ -202,8 +202,9 @@ def check_bifurcation_table(path: Path, summary: dict) -> None:
                          f"summary.json {summary['counts']} (run pinbore dynamics again)")
 
 
-def dynamics_section(build_dir: Path) -> str:
-    """Nonlinear dynamics: Poincare map, bifurcation diagram, design map (build/dynamics)."""
+def dynamics_section(build_dir: Path, bench_dir: Path) -> str:
+    """Nonlinear dynamics: Poincare map, bifurcation diagram, design map (build/dynamics;
+    no benchmark of its own: `bench_dir`, the sections' common signature, is unused)."""
     folder = build_dir / "dynamics"
     parts = ["<h2>Nonlinear dynamics of the slider-crank with clearance</h2>",
              "<p>Sampled once per crank revolution after a transient; points classified as "
