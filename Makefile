@@ -40,6 +40,7 @@ CONTINUATION_SCENE := scenes/reduced/impact_oscillator.toml
 DYNAMICS := $(addprefix build/dynamics/,poincare/summary.json bifurcation/summary.json design/summary.json \
                                         spatial_poincare/summary.json spatial_bifurcation/summary.json \
                                         continuation/summary.json)
+STUDY_RUNS := $(patsubst studies/%.toml,build/study/%/summary.json,$(wildcard studies/*.toml))
 REDUCED_CODE := $(wildcard core/*.py laws/*.py fem/modes/file.py reduced/mechanism/*.py)
 DYNAMICS_CODE := $(wildcard pinbore/cli.py reduced/dynamics/*.py) $(REDUCED_CODE) $(STAMP)
 # numba compiles the multibody engine once per body kind into its on-disk cache: the first run
@@ -107,10 +108,11 @@ build/reduced/%/summary.json: scenes/reduced/%.toml $(MODES_RUNS) $(REDUCED_CODE
 
 dynamics: $(DYNAMICS) ## Poincare maps, bifurcation diagrams and design map of the slider-crank (planar, misaligned spatial); the impact oscillator's continued frequency response (build/dynamics/)
 
-study: build/study/slider_crank_monte_carlo/summary.json ## Monte Carlo of the Flores slider-crank over clearance, friction and restitution: statistics, exceedance, tolerance band (build/study/)
+study: $(STUDY_RUNS) ## the studies of studies/: Monte Carlo of the Flores slider-crank (exceedance, tolerance band), Sobol indices of the solar-panel deployment (build/study/)
 
-build/study/slider_crank_monte_carlo/summary.json: studies/slider_crank_monte_carlo.toml $(DYNAMICS_SCENE) $(REDUCED_CODE) pinbore/study.py $(STAMP)
-	$(PINBORE) study $< --out build/study/slider_crank_monte_carlo --cache build/study/cache
+# (a study's points run on the local cores after the first planar run compiled the engine)
+build/study/%/summary.json: studies/%.toml $(wildcard scenes/reduced/*.toml) $(REDUCED_CODE) pinbore/study.py $(PLANAR_FIRST) $(STAMP)
+	$(PINBORE) study $< --out build/study/$* --cache build/study/cache
 
 # (the sweeps run their points on the local cores; their per-point caches make a rerun resume)
 build/dynamics/poincare/summary.json: $(DYNAMICS_DEPS)
@@ -143,7 +145,7 @@ build/dynamics/continuation/summary.json: $(CONTINUATION_SCENE) $(DYNAMICS_CODE)
 
 report: build/report/index.html ## build build/report/index.html from the results
 
-build/report/index.html: $(FEM_CURVES) $(MESHES) $(MODES_RUNS) build/calibration/laws.json $(REDUCED_RUNS) $(DYNAMICS) \
+build/report/index.html: $(FEM_CURVES) $(MESHES) $(MODES_RUNS) build/calibration/laws.json $(REDUCED_RUNS) $(DYNAMICS) $(STUDY_RUNS) \
                          $(wildcard bench/*.csv) $(STAGE_CODE) $(MODES_CODE) $(wildcard pinbore/*.py calibration/*.py reduced/*.py) $(REDUCED_CODE) $(STAMP)
 	@# a report folder of a pinbore that wrote no output marker, holding its index.html alone
 	@if [ -d build/report ] && [ ! -e build/report/.pinbore-output ] && [ "$$(ls -A build/report)" = "index.html" ]; then rm -rf build/report; fi

@@ -224,6 +224,12 @@ def sobol(y, dims: int, confidence: float = 0.95, resamples: int = 1000, seed: i
 
 
 def _indices(blocks: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Saltelli's first-order and Jansen's total-order estimators on the outputs centred on
+    the mean of A and B: the first-order one, mean(f_B (f_ABi - f_A)), has the square of the
+    outputs' mean in its variance (f_ABi - f_A averages to zero but scatters); centring leaves
+    its expectation and removes that term (a quantity whose scatter is 8 % of its mean had
+    first-order intervals 3 wide at N = 128 uncentred)."""
+    blocks = blocks - np.mean(blocks[:2])
     f_a, f_b, f_ab = blocks[0], blocks[1], blocks[2:]
     var = np.var(np.concatenate([f_a, f_b]))
     first = np.mean(f_b * (f_ab - f_a), axis=1) / var

@@ -18,6 +18,11 @@ The study file (a strict model: unknown keys are refused):
     [[collect]]
     name = "peak_force_N"
     path = "clearance_joints.rod_slider.peak_normal_force_N"   # into the point's result
+    [[collect]]                    # or a statistic of a mechanism's time-series column
+    name = "jitter_rad_per_s"
+    column = "crank_omega_rad_per_s"
+    statistic = "std"              # max min max_abs peak_to_peak mean rms std final
+    window_s = [0.006, 0.012]      # optional (s)
     [limit]                        # optional: P(quantity > threshold), against target
     quantity = "peak_force_N"
     threshold = 2.0e4
@@ -28,7 +33,7 @@ The study file (a strict model: unknown keys are refused):
     target = 0.01
 
 A point's result is what its command writes: the summary of `pinbore reduced` (summary.json,
-computed in process, no files), impact.json of `pinbore impact`, result.json of `pinbore fem`
+computed in process, no files; with the statistics of its collected columns under `series`), impact.json of `pinbore impact`, result.json of `pinbore fem`
 with the last row of its curve under `curve_last`. The base scene's `kind` says which.
 
 Every point's scene is validated before any run (a point that breaks a rule is one line
@@ -133,9 +138,62 @@ class Sampling(Strict):
     seed: int = 0
 
 
+STATISTICS = ("max", "min", "max_abs", "peak_to_peak", "mean", "rms", "std", "final")
+
+
 class Collect(Strict):
+    """A quantity of each point: a number of its result (`path`), or a statistic of one of a
+    mechanism's time series over a window of time (`column`, `statistic`, `window_s`)."""
+
     name: str = pydantic.Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]*$")
-    path: str = pydantic.Field(min_length=1)
+    path: str | None = pydantic.Field(default=None, min_length=1)
+    column: str | None = pydantic.Field(default=None, min_length=1)
+    statistic: Literal[STATISTICS] | None = None
+    window_s: list[float] | None = pydantic.Field(default=None, min_length=2, max_length=2)
+
+    @pydantic.model_validator(mode="after")
+    def _one(self):
+        if (self.path is None) == (self.column is None):
+            raise ValueError("give a path (a number of the result) or a column (of the time "
+                             "series), not both")
+        if self.column is None and (self.statistic is not None or self.window_s is not None):
+            raise ValueError("statistic and window_s go with a column")
+        if self.column is not None and self.statistic is None:
+            raise ValueError(f"a column needs its statistic ({', '.join(STATISTICS)})")
+        if self.window_s is not None and not 0 <= self.window_s[0] < self.window_s[1]:
+            raise ValueError(f"window_s: [start, end] with 0 <= start < end (got {self.window_s})")
+        return self
+
+    @property
+    def where(self) -> str:
+        """Where the quantity sits in a point's result."""
+        return self.path if self.column is None else f"series.{self.name}"
+
+
+def column_statistic(times: np.ndarray, values: np.ndarray, statistic: str,
+                     window=None) -> float:
+    """A statistic of a time series sampled at the run's accepted steps (times s, values in
+    the column's unit), over the window [start, end] s (default: the whole run): max, min,
+    max_abs, peak_to_peak and final of the step values; mean, rms and std weighted by time
+    (trapezoidal rule over the steps, whose sizes vary), e.g. the rms of an attitude rate
+    about its mean after a latch. NaN when the window holds fewer than two steps."""
+    start, end = window if window is not None else (times[0], times[-1])
+    inside = (times >= start) & (times <= end)
+    t, x = times[inside], values[inside]
+    if t.size < 2:
+        return math.nan
+    if statistic in ("max", "min", "max_abs", "peak_to_peak", "final"):
+        return float({"max": np.max(x), "min": np.min(x), "max_abs": np.max(np.abs(x)),
+                      "peak_to_peak": np.ptp(x), "final": x[-1]}[statistic])
+    weights = np.zeros(t.size)
+    weights[1:] += np.diff(t) / 2
+    weights[:-1] += np.diff(t) / 2
+    mean = float(weights @ x / (t[-1] - t[0]))
+    if statistic == "mean":
+        return mean
+    if statistic == "rms":
+        return math.sqrt(float(weights @ x**2 / (t[-1] - t[0])))
+    return math.sqrt(max(float(weights @ (x - mean) ** 2 / (t[-1] - t[0])), 0.0))
 
 
 class Threshold(Strict):
@@ -369,20 +427,39 @@ class Plan:
             scenes.validate(self.model, data, f"{path}: point {i} ({where})")
             self.scenes.append(data)
         self.check_collect()
+        self.columns = [(c.name, c.column, c.statistic, c.window_s)
+                        for c in study.collect if c.column is not None]
         files = digest_files(scenes.referenced_files(self.base_path))
         code = source_hash(*CODE) + hashlib.sha256(inspect.getsource(Point).encode()).hexdigest()
-        self.keys = [hashlib.sha256(json.dumps([self.kind, d, files, code], sort_keys=True)
-                                    .encode()).hexdigest() for d in self.scenes]
+        self.keys = [hashlib.sha256(json.dumps([self.kind, d, files, code, self.columns],
+                                               sort_keys=True).encode()).hexdigest()
+                     for d in self.scenes]
 
     def check_collect(self) -> None:
         """A mechanism's summary is known before the run: every collected path must name one
-        of its keys (a joint by its name)."""
+        of its keys (a joint by its name), and a column must begin with the name of one of
+        its bodies, clearance joints or output points (its whole name is checked in the run,
+        whose columns it is). Columns are a mechanism's only."""
+        columns = [(i, c) for i, c in enumerate(self.study.collect) if c.column is not None]
         if self.kind != "mechanism":
+            if columns:
+                raise InputError(f"{self.path}: collect.{columns[0][0]}.column: only a "
+                                 f"mechanism's time series has columns (this base is {self.kind})")
             return
         from pinbore.reduced.mechanism.summary import JointPeaks, Summary   # noqa: PLC0415
-        joints = {j["name"] for j in self.scenes[0].get("clearance_joints", [])} | \
-                 {j["name"] for j in self.scenes[0].get("translational_joints", [])}
+        scene = self.scenes[0]
+        joints = {j["name"] for j in scene.get("clearance_joints", [])} | \
+                 {j["name"] for j in scene.get("translational_joints", [])}
+        stems = {b["name"] for b in scene.get("bodies", [])} | joints | \
+                {f"{p['body']}_{p['name']}" for p in scene.get("output", {}).get("points", [])}
+        for i, c in columns:
+            if not any(c.column.startswith(f"{stem}_") for stem in stems):
+                raise InputError(f"{self.path}: collect.{i}.column: {c.column!r} is no column of "
+                                 "the mechanism's time series (a column begins with a body, "
+                                 f"clearance joint or output point: {', '.join(sorted(stems))})")
         for i, c in enumerate(self.study.collect):
+            if c.path is None:
+                continue
             parts = c.path.split(".")
             ok = parts[0] in Summary.model_fields
             if ok and parts[0] == "clearance_joints":
@@ -410,8 +487,9 @@ class Point:
     "seconds", "result"}: status "complete", "suspect" (the run's verdict doubts it),
     "incomplete" (it stopped early) or "failed" (an error; reason says which)."""
 
-    def __init__(self, kind: str, base: Path, source: str):
+    def __init__(self, kind: str, base: Path, source: str, columns=()):
         self.kind, self.base, self.source = kind, Path(base), source
+        self.columns = list(columns)   # (name, column, statistic, window) of a mechanism's series
 
     def __call__(self, data: dict) -> dict:
         start = time.perf_counter()
@@ -426,9 +504,17 @@ class Point:
         from pinbore.reduced.mechanism import kinds   # noqa: PLC0415
         from pinbore.reduced.mechanism.run import summarised   # noqa: PLC0415 (compiled)
 
-        *_, summary = summarised(kinds.validate(data, self.source), self.source, self.base)
+        _, _, series, summary = summarised(kinds.validate(data, self.source), self.source, self.base)
         stop = summary.stop.reason if summary.stop else "; ".join(summary.verdict)
-        return summary.status, stop, json.loads(summary.model_dump_json())
+        result = json.loads(summary.model_dump_json())
+        steps = series["steps"]
+        result["series"] = {}
+        for name, column, statistic, window in self.columns:
+            if column not in steps:
+                raise KeyError(f"column {column!r}: not in the time series (columns: "
+                               f"{', '.join(k for k in steps if k != 'time_s')})")
+            result["series"][name] = column_statistic(steps["time_s"], steps[column], statistic, window)
+        return summary.status, stop, result
 
     def fem(self, data):
         from pinbore.fem import run as fem_run   # noqa: PLC0415
@@ -481,7 +567,7 @@ def run(study_file, options: Options) -> int:
     study = load(path)
     plan = Plan(path, study)
     start = time.perf_counter()
-    task = Point(plan.kind, plan.base_path.parent, str(plan.base_path))
+    task = Point(plan.kind, plan.base_path.parent, str(plan.base_path), plan.columns)
     records, fresh = cached_map(task, plan.scenes, plan.keys, options.cache, options.workers,
                                 options.scheduler, desc="study")
     wall = time.perf_counter() - start
@@ -520,11 +606,11 @@ def table(plan: Plan, records: list[dict], fresh: list[bool]) -> list[dict]:
                "seconds": record["seconds"], "key": key[:16]}
         for c in plan.study.collect:
             try:
-                row[c.name] = float(get(record["result"], c.path))
+                row[c.name] = float(get(record["result"], c.where))
             except (KeyError, TypeError, ValueError):
                 row[c.name] = math.nan
                 if row["status"] == "complete":
-                    row["status"], row["reason"] = "failed", f"{c.path}: not in the result"
+                    row["status"], row["reason"] = "failed", f"{c.where}: not in the result"
         rows.append(row)
     return rows
 
@@ -541,6 +627,13 @@ def complete(rows, name) -> np.ndarray:
     return np.array([r[name] for r in rows if r["status"] == "complete"], dtype=float)
 
 
+def sampled(plan: Plan, rows: list[dict]) -> list[dict]:
+    """The rows the statistics and their figures take: every point, but of a Saltelli plan
+    only the blocks A and B (its blocks AB_i repeat their coordinates, and the intervals count
+    independent draws)."""
+    return rows[:2 * plan.study.sampling.points] if plan.study.sampling.method == "saltelli" else rows
+
+
 def statistics(plan: Plan, rows: list[dict]) -> dict:
     """Per quantity: uq.describe over the complete points; the limit's exceedance; Sobol
     indices for a saltelli plan (every point must be complete: a hole breaks the blocks)."""
@@ -548,12 +641,15 @@ def statistics(plan: Plan, rows: list[dict]) -> dict:
     out = {"confidence": conf, "method": study.sampling.method,
            "complete_points": sum(r["status"] == "complete" for r in rows), "points": len(rows),
            "quantities": {}}
+    sample = sampled(plan, rows)
+    if study.sampling.method == "saltelli":
+        out["statistics_of"] = "the A and B blocks of the Saltelli plan"
     for c in study.collect:
-        y = complete(rows, c.name)
+        y = complete(sample, c.name)
         out["quantities"][c.name] = uq.describe(y, conf) if len(y) else {"points": 0}
     if study.limit is not None and out["complete_points"]:
         lim = study.limit
-        e = uq.exceedance(complete(rows, lim.quantity), lim.threshold, conf)
+        e = uq.exceedance(complete(sample, lim.quantity), lim.threshold, conf)
         upper = uq.clopper_pearson(e.exceeding, e.points, conf, "upper")[1]
         out["limit"] = {"quantity": lim.quantity, "threshold": lim.threshold, "target": lim.target,
                         "probability": e.probability, "interval": [e.low, e.high],
@@ -595,6 +691,7 @@ def figures_of(folder: Path, plan: Plan, rows: list[dict], stats: dict) -> None:
 
     names = [c.name for c in plan.study.collect]
     conf = plan.study.confidence
+    rows = sampled(plan, rows)
     fig, axes = plt.subplots(1, len(names), figsize=(4.5 * len(names), 3.5), squeeze=False)
     for ax, name in zip(axes[0], names):
         y = complete(rows, name)
@@ -679,6 +776,12 @@ def answers(build_dir: Path) -> list[tuple[str, str]]:
                         f"{limit['probability']:.3f} [{low:.3f}, {high:.3f}] against a target of "
                         f"{limit['target']:g}: {'met' if limit['meets_target'] else 'not shown to be met'} "
                         f"({limit['points']} points, {stats['confidence']:.0%} confidence)"))
+        for quantity, indices in stats.get("sobol", {}).items():
+            name, top = max(indices.items(), key=lambda item: item[1]["total"])
+            low, high = top["total_interval"]
+            out.append((f"What drives {quantity}, {folder.name}",
+                        f"{name}: total-order Sobol index {top['total']:.2f} [{low:.2f}, {high:.2f}] "
+                        f"(first order {top['first']:.2f}; of {len(indices)} inputs)"))
         if (folder / "tolerance.json").exists():
             t = json.loads((folder / "tolerance.json").read_text())
             band = (f"&plusmn;{t['half_width']:.3g} about {t['centre']:.4g}" if t["half_width"]
@@ -716,6 +819,14 @@ def section(build_dir: Path, bench_dir: Path) -> str:
                 for name, q in stats["quantities"].items()]
         parts.append(table(["quantity", f"mean [{stats['confidence']:.0%}]", "std", "5 %",
                             "median", f"95 % quantile [{stats['confidence']:.0%}]"], rows))
+        if "statistics_of" in stats:
+            parts.append(f"<p>Statistics of {stats['statistics_of']}.</p>")
+        sobol = [[quantity, name, f"{i['first']:.2f} [{i['first_interval'][0]:.2f}, {i['first_interval'][1]:.2f}]",
+                  f"{i['total']:.2f} [{i['total_interval'][0]:.2f}, {i['total_interval'][1]:.2f}]"]
+                 for quantity, indices in stats.get("sobol", {}).items() for name, i in indices.items()]
+        if sobol:
+            parts.append(table(["quantity", "input", f"first order [{stats['confidence']:.0%}]",
+                                f"total order [{stats['confidence']:.0%}]"], sobol))
         for png, caption in (("histograms.png", "histograms of the collected quantities"),
                              ("exceedance.png", "exceedance curve: P(quantity > x)"),
                              ("sobol.png", "Sobol indices, first and total order"),

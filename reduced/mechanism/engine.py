@@ -1102,6 +1102,36 @@ def observe(t, y, dy, args, work, depth, offset):
 
 
 @numba.njit(cache=True)
+def observe_steps(times, states, speeds, latched, modes, args, work, rates, bodies, depths,
+                  normals, frictions, offsets, drift, kinetic, angles, stretches):
+    """observe, energy_of, torsion_angles and spring_lengths at every recorded step (row k of
+    times, states, and of the impact speeds, latch flags and contact modes the step was taken
+    with, which go into args in place), into the rows of the output arrays: the outputs' one
+    pass over a run in compiled code (a Python loop over the steps cost ten times the
+    integration of a short run)."""
+    nc, nt = args.speeds.shape[0], args.latched.shape[0]
+    kept = bodies.shape[2]
+    dy = np.empty(states.shape[1])
+    depth, offset = np.empty(nc), np.zeros((nc, offsets.shape[2]))
+    angle, stretch = np.empty(nt), np.empty(args.springs.shape[0])
+    for k in range(times.size):
+        args.speeds[:] = speeds[k, :nc]
+        args.latched[:] = latched[k, :nt]
+        for i in range(nc):
+            args.mode[i] = modes[k, i]
+        drift[k] = observe(times[k], states[k], dy, args, work, depth, offset)
+        rates[k] = dy
+        bodies[k] = work.bodies[:, :kept]
+        depths[k], offsets[k] = depth, offset
+        normals[k], frictions[k] = work.normal[:nc], work.friction[:nc]
+        kinetic[k] = energy_of(states[k], args)
+        torsion_angles(states[k], args, work, angle)
+        angles[k] = angle
+        spring_lengths(states[k], args, work, stretch)
+        stretches[k] = stretch
+
+
+@numba.njit(cache=True)
 def relative_motion(y, args, work, bb, s_b, bj, s_j, f, g):
     """Body bj's point s_j relative to body bb's point s_b (body frames): the offset e and the
     relative velocity v_j(P_j) - v_b(P_j) along body bb's vectors f and g (its frame; the

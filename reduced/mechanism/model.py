@@ -98,33 +98,34 @@ class Model:
             mode=np.zeros(nc, np.int64) if mode is None else np.array(mode, np.int64),
             primitives=self.primitives if primitives is None else primitives)
 
-    def elastic_energy(self, k: int, delta: float) -> float:
-        """U(delta) of contact k's tabulated law (table_energy); a linear law's k delta^2 / 2."""
+    def elastic_energy(self, k: int, delta):
+        """U(delta) of contact k's tabulated law (table_energy); a linear law's k delta^2 / 2
+        (J; delta in m, a number or an array)."""
         stiffness = self.contacts[k, layout.CONTACT_STIFFNESS]
         if stiffness > 0:
-            return 0.5 * stiffness * max(delta, 0.0) ** 2
+            return 0.5 * stiffness * np.maximum(delta, 0.0) ** 2
         return table_energy(self.base.tables[int(self.contacts[k, CONTACT_TABLE])],
                             self.base.grid_log0, self.base.grid_step, delta)
 
 
-def table_energy(log_f, grid_log0: float, grid_step: float, delta: float) -> float:
+def table_energy(log_f, grid_log0: float, grid_step: float, delta):
     """U(delta) = int_0^delta F_el of a law tabulated as ln F (pinbore.laws.tables), exact for
     the log-log interpolant the dynamics use: on a segment F = F_i (d / d_i)^s_i, whose
     integral is F_i d_i ((d/d_i)^(s_i+1) - 1)/(s_i+1); below the grid the first segment's power
-    law continues to 0."""
-    if delta <= 0:
-        return 0.0
+    law continues to 0. delta: a number or an array (m); 0 where delta <= 0."""
     d = np.exp(grid_log0 + grid_step * np.arange(log_f.size))
     f = np.exp(log_f)
     slope = np.diff(log_f) / grid_step
-    x = (math.log(delta) - grid_log0) / grid_step
-    i = min(max(int(math.floor(x)), 0), log_f.size - 2)
     below = f[0] * d[0] / (slope[0] + 1)
-    whole = f[:i] * d[:i] * ((d[1:i + 1] / d[:i]) ** (slope[:i] + 1) - 1) / (slope[:i] + 1)
-    if delta < d[0]:
-        return below * (delta / d[0]) ** (slope[0] + 1)
-    part = f[i] * d[i] * ((delta / d[i]) ** (slope[i] + 1) - 1) / (slope[i] + 1)
-    return float(below + whole.sum() + part)
+    segment = f[:-1] * d[:-1] * ((d[1:] / d[:-1]) ** (slope + 1) - 1) / (slope + 1)
+    at_node = below + np.concatenate(([0.0], np.cumsum(segment)))   # U(d_i)
+    x = np.asarray(delta, float)
+    positive = np.maximum(x, d[0] * 1e-300)
+    i = np.clip(np.floor((np.log(positive) - grid_log0) / grid_step).astype(np.int64), 0, log_f.size - 2)
+    inside = at_node[i] + f[i] * d[i] * ((positive / d[i]) ** (slope[i] + 1) - 1) / (slope[i] + 1)
+    first = below * (positive / d[0]) ** (slope[0] + 1)
+    energy = np.where(x <= 0, 0.0, np.where(x < d[0], first, inside))
+    return float(energy) if energy.ndim == 0 else energy
 
 
 # ---- the build

@@ -51,10 +51,9 @@ def roles(model, j) -> dict:
     return {"main": [k for k in rows if k not in axial], "axial": axial}
 
 
-def joint_force(model, j, normal) -> float:
+def joint_force(r, normal) -> float:
     """The force a joint's peak is taken of: the larger of its main contacts' normal forces
-    summed and its axial ones' (N)."""
-    r = roles(model, j)
+    summed and its axial ones' (N; r: the joint's roles)."""
     return max(float(np.sum(normal[r["main"]])), float(np.sum(normal[r["axial"]])))
 
 
@@ -67,27 +66,17 @@ def per_step(model, run):
     dimension = model.kind.dimension
     args = model.args()
     work = engine.workspace(args)
-    dy, depth, offset = np.empty(states.shape[1]), np.empty(nc), np.zeros((nc, dimension))
     rates = np.empty((n, states.shape[1]))
     kept = model.kind.bodies().RIGID_COLUMNS   # of a body's row: its rigid motion
     bodies = np.empty((n, work.bodies.shape[0], kept))
     depths, normals, frictions = np.empty((n, nc)), np.empty((n, nc)), np.empty((n, nc))
-    offsets = np.empty((n, nc, dimension))
-    drift, kinetic, elastic = np.empty(n), np.empty(n), np.zeros(n)
-    angles = np.empty((n, nt))
-    angle = np.empty(nt)
-    stretches, stretch = np.empty((n, args.springs.shape[0])), np.empty(args.springs.shape[0])
-    for k in range(n):
-        args = model.args(run.speeds[k, :nc], run.latched[k, :nt], run.modes[k, :nc])
-        drift[k] = engine.observe(times[k], states[k], dy, args, work, depth, offset)
-        rates[k], bodies[k] = dy, work.bodies[:, :kept]
-        depths[k], normals[k], frictions[k], offsets[k] = depth, work.normal[:nc], work.friction[:nc], offset
-        kinetic[k] = engine.energy_of(states[k], args)
-        engine.torsion_angles(states[k], args, work, angle)
-        angles[k] = angle
-        engine.spring_lengths(states[k], args, work, stretch)
-        stretches[k] = stretch
-        elastic[k] = elastic_energy(model, states[k], args, work, depth)
+    offsets = np.zeros((n, nc, dimension))
+    drift, kinetic = np.empty(n), np.empty(n)
+    angles, stretches = np.empty((n, nt)), np.empty((n, args.springs.shape[0]))
+    engine.observe_steps(times, states, run.speeds, run.latched, run.modes, args, work, rates,
+                         bodies, depths, normals, frictions, offsets, drift, kinetic, angles,
+                         stretches)
+    elastic = elastic_energy(model, states, args, work, depths)
     cols = {"time_s": times} | model.kind.bodies().motion_columns(
         model, states[:, :nq], states[:, nq:2 * nq], rates[:, nq:2 * nq], bodies)
     for j, c in enumerate(model.joints):
@@ -134,22 +123,23 @@ def slider_pose(depth, half_length):
     return (d1 + d2 - d3 - d4) / 4, np.arcsin(np.clip((d2 - d1 + d3 - d4) / (4 * half_length), -1, 1))
 
 
-def elastic_energy(model, y, args, work, depth) -> float:
-    """The elastic energy of every continuous contact at the state y (J; depth: each
-    contact's deepest penetration there)."""
-    total = 0.0
+def elastic_energy(model, states, args, work, depths) -> np.ndarray:
+    """The elastic energy of every continuous contact at each state (J per row of states;
+    depths: each contact's deepest penetration there, one row per state)."""
+    total = np.zeros(states.shape[0])
     for k in range(model.contacts.shape[0]):
         row = model.contacts[k]
-        if int(row[CONTACT_IMPACT]) != CONTINUOUS or depth[k] <= 0 and int(row[CONTACT_KIND]) != SLICED:
+        if int(row[CONTACT_IMPACT]) != CONTINUOUS:
             continue
         if int(row[CONTACT_KIND]) != SLICED:
-            total += model.elastic_energy(k, depth[k])
+            total += model.elastic_energy(k, depths[:, k])
             continue
-        approaches, weights = np.empty((2, int(row[CONTACT_SLICES])))
-        moved = np.array(engine.slice_approaches(y, args, work, k, approaches, weights))
-        total += sum(w * model.elastic_energy(k, d) for d, w in zip(approaches, weights))
+        approaches, weights = np.empty((2, states.shape[0], int(row[CONTACT_SLICES])))
+        moved = np.array([engine.slice_approaches(y, args, work, k, approaches[s], weights[s])
+                          for s, y in enumerate(states)])
+        total += np.sum(weights * model.elastic_energy(k, approaches), axis=1)
         if row[CONTACT_COMPLIANCE] > 0:
-            total += row[CONTACT_LENGTH] * (moved @ moved) / (2 * row[CONTACT_COMPLIANCE])
+            total += row[CONTACT_LENGTH] * np.sum(moved**2, axis=1) / (2 * row[CONTACT_COMPLIANCE])
     return total
 
 
@@ -168,18 +158,24 @@ def refined_peak(model, j, run, k, points=REFINE_POINTS):
     its time s)."""
     times, states = run.times, run.states
     nc, nt = model.contacts.shape[0], model.torsion.shape[0]
+    r = roles(model, j)
     best = (0.0, float(times[k]))
     x = np.linspace(0.0, 1.0, points)
     basis, _ = hermite_basis(x)
+    args = model.args()
+    work = engine.workspace(args)
+    f0, f1 = np.empty(states.shape[1]), np.empty(states.shape[1])
     for a in range(max(k - 1, 0), min(k + 1, times.size - 1)):
-        args = model.args(run.speeds[a + 1, :nc], run.latched[a + 1, :nt], run.modes[a + 1, :nc])
+        args.speeds[:], args.latched[:] = run.speeds[a + 1, :nc], run.latched[a + 1, :nt]
+        args.mode[:] = run.modes[a + 1, :nc]
         h = times[a + 1] - times[a]
-        f0 = engine.rhs_value(times[a], states[a], args)[0]
-        f1 = engine.rhs_value(times[a + 1], states[a + 1], args)[0]
+        engine.rhs(times[a], states[a], f0, args, work)
+        engine.rhs(times[a + 1], states[a + 1], f1, args, work)
         ys = basis.T @ np.array([states[a], h * f0, states[a + 1], h * f1])
         for i in range(points):
             t = times[a] + x[i] * h
-            force = joint_force(model, j, engine.rhs_value(t, ys[i], args)[1])
+            engine.rhs(t, ys[i], f0, args, work)
+            force = joint_force(r, work.normal[:nc])
             if force > best[0]:
                 best = (force, float(t))
     return best
