@@ -21,12 +21,9 @@ PYTHON312 ?= $(shell for p in $$(command -v python3.12) \
 
 FEM_SCENES := $(basename $(notdir $(wildcard scenes/fem/*.toml)))
 FEM_CURVES := $(FEM_SCENES:%=build/fem/%/curve.csv)
-MESHES := $(filter-out build/mesh/study_% build/mesh/study3d_%,$(FEM_SCENES:%=build/mesh/%/mesh.msh))
-STUDY_CURVES := $(filter build/fem/study_%,$(FEM_CURVES))
-STUDY3D_CURVES := $(filter build/fem/study3d_%,$(FEM_CURVES))
+MESHES := $(FEM_SCENES:%=build/mesh/%/mesh.msh)
 IMPACT_SCENES := $(basename $(notdir $(wildcard scenes/impact/*.toml)))
 IMPACT_RUNS := $(IMPACT_SCENES:%=build/impact/%/impact.json)
-STUDY_IMPACTS := $(filter build/impact/study_%,$(IMPACT_RUNS))
 MODES_SCENES := $(basename $(notdir $(wildcard scenes/modes/*.toml)))
 MODES_RUNS := $(MODES_SCENES:%=build/modes/%/body.npz)
 MODES_CODE := $(wildcard pinbore/cli.py core/*.py meshes/body.py fem/modes/*.py)
@@ -41,6 +38,8 @@ DYNAMICS := $(addprefix build/dynamics/,poincare/summary.json bifurcation/summar
                                         spatial_poincare/summary.json spatial_bifurcation/summary.json \
                                         continuation/summary.json)
 STUDY_RUNS := $(patsubst studies/%.toml,build/study/%/summary.json,$(wildcard studies/*.toml))
+# the studies whose points' curves and impacts the calibration reads
+CALIBRATION_STUDIES := $(addprefix build/study/,$(addsuffix /summary.json,calibration_2d calibration_3d restitution))
 REDUCED_CODE := $(wildcard core/*.py laws/*.py fem/modes/file.py reduced/mechanism/*.py)
 DYNAMICS_CODE := $(wildcard pinbore/cli.py reduced/dynamics/*.py) $(REDUCED_CODE) $(STAMP)
 # numba compiles the multibody engine once per body kind into its on-disk cache: the first run
@@ -93,10 +92,16 @@ modes: $(MODES_RUNS) ## reduce the flexible bodies of scenes/modes/ to their mod
 build/modes/%/body.npz: scenes/modes/%.toml $(MODES_CODE) $(STAMP)
 	$(PINBORE) modes $< --out build/modes/$*
 
-calibration: build/calibration/laws.json ## fit and rank the contact laws on the study curves (2D and 3D), the restitution on the study impacts
+calibration: build/calibration/laws.json ## fit and rank the contact laws on the calibration studies' curves (2D and 3D), the restitution on their impacts
 
-build/calibration/laws.json: $(STUDY_CURVES) $(STUDY3D_CURVES) $(STUDY_IMPACTS) fem/scene.py fem/curve.py fem/impact/file.py $(wildcard core/*.py laws/*.py meshes/*.py calibration/*.py) $(STAMP)
-	$(PINBORE) calibrate $(STUDY_CURVES) $(STUDY3D_CURVES) --impacts $(STUDY_IMPACTS) --out build/calibration
+build/calibration/laws.json: $(CALIBRATION_STUDIES) fem/scene.py fem/curve.py fem/impact/file.py $(wildcard core/*.py laws/*.py meshes/*.py calibration/*.py) $(STAMP)
+	$(PINBORE) calibrate build/study/calibration_2d/points/*/curve.csv build/study/calibration_3d/points/*/curve.csv \
+	    --impacts build/study/restitution/points/*/impact.json --out build/calibration
+
+# the calibration studies: FE and impact points (their curves, impact.json and history.csv
+# kept under build/study/<study>/points/<point>/)
+$(CALIBRATION_STUDIES): build/study/%/summary.json: studies/%.toml studies/bases/%.toml $(STAGE_CODE) pinbore/study.py $(STAMP)
+	$(PINBORE) study $< --out build/study/$* --cache build/study/cache
 
 reduced: $(REDUCED_RUNS) ## run the mechanisms with clearance joints (build/reduced/<scene>/)
 
@@ -108,9 +113,9 @@ build/reduced/%/summary.json: scenes/reduced/%.toml $(MODES_RUNS) $(REDUCED_CODE
 
 dynamics: $(DYNAMICS) ## Poincare maps, bifurcation diagrams and design map of the slider-crank (planar, misaligned spatial); the impact oscillator's continued frequency response (build/dynamics/)
 
-study: $(STUDY_RUNS) ## the studies of studies/: Monte Carlo of the Flores slider-crank (exceedance, tolerance band), Sobol indices of the solar-panel deployment (build/study/)
+study: $(STUDY_RUNS) ## the studies of studies/: the calibration curves and impacts, Monte Carlo of the Flores slider-crank (exceedance, tolerance band), Sobol indices of the solar-panel deployment (build/study/)
 
-# (a study's points run on the local cores after the first planar run compiled the engine)
+# (a mechanism study's points run on the local cores after the first planar run compiled the engine)
 build/study/%/summary.json: studies/%.toml $(wildcard scenes/reduced/*.toml) $(REDUCED_CODE) pinbore/study.py $(PLANAR_FIRST) $(STAMP)
 	$(PINBORE) study $< --out build/study/$* --cache build/study/cache
 
@@ -152,7 +157,7 @@ build/report/index.html: $(FEM_CURVES) $(MESHES) $(MODES_RUNS) build/calibration
 	$(PINBORE) report --build build --out build/report
 	@echo "report: $(abspath $@)"
 
-bench: $(STUDY_CURVES) $(MODES_RUNS) $(STAMP) ## run the benchmarks: bench/*.csv and plots (a few minutes)
+bench: build/study/calibration_2d/summary.json $(MODES_RUNS) $(STAMP) ## run the benchmarks: bench/*.csv and plots (a few minutes)
 	$(PY) bench/fem2d.py --out bench
 	$(PY) bench/fem3d.py --out bench
 	$(PY) bench/plastic.py --out bench

@@ -1,6 +1,7 @@
 """Benchmark of the calibration: time to fit and rank every law on the study curves.
 
-Reads the FE curves of the study (build/fem/study_*/curve.csv, made by `make fem`), times
+Reads the FE curves of the 2D calibration study (build/study/calibration_2d/points/*/curve.csv,
+made by `make calibration`), times
 the fit and ranking (median of 5 runs; reading files excluded) and writes OUT/calibration.csv.
 """
 
@@ -17,9 +18,10 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def main(out: Path) -> None:
-    paths = sorted((ROOT / "build" / "fem").glob("study_*/curve.csv"))
+    paths = sorted((ROOT / "build" / "study" / "calibration_2d" / "points").glob("*/curve.csv"))
     if not paths:
-        raise SystemExit("bench/calibrate.py: no study curves under build/fem: run `make fem` first")
+        raise SystemExit("bench/calibrate.py: no study curves under build/study/calibration_2d: "
+                         "run `make calibration` first")
     curves = [read_curve(p, None) for p in paths]
     times = []
     for _ in range(5):

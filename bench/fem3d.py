@@ -25,13 +25,13 @@ import argparse
 import json
 import math
 import tempfile
-import tomllib
 from pathlib import Path
 
 import numpy as np
 from fem2d import finish, run, write_table
 
 from pinbore.core.figures import plt
+from pinbore.study import point_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = {
@@ -46,13 +46,14 @@ SCENE = {
 LEVELS = [(6e-4, 4), (4.2e-4, 6), (3e-4, 8), (2.1e-4, 11), (1.5e-4, 16)]
 LARGE = (1.06e-4, 23)
 REFINEMENT = math.sqrt(2)   # of the element sizes from level to level
-PATH_SCENE = ROOT / "scenes" / "fem" / "study3d_steel_steel_L20mm.toml"
+PATH_POINT = (ROOT / "studies" / "calibration_3d.toml", "study3d_steel_steel_L20mm")
 PATH_STEPS = 10             # push steps, and as many tilt steps
 
 
 def path_scene() -> dict:
-    """The study scene with a (delta, theta) path of 2 PATH_STEPS points."""
-    scene = tomllib.loads(PATH_SCENE.read_text())
+    """The 3D calibration study's scene of the 20 mm steel lug with a (delta, theta) path of
+    2 PATH_STEPS points."""
+    scene = point_scene(*PATH_POINT)
     scene["load"].update(steps=PATH_STEPS, tilt_steps=PATH_STEPS)
     scene["output"] = {"picture": False}
     return scene

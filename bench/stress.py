@@ -15,7 +15,7 @@ Spatial multibody (around scenes/reduced/spatial_slider_crank_flores.toml, one r
 the slider's mass from 1e-12 kg to 10 kg (the mass ratio), and scenes with two joints or two
 clearance joints of one name.
 
-Dynamic impact (around scenes/impact/study_steel_c100um_v1000mm_s.toml, coarse: 30 steps
+Dynamic impact (around the restitution study's point study_steel_c100um_v1000mm_s, coarse: 30 steps
 over the contact): the hub's added mass, the impact speed, the initial gap (up to and beyond
 the diametral clearance) and the steps over the contact, swept alone.
 
@@ -62,11 +62,12 @@ from pinbore.fem.impact import file as impact_file
 from pinbore.laws.dissipative import HYSTERESIS
 from pinbore.reduced.mechanism import kinds, verdict
 from pinbore.reduced.mechanism.scene import clearance_joints
+from pinbore.study import point_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 REDUCED_SCENE = ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml"
 SPATIAL_SCENE = ROOT / "scenes" / "reduced" / "spatial_slider_crank_flores.toml"
-IMPACT_SCENE = ROOT / "scenes" / "impact" / "study_steel_c100um_v1000mm_s.toml"
+IMPACT_POINT = (ROOT / "studies" / "restitution.toml", "study_steel_c100um_v1000mm_s")
 FEM_SCENE = ROOT / "scenes" / "fem" / "steel_c10um.toml"
 TIMEOUT = {"reduced": 120.0, "fem": 300.0, "impact": 300.0}
 WORKERS = 2
@@ -159,7 +160,7 @@ def spatial_points() -> list[dict]:
 
 def impact_points() -> list[dict]:
     """The dynamic impact's points, each parameter alone around a coarse steel impact."""
-    base = tomllib.loads(IMPACT_SCENE.read_text())
+    base = point_scene(*IMPACT_POINT)
     base["impact"]["steps_per_contact"] = 30
     base["output"] = {"picture": False}
     clearance = base["geometry"]["bore_radius"] - base["geometry"]["pin_radius"]

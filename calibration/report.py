@@ -75,7 +75,7 @@ def section(build_dir: Path, bench_dir: Path) -> str:
     curves, laws = data.curves, data.laws
     clear = [c.clearance_m / c.bore_radius_m for c in curves]
     parts.append(
-        f"<p>{len(curves)} FE curves (scenes <code>study_*</code>): clearance ratios c/R from "
+        f"<p>{len(curves)} FE curves (the points of <code>studies/calibration_2d.toml</code>): clearance ratios c/R from "
         f"{min(clear):.3g} to {max(clear):.3g}, steel pin in steel and in aluminium housings, "
         f"approaches to {max(c.approach_m[1] for c in curves) * 1e6:.0f} um. Each law is "
         "compared as published (parameters from geometry and materials only) and fitted: "

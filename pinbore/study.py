@@ -51,15 +51,17 @@ tolerance DIR/tolerance.json and DIR/tolerance.png. The statistics are those of
 pinbore.core.uq, over the points whose status is "complete".
 """
 
+import csv
 import hashlib
 import inspect
+import itertools
 import json
 import math
 import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
 import pydantic
@@ -73,6 +75,10 @@ from pinbore.core.parallel import (cached_map, check_cache, check_scheduler, che
 from pinbore.core.scene import Strict
 
 SPEC_KEYS = ("values", "grid", "distribution")
+# the files of an FE or impact point's run kept in DIR/points/<name>/ (its data; not its plots)
+KEPT_SUFFIXES = (".csv", ".json")
+# a label of a case or a value: a part of a point's name, and so of a folder's
+LabelText = Annotated[str, pydantic.Field(pattern=r"^[A-Za-z0-9_.+-]*$")]
 # the packages whose source may decide a point's result: every floor below the roof (a
 # mechanism reads a laws file through calibration/ and a flexible body through fem/modes/),
 # and the class that runs a point (Point; not the rest of this module: a new plot reruns nothing)
@@ -123,13 +129,36 @@ class Parameter(Strict):
     values: list[float] | None = pydantic.Field(default=None, min_length=1)
     grid: Grid | None = None
     distribution: Distribution | None = None
+    labels: list[LabelText] | None = None   # one per value: the points' names (grid plans)
 
     @pydantic.model_validator(mode="after")
     def _one(self):
         given = [k for k in SPEC_KEYS if getattr(self, k) is not None]
         if len(given) != 1:
             raise ValueError(f"give exactly one of values, grid, distribution (given: {', '.join(given) or 'none'})")
+        if self.labels is not None:
+            if self.distribution is not None:
+                raise ValueError("labels name the values of a list or a grid, not of a distribution")
+            count = len(self.values) if self.values is not None else self.grid.num
+            if len(self.labels) != count:
+                raise ValueError(f"labels: one per value ({count}), given {len(self.labels)}")
         return self
+
+
+class Case(Strict):
+    """One case of a group: its label and the keys it sets (dotted, as in [set]: any value,
+    a key may be new)."""
+
+    label: LabelText
+    settings: dict[str, object] = {}
+
+    @pydantic.model_validator(mode="before")
+    @classmethod
+    def _keys(cls, data):
+        """A case's table is its label beside the keys it sets."""
+        if isinstance(data, dict) and "settings" not in data:
+            return {"label": data.get("label"), "settings": {k: v for k, v in data.items() if k != "label"}}
+        return data
 
 
 class Sampling(Strict):
@@ -216,6 +245,8 @@ class Study(Strict):
     base: str
     confidence: float = pydantic.Field(default=0.95, gt=0, lt=1)
     set: dict[str, object] = {}
+    cases: dict[str, list[Case]] = {}   # groups of cases, every combination (grid plans)
+    name_prefix: LabelText = ""        # of every point's name
     parameters: dict[str, Parameter] = pydantic.Field(min_length=1)
     sampling: Sampling = Sampling()
     collect: list[Collect] = pydantic.Field(min_length=1)
@@ -232,7 +263,15 @@ class Study(Strict):
             if self.sampling.points is not None:
                 raise ValueError("sampling.points: a grid runs every combination of the values; "
                                  "give no points")
+            for group, cases in self.cases.items():
+                if not cases:
+                    raise ValueError(f"cases.{group}: give at least one case")
+                labels = [c.label for c in cases]
+                if len(set(labels)) != len(labels):
+                    raise ValueError(f"cases.{group}: two cases have one label")
         else:
+            if self.cases:
+                raise ValueError(f"cases: go with sampling.method grid (every combination), not {method}")
             wrong = [k for k, p in specs.items() if p.distribution is None]
             if wrong:
                 raise ValueError(f"sampling.method: {method} samples distributions; {wrong[0]} has none")
@@ -332,6 +371,10 @@ def load(path: Path) -> Study:
                                      stop=lambda t: any(k in t for k in SPEC_KEYS))
     if isinstance(data.get("set"), dict):
         data["set"] = flatten(data["set"])
+    if isinstance(data.get("cases"), dict):
+        data["cases"] = {group: [flatten(c) if isinstance(c, dict) else c for c in cases]
+                         if isinstance(cases, list) else cases
+                         for group, cases in data["cases"].items()}
     return scenes.validate(Study, data, str(path))
 
 
@@ -387,6 +430,17 @@ def scene_kind(data: dict, source: str):
     return "mechanism", kinds.kind_of(data, source).scene
 
 
+def value_labels(study: Study, rows: int) -> list[tuple[str, ...]]:
+    """Per row of the plan (`matrix`, `rows` rows), the labels of its parameters' values (""
+    where a parameter has none, and for random plans)."""
+    specs = list(study.parameters.values())
+    if study.sampling.method != "grid":
+        return [("",) * len(specs)] * rows
+    counts = [len(p.values) if p.values is not None else p.grid.num for p in specs]
+    index = uq.grid([range(n) for n in counts]).astype(int)
+    return [tuple(p.labels[k] if p.labels else "" for p, k in zip(specs, row)) for row in index]
+
+
 def matrix(study: Study) -> np.ndarray:
     """The plan: one row per point, one column per parameter (in the study's order)."""
     specs = list(study.parameters.values())
@@ -417,15 +471,40 @@ class Plan:
                 put(json.loads(json.dumps(base)), name, 0.0)
             except KeyError as err:
                 raise InputError(f"{path}: parameters.{name}: {err.args[0]}") from None
-        self.values = matrix(study)
-        self.scenes = []
-        for i, row in enumerate(self.values):
-            data = json.loads(json.dumps(base))
-            for name, value in zip(self.names, row):
-                put(data, name, float(value))
-            where = ", ".join(f"{n} = {v:.6g}" for n, v in zip(self.names, row))
-            scenes.validate(self.model, data, f"{path}: point {i} ({where})")
-            self.scenes.append(data)
+        groups = list(study.cases)
+        rows = matrix(study)
+        row_labels = value_labels(study, len(rows))
+        values, self.cases, self.point_names, self.scenes = [], [], [], []
+        for combo in itertools.product(*(study.cases[g] for g in groups)):
+            for row, labels in zip(rows, row_labels):
+                data = json.loads(json.dumps(base))
+                for group, case in zip(groups, combo):
+                    for key, value in case.settings.items():
+                        try:
+                            put(data, key, value, create=True)
+                        except KeyError as err:
+                            raise InputError(f"{path}: cases.{group}.{case.label}: {err.args[0]}") from None
+                for name, value in zip(self.names, row):
+                    put(data, name, float(value))
+                where = ", ".join([f"{g} = {c.label}" for g, c in zip(groups, combo)]
+                                  + [f"{n} = {v:.6g}" for n, v in zip(self.names, row)])
+                scenes.validate(self.model, data, f"{path}: point {len(self.scenes)} ({where})")
+                values.append(row)
+                self.cases.append({g: c.label for g, c in zip(groups, combo)})
+                self.point_names.append("_".join(
+                    part for part in (study.name_prefix, *(c.label for c in combo), *labels) if part))
+                self.scenes.append(data)
+        self.values = np.array(values)
+        labelled = bool(groups) or any(p.labels for p in study.parameters.values())
+        if not labelled:
+            self.point_names = ["_".join(part for part in (study.name_prefix, f"point{i:04d}") if part)
+                                for i in range(len(self.scenes))]
+        seen = {}
+        for i, name in enumerate(self.point_names):
+            if name in seen:
+                raise InputError(f"{path}: points {seen[name]} and {i} share the name {name!r}: label "
+                                 "the values of every parameter that varies (parameters.<key>.labels)")
+            seen[name] = i
         self.check_collect()
         self.columns = [(c.name, c.column, c.statistic, c.window_s)
                         for c in study.collect if c.column is not None]
@@ -472,6 +551,31 @@ class Plan:
                 raise InputError(f"{self.path}: collect.{i}.path: {c.path!r} is no number of a "
                                  "mechanism's summary.json (e.g. clearance_joints.<joint name>."
                                  "peak_normal_force_N, impacts, energy_balance.dissipated_J)")
+
+
+def point_scene(study_file, name: str, out=None) -> dict:
+    """The scene data of the point `name` of a study (validated), e.g. one calibration curve's
+    FE scene; with `out`, also written there as a TOML scene file (the names of files it
+    refers to made absolute)."""
+    path = Path(study_file)
+    plan = Plan(path, load(path))
+    if name not in plan.point_names:
+        raise InputError(f"{path}: no point named {name!r} (points: {', '.join(plan.point_names)})")
+    data = plan.scenes[plan.point_names.index(name)]
+    if out is not None:
+        import tomli_w   # noqa: PLC0415
+
+        Path(out).write_text(tomli_w.dumps(absolute_files(data, plan.base_path.parent)))
+    return data
+
+
+def absolute_files(data: dict, base: Path) -> dict:
+    """A copy of scene data with the names of the files it refers to (`*_file`) absolute."""
+    data = json.loads(json.dumps(data))
+    for key, value in flatten(data).items():
+        if key.endswith("_file") and isinstance(value, str) and not Path(value).is_absolute():
+            put(data, key, str(base / value), create=True)
+    return data
 
 
 def digest_files(paths) -> list[str]:
@@ -540,10 +644,7 @@ class Point:
         temporary folder (names of files made absolute), and read its result."""
         import tomli_w   # noqa: PLC0415
 
-        data = json.loads(json.dumps(data))
-        for key, value in flatten(data).items():
-            if key.endswith("_file") and isinstance(value, str) and not Path(value).is_absolute():
-                put(data, key, str(self.base / value), create=True)
+        data = absolute_files(data, self.base)
         with tempfile.TemporaryDirectory(prefix="pinbore-study-") as folder:
             path = Path(folder) / "scene.toml"
             path.write_text(tomli_w.dumps(data))
@@ -551,6 +652,8 @@ class Point:
             if not (Path(folder) / "out").is_dir():
                 return "failed", f"the run wrote nothing (exit {code})", {}
             result = read(Path(folder) / "out", code)
+            result["files"] = {f.name: f.read_text() for f in sorted((Path(folder) / "out").iterdir())
+                               if f.suffix in KEPT_SUFFIXES}
         if code == 0:
             return "complete", "", result
         status = result.get("status") if result.get("status") in ("incomplete", "suspect") else "failed"
@@ -574,9 +677,15 @@ def run(study_file, options: Options) -> int:
     rows = table(plan, records, fresh)
     with atomic_directory(options.out, inputs=[path, plan.base_path, options.cache]) as tmp:
         write_results(tmp / "results.csv", plan, rows)
+        for name, record in zip(plan.point_names, records):
+            if record["result"].get("files"):
+                (tmp / "points" / name).mkdir(parents=True)
+                for file, text in record["result"]["files"].items():
+                    (tmp / "points" / name / file).write_text(text)
         stats = statistics(plan, rows)
         (tmp / "statistics.json").write_text(json.dumps(stats, indent=2) + "\n")
-        figures_of(tmp, plan, rows, stats)
+        if study.sampling.method != "grid":   # a grid's points are chosen, not drawn
+            figures_of(tmp, plan, rows, stats)
         failed = [r for r in rows if r["status"] != "complete"]
         summary = {"study_file": str(path), "base": str(plan.base_path), "kind": plan.kind,
                    "points": len(rows), "ran": sum(fresh), "from_cache": len(rows) - sum(fresh),
@@ -601,7 +710,8 @@ def table(plan: Plan, records: list[dict], fresh: list[bool]) -> list[dict]:
     """One row per point: its values, status, reason, quantities, whether it ran now."""
     rows = []
     for i, (values, record, ran, key) in enumerate(zip(plan.values, records, fresh, plan.keys)):
-        row = {"point": i, **dict(zip(plan.names, map(float, values))),
+        row = {"point": i, "name": plan.point_names[i], **plan.cases[i],
+               **dict(zip(plan.names, map(float, values))),
                "status": record["status"], "reason": record["reason"], "ran": ran,
                "seconds": record["seconds"], "key": key[:16]}
         for c in plan.study.collect:
@@ -618,8 +728,8 @@ def table(plan: Plan, records: list[dict], fresh: list[bool]) -> list[dict]:
 def write_results(path: Path, plan: Plan, rows: list[dict]) -> None:
     from pinbore.reduced.dynamics.plots import write_table   # noqa: PLC0415
 
-    header = ["point", *plan.names, *(c.name for c in plan.study.collect), "status", "reason",
-              "ran", "seconds", "key"]
+    header = ["point", "name", *plan.study.cases, *plan.names, *(c.name for c in plan.study.collect),
+              "status", "reason", "ran", "seconds", "key"]
     write_table(path, header, [[r[h] for h in header] for r in rows])
 
 
@@ -813,6 +923,13 @@ def section(build_dir: Path, bench_dir: Path) -> str:
         parts.append(f"<h3>{markup.escape(folder.name)}</h3><p>{s['complete']} of {s['points']} "
                      f"points complete ({stats['method']}), base scene "
                      f"<code>{markup.escape(str(s['base']))}</code>.</p>")
+        if stats["method"] == "grid":   # chosen points: their table, not a distribution
+            results = list(csv.DictReader((folder / "results.csv").read_text().splitlines()))
+            quantities = list(stats["quantities"])
+            parts.append(table(["point", *quantities, "status"],
+                               [[r["name"], *(f"{float(r[q]):.5g}" for q in quantities), r["status"]]
+                                for r in results]))
+            continue
         rows = [[name, f"{q['mean']:.4g} [{q['mean_interval'][0]:.4g}, {q['mean_interval'][1]:.4g}]",
                  f"{q['std']:.3g}", f"{q['q05']:.4g}", f"{q['q50']:.4g}",
                  f"{q['q95']:.4g} [{q['q95_interval'][0]:.4g}, {q['q95_interval'][1]:.4g}]"]

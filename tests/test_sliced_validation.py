@@ -18,8 +18,9 @@ from conftest import ROOT, pinbore
 from pinbore.calibration import run, sliced
 from pinbore.calibration.curves import read
 from pinbore.laws import lawsfile
+from pinbore.study import point_scene
 
-SCENES = ROOT / "scenes" / "fem"
+STUDIES = ROOT / "studies"   # the calibration curves are points of its studies
 FITTED = ["study3d_steel_steel_L10mm_lug", "study3d_steel_steel_L20mm_lug"]
 SECTION = "study_steel_steel_c030um"
 
@@ -28,11 +29,14 @@ SECTION = "study_steel_steel_c030um"
 def runs(tmp_path_factory):
     """The FE curves: the section's 2D curve, the two fitted lugs, the unseen lug."""
     root = tmp_path_factory.mktemp("sliced_validation")
-    unseen = tomllib.loads((SCENES / f"{FITTED[1]}.toml").read_text())
+    scenes = {name: root / f"{name}.toml" for name in [SECTION, *FITTED]}
+    point_scene(STUDIES / "calibration_2d.toml", SECTION, scenes[SECTION])
+    for name in FITTED:
+        point_scene(STUDIES / "calibration_3d.toml", name, scenes[name])
+    unseen = tomllib.loads(scenes[FITTED[1]].read_text())
     unseen["geometry"]["length"] = 0.015
     unseen["load"]["tilt_deg"] = 0.12
     (root / "unseen.toml").write_text(tomli_w.dumps(unseen))
-    scenes = {name: SCENES / f"{name}.toml" for name in [SECTION, *FITTED]}
     scenes["unseen"] = root / "unseen.toml"
     for name, scene in scenes.items():
         done = pinbore("fem", scene, "--out", root / name)

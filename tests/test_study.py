@@ -12,6 +12,7 @@ import signal
 import subprocess
 import sys
 import time
+import tomllib
 
 import numpy as np
 import pytest
@@ -276,6 +277,8 @@ BAD = [
     ("a window that ends before it starts", lambda t: t + COLUMN.replace("[0.0, 0.0065]", "[0.004, 0.001]"),
      "window_s"),
     ("a column without its statistic", lambda t: t + COLUMN.replace('statistic = "min"\n', ""), "statistic"),
+    ("cases in a random plan", lambda t: t + '[[cases.joint]]\nlabel = "a"\n"duration" = 0.004\n',
+     "cases: go with sampling.method grid"),
 ]
 
 
@@ -288,6 +291,30 @@ def test_a_bad_study_is_one_line_before_numba(tmp_path, name, edit, message):
     assert run.returncode == 2, run.stderr
     assert message in run.stderr and len(run.stderr.strip().splitlines()) == 1, run.stderr
     assert not (tmp_path / "out").exists() and not (tmp_path / "out-cache").exists()
+
+
+BAD_GRID = [
+    ("two points of one name", lambda t: t.replace("values = [0.0095, 0.0096]",
+                                                   'values = [0.0095, 0.0096]\nlabels = ["c", "c"]'),
+     "share the name"),
+    ("a label short", lambda t: t.replace("values = [0.0095, 0.0096]",
+                                          'values = [0.0095, 0.0096]\nlabels = ["c500um"]'),
+     "labels: one per value"),
+    ("a case without its label", lambda t: t + '[[cases.joint]]\n"clearance_joints.0.E" = 70e9\n',
+     "label"),
+    ("a case that breaks the scene", lambda t: t + '[[cases.joint]]\nlabel = "a"\n"clearance_joints.0.nu" = 0.6\n',
+     "point 0 (joint = a"),
+]
+
+
+@pytest.mark.parametrize("name, edit, message", BAD_GRID, ids=[b[0] for b in BAD_GRID])
+def test_a_bad_grid_is_one_line_before_numba(tmp_path, name, edit, message):
+    study = tmp_path / "study.toml"
+    study.write_text(edit(study_text([9.5e-3, 9.6e-3])))
+    run = main_in_child("study", study, "--out", tmp_path / "out")
+    assert run.returncode == 2, run.stderr
+    assert message in run.stderr and len(run.stderr.strip().splitlines()) == 1, run.stderr
+    assert not (tmp_path / "out").exists()
 
 
 def test_an_unreachable_scheduler_is_one_line_and_writes_nothing(tmp_path):
@@ -308,12 +335,38 @@ def test_the_shipped_studies_validate(path):
 
     loaded = study.load(path)
     plan = study.Plan(path, loaded)
-    points = loaded.sampling.points * (len(plan.names) + 2 if loaded.sampling.method == "saltelli" else 1)
+    method, specs = loaded.sampling.method, list(loaded.parameters.values())
+    if method == "grid":
+        points = math.prod(len(s.values) for s in specs) * math.prod(map(len, loaded.cases.values()))
+    else:
+        points = loaded.sampling.points * (len(specs) + 2 if method == "saltelli" else 1)
     assert len(plan.scenes) == points and len(set(plan.keys)) == points
-    for j, spec in enumerate(loaded.parameters.values()):
+    assert len(set(plan.point_names)) == points
+    for j, spec in enumerate(specs):
         d = spec.distribution
-        if d.low is not None:
+        if d is not None and d.low is not None:
             assert d.low <= plan.values[:, j].min() and plan.values[:, j].max() <= d.high
+
+
+def test_cases_cross_the_values_and_name_the_points():
+    """Two cases of a group (each setting two keys) crossed with two labelled values: four
+    points, the cases outermost, each scene holding its case's and its value's settings, each
+    named prefix_case_value."""
+    from pinbore import study
+
+    path = ROOT / "studies" / "x.toml"
+    text = study_text([9.5e-3, 9.6e-3]).replace(
+        "values = [0.0095, 0.0096]", 'values = [0.0095, 0.0096]\nlabels = ["c500um", "c400um"]')
+    text = 'name_prefix = "flores"\n' + text + (
+        '[[cases.joint]]\nlabel = "soft"\n"clearance_joints.0.E" = 70e9\n"clearance_joints.0.nu" = 0.33\n'
+        '[[cases.joint]]\nlabel = "steel"\n"clearance_joints.0.E" = 207e9\n"clearance_joints.0.nu" = 0.3\n')
+    plan = study.Plan(path, study.Study.model_validate(tomllib.loads(text)))
+    assert plan.point_names == ["flores_soft_c500um", "flores_soft_c400um",
+                                "flores_steel_c500um", "flores_steel_c400um"]
+    joints = [s["clearance_joints"][0] for s in plan.scenes]
+    assert [(j["E"], j["nu"], j["journal_radius"]) for j in joints] == [
+        (70e9, 0.33, 9.5e-3), (70e9, 0.33, 9.6e-3), (207e9, 0.3, 9.5e-3), (207e9, 0.3, 9.6e-3)]
+    assert plan.cases == [{"joint": "soft"}] * 2 + [{"joint": "steel"}] * 2
 
 
 def test_a_statistic_of_a_column_against_the_closed_form():
@@ -369,14 +422,21 @@ def test_an_fe_study_scales_with_the_elastic_moduli(tmp_path):
     base = tmp_path / "base.toml"
     base.write_text(tomli_w.dumps(scene_dict(load={"steps": 2})))
     study = tmp_path / "study.toml"
-    study.write_text('base = "base.toml"\n[parameters."materials.pin.E"]\nvalues = [70e9, 210e9]\n'
-                     '[parameters."materials.bore.E"]\nvalues = [70e9, 210e9]\n'
+    study.write_text('base = "base.toml"\n'
+                     '[[cases.moduli]]\nlabel = "soft"\n"materials.pin.E" = 70e9\n"materials.bore.E" = 70e9\n'
+                     '[[cases.moduli]]\nlabel = "stiff"\n"materials.pin.E" = 210e9\n"materials.bore.E" = 210e9\n'
+                     '[parameters."contact.friction"]\nvalues = [0.0]\n'
                      '[[collect]]\nname = "force"\npath = "curve_last.force_per_length_N_per_m"\n')
     done = pinbore("study", study, "--out", tmp_path / "out", "--workers", "2")
     assert done.returncode == 0, done.stderr
-    force = {(float(r["materials.pin.E"]), float(r["materials.bore.E"])): float(r["force"])
-             for r in rows_of(tmp_path / "out")}
-    assert force[(210e9, 210e9)] == pytest.approx(3 * force[(70e9, 70e9)], rel=1e-6)
+    force = {r["moduli"]: float(r["force"]) for r in rows_of(tmp_path / "out")}
+    assert force["stiff"] == pytest.approx(3 * force["soft"], rel=1e-6)
+    # each point's files are kept under its name, as pinbore fem wrote them
+    for name in ("soft", "stiff"):
+        last = (tmp_path / "out" / "points" / name / "curve.csv").read_text().splitlines()
+        header = last[0].split(",")
+        assert float(last[-1].split(",")[header.index("force_per_length_N_per_m")]) == force[name]
+        assert (tmp_path / "out" / "points" / name / "result.json").exists()
 
 
 @pytest.mark.slow
