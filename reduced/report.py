@@ -27,8 +27,7 @@ def answers(build_dir: Path) -> list[tuple[str, str]]:
                     f"{calibrated.peak_normal_force_N / 1e3:.3g} kN on the calibrated law, "
                     f"{published.peak_normal_force_N / 1e3:.3g} kN on the published one "
                     f"({change:+.0%}); {calibrated.impacts} impacts"))
-    path = build_dir / "dynamics" / "continuation" / "summary.json"
-    if path.exists():
+    for path in sorted((build_dir / "dynamics").glob("continuation*/summary.json")):
         s = load_json(path, "dynamics")
         kinds_found = {}
         for b in s.get("bifurcations", []):
@@ -243,8 +242,7 @@ def dynamics_section(build_dir: Path, bench_dir: Path) -> str:
         png = folder / name / f"{kind}.png"
         if png.exists():
             parts.append(figure(png_data(png), f"{caption} ({facts}; {s['wall_time_s']:.1f} s)."))
-    path = folder / "continuation" / "summary.json"
-    if path.exists():
+    for path in sorted(folder.glob("continuation*/summary.json")):
         parts.append(continuation_part(path))
     return "".join(parts)
 
@@ -254,7 +252,8 @@ CONTINUATION_KEYS = ("scene_file", "parameter", "start", "points", "converged", 
 
 
 def continuation_part(path: Path) -> str:
-    """The continued response of a scene (make dynamics: the impact oscillator): its figure,
+    """The continued response of a scene (make dynamics: the impact oscillator, the shaken
+    deployed panel): its figure,
     the periodic orbit at the scene's own value with its Floquet multipliers, and the
     bifurcations."""
     s = load_json(path, "dynamics")

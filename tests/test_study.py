@@ -327,7 +327,9 @@ def test_an_unreachable_scheduler_is_one_line_and_writes_nothing(tmp_path):
     assert not (tmp_path / "out").exists() and not (tmp_path / "out-cache").exists()
 
 
-@pytest.mark.parametrize("path", sorted((ROOT / "studies").glob("*.toml")), ids=lambda p: p.stem)
+@pytest.mark.parametrize("path", sorted([*(ROOT / "studies").glob("*.toml"),
+                                         *(ROOT / "studies" / "convergence").glob("*.toml")]),
+                         ids=lambda p: p.stem)
 def test_the_shipped_studies_validate(path):
     """Every point of each shipped study is a valid scene, each its own cache key, and every
     sampled value inside its distribution's support."""
