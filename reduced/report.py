@@ -252,10 +252,9 @@ CONTINUATION_KEYS = ("scene_file", "parameter", "start", "points", "converged", 
 
 
 def continuation_part(path: Path) -> str:
-    """The continued response of a scene (make dynamics: the impact oscillator, the shaken
-    deployed panel): its figure,
-    the periodic orbit at the scene's own value with its Floquet multipliers, and the
-    bifurcations."""
+    """The continued response of a scene (build/dynamics/continuation*/: make dynamics runs
+    the impact oscillator's): its figure, the periodic orbit at the scene's own value with its
+    Floquet multipliers, and the bifurcations."""
     s = load_json(path, "dynamics")
     for key in CONTINUATION_KEYS:
         if key not in s:
