@@ -25,6 +25,18 @@ chaospy are larger still. scipy.stats.qmc already has the Sobol' and Latin-hyper
 generators, and the estimators are a few lines of numpy, checked against the Ishigami
 function's closed form (tests/test_study.py).
 
+Surrogate (`chaos`): a polynomial chaos expansion of the output in the inputs, fitted by least
+squares on any random plan: each input u_i = F_i(x_i) (its CDF: every input uniform on [0, 1],
+any distribution) mapped to z_i = 2 u_i - 1 and expanded in Legendre polynomials, orthogonal
+for the uniform measure, P_n with E[P_n^2] = 1/(2n + 1), over the multi-indices of total
+degree <= p. Mean, variance and Sobol indices follow from the coefficients [Sudret2008]:
+mean c_0, V = sum_{a != 0} c_a^2 / prod(2 a_i + 1), S_i the share of the terms in z_i alone,
+ST_i of the terms that hold z_i. Its accuracy: the leave-one-out error of the least-squares fit
+(exact from the hat matrix, no refit), relative to the output's variance; a degree is refused
+when the plan has fewer than twice as many points as terms. It pays where a point costs
+seconds (FE, impacts): the Ishigami function's indices within 1e-5 from 1000 points at degree
+12, where Saltelli's estimators need 5 x 16384 runs for 1e-3.
+
 Tolerance (`tolerance_band`): a uniform parameter sampled over its widest band
 [centre - H, centre + H] by independent draws; the points inside a narrower band
 [centre - h, centre + h] are independent uniform draws over that band (rejection sampling, the
@@ -266,3 +278,70 @@ def tolerance_band(x, y, centre: float, widest: float, threshold: float, target:
             "widest_half_width": widest,
             "fewest_points_needed": math.ceil(math.log(1 - confidence) / math.log(1 - target)),
             "curve": curve}
+
+
+# ---- surrogate: polynomial chaos
+
+def multi_indices(dims: int, degree: int) -> np.ndarray:
+    """Every multi-index a of `dims` non-negative integers with sum(a) <= degree, the zero
+    index first, then by total degree."""
+    out = [a for a in np.ndindex(*(degree + 1,) * dims) if sum(a) <= degree]
+    return np.array(sorted(out, key=lambda a: (sum(a), tuple(-v for v in a))), dtype=int)
+
+
+def legendre_basis(z: np.ndarray, indices: np.ndarray) -> np.ndarray:
+    """The products prod_i P_{a_i}(z_i) of Legendre polynomials at the points z (n, dims) in
+    [-1, 1]^dims, one column per multi-index (Bonnet's recursion)."""
+    degree = int(indices.max(initial=0))
+    p = np.ones((degree + 1,) + z.shape)
+    if degree >= 1:
+        p[1] = z
+    for n in range(1, degree):
+        p[n + 1] = ((2 * n + 1) * z * p[n] - n * p[n - 1]) / (n + 1)
+    columns = np.ones((z.shape[0], len(indices)))
+    for i in range(z.shape[1]):
+        columns *= p[indices[:, i], :, i].T
+    return columns
+
+
+class Chaos(NamedTuple):
+    """A fitted polynomial chaos expansion (`chaos`)."""
+
+    indices: np.ndarray        # (terms, dims) multi-indices
+    coefficients: np.ndarray   # (terms,)
+    mean: float
+    variance: float
+    first: np.ndarray          # (dims,) first-order Sobol indices
+    total: np.ndarray          # (dims,) total-order Sobol indices
+    loo_error: float           # leave-one-out mean square error / the output's variance
+
+    def __call__(self, u: np.ndarray) -> np.ndarray:
+        """The surrogate at points u (n, dims) of the unit hypercube (the inputs' CDF values)."""
+        return legendre_basis(2 * np.asarray(u, float) - 1, self.indices) @ self.coefficients
+
+
+def chaos(u, y, degree: int) -> Chaos:
+    """The Legendre chaos of total degree `degree` fitted by least squares to the outputs y at
+    the points u (n, dims) of the unit hypercube (each input's CDF value: the plan's own
+    points); ValueError when the plan has fewer than twice as many points as terms."""
+    u, y = np.asarray(u, float), np.asarray(y, float)
+    indices = multi_indices(u.shape[1], degree)
+    if len(y) < 2 * len(indices):
+        raise ValueError(f"a chaos of degree {degree} in {u.shape[1]} inputs has {len(indices)} "
+                         f"terms: it needs at least {2 * len(indices)} points (given {len(y)})")
+    basis = legendre_basis(2 * u - 1, indices)
+    q, r = np.linalg.qr(basis)
+    coefficients = np.linalg.solve(r, q.T @ y)
+    residual = y - basis @ coefficients
+    leverage = np.sum(q**2, axis=1)
+    loo = float(np.mean((residual / (1 - leverage)) ** 2) / max(np.var(y), 1e-300))
+    norms = 1 / np.prod(2 * indices + 1, axis=1)
+    share = coefficients**2 * norms
+    variance = float(share[1:].sum())
+    alone = [(indices[:, i] > 0) & (indices.sum(axis=1) == indices[:, i]) for i in range(u.shape[1])]
+    held = [indices[:, i] > 0 for i in range(u.shape[1])]
+    scale = max(variance, 1e-300)
+    return Chaos(indices, coefficients, float(coefficients[0]), variance,
+                 np.array([share[m].sum() / scale for m in alone]),
+                 np.array([share[m].sum() / scale for m in held]), loo)
+

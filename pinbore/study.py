@@ -27,6 +27,8 @@ The study file (a strict model: unknown keys are refused):
     quantity = "peak_force_N"
     threshold = 2.0e4
     target = 0.05
+    [surrogate]                    # optional (random plans): a polynomial chaos of this
+    degree = 4                     # total degree in the parameters: its Sobol indices
     [tolerance]                    # optional: the widest band of a uniform parameter
     parameter = "clearance_joints.0.journal_radius"
     limit = { quantity = "peak_force_N", threshold = 5.0e4 }
@@ -167,6 +169,13 @@ class Sampling(Strict):
     seed: int = 0
 
 
+class Surrogate(Strict):
+    """A polynomial chaos of each quantity in the parameters (core.uq.chaos), fitted on the
+    points of a random plan: its Sobol indices, mean and spread, and its leave-one-out error."""
+
+    degree: int = pydantic.Field(ge=1, le=20)
+
+
 STATISTICS = ("max", "min", "max_abs", "peak_to_peak", "mean", "rms", "std", "final")
 
 
@@ -252,6 +261,7 @@ class Study(Strict):
     collect: list[Collect] = pydantic.Field(min_length=1)
     limit: Limit | None = None
     tolerance: Tolerance | None = None
+    surrogate: Surrogate | None = None
 
     @pydantic.model_validator(mode="after")
     def _plan(self):
@@ -284,6 +294,15 @@ class Study(Strict):
             if quantity is not None and quantity.quantity not in names:
                 raise ValueError(f"{where}.quantity: {quantity.quantity!r} is not collected "
                                  f"(collect: {', '.join(names)})")
+        if self.surrogate is not None:
+            if method not in ("monte_carlo", "lhs", "sobol"):
+                raise ValueError(f"surrogate: fits the points of a random plan (monte_carlo, lhs, "
+                                 f"sobol), not of {method}")
+            terms = math.comb(len(specs) + self.surrogate.degree, self.surrogate.degree)
+            if self.sampling.points < 2 * terms:
+                raise ValueError(f"surrogate.degree: {self.surrogate.degree} in {len(specs)} "
+                                 f"parameters is {terms} terms: it needs sampling.points >= "
+                                 f"{2 * terms} (given {self.sampling.points})")
         if self.tolerance is not None:
             spec = specs.get(self.tolerance.parameter)
             if spec is None or spec.distribution is None or spec.distribution.kind != "uniform":
@@ -765,6 +784,8 @@ def statistics(plan: Plan, rows: list[dict]) -> dict:
                         "probability": e.probability, "interval": [e.low, e.high],
                         "exceeding": e.exceeding, "points": e.points, "upper_bound": upper,
                         "meets_target": upper <= lim.target}
+    if study.surrogate is not None:
+        out["surrogate"] = surrogates(plan, rows)
     if study.sampling.method == "saltelli":
         out["sobol"] = {}
         if out["complete_points"] == len(rows):
@@ -777,6 +798,29 @@ def statistics(plan: Plan, rows: list[dict]) -> dict:
         else:
             out["sobol_missing"] = "not every point completed: the Saltelli blocks have holes"
     return json.loads(json.dumps(out, default=float))
+
+
+def surrogates(plan: Plan, rows: list[dict]) -> dict:
+    """Per quantity, the polynomial chaos (core.uq.chaos) of the complete points, each
+    parameter's value mapped to the unit interval by its distribution's CDF: the leave-one-out
+    error (of the variance), mean, standard deviation and Sobol indices by parameter."""
+    dists = [p.distribution.frozen() for p in plan.study.parameters.values()]
+    done = [i for i, r in enumerate(rows) if r["status"] == "complete"]
+    u = np.column_stack([d.cdf(plan.values[done, j]) for j, d in enumerate(dists)])
+    out = {}
+    for c in plan.study.collect:
+        y = np.array([rows[i][c.name] for i in done], dtype=float)
+        try:
+            fit = uq.chaos(u, y, plan.study.surrogate.degree)
+        except ValueError as err:
+            out[c.name] = {"missing": str(err)}
+            continue
+        out[c.name] = {"degree": plan.study.surrogate.degree, "terms": len(fit.indices),
+                       "points": len(y), "loo_error": fit.loo_error, "mean": fit.mean,
+                       "std": math.sqrt(fit.variance),
+                       "first": dict(zip(plan.names, fit.first.tolist())),
+                       "total": dict(zip(plan.names, fit.total.tolist()))}
+    return out
 
 
 def tolerance(plan: Plan, rows: list[dict]) -> dict:
@@ -869,6 +913,10 @@ def tolerance_figure(path: Path, answer: dict) -> None:
 
 
 # ---- the report's section on the studies under build/study (make study)
+CHAOS_HOLDS = 0.05   # a chaos whose leave-one-out error is above this share of the variance misses
+                    # more than a twentieth of it: its indices are not shown as an answer
+
+
 def _studies(build_dir: Path) -> list[Path]:
     return sorted(p.parent for p in (Path(build_dir) / "study").glob("*/summary.json"))
 
@@ -892,6 +940,16 @@ def answers(build_dir: Path) -> list[tuple[str, str]]:
             out.append((f"What drives {quantity}, {folder.name}",
                         f"{name}: total-order Sobol index {top['total']:.2f} [{low:.2f}, {high:.2f}] "
                         f"(first order {top['first']:.2f}; of {len(indices)} inputs)"))
+        for quantity, c in stats.get("surrogate", {}).items():
+            if "total" not in c:
+                continue
+            name = max(c["total"], key=c["total"].get)
+            held = c["loo_error"] <= CHAOS_HOLDS
+            out.append((f"What drives {quantity}, {folder.name} (polynomial chaos)",
+                        f"{name}: total-order Sobol index {c['total'][name]:.2f} (first order "
+                        f"{c['first'][name]:.2f}); the chaos's leave-one-out error "
+                        f"{c['loo_error']:.1g} of the variance"
+                        + ("" if held else ": the chaos does not hold, nor its indices")))
         if (folder / "tolerance.json").exists():
             t = json.loads((folder / "tolerance.json").read_text())
             band = (f"&plusmn;{t['half_width']:.3g} about {t['centre']:.4g}" if t["half_width"]
@@ -944,6 +1002,13 @@ def section(build_dir: Path, bench_dir: Path) -> str:
         if sobol:
             parts.append(table(["quantity", "input", f"first order [{stats['confidence']:.0%}]",
                                 f"total order [{stats['confidence']:.0%}]"], sobol))
+        chaos = [[quantity, f"{c['degree']} ({c['terms']} terms)", f"{c['loo_error']:.2g}",
+                  f"{c['mean']:.4g} ± {c['std']:.3g}",
+                  ", ".join(f"{markup.escape(n)} {c['first'][n]:.2f} / {c['total'][n]:.2f}" for n in c["first"])]
+                 for quantity, c in stats.get("surrogate", {}).items() if "degree" in c]
+        if chaos:
+            parts.append(table(["quantity", "chaos degree", "leave-one-out error / variance",
+                                "mean ± std", "Sobol indices, first / total order"], chaos))
         for png, caption in (("histograms.png", "histograms of the collected quantities"),
                              ("exceedance.png", "exceedance curve: P(quantity > x)"),
                              ("sobol.png", "Sobol indices, first and total order"),
