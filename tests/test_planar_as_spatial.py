@@ -76,8 +76,13 @@ FORCE_TOL = 1e-6             # of the peak
 # 5e-4 of the friction force's peak (sigma1's transient at the onset lifts it above F_n). The
 # other laws' states are forces per normal force (Dahl: m ~ 0.1, its error 1e-10 of it) or a
 # stretch whose error k1 dz = 7.5e-7 N is 6e-9 of the Iwan element's 125 N: within FORCE_TOL.
-# LuGre's motion: its friction force's error (above) moves the bodies by up to twice the
-# bounds of the frictionless motion (the last entry: a factor on POSITION_TOL, ANGLE_TOL). The Iwan element's force: its stick-slip switch (at the
+# LuGre's motion: the bristle state is stiff (its time constant g / (sigma0 |v|) = 0.5 us at
+# 2.1 m/s, against steps of 0.1-0.3 us through the impact), and its integration error, fed
+# back through the friction force, moves the bodies by 2-4 times the bounds of the
+# frictionless motion at rtol 1e-10 (4.2x in position, 3.5x in angle, the normal force 1.5e-6
+# of its peak, measured; it depends on the floating-point code of the machine): its twins run
+# at rtol 1e-11, atol 1e-14 (the last entry), where the differences fall by 14x to 0.3 of the
+# bounds (1e-12: 4e-3), within every common bound. The Iwan element's force: its stick-slip switch (at the
 # onset and as the contact opens, where mu F_n falls below k1 z) is a discontinuity of the
 # right-hand side, which the two models' steps cross at other instants and, in space, every
 # slice at its own: the slider's force there differs by k1 times the slip over that
@@ -89,20 +94,20 @@ LAWS = {
                  FORCE_TOL),
     "linear": ({"law": "linear", "mu_static": 0.1, "alpha": 0.02}, 0.1, FORCE_TOL),
     "lugre": ({"law": "lugre", "mu_coulomb": 0.1, "mu_static": 0.15, "stribeck_speed": 1e-3,
-               "sigma0": 1e5, "sigma1": 316.0, "sigma2": 0.0}, 0.1, 5e-4, 2.0),
+               "sigma0": 1e5, "sigma1": 316.0, "sigma2": 0.0}, 0.1, 5e-4, 1e-11),
     "dahl": ({"law": "dahl", "mu": 0.1, "sigma": 1e5}, 0.1, FORCE_TOL),
     "iwan_bilinear": ({"law": "iwan_bilinear", "mu": 0.1, "k1": 1e6, "k2": 0.0}, 0.1, 1e-2),
 }
 
 
-def twins(duration, joint, drop=()):
+def twins(duration, joint, drop=(), rtol=1e-10):
     """The planar scene and its spatial writing over `duration`, the rod-slider joint's keys
-    `drop` removed and `joint` added, integrated at rtol 1e-10."""
+    `drop` removed and `joint` added, integrated at rtol 1e-10 (atol 1e-3 rtol m)."""
     out = []
     for data in (PLANAR, SPATIAL):
         data = copy.deepcopy(data)
         data["duration"] = duration
-        data["integrator"] = {"rtol": 1e-10, "atol": 1e-13}
+        data["integrator"] = {"rtol": rtol, "atol": 1e-3 * rtol}
         data["output"] = {"plots": False}
         for key in drop:
             data["clearance_joints"][0].pop(key)
@@ -186,13 +191,13 @@ def test_continuous_contact_with_friction_reproduces_the_planar_model(law):
     (4e-4 s: free flight, the impact with its peak at 0.25 ms, the contact opening, free flight
     again): the same onset, and at 600 instants the same positions, angles, normal force and
     friction force (module docstring: 5e-10 m, 1e-8 rad, 1e-6 of the peaks; LuGre's friction
-    force 5e-4 of its peak and its motion twice the bounds, the Iwan element's force 1e-2: LAWS). The
+    force 5e-4 of its peak, its twins at rtol 1e-11; the Iwan element's force 1e-2: LAWS). The
     law was
     exercised: somewhere in contact the planar joint slides at its law's sliding coefficient
     (|F_t| >= 0.999 mu F_n)."""
-    friction, mu, friction_tol, *motion = LAWS[law]
-    factor = motion[0] if motion else 1.0
-    planar, spatial = (integrate(data) for data in twins(4e-4, {"friction": friction}))
+    friction, mu, friction_tol, *rtol = LAWS[law]
+    rtol = rtol[0] if rtol else 1e-10
+    planar, spatial = (integrate(data) for data in twins(4e-4, {"friction": friction}, rtol=rtol))
     (_, p_run), (_, s_run) = planar, spatial
     assert p_run.impacts.shape[0] == s_run.impacts.shape[0] == 1
     assert s_run.impacts[0, LOG_TIME] == pytest.approx(p_run.impacts[0, LOG_TIME], rel=1e-8)
@@ -201,8 +206,8 @@ def test_continuous_contact_with_friction_reproduces_the_planar_model(law):
     positions, angles, normal, tangential, p, _ = differences(planar, spatial, times)
     in_contact = p[:, -2] > 0
     assert np.any(p[in_contact, -1] >= 0.999 * mu * p[in_contact, -2])   # it slid
-    assert positions < factor * POSITION_TOL, positions
-    assert angles < factor * ANGLE_TOL, angles
+    assert positions < POSITION_TOL, positions
+    assert angles < ANGLE_TOL, angles
     assert normal < FORCE_TOL * p[:, -2].max(), normal / p[:, -2].max()
     assert tangential < friction_tol * p[:, -1].max(), tangential / p[:, -1].max()
 
