@@ -305,6 +305,42 @@ def test_a_dask_cluster_gives_the_table_of_local_processes(tmp_path):
     assert [r["ran"] for r in rows_of(tmp_path / "dask")] == ["True"] * 3
 
 
+def test_a_dask_worker_killed_during_a_study_loses_no_point(tmp_path):
+    """SIGKILL to one of the two workers of a local Dask cluster while it runs a point (its
+    nanny starts a new one; the scheduler gives the lost worker's points to the workers left):
+    the study completes, its table equals that of local processes, and every point ran once
+    in this study (none from a cache, none missing)."""
+    distributed = pytest.importorskip("distributed")
+    study = tmp_path / "study.toml"
+    study.write_text(study_text(distribution='{ kind = "uniform", low = 9.45e-3, high = 9.6e-3 }',
+                                points=12, duration=0.024, friction=True))
+    local = pinbore("study", study, "--out", tmp_path / "local", "--workers", "2")
+    assert local.returncode == 0, local.stderr
+    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
+                                  dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        pids = client.run(os.getpid)
+        child = subprocess.Popen([sys.executable, "-m", "pinbore.cli", "study", study, "--out",
+                                  tmp_path / "dask", "--scheduler", cluster.scheduler_address],
+                                 stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        deadline = time.monotonic() + 300
+        while time.monotonic() < deadline and child.poll() is None:
+            busy = [w for w, tasks in client.processing().items() if tasks and w in pids]
+            if busy:   # a worker holds a point: kill it mid-run
+                killed = pids[busy[0]]
+                os.kill(killed, signal.SIGKILL)
+                break
+            time.sleep(0.01)
+        else:
+            pytest.fail("no worker of the cluster took a point")
+        _, err = child.communicate(timeout=600)
+        assert child.returncode == 0, err
+        assert killed not in client.run(os.getpid).values()   # it was gone, not only busy
+    rows = rows_of(tmp_path / "dask")
+    assert quantities(rows) == quantities(rows_of(tmp_path / "local"))
+    assert [r["ran"] for r in rows] == ["True"] * 12
+
+
 def test_a_failed_point_is_marked_and_the_others_kept(tmp_path):
     """A journal radius of 9.999 mm leaves 1 um of clearance: a point the engine stops early
     on (penetration beyond its range) or whose verdict doubts it is marked with its reason;
