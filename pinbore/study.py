@@ -256,7 +256,7 @@ class Study(Strict):
     set: dict[str, object] = {}
     cases: dict[str, list[Case]] = {}   # groups of cases, every combination (grid plans)
     name_prefix: LabelText = ""        # of every point's name
-    parameters: dict[str, Parameter] = pydantic.Field(min_length=1)
+    parameters: dict[str, Parameter] = {}   # with cases, may be empty: a grid of the cases
     sampling: Sampling = Sampling()
     collect: list[Collect] = pydantic.Field(min_length=1)
     limit: Limit | None = None
@@ -266,6 +266,8 @@ class Study(Strict):
     @pydantic.model_validator(mode="after")
     def _plan(self):
         method, specs = self.sampling.method, self.parameters
+        if not specs and (method != "grid" or not self.cases):
+            raise ValueError("parameters: give at least one (a grid of cases alone may have none)")
         if method == "grid":
             wrong = [k for k, p in specs.items() if p.distribution is not None]
             if wrong:
@@ -453,7 +455,7 @@ def value_labels(study: Study, rows: int) -> list[tuple[str, ...]]:
     """Per row of the plan (`matrix`, `rows` rows), the labels of its parameters' values (""
     where a parameter has none, and for random plans)."""
     specs = list(study.parameters.values())
-    if study.sampling.method != "grid":
+    if study.sampling.method != "grid" or not specs:
         return [("",) * len(specs)] * rows
     counts = [len(p.values) if p.values is not None else p.grid.num for p in specs]
     index = uq.grid([range(n) for n in counts]).astype(int)
@@ -464,6 +466,8 @@ def matrix(study: Study) -> np.ndarray:
     """The plan: one row per point, one column per parameter (in the study's order)."""
     specs = list(study.parameters.values())
     s = study.sampling
+    if s.method == "grid" and not specs:
+        return np.zeros((1, 0))   # the cases alone: one row of no parameter
     if s.method == "grid":
         return uq.grid([p.values if p.values is not None else p.grid.values() for p in specs])
     return uq.plan(s.method, [p.distribution.frozen() for p in specs], s.points, s.seed)

@@ -380,6 +380,9 @@ BAD = [
      "cases: go with sampling.method grid"),
     ("a surrogate of more terms than the plan can fit", lambda t: t + '[surrogate]\ndegree = 30\n',
      "surrogate.degree"),
+    ("no parameter", lambda t: t.replace('[parameters."clearance_joints.0.journal_radius"]\n'
+                                         'distribution = { kind = "uniform", low = 9.45e-3, high = 9.6e-3 }\n', ""),
+     "parameters: give at least one"),
     ("a surrogate too rich for the points",
      lambda t: t.replace("points = 50", "points = 10") + '[surrogate]\ndegree = 5\n',
      "needs sampling.points >= 12"),
@@ -404,6 +407,9 @@ BAD_GRID = [
     ("a label short", lambda t: t.replace("values = [0.0095, 0.0096]",
                                           'values = [0.0095, 0.0096]\nlabels = ["c500um"]'),
      "labels: one per value"),
+    ("neither parameters nor cases",
+     lambda t: t.replace('[parameters."clearance_joints.0.journal_radius"]\nvalues = [0.0095, 0.0096]\n', ""),
+     "parameters: give at least one"),
     ("a case without its label", lambda t: t + '[[cases.joint]]\n"clearance_joints.0.E" = 70e9\n',
      "label"),
     ("a case that breaks the scene", lambda t: t + '[[cases.joint]]\nlabel = "a"\n"clearance_joints.0.nu" = 0.6\n',
@@ -473,6 +479,11 @@ def test_cases_cross_the_values_and_name_the_points():
     assert [(j["E"], j["nu"], j["journal_radius"]) for j in joints] == [
         (70e9, 0.33, 9.5e-3), (70e9, 0.33, 9.6e-3), (207e9, 0.3, 9.5e-3), (207e9, 0.3, 9.6e-3)]
     assert plan.cases == [{"joint": "soft"}] * 2 + [{"joint": "steel"}] * 2
+    # the cases alone (no parameter): a point per case, the base's value kept
+    alone = text[:text.index('[parameters.')] + text[text.index("[sampling]"):]
+    plan = study.Plan(path, study.Study.model_validate(tomllib.loads(alone)))
+    assert plan.point_names == ["flores_soft", "flores_steel"] and plan.values.shape == (2, 0)
+    assert [s["clearance_joints"][0]["E"] for s in plan.scenes] == [70e9, 207e9]
 
 
 def test_a_statistic_of_a_column_against_the_closed_form():
