@@ -101,7 +101,7 @@ def _export(args) -> int:
 def _study(args) -> int:
     from pinbore import study
 
-    options = study.options({"out": args.out, "workers": args.workers,
+    options = study.options({"out": args.out, "workers": args.workers, "ranks": args.ranks,
                              "scheduler": args.scheduler, "cache": args.cache})
     return study.run(args.study, options)
 
@@ -290,6 +290,8 @@ def parser() -> argparse.ArgumentParser:
     st.add_argument("--out", required=True, type=Path, metavar="DIR",
                     help="output directory (replaced when complete)")
     _runner_options(st)
+    st.add_argument("--ranks", type=int, default=None, metavar="N",
+                    help="MPI ranks of each FE point (mpiexec -n N pinbore fem; default 1)")
     st.set_defaults(func=_study)
     r = sub.add_parser("report", help="build the HTML report from the results under build/",
                        description="Collect the results under BUILD into one self-contained "

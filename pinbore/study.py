@@ -59,6 +59,7 @@ import inspect
 import itertools
 import json
 import math
+import subprocess
 import sys
 import tempfile
 import time
@@ -321,6 +322,7 @@ class Options(Strict):
 
     out: Path
     workers: int = pydantic.Field(default_factory=default_workers, ge=1)
+    ranks: int = pydantic.Field(default=1, ge=1)   # MPI ranks of an FE point
     scheduler: str | None = None
     cache: Path
 
@@ -614,9 +616,10 @@ class Point:
     "seconds", "result"}: status "complete", "suspect" (the run's verdict doubts it),
     "incomplete" (it stopped early) or "failed" (an error; reason says which)."""
 
-    def __init__(self, kind: str, base: Path, source: str, columns=()):
+    def __init__(self, kind: str, base: Path, source: str, columns=(), ranks: int = 1):
         self.kind, self.base, self.source = kind, Path(base), source
         self.columns = list(columns)   # (name, column, statistic, window) of a mechanism's series
+        self.ranks = ranks             # of an FE point: mpiexec -n ranks pinbore fem
 
     def __call__(self, data: dict) -> dict:
         start = time.perf_counter()
@@ -652,7 +655,16 @@ class Point:
             result["curve_last"] = {k: float(v) for k, v in zip(rows[0].split(","), rows[-1].split(","))
                                     if k != "stage"}
             return result
-        return self._in_folder(data, lambda path, out: fem_run.run(path, out), read)
+        def on_ranks(path, out):
+            """pinbore fem on `ranks` MPI processes (MPICH's mpiexec beside this Python, as
+            the venv has it, else on PATH); its exit code."""
+            mpiexec = Path(sys.executable).parent / "mpiexec"
+            command = [str(mpiexec) if mpiexec.exists() else "mpiexec", "-n", str(self.ranks),
+                       sys.executable, "-m", "pinbore.cli", "fem", str(path), "--out", str(out)]
+            return subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL).returncode
+
+        return self._in_folder(data, on_ranks if self.ranks > 1 else lambda path, out: fem_run.run(path, out),
+                               read)
 
     def impact(self, data):
         from pinbore.fem.impact import run as impact_run   # noqa: PLC0415
@@ -692,8 +704,11 @@ def run(study_file, options: Options) -> int:
     path = Path(study_file)
     study = load(path)
     plan = Plan(path, study)
+    if options.ranks > 1 and plan.kind != "fem":
+        raise InputError(f"--ranks: MPI ranks run FE points (pinbore fem); {path}'s points are "
+                         f"{plan.kind} runs, which run on one process")
     start = time.perf_counter()
-    task = Point(plan.kind, plan.base_path.parent, str(plan.base_path), plan.columns)
+    task = Point(plan.kind, plan.base_path.parent, str(plan.base_path), plan.columns, options.ranks)
     records, fresh = cached_map(task, plan.scenes, plan.keys, options.cache, options.workers,
                                 options.scheduler, desc="study")
     wall = time.perf_counter() - start

@@ -561,6 +561,38 @@ def test_an_fe_study_scales_with_the_elastic_moduli(tmp_path):
         assert (tmp_path / "out" / "points" / name / "result.json").exists()
 
 
+@pytest.mark.mpi
+def test_an_fe_study_on_two_ranks_a_point_gives_the_curves_of_one(tmp_path):
+    """`--ranks 2`: each FE point runs as `mpiexec -n 2 pinbore fem`; every curve equals that
+    of one process to 1e-8 of each column's largest value (the bound of tests/test_mpi.py:
+    the linear solves may take the two runs along different paths to the same Newton
+    tolerance). A study of other points refuses ranks in one line."""
+    import tomli_w
+    from conftest import scene_dict
+
+    from pinbore.fem import curve as fe_curve
+
+    base = tmp_path / "base.toml"
+    base.write_text(tomli_w.dumps(scene_dict(load={"steps": 3})))
+    study = tmp_path / "study.toml"
+    study.write_text('base = "base.toml"\n[parameters."contact.friction"]\nvalues = [0.0, 0.2]\n'
+                     'labels = ["mu0", "mu02"]\n'
+                     '[[collect]]\nname = "force"\npath = "curve_last.force_per_length_N_per_m"\n')
+    for ranks in (1, 2):
+        done = pinbore("study", study, "--out", tmp_path / f"r{ranks}", "--workers", "1",
+                       "--ranks", str(ranks), "--cache", tmp_path / f"c{ranks}")
+        assert done.returncode == 0, done.stderr
+    for name in ("mu0", "mu02"):
+        one, two = (fe_curve.read(tmp_path / f"r{ranks}" / "points" / name / "curve.csv")
+                    for ranks in (1, 2))
+        for a, b in ((one.force, two.force), (one.half_angle, two.half_angle)):
+            assert np.abs(a - b).max() <= 1e-8 * np.abs(a).max()
+    mechanism = tmp_path / "mechanism.toml"
+    mechanism.write_text(study_text([9.5e-3]))
+    run = main_in_child("study", mechanism, "--out", tmp_path / "m", "--ranks", "2")
+    assert run.returncode == 2 and "--ranks" in run.stderr and len(run.stderr.strip().splitlines()) == 1
+
+
 @pytest.mark.slow
 def test_an_impact_study_is_the_impact_command_at_each_point(tmp_path):
     """An impact scene's points (kind "impact"): each point's restitution, peak force and pin
