@@ -10,13 +10,17 @@ a point, friction and restitution scattered), on 2 local processes:
 - studies of 50 and 250 points (fresh caches): wall time per point;
 - beside it, the same point through `pinbore reduced` (a process per point, as a shell loop
   would run it: interpreter, imports, the engine's cache load, the files);
-- the whole 1000-point study, and a rerun of it (all points from the cache).
+- the whole 1000-point study, and a rerun of it (all points from the cache);
+- how an FE study scales: the 2D calibration study (10 points) on 1 and 2 local workers, a
+  local Dask cluster of 2 workers, and 1 worker with 2 MPI ranks a point (the CPU time of a
+  Dask cluster's workers is not the command's, and is not counted).
 Records wall and CPU time and the load average (the machine may be shared, which a study's
 wall time feels and the runner's own cost hardly does). Writes OUT/study.csv and OUT/study.png."""
 
 import argparse
 import csv
 import json
+import math
 import os
 import resource
 import subprocess
@@ -46,6 +50,9 @@ def study(work: Path, points: int, name: str, cache: Path | None = None) -> tupl
     data = tomllib.loads(STUDY.read_text())
     data["base"] = str((STUDY.parent / data["base"]).resolve())
     data["sampling"]["points"] = points
+    if "surrogate" in data and points < 2 * math.comb(len(data["parameters"]) + data["surrogate"]["degree"],
+                                                      data["surrogate"]["degree"]):
+        data.pop("surrogate")   # too few points for its chaos
     path = work / f"{name}.toml"
     path.write_text(tomli_w.dumps(data))
     cache = cache or work / f"{name}-cache"
@@ -62,6 +69,39 @@ def study(work: Path, points: int, name: str, cache: Path | None = None) -> tupl
     return ({"case": name + (f" ({failed} points not complete)" if failed else ""), "points": points,
              "workers": WORKERS, "wall_time_s": wall, "cpu_time_s": cpu, "per_point_s": wall / points,
              "load_average": os.getloadavg()[0]}, rows)
+
+
+CALIBRATION = ROOT / "studies" / "calibration_2d.toml"
+
+
+def calibration_scaling(work: Path) -> list[dict]:
+    """The 2D calibration study (10 FE points of 1-3 s each, each worker importing DOLFINx once)
+    on fresh caches: 1 local worker, 2, a local Dask cluster of 2 worker processes, and 1
+    worker whose points run on 2 MPI ranks each."""
+    import distributed
+
+    data = tomllib.loads(CALIBRATION.read_text())
+    data["base"] = str((CALIBRATION.parent / data["base"]).resolve())
+    path = work / "calibration_2d.toml"
+    path.write_text(tomli_w.dumps(data))
+    rows = []
+    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1,
+                                  dashboard_address=None) as cluster:
+        for name, options in (("1 worker", ["--workers", "1"]), ("2 workers", ["--workers", "2"]),
+                              ("a local Dask cluster of 2 workers", ["--scheduler", cluster.scheduler_address]),
+                              ("1 worker, 2 MPI ranks a point", ["--workers", "1", "--ranks", "2"])):
+            folder = work / f"calibration {name}"
+            start, cpu = time.perf_counter(), _children_cpu()
+            subprocess.run([sys.executable, "-m", "pinbore.cli", "study", str(path), "--out", str(folder),
+                            "--cache", str(folder) + "-cache", *options], cwd=work,
+                           stderr=subprocess.DEVNULL, check=True)
+            wall = time.perf_counter() - start
+            points = len(list((folder / "points").iterdir()))
+            rows.append({"case": f"calibration_2d (FE): {name}", "points": points,
+                         "workers": 2 if "2 workers" in name else 1, "wall_time_s": wall,
+                         "cpu_time_s": _children_cpu() - cpu, "per_point_s": wall / points,
+                         "load_average": os.getloadavg()[0]})
+    return rows
 
 
 def echo(item):
@@ -124,6 +164,7 @@ def main() -> None:
             "per_point_s": f"{overhead['per_point_s']:.2e} = {overhead['per_point_s'] / seconds.mean():.2%} "
                            f"of a point's mean run ({seconds.mean():.3f} s)",
             "load_average": os.getloadavg()[0]}]
+        table += calibration_scaling(work)
         whole = None
         if not args.skip_1000:
             whole, whole_rows = study(work, 1000, "n1000")
