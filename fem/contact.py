@@ -247,9 +247,16 @@ class Projection:
         return Projection(*(getattr(self, f.name)[index] for f in fields(self)))
 
 
-def closest_point(x: np.ndarray, bore: BoreSurface, newton_steps: int = 4, hops: int = 8):
-    """The closest bore point to each x (n, d), a Projection."""
+def closest_point(x: np.ndarray, bore: BoreSurface, newton_steps: int = 4, hops: int = 8,
+                  held: np.ndarray | None = None, band: float = 0.0):
+    """The closest bore point to each x (n, d), a Projection. With `held` (a patch index k per
+    point, from the last projection), each point starts on its held patch and leaves it only
+    when its closest point lies more than `band` of the patch beyond its edges (hysteresis:
+    PinBoreContact.hold_patches)."""
     k, xi = bracket(np.arctan2(x[:, 1], x[:, 0]), bore.angles)
+    if held is not None:
+        k = held.copy()
+        xi = np.zeros_like(xi)
     if bore.dim == 2:
         l, zeta = np.zeros_like(k), xi[:, None]
     else:
@@ -264,7 +271,7 @@ def closest_point(x: np.ndarray, bore: BoreSurface, newton_steps: int = 4, hops:
             f = np.einsum("nd,npd->np", r, dy)
             a = np.einsum("npd,nqd->npq", dy, dy) - np.einsum("nd,npqd->npq", r, ddy)
             zeta = zeta + np.linalg.solve(a, f[..., None])[..., 0]
-        below, above = zeta[:, 0] < 0, zeta[:, 0] > 1
+        below, above = zeta[:, 0] < -band, zeta[:, 0] > 1 + band
         k = np.where(below, (k - 1) % m, np.where(above, (k + 1) % m, k))
         zeta[:, 0] = np.where(below, 1.0, np.where(above, 0.0, zeta[:, 0]))
         moved = below | above
@@ -276,7 +283,7 @@ def closest_point(x: np.ndarray, bore: BoreSurface, newton_steps: int = 4, hops:
         if not moved.any():
             break
     inside = np.ones(len(x), dtype=bool)
-    zeta[:, 0] = np.clip(zeta[:, 0], 0.0, 1.0)
+    zeta[:, 0] = np.clip(zeta[:, 0], -band, 1.0 + band)
     if bore.dim == 3:
         # Past the bore's ends the end patches continue smoothly (a pin node that moves a
         # little beyond the end keeps its contact; cutting it off there made Newton cycle);
@@ -311,9 +318,11 @@ class Kinematics:
                             else self.projection.take(index) for f in fields(self)))
 
 
-def kinematics(x: np.ndarray, bore: BoreSurface) -> Kinematics:
-    """Project the pin nodes x (n, d) onto the bore and measure gaps and normals."""
-    proj = closest_point(x, bore)
+def kinematics(x: np.ndarray, bore: BoreSurface, held: np.ndarray | None = None,
+               band: float = 0.0) -> Kinematics:
+    """Project the pin nodes x (n, d) onto the bore (closest_point: `held` patches and their
+    `band`) and measure gaps and normals."""
+    proj = closest_point(x, bore, held=held, band=band)
     y, dy, ddy, n, dn = bore.point(proj.k, proj.l, proj.zeta)
     if bore.dim == 2:
         nu = np.stack([dy[:, 0, 1], -dy[:, 0, 0]], axis=1)
@@ -367,6 +376,7 @@ OPEN, STICK, SLIP = 0, 1, 2
 STATE_NAMES = ("open", "stick", "slip")
 TANGENTIAL_PENALTY_RATIO = 1.0  # eps_T / eps
 ACTIVE_SET_UPDATES = 5          # per Newton solve (see PinBoreContact.start_solve)
+HELD_BAND = 0.05                # of a patch: how far a held projection may run past its edge
 
 
 @dataclass
@@ -482,6 +492,7 @@ class PinBoreContact:
         self.friction = (Friction.at_rest(friction, TANGENTIAL_PENALTY_RATIO * penalty,
                                           len(self.pin_X), dim - 1) if friction > 0 else None)
         self.active_set_updates = 0   # left in the current Newton solve (see start_solve)
+        self.holding, self.held = False, None   # projection onto held patches (hold_patches)
         self.normal_set = None        # the nodes in contact, once kept (see start_solve)
 
     def couplings(self, direction, half_angle: float, reach: int = 2) -> np.ndarray:
@@ -547,7 +558,23 @@ class PinBoreContact:
     def _kinematics(self, u: PETSc.Vec) -> Kinematics:
         """Current pin positions, closest bore points and gaps. Collective (gathers u)."""
         u_pin, self.bore.displacement = self._surface_displacements(u)
-        return kinematics(self.pin_X + u_pin, self.bore)
+        if not self.holding:
+            return kinematics(self.pin_X + u_pin, self.bore)
+        kin = kinematics(self.pin_X + u_pin, self.bore, self.held, HELD_BAND)
+        self.held = kin.projection.k
+        return kin
+
+    def hold_patches(self, on: bool) -> None:
+        """Project every pin node, from its next projection on, first onto the bore patch it
+        was last projected on, leaving it only beyond HELD_BAND of the patch (on), or afresh
+        each time (off, the default). The deformed bore has a kink at each node: a pin node
+        close to one, whose closest point lies just past the end of one patch and just before
+        the start of the next, can alternate between the two (and their normals) from one
+        Newton iterate to the next, and Newton cycles, at any step size (measured: a 2D
+        impact at 0.3 m/s, the residual alternating 14.905 / 14.947 N/m, node 36 on patch 36,
+        then 37, then 36). Held, the node keeps its patch (extended by the band) and the
+        residual is smooth. The steppers hold them only for a step that failed without."""
+        self.holding, self.held = on, None
 
     def _position(self, kin: Kinematics, previous):
         proj = kin.projection

@@ -365,7 +365,33 @@ def contact_solve(snes, x, contact, augmented: bool, uzawa_max_it: int, gap_tole
     """Newton solves from x (updated in place) with the contact's Uzawa and friction updates
     between them, until the penetration (and stuck-node slip) is within gap_tolerance
     (augmented Lagrangian) and the friction's active sets settle. (newton iterations, uzawa
-    updates, SNES reasons, contact state, largest penetration (m)), or why it failed."""
+    updates, SNES reasons, contact state, largest penetration (m)), or why it failed.
+
+    If that fails, it is solved once more from the same start with the contact's projection
+    held on its patches (PinBoreContact.hold_patches: a pin node at a kink of the deformed
+    bore can alternate between two patches and make Newton cycle, at any step size). A step
+    solved so keeps them held until the next solve, so that what the stepper then reads of
+    the contact (its state, forces) is that of the solution; solves that converge without
+    are left exactly as they were."""
+    contact.hold_patches(False)
+    start, saved = x.copy(), contact.snapshot()
+    try:
+        solved = _contact_solve(snes, x, contact, augmented, uzawa_max_it, gap_tolerance)
+        if not isinstance(solved, str):
+            return solved
+        start.copy(x)
+        contact.restore(saved)
+        contact.hold_patches(True)
+        held = _contact_solve(snes, x, contact, augmented, uzawa_max_it, gap_tolerance)
+        if not isinstance(held, str):
+            return held
+        contact.hold_patches(False)
+        return solved
+    finally:
+        start.destroy()
+
+
+def _contact_solve(snes, x, contact, augmented: bool, uzawa_max_it: int, gap_tolerance: float):
     newton, reasons = 0, []
     for uzawa in range(1, uzawa_max_it + 1):
         contact.start_solve()

@@ -1,5 +1,6 @@
 """The contact building blocks against closed forms: gaps of circles, segment search across
-the angle seam, tributary lengths, the contact edge of a Hertz pressure profile."""
+the angle seam, a projection held on its patch, tributary lengths, the contact edge of a
+Hertz pressure profile."""
 
 import math
 
@@ -80,3 +81,25 @@ def test_half_angle_of_a_sampled_hertz_profile(spacing_deg):
     theta = np.remainder(alpha + np.pi + np.pi, 2 * np.pi) - np.pi   # load at 180 deg
     found = half_angle(angle_from(180.0, theta), p)
     assert abs(found - eps) < 0.1 * math.radians(spacing_deg)
+
+
+def test_a_held_projection_keeps_its_patch_within_the_band():
+    """A pin node whose closest point lies 2 % of a patch past the end of patch k, projected
+    with k held: it stays on k, its surface coordinate 1.02, and its gap is the circle's
+    exact R_bore - |x| (the reference patch is the arc, extended); 20 % past the end (beyond
+    the band) it moves on to patch k + 1 at 0.2; unheld it goes to k + 1 at 0.02."""
+    from pinbore.fem.contact import HELD_BAND
+
+    bore = circle_segments(n=60)
+    k = 20
+    width = bore.widths[k]
+    for past, patch, zeta in ((0.02, k, 1.02), (0.2, k + 1, 0.2)):
+        angle = bore.angles[k + 1] + past * width
+        x = np.array([[R_PIN * math.cos(angle), R_PIN * math.sin(angle)]])
+        held = kinematics(x, bore, held=np.array([k]), band=HELD_BAND)
+        assert held.projection.k[0] == patch
+        assert held.projection.zeta[0, 0] == pytest.approx(zeta, abs=1e-9)
+        assert held.gap[0] == pytest.approx(R_BORE - R_PIN, abs=1e-15)
+    angle = bore.angles[k + 1] + 0.02 * width
+    free = kinematics(np.array([[R_PIN * math.cos(angle), R_PIN * math.sin(angle)]]), bore)
+    assert free.projection.k[0] == k + 1 and free.projection.zeta[0, 0] == pytest.approx(0.02, abs=1e-9)
