@@ -382,3 +382,21 @@ def test_the_continuation_command_writes_the_response_and_agrees_with_direct_swe
     for value, amplitude in sweeps + branch:
         assert amplitude == pytest.approx(linear(value), rel=1e-3)
     assert (out / "response.png").stat().st_size > 10_000 and (out / "bifurcations.csv").exists()
+
+
+def test_a_branch_that_runs_out_of_points_inside_the_range_is_marked_partial(tmp_path, write_scene):
+    """Four points a way (--points 8) cannot reach from 3 Hz to either end of [1, 6] Hz from
+    a step of 0.05 Hz (an arclength step grows by at most 1.5 a point: 0.05 (1.5 + 2.25 +
+    3.375) = 0.36 Hz at most): the command keeps the 7 points it found, says where each way
+    stopped and exits 1, not 0 as if the range were covered."""
+    import json
+
+    from pinbore import cli
+
+    out = tmp_path / "out"
+    code = cli.main(["dynamics", str(write_scene(linear_oscillator(3.0))), "--analysis", "continuation",
+                     "--parameter", "frequency", "--range", "1", "6", "--points", "8", "--step", "0.05",
+                     "--transient", "5", "--sweeps", "0", "--out", str(out)])
+    summary = json.loads((out / "summary.json").read_text())
+    assert code == 1 and not summary["converged"]
+    assert "short of the range [1, 6]" in summary["reason"] and summary["points"] == 7

@@ -519,6 +519,9 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
     figures().response(tmp / "response.png", rows, specials, sweeps, options.parameter,
                        PARAMETERS[options.parameter].label, f"{target.path.stem}: {family.flow(start_value).observed_name()}")
     reasons = [b.reason for b in branches + doubled if not b.complete]
+    reasons += [f"the branch stopped at its {len(b.points)} points at {b.points[-1].p:.6g}, short of "
+                f"the range [{low:g}, {high:g}] (more --points, or a larger --step)"
+                for b in branches if b.complete and low < b.points[-1].p < high]
     return {"parameter": options.parameter, "range": [low, high], "start": start_value,
             "multiple": options.multiple, "points": len(rows), "seconds_per_point": cost,
             "converged": not reasons, "reason": "; ".join(reasons),
