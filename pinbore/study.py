@@ -47,7 +47,8 @@ floor below the roof, and the class Point here), so a
 rerun runs only new or changed points, and a killed study resumes. A failed point is marked
 in results.csv with its reason; the command then exits 1 and keeps the others.
 
-Writes DIR/results.csv, DIR/summary.json, DIR/statistics.json, DIR/histograms.png,
+Writes DIR/results.csv (and, from PARQUET_ROWS points, the same table as DIR/results.parquet:
+typed columns that pandas, Polars, DuckDB or Dask read without parsing text), DIR/summary.json, DIR/statistics.json, DIR/histograms.png,
 DIR/exceedance.png and, for a saltelli plan, DIR/sobol.csv and DIR/sobol.png, for a
 tolerance DIR/tolerance.json and DIR/tolerance.png. The statistics are those of
 pinbore.core.uq, over the points whose status is "complete".
@@ -80,6 +81,8 @@ from pinbore.core.scene import Strict
 SPEC_KEYS = ("values", "grid", "distribution")
 # the files of an FE or impact point's run kept in DIR/points/<name>/ (its data; not its plots)
 KEPT_SUFFIXES = (".csv", ".json")
+# the number of points from which the results table is also written as Parquet (pyarrow)
+PARQUET_ROWS = 1000
 # a label of a case or a value: a part of a point's name, and so of a folder's
 LabelText = Annotated[str, pydantic.Field(pattern=r"^[A-Za-z0-9_.+-]*$")]
 # the packages whose source may decide a point's result: every floor below the roof (a
@@ -715,6 +718,7 @@ def run(study_file, options: Options) -> int:
     rows = table(plan, records, fresh)
     with atomic_directory(options.out, inputs=[path, plan.base_path, options.cache]) as tmp:
         write_results(tmp / "results.csv", plan, rows)
+        parquet = write_parquet(tmp / "results.parquet", plan, rows) if len(rows) >= PARQUET_ROWS else None
         for name, record in zip(plan.point_names, records):
             if record["result"].get("files"):
                 (tmp / "points" / name).mkdir(parents=True)
@@ -730,6 +734,8 @@ def run(study_file, options: Options) -> int:
                    "complete": len(rows) - len(failed), "failed": len(failed),
                    "wall_time_s": wall, "point_seconds": sum(r["seconds"] for r in rows if r["ran"]),
                    "cache": str(options.cache)}
+        if parquet is not None:
+            summary["parquet"] = parquet
         if study.tolerance is not None:
             answer = tolerance(plan, rows)
             (tmp / "tolerance.json").write_text(json.dumps(answer, indent=2) + "\n")
@@ -763,12 +769,44 @@ def table(plan: Plan, records: list[dict], fresh: list[bool]) -> list[dict]:
     return rows
 
 
+def results_header(plan: Plan) -> list[str]:
+    return ["point", "name", *plan.study.cases, *plan.names, *(c.name for c in plan.study.collect),
+            "status", "reason", "ran", "seconds", "key"]
+
+
 def write_results(path: Path, plan: Plan, rows: list[dict]) -> None:
     from pinbore.reduced.dynamics.plots import write_table   # noqa: PLC0415
 
-    header = ["point", "name", *plan.study.cases, *plan.names, *(c.name for c in plan.study.collect),
-              "status", "reason", "ran", "seconds", "key"]
+    header = results_header(plan)
     write_table(path, header, [[r[h] for h in header] for r in rows])
+
+
+def write_parquet(path: Path, plan: Plan, rows: list[dict]) -> str:
+    """The results table as Parquet (the columns of results.csv: the point an int64, ran a
+    bool, the parameters, quantities and seconds float64, the rest strings), written with
+    pyarrow (the optional extra `parquet`, in requirements.lock); without pyarrow, nothing is
+    written and the answer says why."""
+    try:
+        import pyarrow as pa   # noqa: PLC0415
+        import pyarrow.parquet as pq   # noqa: PLC0415
+    except ImportError:
+        print(f"pinbore study: {len(rows)} points: results.parquet not written (pyarrow is not "
+              "installed: pip install 'pinbore[parquet]'); results.csv has the same table", file=sys.stderr)
+        return "not written: pyarrow is not installed"
+    numbers = {*plan.names, *(c.name for c in plan.study.collect), "seconds"}
+    columns = {}
+    for h in results_header(plan):
+        values = [r[h] for r in rows]
+        if h == "point":
+            columns[h] = pa.array(values, type=pa.int64())
+        elif h == "ran":
+            columns[h] = pa.array(values, type=pa.bool_())
+        elif h in numbers:
+            columns[h] = pa.array(values, type=pa.float64())
+        else:
+            columns[h] = pa.array([str(v) for v in values], type=pa.string())
+    pq.write_table(pa.table(columns), path)
+    return path.name
 
 
 def complete(rows, name) -> np.ndarray:

@@ -355,6 +355,43 @@ def test_a_failed_point_is_marked_and_the_others_kept(tmp_path):
     assert rows[0]["status"] == "complete" and rows[1]["reason"]
 
 
+@pytest.mark.parametrize("installed", [True, False], ids=["pyarrow", "without pyarrow"])
+def test_a_large_table_is_also_parquet_with_the_csvs_values(tmp_path, monkeypatch, installed):
+    """From PARQUET_ROWS points (lowered here to 3) the results table is also Parquet:
+    pyarrow, the independent reader, gives the columns of results.csv with their types (the
+    parameters and quantities float64 equal to the CSV's to the last digit, ran a bool, the
+    point an int64), and each row's clearance is 10 mm - r; without pyarrow the CSV alone is
+    written and the summary says why."""
+    from pinbore import cli
+    from pinbore import study as runner
+
+    monkeypatch.setattr(runner, "PARQUET_ROWS", 3)
+    if not installed:
+        monkeypatch.setitem(sys.modules, "pyarrow", None)
+    study = tmp_path / "study.toml"
+    radii = [9.50e-3, 9.55e-3, 9.60e-3]
+    study.write_text(study_text(radii))
+    assert cli.main(["study", str(study), "--out", str(tmp_path / "out"), "--workers", "1"]) == 0
+    rows = rows_of(tmp_path / "out")
+    summary = json.loads((tmp_path / "out/summary.json").read_text())
+    if not installed:
+        assert not (tmp_path / "out/results.parquet").exists()
+        assert summary["parquet"] == "not written: pyarrow is not installed"
+        return
+    import pyarrow.parquet as pq
+
+    table = pq.read_table(tmp_path / "out/results.parquet")
+    assert table.column_names == list(rows[0]) and table.num_rows == len(rows) == 3
+    assert str(table.schema.field("point").type) == "int64" and str(table.schema.field("ran").type) == "bool"
+    for name in ("clearance_joints.0.journal_radius", "peak_force_N", "clearance_m", "seconds"):
+        assert str(table.schema.field(name).type) == "double"
+        assert table.column(name).to_pylist() == [float(r[name]) for r in rows]
+    assert table.column("status").to_pylist() == [r["status"] for r in rows]
+    for clearance, radius in zip(table.column("clearance_m").to_pylist(), radii):
+        assert clearance == pytest.approx(10.0e-3 - radius, rel=1e-9)
+    assert summary["parquet"] == "results.parquet"
+
+
 # ---- bad input: one line, exit 2, nothing written, before numba is loaded
 
 BAD = [
