@@ -107,7 +107,7 @@ def response(path, rows, specials, sweeps, parameter, unit, title) -> None:
     """The continued branches' amplitude against the parameter (stable solid, unstable
     dashed; a doubled branch in its own colour), the bifurcations marked, and the direct
     up- and down-sweeps; below, the first clearance joint's largest normal force over each
-    orbit (where the mechanism has one)."""
+    orbit and each sweep's value (where the mechanism has one)."""
     forces = any(r[7] is not None for r in rows)
     fig, axes = plt.subplots(2 if forces else 1, 1, figsize=(9, 8 if forces else 5), sharex=True, squeeze=False)
     ax = axes[0, 0]
@@ -131,11 +131,14 @@ def response(path, rows, specials, sweeps, parameter, unit, title) -> None:
         axes[-1, 0].set_ylabel("largest normal force over the orbit (N)")
         axes[-1, 0].set_xlabel(f"{parameter} ({unit})")
         axes[-1, 0].grid(alpha=0.3)
-    for direction, marker in (("up", "^"), ("down", "v")):
+    for direction, marker, colour in (("up", "^", "tab:orange"), ("down", "v", "tab:green")):
         kept = [r for r in sweeps if r[0] == direction]
         if kept:
-            ax.plot([r[1] for r in kept], [r[2] * 1e3 for r in kept], marker, ms=4, alpha=0.7,
+            ax.plot([r[1] for r in kept], [r[2] * 1e3 for r in kept], marker, color=colour, ms=4, alpha=0.7,
                     label=f"direct {direction}-sweep")
+            if forces:
+                axes[-1, 0].plot([r[1] for r in kept], [np.nan if r[4] is None else r[4] for r in kept],
+                                 marker, color=colour, ms=4, alpha=0.7)
     for kind, (marker, colour) in SPECIAL_MARKERS.items():
         found = [s for s in specials if s.kind == kind]
         if found:

@@ -537,7 +537,7 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
 CONTINUATION_COLUMNS = ["branch", "multiple", "value", "amplitude_m", "stable", "largest_multiplier_modulus",
                         "gap_m", "peak_force_N", "x"]
 SPECIAL_COLUMNS = ["kind", "value", "amplitude_m", "gap_m", "multipliers"]
-SWEEP_COLUMNS = ["direction", "value", "amplitude_m", "gap_m"]
+SWEEP_COLUMNS = ["direction", "value", "amplitude_m", "gap_m", "peak_force_N"]
 
 
 def point_row(branch: int, multiple: int, p) -> list:
@@ -556,7 +556,8 @@ def special_row(s) -> list:
 def direct_sweeps(family: MechanismFamily, options: ContinuationOptions) -> list:
     """Up- and down-sweep by direct integration, as on a shaker: each starts from the scene's
     initial state at its first value; at each value the state the last value reached runs
-    `transient` periods, then the largest amplitude of `periods` periods is kept."""
+    `transient` periods, then the largest amplitude, the smallest gap and the largest normal
+    force of `periods` periods are kept."""
     values = np.linspace(options.range.low, options.range.high, options.sweeps)
     rows = []
     for direction, order in (("up", values), ("down", values[::-1])):
@@ -564,17 +565,19 @@ def direct_sweeps(family: MechanismFamily, options: ContinuationOptions) -> list
         for value in tqdm(order, desc=f"{direction}-sweep", unit="value"):
             try:
                 state, _, _ = family.settle(float(value), options.transient, state)
-                amplitude, gap = 0.0, None
+                amplitude, gap, force = 0.0, None, None
                 for _ in range(options.periods):
                     state, _, measures = family.settle(float(value), 1, state)
                     amplitude = max(amplitude, measures["amplitude"])
                     if measures["gap"] is not None:
                         gap = measures["gap"] if gap is None else min(gap, measures["gap"])
+                    if measures["peak_force"] is not None:
+                        force = max(force or 0.0, measures["peak_force"])
             except FloatingPointError:
-                rows.append([direction, float(value), math.nan, math.nan])
+                rows.append([direction, float(value), math.nan, math.nan, math.nan])
                 state = family.flow(float(value)).start()
                 continue
-            rows.append([direction, float(value), amplitude, gap])
+            rows.append([direction, float(value), amplitude, gap, force])
     return rows
 
 
