@@ -279,4 +279,6 @@ def continuation_part(path: Path) -> str:
         parts.append(table(["bifurcation", s["parameter"], "amplitude (mm)", "largest multiplier moduli"], rows))
     if not s["converged"]:
         parts.append(note(f"The branch stopped: {html.escape(s['reason'])}"))
+    for warning in s.get("warnings", []):
+        parts.append(note(html.escape(warning)))
     return "".join(parts)

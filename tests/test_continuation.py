@@ -400,3 +400,25 @@ def test_a_branch_that_runs_out_of_points_inside_the_range_is_marked_partial(tmp
     summary = json.loads((out / "summary.json").read_text())
     assert code == 1 and not summary["converged"]
     assert "short of the range [1, 6]" in summary["reason"] and summary["points"] == 7
+
+
+def test_an_integration_too_coarse_for_the_monodromy_warns(tmp_path):
+    """The shaken panel's centre lies at (1.0, 0.5) m, 1e4 clearances of 0.1 mm from the
+    origin: the integrator's error control, rtol |y| + atol per coordinate, allows rtol x 1e4
+    clearances there (closed form), more than the monodromy's difference step 1e-4 at rtol
+    1e-7: a warning naming integrator.rtol and the rtol that resolves it; at the shipped
+    rtol 1e-9 (1e-5 of a clearance) none."""
+    from pinbore.reduced.dynamics import studies
+
+    path = ROOT / "scenes/reduced/deployed_panel_shaken.toml"
+    for rtol, warns in ((1e-7, True), (1e-9, False)):
+        data = tomllib.loads(path.read_text())
+        data["integrator"]["rtol"] = rtol
+        family = studies.MechanismFamily(studies.SceneFile(path, data), "frequency", 3.0)
+        assert family.extent == pytest.approx(1.0 / 1e-4, rel=1e-6)
+        assert family.resolution == pytest.approx(rtol * 1e4, rel=0.01)   # atol 1e-11 adds < 1 %
+        scene = studies.scene_model(data).model_validate(data)
+        warning = studies.resolution_warning(family, scene, str(path))
+        assert (warning is not None) == warns
+        if warns:
+            assert "integrator.rtol" in warning and "integrator.rtol <= 1e-08" in warning

@@ -437,9 +437,16 @@ class MechanismFamily:
         self.target, self.parameter = target, parameter
         self.flows = {}
         reference = self.flow(value)
-        self.tolerance = 100 * reference.model.scene.integrator.rtol   # what a converged orbit resolves
+        integrator = reference.model.scene.integrator
+        self.tolerance = 100 * integrator.rtol   # what a converged orbit resolves
         self.scale = reference.scale.copy()
         self.template = reference.start()
+        # what the integration resolves of x: its error control allows rtol |y_i| + atol in
+        # each coordinate, in scaled units rtol |x_i| + atol / scale_i (a body far from the
+        # origin, in clearances, is resolved coarsely however small its motion)
+        x = np.abs(self.coordinates(reference, self.template))
+        self.extent = float(np.max(x))
+        self.resolution = float(np.max(integrator.rtol * x + integrator.atol / self.scale))
 
     def flow(self, p: float):
         if p not in self.flows:
@@ -475,6 +482,24 @@ class MechanismFamily:
         return state, self.coordinates(flow, state), flow.orbit_measures()
 
 
+def resolution_warning(family: MechanismFamily, scene, source: str) -> str | None:
+    """A warning when the integration's error control allows more in a scaled coordinate
+    than the monodromy's difference step (MechanismFamily.resolution > FD_STEP): a body many
+    clearances from the origin is resolved coarsely however small its motion, and the
+    differences then carry the integration's error as noise (the shaken panel, 1e4
+    clearances out: at rtol 1e-7 quotients at steps h and 2h differ by 5 %, at 1e-9 by 2 %,
+    their truncation; spurious folds and doublings cluster where the noise turns the
+    multipliers). None otherwise."""
+    step = continuation().FD_STEP
+    if family.resolution <= step:
+        return None
+    rtol = scene.integrator.rtol
+    return (f"{source}: integrator.rtol: its error control allows {family.resolution:.2g} of a "
+            f"clearance in a coordinate (here up to {family.extent:.3g} clearances from the origin), "
+            f"more than the monodromy's difference step {step:g}: its multipliers and bifurcations may "
+            f"be noise; integrator.rtol <= {rtol * step / family.resolution:.1g} resolves it")
+
+
 def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dict:
     """The branch of periodic orbits across the range, both ways from the scene's value, its
     bifurcations, the doubled branch of each period doubling (switched onto there), and the
@@ -485,6 +510,9 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
     low, high = options.range
     family = MechanismFamily(target, options.parameter, start_value)
     method = continuation()
+    warnings = [w for w in [resolution_warning(family, scene, target.source)] if w]
+    for w in warnings:
+        print(f"pinbore dynamics: warning: {w}", file=sys.stderr)
     line = method.Continuation(family, low, high, options.multiple)
     ds = (options.step if options.step is not None else (high - low) / 100) / (high - low)
     started = time.perf_counter()
@@ -492,7 +520,7 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
     try:
         first = line.first(x, start_value, 1.0)
     except FloatingPointError as err:
-        return {"converged": False, "reason": str(err), "parameter": options.parameter}
+        return {"converged": False, "reason": str(err), "parameter": options.parameter, "warnings": warnings}
     branches = []
     for direction in (-1.0, 1.0):
         if (direction < 0 and start_value <= low) or (direction > 0 and start_value >= high):
@@ -531,7 +559,7 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
                              for s in specials],
             "stable_points": sum(r[4] for r in rows),
             "start_floquet_multipliers": [[m.real, m.imag] for m in first.multipliers],
-            "start_stable": first.stable}
+            "start_stable": first.stable, "warnings": warnings}
 
 
 CONTINUATION_COLUMNS = ["branch", "multiple", "value", "amplitude_m", "stable", "largest_multiplier_modulus",
