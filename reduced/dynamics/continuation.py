@@ -69,6 +69,7 @@ from tqdm import tqdm
 FD_STEP = 1e-4            # central-difference step of the monodromy (scaled x) and of q
 NEWTON_TOL = 1e-9         # |G| <= tol (1 + |x|): a periodic orbit; tol the family's, at least this
 CORRECTOR_ITERATIONS = 10
+SWITCH_GROWTH = 10.0      # a guess for the doubled orbit whose Newton residual grows this much is left
 GROW, SHRINK = 1.5, 0.5
 LOCATE_ITERATIONS = 6
 LOCATE_TOL = 1e-6         # of the parameter range
@@ -159,14 +160,18 @@ class Continuation:
         return float(np.linalg.norm(g)) <= tol * (1.0 + float(np.linalg.norm(x)))
 
     # -- the first point: Newton at fixed p
-    def first(self, x, p, direction: float) -> Point:
+    def first(self, x, p, direction: float, iterations: int = 2 * CORRECTOR_ITERATIONS,
+              growth: float = math.inf) -> Point:
         """The orbit at p from the guess x (Newton, the monodromy every iteration), its tangent
         pointing to increasing p when direction > 0. FloatingPointError when it does not
-        converge."""
+        converge in `iterations`, or when a residual exceeds `growth` times the first (a
+        guess Newton leaves)."""
         history = []
-        for _ in range(2 * CORRECTOR_ITERATIONS):
+        for _ in range(iterations):
             g = self.residual(x, p)
             history.append(float(np.linalg.norm(g)))
+            if history[-1] > growth * history[0]:
+                break
             if self.converged(g, x):
                 start = self.point(x, p)
                 if start.tangent[-1] * direction < 0:
@@ -276,8 +281,10 @@ class Continuation:
         orbit at p* + h (h a hundredth of the range, towards where a multiplier lies beyond
         -1: the supercritical side) is found by Newton on P^2m from x* +- e v (amplitudes e
         from 1e-3 to 1 of the orbit's size: the doubled orbit grows as sqrt(h)), kept when
-        P^m moves it (a genuine period 2m), and continued away from p*. None when no
-        doubled orbit is found."""
+        P^m moves it (a genuine period 2m), and continued away from p*. A guess gets the
+        corrector's iterations and is left when its residual grows SWITCH_GROWTH-fold (so a
+        spurious doubling costs at most 8 x 10 monodromies). None when no doubled orbit is
+        found."""
         point = special.point
         if point.jacobian is None:
             return None
@@ -289,16 +296,19 @@ class Continuation:
         twice = Continuation(self.family, self.low, self.high, 2 * self.multiple)
         size = 1.0 + float(np.linalg.norm(point.x))
         p = point.p + side * 0.01 * self.width
-        for amplitude in (1e-3, 1e-2, 1e-1, 1.0):
-            for sign in (1.0, -1.0):
-                try:
-                    start = twice.first(point.x + sign * amplitude * size * v, p, side)
-                except FloatingPointError:
-                    continue
-                once = self.family.map(start.x, p, self.multiple) - start.x
-                if np.linalg.norm(once) > 1e3 * NEWTON_TOL * size and \
-                        np.linalg.norm(once) > 10 * getattr(self.family, "tolerance", 0.0) * size:
-                    return twice.run(start, ds, max_points, progress)
+        guesses = [(a, sign) for a in (1e-3, 1e-2, 1e-1, 1.0) for sign in (1.0, -1.0)]
+        for amplitude, sign in tqdm(guesses, desc=f"switching at {point.p:.6g}", unit="guess",
+                                    disable=not progress, leave=False):
+            try:   # a guess whose residual grows tenfold, or that does not converge as a
+                #    corrector does, is left for the next
+                start = twice.first(point.x + sign * amplitude * size * v, p, side,
+                                    CORRECTOR_ITERATIONS, SWITCH_GROWTH)
+            except FloatingPointError:
+                continue
+            once = self.family.map(start.x, p, self.multiple) - start.x
+            if np.linalg.norm(once) > 1e3 * NEWTON_TOL * size and \
+                    np.linalg.norm(once) > 10 * getattr(self.family, "tolerance", 0.0) * size:
+                return twice.run(start, ds, max_points, progress)
         return None
 
     # -- bifurcations
