@@ -48,8 +48,9 @@ rerun runs only new or changed points, and a killed study resumes. A failed poin
 in results.csv with its reason; the command then exits 1 and keeps the others.
 
 Writes DIR/results.csv (and, from PARQUET_ROWS points, the same table as DIR/results.parquet:
-typed columns that pandas, Polars, DuckDB or Dask read without parsing text), DIR/summary.json, DIR/statistics.json, DIR/histograms.png,
-DIR/exceedance.png and, for a saltelli plan, DIR/sobol.csv and DIR/sobol.png, for a
+typed columns that pandas, Polars, DuckDB or Dask read without parsing text),
+DIR/summary.json, DIR/statistics.json, DIR/histograms.png, DIR/exceedance.png and, for a
+saltelli plan, DIR/sobol.csv and DIR/sobol.png, for a
 tolerance DIR/tolerance.json and DIR/tolerance.png. The statistics are those of
 pinbore.core.uq, over the points whose status is "complete".
 """
