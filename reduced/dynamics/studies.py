@@ -510,9 +510,10 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
     low, high = options.range
     family = MechanismFamily(target, options.parameter, start_value)
     method = continuation()
-    warnings = [w for w in [resolution_warning(family, scene, target.source)] if w]
-    for w in warnings:
-        print(f"pinbore dynamics: warning: {w}", file=sys.stderr)
+    warning = resolution_warning(family, scene, target.source)
+    warnings = [warning] if warning else []
+    if warning:
+        print(f"pinbore dynamics: warning: {warning}", file=sys.stderr)
     line = method.Continuation(family, low, high, options.multiple)
     ds = (options.step if options.step is not None else (high - low) / 100) / (high - low)
     started = time.perf_counter()
