@@ -35,7 +35,7 @@ from pinbore.reduced.mechanism import engine
 from pinbore.reduced.mechanism.layout import (CONSTANT_SPEED, OK, PRIM_ANGLE0, PRIM_BODY_I, PRIM_BODY_J,
                                               PRIM_PROFILE, PRIM_SPEED)
 from pinbore.reduced.mechanism.model import Model, translational_frames
-from pinbore.reduced.mechanism.run import simulate
+from pinbore.reduced.mechanism.run import STATUS, simulate
 
 MAX_PERIOD = 16
 
@@ -93,7 +93,7 @@ class MechanismFlow:
         self.last = simulate(self.model, state.y, periods * self.period, args)
         if self.last.status != OK:
             raise FloatingPointError(f"the integration stopped at t = {self.last.t_end:.6g} s "
-                                     f"of period {state.period} (status {self.last.status})")
+                                     f"of period {state.period}: {STATUS[self.last.status]}")
         return MechanismState(self.last.states[-1].copy(), args.speeds, args.mode, args.latched,
                               state.period + periods)
 
