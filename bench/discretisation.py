@@ -53,10 +53,15 @@ def run(study: Path, cache: Path) -> list[dict]:
         return list(csv.DictReader(f))
 
 
+def extrapolated(coarse: float, fine: float, order: float) -> float:
+    """The limit of values on a mesh and on its halving, converging at `order`."""
+    return fine + (fine - coarse) / (2**order - 1)
+
+
 def richardson(q0: float, q1: float, q2: float) -> tuple[float, float]:
     """(observed order, extrapolated value) of three values on meshes halved in turn."""
     order = math.log2((q0 - q1) / (q1 - q2))
-    return order, q2 + (q2 - q1) / (2**order - 1)
+    return order, extrapolated(q1, q2, order)
 
 
 def cases_of(study: Path, rows: list[dict]) -> list[tuple[str, str, dict]]:
@@ -90,7 +95,7 @@ def tables(studies: dict[str, list]) -> list[dict]:
                 note = ""
             else:
                 (q0, _), (q1, _) = meshes["r0"], meshes["r1"]
-                order, converged = cautious, q1 + (q1 - q0) / (2**cautious - 1)
+                order, converged = cautious, extrapolated(q0, q1, cautious)
                 note = " (order assumed)"
             for mesh, (value, seconds) in meshes.items():
                 out.append({"study": study, "case": case, "quantity": quantity, "mesh": mesh,
