@@ -234,7 +234,8 @@ def test_linear_oscillator_response_and_multipliers_in_closed_form(tmp_path, sce
         w = 2 * math.pi * point.p
         amplitude = force / math.hypot(k - m * w * w, c * w)
         phase = math.atan2(c * w, k - m * w * w)
-        y0, v0 = point.x[1] * family.scale[1], point.x[nq + 1] * family.scale[nq + 1]
+        scale = family.scale_at(family.flow(point.p))
+        y0, v0 = point.x[1] * scale[1], point.x[nq + 1] * scale[nq + 1]
         assert y0 == pytest.approx(amplitude * math.cos(phase), abs=1e-6 * amplitude)
         assert v0 == pytest.approx(amplitude * w * math.sin(phase), abs=1e-6 * amplitude * w)
         moduli = np.sort(np.abs(point.multipliers))[::-1]
@@ -258,14 +259,16 @@ def grazing_frequencies(data):
 @pytest.mark.parametrize("start, low, high, side", [(13.5, 13.0, 14.8, 0), (19.0, 17.0, 19.5, 1)])
 def test_impact_oscillator_grazes_where_the_linear_response_reaches_the_gap(tmp_path, start, low, high, side):
     """Continued towards resonance from either side, the branch grazes at the closed-form
-    frequency (measured within 2e-7 from below); without contact its amplitude is the
-    linear response's."""
+    frequency (measured within 2e-7 from below, 1e-5 from above); without contact its
+    amplitude is the linear response's. From above, the steps shrink into the grazing (the
+    corrector slows where contact begins): 20 points reach it (from 19 Hz: 17.4092,
+    17.4041, 17.4003, 17.3996 Hz at points 11-14)."""
     data = tomllib.loads(IMPACT.read_text())
     data["loads"][0]["frequency_hz"] = start
     family = family_of(data, "frequency", start, tmp_path)
     line = method.Continuation(family, low, high)
     x = family.settle(start, 30)[1]
-    branch = line.run(line.first(x, start, 1.0 if side == 0 else -1.0), 0.02, 14)
+    branch = line.run(line.first(x, start, 1.0 if side == 0 else -1.0), 0.02, 20)
     grazing = [s for s in branch.specials if s.kind == "grazing"]
     assert len(grazing) == 1
     assert grazing[0].p == pytest.approx(grazing_frequencies(data)[side], rel=2e-5)
@@ -422,3 +425,37 @@ def test_an_integration_too_coarse_for_the_monodromy_warns(tmp_path):
         assert (warning is not None) == warns
         if warns:
             assert "integrator.rtol" in warning and "integrator.rtol <= 1e-08" in warning
+
+
+def test_a_turning_drive_is_continued_over_its_speed(tmp_path, write_scene):
+    """The Flores slider-crank with Coulomb friction (mu 0.1) at 100 rpm, where a sweep by
+    direct integration settles on a period-1 motion, continued over the crank's speed (its
+    angle counts the periods elapsed; the coordinates are taken relative to the drive). The
+    orbit found is a fixed point of a plain integration too: integrated on from it for
+    three crank turns, the state returns to it within the corrector's tolerance, and it is
+    stable (the sweep saw it attract)."""
+    import json
+
+    from pinbore import cli
+
+    data = tomllib.loads((ROOT / "scenes/reduced/slider_crank_flores2004.toml").read_text())
+    data["drive"]["speed_rpm"] = 100.0
+    data["clearance_joints"][0]["friction"] = {"law": "coulomb_ambrosio", "mu": 0.1}
+    data["integrator"]["rtol"] = 4e-8   # resolves the monodromy's differences (no warning)
+    out = tmp_path / "out"
+    cli.main(["dynamics", str(write_scene(data)), "--analysis", "continuation", "--parameter", "speed",
+              "--range", "99", "101", "--points", "2", "--transient", "10", "--out", str(out)])
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["points"] >= 2 and summary["start_stable"] and not summary["warnings"]
+    assert "blown up" not in summary.get("reason", "")
+
+    family = family_of(data, "speed", 100.0, tmp_path)
+    state, x, _ = family.settle(100.0, 10)
+    family.template = state
+    orbit = method.Continuation(family, 99.0, 101.0).first(x, 100.0, 1.0)
+    assert np.max(np.abs(orbit.multipliers)) < 1.0
+    flow = family.flow(100.0)
+    turned = family.state(flow, orbit.x)
+    for _ in range(3):
+        turned = flow.advance(turned, 1)
+        assert np.linalg.norm(family.coordinates(flow, turned) - orbit.x) <= family.tolerance * (1 + np.linalg.norm(orbit.x))

@@ -424,8 +424,12 @@ def design_map(target: SceneFile, options: DesignOptions, tmp: Path) -> dict:
 class MechanismFamily:
     """A scene's mechanisms over one parameter, as continuation needs them
     (reduced.dynamics.continuation): the map of the scaled coordinates x over `multiple`
-    forcing periods at p, and the orbit's measures. x is scaled once, by the flow at the
-    scene's own value (a frequency changes the flow's own velocity scale); a state at p is
+    forcing periods at p, and the orbit's measures. x is scaled by the clearance c of the
+    flow at the scene's own value, its velocities by c omega(p), omega of the flow at p: a
+    forcing frequency or a drive's speed scales every velocity of the motion, and at one
+    fixed velocity scale the pseudo-arclength measured that growth rather than the
+    parameter's change (measured: the Flores slider-crank, from 100 rpm, 40 points over
+    0.52 rpm); a state at p is
     the template state (the last orbit's end: its impact speeds, contact modes, latches,
     friction states and the periods elapsed, which a turning drive's angle counts) moved to
     x and onto the constraints. The models of the last few p are
@@ -439,7 +443,7 @@ class MechanismFamily:
         reference = self.flow(value)
         integrator = reference.model.scene.integrator
         self.tolerance = 100 * integrator.rtol   # what a converged orbit resolves
-        self.scale = reference.scale.copy()
+        self.scale, self.omega = reference.scale.copy(), reference.omega
         self.template = reference.start()
         # what the integration resolves of x: its error control allows rtol |y_i| + atol in
         # each coordinate, in scaled units rtol |x_i| + atol / scale_i (a body far from the
@@ -456,11 +460,19 @@ class MechanismFamily:
             self.flows[p] = mechanism_flow(data, self.target.base, self.target.source)
         return self.flows[p]
 
+    def scale_at(self, flow) -> np.ndarray:
+        """The scale of x at the flow's parameter: c, and c omega(p) for the velocities (the
+        second half of the coordinates)."""
+        scale = self.scale.copy()
+        scale[scale.size // 2:] *= flow.omega / self.omega
+        return scale
+
     def coordinates(self, flow, state) -> np.ndarray:
-        return flow.coordinates(state) * flow.scale / self.scale
+        return flow.coordinates(state) * flow.scale / self.scale_at(flow)
 
     def state(self, flow, x):
-        return flow.perturb(self.template, x * self.scale / flow.scale - flow.coordinates(self.template))
+        return flow.perturb(self.template,
+                            x * self.scale_at(flow) / flow.scale - flow.coordinates(self.template))
 
     def map(self, x, p, multiple):
         flow = self.flow(p)
@@ -518,10 +530,14 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
     ds = (options.step if options.step is not None else (high - low) / 100) / (high - low)
     started = time.perf_counter()
     state, x, _ = family.settle(start_value, options.transient)
+    family.template = state   # the contact modes, impact speeds and friction states of x
     try:
         first = line.first(x, start_value, 1.0)
     except FloatingPointError as err:
-        return {"converged": False, "reason": str(err), "parameter": options.parameter, "warnings": warnings}
+        reason = (f"no periodic orbit found from the state after {options.transient} transient "
+                  f"periods at {options.parameter} {start_value:g} ({err}); the motion there may "
+                  f"not be periodic (--analysis poincare shows it)")
+        return {"converged": False, "reason": reason, "parameter": options.parameter, "warnings": warnings}
     branches = []
     for direction in (-1.0, 1.0):
         if (direction < 0 and start_value <= low) or (direction > 0 and start_value >= high):
