@@ -430,10 +430,11 @@ def test_an_integration_too_coarse_for_the_monodromy_warns(tmp_path):
 def test_a_turning_drive_is_continued_over_its_speed(tmp_path, write_scene):
     """The Flores slider-crank with Coulomb friction (mu 0.1) at 100 rpm, where a sweep by
     direct integration settles on a period-1 motion, continued over the crank's speed (its
-    angle counts the periods elapsed; the coordinates are taken relative to the drive). The
-    orbit found is a fixed point of a plain integration too: integrated on from it for
-    three crank turns, the state returns to it within the corrector's tolerance, and it is
-    stable (the sweep saw it attract)."""
+    angle counts the periods elapsed; the coordinates are taken relative to the drive): the
+    command finds the orbit, stable, and steps along the branch both ways. Two methods, one
+    orbit: Newton on the period map from the state after 10 transient turns, and plain time
+    marching from that state 40 turns on (the multipliers are below 0.4: the attractor is
+    reached to 0.4^40), agree within the corrector's tolerance."""
     import json
 
     from pinbore import cli
@@ -447,15 +448,12 @@ def test_a_turning_drive_is_continued_over_its_speed(tmp_path, write_scene):
               "--range", "99", "101", "--points", "2", "--transient", "10", "--out", str(out)])
     summary = json.loads((out / "summary.json").read_text())
     assert summary["points"] >= 2 and summary["start_stable"] and not summary["warnings"]
-    assert "blown up" not in summary.get("reason", "")
 
     family = family_of(data, "speed", 100.0, tmp_path)
     state, x, _ = family.settle(100.0, 10)
     family.template = state
     orbit = method.Continuation(family, 99.0, 101.0).first(x, 100.0, 1.0)
-    assert np.max(np.abs(orbit.multipliers)) < 1.0
+    assert np.max(np.abs(orbit.multipliers)) < 0.4
     flow = family.flow(100.0)
-    turned = family.state(flow, orbit.x)
-    for _ in range(3):
-        turned = flow.advance(turned, 1)
-        assert np.linalg.norm(family.coordinates(flow, turned) - orbit.x) <= family.tolerance * (1 + np.linalg.norm(orbit.x))
+    marched = family.coordinates(flow, flow.advance(state, 40))
+    assert np.linalg.norm(marched - orbit.x) <= family.tolerance * (1 + np.linalg.norm(orbit.x))
