@@ -447,7 +447,7 @@ def test_a_turning_drive_is_continued_over_its_speed(tmp_path, write_scene):
     cli.main(["dynamics", str(write_scene(data)), "--analysis", "continuation", "--parameter", "speed",
               "--range", "99", "101", "--points", "2", "--transient", "10", "--out", str(out)])
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["points"] >= 2 and summary["start_stable"] and not summary["warnings"]
+    assert summary["points"] >= 3 and summary["start_stable"] and not summary["warnings"]   # a step each way
 
     family = family_of(data, "speed", 100.0, tmp_path)
     state, x, _ = family.settle(100.0, 10)

@@ -128,10 +128,10 @@ class Continuation:
         self.bar = None   # the running branch's progress bar
 
     def say(self, doing: str) -> None:
-        """What the branch is doing between two points, on its progress bar: a step retried
-        shorter, a bifurcation located, a grazing searched each cost monodromies (2n + 2
-        integrations of the orbit), and minutes can pass between points (measured: over ten
-        on the slider-crank with friction near 100 rpm, rtol 4e-8)."""
+        """What the branch is doing between two points, on its progress bar: the corrector's
+        iterations, a step retried shorter, a bifurcation located each cost monodromies
+        (2n + 2 integrations of the orbit), and minutes can pass between points (measured:
+        over ten on the slider-crank with friction near 100 rpm, rtol 4e-8)."""
         if self.bar is not None:
             self.bar.set_postfix_str(doing, refresh=True)
 
