@@ -21,7 +21,6 @@ planar, .flexible) against independent references.
 """
 
 import dataclasses
-import json
 import math
 import tomllib
 
@@ -31,6 +30,7 @@ from conftest import ROOT, compound_pendulum, pinbore, simulated
 
 from pinbore.fem.modes import file as modes_file
 from pinbore.reduced.mechanism import layout
+from pinbore.reduced.mechanism.flexible import rigid_twin
 
 G = 9.81
 SMALL = 1e-2   # of gravity: a static load whose deflection is linear
@@ -82,23 +82,6 @@ def test_a_stiff_pendulum_swings_as_the_rigid_one(bodies, tmp_path):
     assert np.abs(trajectory.states[:, 2] - exact).max() < 1e-6
 
 
-FLEXIBLE_KEYS = ("modes_file", "modes", "damping_ratio", "stiffening")
-
-
-def rigid_twin(data: dict, name: str, path) -> dict:
-    """The scene with its flexible body `name` rigid, of the mass and the inertia about the
-    centre of mass of the body in `path` (its frame is at the centre of mass: the points
-    stay)."""
-    body = modes_file.read(path)
-    twin = json.loads(json.dumps(data))
-    for i, b in enumerate(twin["bodies"]):
-        if b["name"] == name:
-            twin["bodies"][i] = {k: v for k, v in b.items() if k not in FLEXIBLE_KEYS} | {
-                "mass": body.mass, "inertia": float(body.inertia[2, 2])}
-    twin["output"] = {k: v for k, v in twin.get("output", {}).items() if k != "points"}
-    return twin
-
-
 def shipped(name: str, flexible: str, path, **changes) -> dict:
     data = tomllib.loads((ROOT / "scenes" / "reduced" / f"{name}.toml").read_text())
     for b in data["bodies"]:
@@ -124,7 +107,7 @@ def test_the_stiff_flexible_slider_crank_impacts_as_the_rigid_one(bodies, tmp_pa
         return joint.peak_normal_force_N, trajectory.impacts[0, layout.LOG_RATE]
 
     flexible = shipped("slider_crank_flores2004_flexible", "rod", bodies["link_steel_2d"], duration=5e-4)
-    rigid_peak, rigid_speed = first_impact(rigid_twin(flexible, "rod", bodies["link_steel_2d"]))
+    rigid_peak, rigid_speed = first_impact(rigid_twin(flexible))
     errors = {}
     for factor in (1e2, 1e4):
         stiff = stiffer(bodies["link_steel_2d"], tmp_path / f"link_{factor:g}.npz", factor)
@@ -144,8 +127,7 @@ def test_the_stiff_flexible_deployment_turns_the_bus_as_the_rigid_one(bodies, tm
     rad after the latch, with E x 1e4 by 1e-6 rad and less (the hinge rattles in its clearance
     after the latch: the timing of its small impacts differs, which the attitude smooths)."""
     rigid = simulated(rigid_twin(shipped("solar_panel_deployment_flexible", "panel",
-                                         bodies["panel_strip_2d"], duration=4.5),
-                                 "panel", bodies["panel_strip_2d"]))
+                                         bodies["panel_strip_2d"], duration=4.5)))
     grid = np.linspace(0.0, 4.5, 9001)
 
     def attitude(model, trajectory):

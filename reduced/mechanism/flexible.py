@@ -16,6 +16,7 @@ An output point's elastic displacement is the modes interpolated linearly on the
 around it.
 """
 
+import json
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +24,7 @@ import numpy as np
 from pinbore.core.errors import InputError
 from pinbore.fem.modes import file as modes_file
 
+FLEXIBLE_KEYS = ("modes_file", "modes", "damping_ratio", "stiffening")
 INTERFACE_REACH = 0.1   # of the body's size: how far from an interface centre a joint may act
 ON_BODY = 1e-9          # barycentric tolerance of a point on the mesh (its edges and corners)
 
@@ -57,8 +59,7 @@ class Flexible:
         self.n, self.ratios, self.stiffening = n, ratios, body.stiffening
         self.dim = dim
         self.mass = float(reduced.mass)
-        self.inertia = reduced.inertia if dim == 3 else float(reduced.second_moments[0, 0]
-                                                               + reduced.second_moments[1, 1])
+        self.inertia = reduced.inertia if dim == 3 else float(reduced.inertia[2, 2])
         self.centres = reduced.interface_centres[:, :dim]
         self.size = float(np.ptp(reduced.nodes[:, :dim], axis=0).max())
 
@@ -167,3 +168,28 @@ class FlexibleGeometry:
                 c = self.coordinate(b) + self.RIGID_COORDINATES
                 energy += 0.5 * (q[:, c:c + f.n] ** 2) @ f.body.omega[:f.n] ** 2
         return energy
+
+
+def rigid_twin(data: dict, base=None) -> dict:
+    """A scene's data (a dict as read from its TOML) with each flexible body rigid: the mass
+    and the inertia about the centre of mass of its modes file (a plane body's about z). The
+    body's frame is at its centre of mass in both, so its joints' points, its position and
+    its rotation stay; output points on it go (a rigid body has no elastic displacement).
+    What flexibility costs and changes is then the difference of the two runs, everything
+    else (joints, laws, tolerances) the same. `base`: the directory a relative modes_file is
+    read from."""
+    twin = json.loads(json.dumps(data))
+    rigid = set()
+    for i, b in enumerate(twin["bodies"]):
+        if "modes_file" not in b:
+            continue
+        path = Path(b["modes_file"])
+        body = modes_file.read(path if path.is_absolute() or base is None else Path(base) / path)
+        inertia = body.inertia.tolist() if body.dim == 3 else float(body.inertia[2, 2])
+        twin["bodies"][i] = {k: v for k, v in b.items() if k not in FLEXIBLE_KEYS} | {
+            "mass": float(body.mass), "inertia": inertia}
+        rigid.add(b["name"])
+    output = twin.get("output", {})
+    if "points" in output:
+        output["points"] = [p for p in output["points"] if p["body"] not in rigid]
+    return twin
