@@ -24,7 +24,8 @@ CORRECTOR_REACH steps from u_k has left the branch, and the step is retried shor
 (measured: on the slider-crank with friction a corrector from 95 rpm ran to 69, 53 and
 11 rpm, each period at 11 rpm five times longer to integrate). P_x, the monodromy matrix,
 and P_q by central differences of the map (steps FD_STEP in x, in scaled units, and of the
-range in q): each perturbed state meets its contact onsets at its own (shifted) instants,
+range in q; P_x of a mechanism along the tangent space of its ideal joints and drive only,
+`directions`: on the Flores slider-crank 3.8 -> 1.0 s a monodromy): each perturbed state meets its contact onsets at its own (shifted) instants,
 so the difference quotient is the derivative of the map through the impacts, the saltation
 of each onset included. Its step lies between what the integration resolves and the depth
 of an impact: on an impacting orbit of the impact oscillator (rtol 1e-8, 6.5 um deep into a
@@ -77,6 +78,7 @@ SWITCH_GROWTH = 10.0      # a guess for the doubled orbit whose Newton residual 
 GROW, SHRINK = 1.5, 0.5
 LOCATE_ITERATIONS = 6
 LOCATE_TOL = 1e-6         # of the parameter range
+TANGENT_RANK = 1e-6       # a singular value of the projection's derivative below this (of the largest) is a constraint's
 
 
 @dataclass
@@ -145,14 +147,45 @@ class Continuation:
     def residual(self, x, p):
         return self.family.map(x, p, self.multiple) - x
 
-    def jacobian(self, x, p):
-        """[P_x - I, P_q] at (x, p) by central differences."""
+    def directions(self, x, p):
+        """The directions the monodromy is differenced along and what turns their quotients
+        into P_x: (D, W) with P_x = (P_x D) W. The coordinates (D = W = I), or, for a family
+        whose map first moves x onto its constraints (family.consistent: C), the r
+        directions of their tangent space: P = P o C gives P_x = P'(C(x)) C_x, and
+        C_x = T T^T C_x with T an orthonormal basis of C_x's range (its singular values
+        above TANGENT_RANK of the largest), so D = T and W = T^T C_x: 2r integrations of the
+        orbit instead of 2n (the Flores slider-crank: r = 4 of n = 18), C_x by central
+        differences of the projection, no integration."""
         n = x.size
-        jac = np.empty((n, n + 1))
+        consistent = getattr(self.family, "consistent", None)
+        if consistent is None:
+            return None, None
+        onto = np.empty((n, n))
         for i in range(n):
             dx = np.zeros(n)
             dx[i] = FD_STEP
-            jac[:, i] = (self.residual(x + dx, p) - self.residual(x - dx, p)) / (2 * FD_STEP)
+            onto[:, i] = (consistent(x + dx, p) - consistent(x - dx, p)) / (2 * FD_STEP)
+        u, sigma, _ = np.linalg.svd(onto)
+        tangent = u[:, sigma > TANGENT_RANK * sigma[0]]
+        if tangent.shape[1] == n:
+            return None, None
+        return tangent, tangent.T @ onto
+
+    def jacobian(self, x, p):
+        """[P_x - I, P_q] at (x, p) by central differences (P_x along `directions`)."""
+        n = x.size
+        jac = np.empty((n, n + 1))
+        along, onto = self.directions(x, p)
+        if along is None:
+            for i in range(n):
+                dx = np.zeros(n)
+                dx[i] = FD_STEP
+                jac[:, i] = (self.residual(x + dx, p) - self.residual(x - dx, p)) / (2 * FD_STEP)
+        else:
+            quotients = np.column_stack([
+                (self.family.map(x + FD_STEP * d, p, self.multiple)
+                 - self.family.map(x - FD_STEP * d, p, self.multiple)) / (2 * FD_STEP) for d in along.T])
+            jac[:, :n] = quotients @ onto - np.eye(n)
         q = self.q(p)
         jac[:, n] = (self.family.map(x, self.p(q + FD_STEP), self.multiple)
                      - self.family.map(x, self.p(q - FD_STEP), self.multiple)) / (2 * FD_STEP)
@@ -263,7 +296,8 @@ class Continuation:
                 break
             x, p, _, iterations = found
             try:
-                new = self.point(x, p, last.tangent, iterations)
+                secant = np.append(x - last.x, self.q(p) - self.q(last.p))
+                new = self.point(x, p, secant, iterations)
             except FloatingPointError as err:
                 branch.complete, branch.reason = False, f"at {p:.6g}: {err}"
                 break

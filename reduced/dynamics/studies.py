@@ -478,6 +478,12 @@ class MechanismFamily:
         flow = self.flow(p)
         return self.coordinates(flow, flow.advance(self.state(flow, x), multiple))
 
+    def consistent(self, x, p):
+        """x moved onto the ideal joints and the drive, as `map` moves it before it integrates
+        (continuation differences the monodromy along their tangent space only)."""
+        flow = self.flow(p)
+        return self.coordinates(flow, self.state(flow, x))
+
     def measure(self, x, p, multiple) -> dict:
         """The orbit's measures (flow.orbit_measures); its end becomes the template."""
         flow = self.flow(p)
