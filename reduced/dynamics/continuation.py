@@ -33,7 +33,10 @@ of an impact: on an impacting orbit of the impact oscillator (rtol 1e-8, 6.5 um 
 0.13 % and 0.26 % off an independent integration at the step 1e-4 (0.1 um), 2.6 % and 5 %
 at 1e-5 and 21 % at 1e-6, where the noise of the onsets' location (the impact speed v0 of
 the damping law) takes over. The tangent at a converged point is the null vector of
-[P_x - I, P_q], oriented along the previous one. Step control: ds grows by 1.5 after a
+[P_x - I, P_q], oriented along the secant from the last point (oriented along the last
+tangent, the slider-crank's branch with friction turned back at 103 rpm and retraced its own
+orbits, a fold that was not one: at rtol 4e-8 its multipliers scatter by 0.3 between
+neighbouring points, the monodromy's noise). Step control: ds grows by 1.5 after a
 corrector that needed at most four (chord) iterations and halves after one that needed
 more than seven, up to 50 times the first step; a failed step is retried down to ds_min,
 then once at two and four times the step (over a branch point, where the extended Jacobian
