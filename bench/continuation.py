@@ -1,15 +1,22 @@
-"""Cost of continuing periodic motions: the impact oscillator's frequency response
-(scenes/reduced/impact_oscillator.toml), a 200-point branch over 10-30 Hz through both
-grazings, its folds and branch points, run in this process after the engine is compiled:
-at the first step 0.01 of the range (the steps adapt, up to 50 times it), and at 0.002 with
-steps up to 0.005 (a branch of up to 200 orbits).
-Counts the maps (one forcing period integrated) the branch takes and where they go: the
-monodromy by central differences at each orbit (2 n + 2 maps, n = 6 coordinates), the
-corrector's iterations and the orbit's measures (one map each), the location of the
-bifurcations. Also times the branch with the Newton tolerance at 10 rtol instead of 100
-rtol (the orbits' accuracy against the corrector's iterations: at 10 rtol the corrector
-meets the noise of the impacts' location). Writes
-OUT/continuation.csv (a row per setting) and OUT/continuation.png (the branch)."""
+"""Cost of continuing periodic motions.
+
+1. The impact oscillator's frequency response (scenes/reduced/impact_oscillator.toml), a
+   200-point branch over 10-30 Hz through both grazings, its folds and branch points, run in
+   this process after the engine is compiled: at the first step 0.01 of the range (the steps
+   adapt, up to 50 times it), and at 0.002 with steps up to 0.005 (a branch of up to 200
+   orbits). Counts the maps (one forcing period integrated) the branch takes and where they
+   go: the monodromy by central differences at each orbit (2 n + 2 maps, n = 6 coordinates),
+   the corrector's iterations and the orbit's measures (one map each), the location of the
+   bifurcations. Also times the branch with the Newton tolerance at 10 rtol instead of 100
+   rtol (the orbits' accuracy against the corrector's iterations: at 10 rtol the corrector
+   meets the noise of the impacts' location).
+2. The Flores slider-crank with Coulomb friction (mu 0.1) over its crank's speed, from
+   100 rpm upwards (rtol 4e-8, SLIDER_POINTS orbits), counted the same way; and one monodromy
+   at its first orbit differenced along the tangent space of its joints and drive (2 r + 2
+   maps, r = 4) against one along every coordinate (2 n + 2, n = 18), timed.
+
+Writes OUT/continuation.csv (a row per setting) and OUT/continuation.png (the oscillator's
+branch)."""
 
 import argparse
 import csv
@@ -22,9 +29,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "reduced" / "impact_oscillator.toml"
 LOW, HIGH, POINTS, STEP = 10.0, 30.0, 200, 0.01
-COLUMNS = ["tolerance_rtol", "first_step", "largest_step", "points", "wall_time_s", "seconds_per_point", "maps", "maps_per_point",
+SLIDER = ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml"
+SLIDER_POINTS, SLIDER_HIGH = 30, 400.0
+COLUMNS = ["scene", "tolerance_rtol", "first_step", "largest_step", "points", "wall_time_s", "seconds_per_point", "maps", "maps_per_point",
            "seconds_per_map", "maps_in_monodromies", "maps_in_corrector", "maps_in_locating",
-           "bifurcations"]
+           "bifurcations", "reached", "monodromy_s", "monodromy_every_coordinate_s"]
 
 
 class Counted:
@@ -33,6 +42,7 @@ class Counted:
     def __init__(self, family):
         self.family, self.calls, self.asker = family, {}, "corrector"
         self.tolerance, self.scale = family.tolerance, family.scale
+        self.consistent = family.consistent   # a projection onto the joints: no integration
 
     def map(self, x, p, multiple):
         self.calls[self.asker] = self.calls.get(self.asker, 0) + 1
@@ -43,18 +53,16 @@ class Counted:
         return self.family.measure(x, p, multiple)
 
 
-def branch(tolerance_factor: float, step: float, largest: float | None = None):
-    from pinbore.reduced.dynamics import continuation, studies
+def counting(family, low: float, high: float):
+    """The continuation of `family` in [low, high], its maps counted by what asked for them
+    (a monodromy while locating counts to locating)."""
+    from pinbore.reduced.dynamics import continuation
 
-    data = tomllib.loads(SCENE.read_text())
-    start = data["loads"][0]["frequency_hz"]
-    family = studies.MechanismFamily(studies.SceneFile(SCENE, data), "frequency", start)
-    family.tolerance = tolerance_factor * data["integrator"]["rtol"]
     counted = Counted(family)
-    line = continuation.Continuation(counted, LOW, HIGH)
+    line = continuation.Continuation(counted, low, high)
     jacobian, locate = line.jacobian, line.locate
 
-    def counted_jacobian(*args):   # a monodromy while locating counts to locating
+    def counted_jacobian(*args):
         asker = counted.asker
         counted.asker = "monodromy" if asker == "corrector" else asker
         try:
@@ -69,6 +77,17 @@ def branch(tolerance_factor: float, step: float, largest: float | None = None):
         finally:
             counted.asker = asker
     line.jacobian, line.locate = counted_jacobian, counted_locate
+    return line, counted
+
+
+def branch(tolerance_factor: float, step: float, largest: float | None = None):
+    from pinbore.reduced.dynamics import studies
+
+    data = tomllib.loads(SCENE.read_text())
+    start = data["loads"][0]["frequency_hz"]
+    family = studies.MechanismFamily(studies.SceneFile(SCENE, data), "frequency", start)
+    family.tolerance = tolerance_factor * data["integrator"]["rtol"]
+    line, counted = counting(family, LOW, HIGH)
     x = family.settle(start, 30)[1]
     began = time.perf_counter()
     first = line.first(x, start, 1.0)
@@ -76,6 +95,49 @@ def branch(tolerance_factor: float, step: float, largest: float | None = None):
                 line.run(first, step, POINTS // 2, ds_max=largest)]
     wall = time.perf_counter() - began
     return branches, counted.calls, wall
+
+
+def row(scene: str, factor: float, step: float, largest: float, branches, calls: dict, wall: float) -> dict:
+    points = sum(len(b.points) for b in branches)
+    maps = sum(calls.values())
+    return {"scene": scene, "tolerance_rtol": factor, "first_step": step, "largest_step": largest,
+            "points": points, "wall_time_s": f"{wall:.1f}",
+            "seconds_per_point": f"{wall / points:.3f}", "maps": maps,
+            "maps_per_point": f"{maps / points:.1f}", "seconds_per_map": f"{wall / maps:.2e}",
+            "maps_in_monodromies": calls.get("monodromy", 0),
+            "maps_in_corrector": calls.get("corrector", 0),
+            "maps_in_locating": calls.get("locating", 0),
+            "bifurcations": " ".join(f"{s.kind}@{s.p:.5g}" for b in branches for s in b.specials),
+            "reached": f"{max(p.p for b in branches for p in b.points):.5g}"}
+
+
+def slider_crank() -> dict:
+    """The slider-crank with friction continued from 100 rpm upwards, and its first orbit's
+    monodromy timed both ways."""
+    from pinbore.reduced.dynamics import continuation, studies
+
+    data = tomllib.loads(SLIDER.read_text())
+    data["drive"]["speed_rpm"] = 100.0
+    data["clearance_joints"][0]["friction"] = {"law": "coulomb_ambrosio", "mu": 0.1}
+    data["integrator"]["rtol"] = 4e-8
+    family = studies.MechanismFamily(studies.SceneFile(SLIDER, data), "speed", 100.0)
+    line, counted = counting(family, 100.0, SLIDER_HIGH)
+    state, x, _ = family.settle(100.0, 10)
+    family.template = state
+    began = time.perf_counter()
+    first = line.first(x, 100.0, 1.0)
+    up = line.run(first, 0.01, SLIDER_POINTS)
+    wall = time.perf_counter() - began
+    result = row("slider_crank_flores2004 mu 0.1, speed", 100, 0.01, 0.5, [up], counted.calls, wall)
+    plain = continuation.Continuation(family, 100.0, SLIDER_HIGH)
+    began = time.perf_counter()
+    plain.jacobian(first.x, first.p)
+    result["monodromy_s"] = f"{time.perf_counter() - began:.2f}"
+    family.consistent = None   # no projection known: every coordinate is differenced
+    began = time.perf_counter()
+    plain.jacobian(first.x, first.p)
+    result["monodromy_every_coordinate_s"] = f"{time.perf_counter() - began:.2f}"
+    return result
 
 
 def main() -> int:
@@ -87,19 +149,12 @@ def main() -> int:
     branch(100, STEP)   # compile the engine (cached on disk) before timing
     for factor, step, largest in ((100, STEP, None), (100, STEP / 5, STEP / 2), (10, STEP, None)):
         branches, calls, wall = branch(factor, step, largest)
-        points = sum(len(b.points) for b in branches)
-        maps = sum(calls.values())
-        rows.append({"tolerance_rtol": factor, "first_step": step, "largest_step": largest or 50 * step,
-                     "points": points, "wall_time_s": f"{wall:.1f}",
-                     "seconds_per_point": f"{wall / points:.3f}", "maps": maps,
-                     "maps_per_point": f"{maps / points:.1f}", "seconds_per_map": f"{wall / maps:.2e}",
-                     "maps_in_monodromies": calls.get("monodromy", 0),
-                     "maps_in_corrector": calls.get("corrector", 0),
-                     "maps_in_locating": calls.get("locating", 0),
-                     "bifurcations": " ".join(f"{s.kind}@{s.p:.5g}" for b in branches for s in b.specials)})
+        rows.append(row("impact_oscillator, frequency", factor, step, largest or 50 * step, branches, calls, wall))
         print(rows[-1], file=sys.stderr)
         if (factor, step) == (100, STEP):
             picture(branches, out / "continuation.png")
+    rows.append(slider_crank())
+    print(rows[-1], file=sys.stderr)
     with open(out / "continuation.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=COLUMNS)
         writer.writeheader()
