@@ -222,7 +222,8 @@ def test_linear_oscillator_response_and_multipliers_in_closed_form(tmp_path, sce
     y = A cos(w t - phi), A = F / sqrt((k - m w^2)^2 + (c w)^2), tan phi = c w / (k - m w^2),
     to 1e-6 of A (and of A w); the two multipliers of the block's motion have the modulus
     exp(-zeta w_n T) (to 1e-6: central differences of a linear map), the others (the
-    directions the guide, or the Euler parameters' norm, project away) vanish."""
+    directions the guide, or the Euler parameters' norm, project away) vanish; doubling the
+    difference step does not move them (a linear map)."""
     m, k, c, force = 2.0, 800.0, 4.0, 3.0
     family = family_of(scene(3.0), "frequency", 3.0, tmp_path)
     line = method.Continuation(family, 2.0, 4.5)
@@ -242,6 +243,7 @@ def test_linear_oscillator_response_and_multipliers_in_closed_form(tmp_path, sce
         decay = math.exp(-c / (2 * m) / point.p)
         assert moduli[:2] == pytest.approx([decay, decay], rel=1e-6)
         assert np.all(moduli[2:] < 1e-6)
+    assert line.spread(branch.points[0]) < 1e-8   # a linear map: its differences do not depend on the step
 
 
 @pytest.mark.parametrize("scene", [linear_oscillator, spatial_linear_oscillator], ids=["planar", "spatial"])
@@ -470,7 +472,11 @@ def test_a_turning_drive_is_continued_over_its_speed(tmp_path, write_scene):
     cli.main(["dynamics", str(write_scene(data)), "--analysis", "continuation", "--parameter", "speed",
               "--range", "99", "101", "--points", "2", "--transient", "10", "--out", str(out)])
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["points"] >= 3 and summary["start_stable"] and not summary["warnings"]   # a step each way
+    assert summary["points"] >= 3 and summary["start_stable"]   # a step each way
+    assert not any("integrator.rtol" in w for w in summary["warnings"])   # the integration resolves the step
+    # what the monodromy resolves of the stability is said, and warned of when coarse
+    spread_warned = any("not resolved" in w for w in summary["warnings"])
+    assert spread_warned == (summary["start_multiplier_spread"] > method.SPREAD_WARNING)
 
     family = family_of(data, "speed", 100.0, tmp_path)
     state, x, _ = family.settle(100.0, 10)

@@ -544,6 +544,14 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
                   f"periods at {options.parameter} {start_value:g} ({err}); the motion there may "
                   f"not be periodic (--analysis poincare shows it)")
         return {"converged": False, "reason": reason, "parameter": options.parameter, "warnings": warnings}
+    spread = line.spread(first)
+    if spread > method.SPREAD_WARNING:
+        warning = (f"{target.source}: the largest Floquet multiplier at {options.parameter} "
+                   f"{start_value:g} moves by {spread:.2g} when the monodromy's difference step doubles "
+                   f"(the map is not smooth at that scale, whatever the tolerance): stability and "
+                   f"bifurcations within {spread:.2g} of |mu| = 1 are not resolved")
+        warnings.append(warning)
+        print(f"pinbore dynamics: warning: {warning}", file=sys.stderr)
     branches = []
     for direction in (-1.0, 1.0):
         if (direction < 0 and start_value <= low) or (direction > 0 and start_value >= high):
@@ -582,7 +590,7 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
                              for s in specials],
             "stable_points": sum(r[4] for r in rows),
             "start_floquet_multipliers": [[m.real, m.imag] for m in first.multipliers],
-            "start_stable": first.stable, "warnings": warnings}
+            "start_stable": first.stable, "start_multiplier_spread": spread, "warnings": warnings}
 
 
 CONTINUATION_COLUMNS = ["branch", "multiple", "value", "amplitude_m", "stable", "largest_multiplier_modulus",
