@@ -25,9 +25,9 @@ CORRECTOR_REACH steps from u_k has left the branch, and the step is retried shor
 11 rpm, each period at 11 rpm five times longer to integrate). P_x, the monodromy matrix,
 and P_q by central differences of the map (steps FD_STEP in x, in scaled units, and of the
 range in q; P_x of a mechanism along the tangent space of its ideal joints and drive only,
-`directions`: on the Flores slider-crank 3.8 -> 1.0 s a monodromy): each perturbed state meets its contact onsets at its own (shifted) instants,
-so the difference quotient is the derivative of the map through the impacts, the saltation
-of each onset included. Its step lies between what the integration resolves and the depth
+`directions`: on the Flores slider-crank 3.8 -> 1.0 s a monodromy): each perturbed state
+meets its contact onsets at its own (shifted) instants, so the difference quotient is the
+derivative of the map through the impacts, the saltation of each onset included. Its step lies between what the integration resolves and the depth
 of an impact: on an impacting orbit of the impact oscillator (rtol 1e-8, 6.5 um deep into a
 1 mm clearance) the trace and determinant of the monodromy's block across the guide are
 0.13 % and 0.26 % off an independent integration at the step 1e-4 (0.1 um), 2.6 % and 5 %
@@ -38,9 +38,8 @@ tangent, the slider-crank's branch with friction turned back at 103 rpm and retr
 orbits, a fold that was not one: its largest multiplier lies between 0.12 and 0.35 from
 orbit to orbit). What the monodromy resolves of the stability is measured at the first
 orbit (`spread`: the largest multiplier's move when the difference step doubles) and warned
-of above SPREAD_WARNING. Step control: ds grows by 1.5 after a
-corrector that needed at most four (chord) iterations and halves after one that needed
-more than seven, up to 50 times the first step; a failed step is retried down to ds_min,
+of above SPREAD_WARNING. Step control: ds grows by 1.5 after a corrector that needed at
+most four (chord) iterations and halves after one that needed more than seven, up to 50 times the first step; a failed step is retried down to ds_min,
 then once at two and four times the step (over a branch point, where the extended Jacobian
 is singular), and the branch stops with the reason, its points kept.
 
