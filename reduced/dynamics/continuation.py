@@ -27,21 +27,22 @@ and P_q by central differences of the map (steps FD_STEP in x, in scaled units, 
 range in q; P_x of a mechanism along the tangent space of its ideal joints and drive only,
 `directions`: on the Flores slider-crank 3.8 -> 1.0 s a monodromy): each perturbed state
 meets its contact onsets at its own (shifted) instants, so the difference quotient is the
-derivative of the map through the impacts, the saltation of each onset included. Its step lies between what the integration resolves and the depth
-of an impact: on an impacting orbit of the impact oscillator (rtol 1e-8, 6.5 um deep into a
-1 mm clearance) the trace and determinant of the monodromy's block across the guide are
-0.13 % and 0.26 % off an independent integration at the step 1e-4 (0.1 um), 2.6 % and 5 %
-at 1e-5 and 21 % at 1e-6, where the noise of the onsets' location (the impact speed v0 of
-the damping law) takes over. The tangent at a converged point is the null vector of
-[P_x - I, P_q], oriented along the secant from the last point (oriented along the last
-tangent, the slider-crank's branch with friction turned back at 103 rpm and retraced its own
-orbits, a fold that was not one: its largest multiplier lies between 0.12 and 0.35 from
-orbit to orbit). What the monodromy resolves of the stability is measured at the first
-orbit (`spread`: the largest multiplier's move when the difference step doubles) and warned
-of above SPREAD_WARNING. Step control: ds grows by 1.5 after a corrector that needed at
-most four (chord) iterations and halves after one that needed more than seven, up to 50 times the first step; a failed step is retried down to ds_min,
-then once at two and four times the step (over a branch point, where the extended Jacobian
-is singular), and the branch stops with the reason, its points kept.
+derivative of the map through the impacts, the saltation of each onset included. Its step
+lies between what the integration resolves and the depth of an impact: on an impacting orbit
+of the impact oscillator (rtol 1e-8, 6.5 um deep into a 1 mm clearance) the trace and
+determinant of the monodromy's block across the guide are 0.13 % and 0.26 % off an
+independent integration at the step 1e-4 (0.1 um), 2.6 % and 5 % at 1e-5 and 21 % at 1e-6,
+where the noise of the onsets' location (the impact speed v0 of the damping law) takes over.
+The tangent at a converged point is the null vector of [P_x - I, P_q], oriented along the
+secant from the last point (oriented along the last tangent, the slider-crank's branch with
+friction turned back at 103 rpm and retraced its own orbits, a fold that was not one: its
+largest multiplier lies between 0.12 and 0.35 from orbit to orbit). What the monodromy
+resolves of the stability is measured at the first orbit (`spread`: the largest multiplier's
+move when the difference step doubles) and warned of above SPREAD_WARNING. Step control: ds
+grows by 1.5 after a corrector that needed at most four (chord) iterations and halves after
+one that needed more than seven, up to 50 times the first step; a failed step is retried
+down to ds_min, then once at two and four times the step (over a branch point, where the
+extended Jacobian is singular), and the branch stops with the reason, its points kept.
 
 Stability: the eigenvalues of P_x are the Floquet multipliers; the orbit is stable when all
 lie inside the unit circle. Bifurcations between consecutive points, each by a test
@@ -82,8 +83,8 @@ SWITCH_GROWTH = 10.0      # a guess for the doubled orbit whose Newton residual 
 GROW, SHRINK = 1.5, 0.5
 LOCATE_ITERATIONS = 6
 LOCATE_TOL = 1e-6         # of the parameter range
-SPREAD_WARNING = 0.01    # of the largest multiplier's modulus: a stability the monodromy does not resolve
-TANGENT_RANK = 1e-6       # a singular value of the projection's derivative below this (of the largest) is a constraint's
+SPREAD_WARNING = 0.01     # a move of the largest multiplier (step doubled) above this is warned of
+TANGENT_RANK = 1e-6       # a projection derivative's singular value below this (of the largest): normal
 
 
 @dataclass
