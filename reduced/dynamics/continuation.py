@@ -228,7 +228,7 @@ class Continuation:
         pointing to increasing p when direction > 0. FloatingPointError when it does not
         converge in `iterations`, or when a residual exceeds `growth` times the first (a
         guess Newton leaves)."""
-        history = []
+        history = self.residuals = []   # |G| at each iteration, kept for the caller
         for _ in range(iterations):
             g = self.residual(x, p)
             history.append(float(np.linalg.norm(g)))

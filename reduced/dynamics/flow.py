@@ -21,8 +21,8 @@ behaviour.
   impact that one meets and the other misses shows up as the (finite) jump it is; d0 = 1e-7
   of the coordinates' scale keeps such jumps rare.
 - Periodic orbits by shooting: Newton on P^m(x) - x = 0 with the Jacobian of the m-fold map
-  by finite differences; its eigenvalues are the Floquet multipliers (stable when all lie
-  inside the unit circle).
+  by finite differences, continuation's at a fixed parameter (FixedFlow); its eigenvalues
+  are the Floquet multipliers (stable when all lie inside the unit circle).
 """
 
 import math
@@ -31,6 +31,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from tqdm import tqdm
 
+from pinbore.reduced.dynamics.continuation import Continuation
 from pinbore.reduced.mechanism import engine
 from pinbore.reduced.mechanism.layout import (CONSTANT_SPEED, OK, PRIM_ANGLE0, PRIM_BODY_I, PRIM_BODY_J,
                                               PRIM_PROFILE, PRIM_SPEED)
@@ -278,32 +279,39 @@ def classify(samples, exponent=None, tol=1e-4) -> tuple[str, int | None]:
     return ("chaotic" if exponent > 0 else "quasi-periodic"), None
 
 
-def shooting(flow, state, multiple: int = 1, tol: float = 1e-9, iterations: int = 20, step: float = 1e-6):
+class FixedFlow:
+    """A flow at its own parameter as a family of continuation (reduced.dynamics.continuation):
+    x its coordinates, the state at x the template moved there (flow.perturb: onto the ideal
+    joints and the drive), the parameter unused."""
+
+    def __init__(self, flow, template, tolerance: float):
+        self.flow, self.template, self.tolerance = flow, template, tolerance
+        self.origin = flow.coordinates(template)
+
+    def state(self, x):
+        return self.flow.perturb(self.template, x - self.origin)
+
+    def map(self, x, p, multiple):
+        return self.flow.coordinates(self.flow.advance(self.state(x), multiple))
+
+    def consistent(self, x, p):
+        return self.flow.coordinates(self.state(x))
+
+    def measure(self, x, p, multiple) -> dict:
+        return {}
+
+
+def shooting(flow, state, multiple: int = 1, tol: float = 1e-9, iterations: int = 20):
     """A periodic orbit of period `multiple` driving periods from a guess `state`, by Newton
-    on P^m(x) - x = 0 in the flow's coordinates. Returns (state on the orbit, Floquet
-    multipliers, residual history). The Jacobian of P^m by forward differences of size `step`."""
-    history = []
-    for _ in range(iterations):
-        x = flow.coordinates(state)
-        end = flow.advance(state, multiple)
-        residual = flow.coordinates(end) - x
-        history.append(float(np.linalg.norm(residual)))
-        jac = monodromy(flow, state, end, multiple, step)
-        if history[-1] <= tol * max(np.linalg.norm(x), 1.0):
-            return state, np.linalg.eigvals(jac), history
-        dx = np.linalg.lstsq(jac - np.eye(x.size), -residual, rcond=None)[0]
-        state = flow.perturb(state, dx)
-    raise FloatingPointError(f"shooting did not converge in {iterations} Newton iterations "
-                             f"(residuals {', '.join(f'{r:.2e}' for r in history)})")
-
-
-def monodromy(flow, state, end, multiple, step):
-    """d P^m / d x at `state` (forward differences; `end` = P^m(state))."""
-    x_end = flow.coordinates(end)
-    n = x_end.size
-    jac = np.empty((n, n))
-    for i in range(n):
-        dx = np.zeros(n)
-        dx[i] = step
-        jac[:, i] = (flow.coordinates(flow.advance(flow.perturb(state, dx), multiple)) - x_end) / step
-    return jac
+    on P^m(x) - x = 0 in the flow's coordinates: continuation's Newton at a fixed parameter
+    (Continuation.first; its monodromy by central differences at the step continuation
+    argues, along the joints' tangent space), until |P^m(x) - x| <= tol (1 + |x|). Returns
+    (state on the orbit, Floquet multipliers, residual history)."""
+    family = FixedFlow(flow, state, tol)
+    line = Continuation(family, 0.0, 1.0, multiple)
+    try:
+        orbit = line.first(family.origin, 0.5, 1.0, iterations)
+    except FloatingPointError:
+        raise FloatingPointError(f"shooting did not converge in {iterations} Newton iterations (residuals "
+                                 f"{', '.join(f'{r:.2e}' for r in line.residuals)})") from None
+    return family.state(orbit.x), orbit.multipliers, line.residuals
