@@ -311,7 +311,10 @@ def shooting(flow, state, multiple: int = 1, tol: float = 1e-9, iterations: int 
     line = Continuation(family, 0.0, 1.0, multiple)
     try:
         orbit = line.first(family.origin, 0.5, 1.0, iterations)
-    except FloatingPointError:
-        raise FloatingPointError(f"shooting did not converge in {iterations} Newton iterations (residuals "
-                                 f"{', '.join(f'{r:.2e}' for r in line.residuals)})") from None
+    except FloatingPointError as err:
+        residuals = ", ".join(f"{r:.2e}" for r in line.residuals)
+        if len(line.residuals) < iterations:   # an integration stopped
+            raise FloatingPointError(f"shooting stopped after the residuals {residuals}: {err}") from None
+        raise FloatingPointError(f"shooting did not converge in {iterations} Newton iterations "
+                                 f"(residuals {residuals})") from None
     return family.state(orbit.x), orbit.multipliers, line.residuals

@@ -544,12 +544,18 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
                   f"periods at {options.parameter} {start_value:g} ({err}); the motion there may "
                   f"not be periodic (--analysis poincare shows it)")
         return {"converged": False, "reason": reason, "parameter": options.parameter, "warnings": warnings}
-    spread = line.spread(first)
-    if spread > method.SPREAD_WARNING:
-        warning = (f"{target.source}: the largest Floquet multiplier at {options.parameter} "
-                   f"{start_value:g} moves by {spread:.2g} when the monodromy's difference step doubles "
-                   f"(the map is not smooth at that scale, whatever the tolerance): stability and "
-                   f"bifurcations within {spread:.2g} of |mu| = 1 are not resolved")
+    try:
+        spread = line.spread(first)
+    except FloatingPointError as err:   # an orbit perturbed by twice the step did not integrate
+        spread, warning = None, (f"{target.source}: what the monodromy resolves of the stability at "
+                                 f"{options.parameter} {start_value:g} is not measured ({err})")
+    else:
+        warning = None if spread <= method.SPREAD_WARNING else (
+            f"{target.source}: the largest Floquet multiplier at {options.parameter} {start_value:g} "
+            f"moves by {spread:.2g} when the monodromy's difference step doubles (the map is not "
+            f"smooth at that scale, whatever the tolerance): stability and bifurcations within "
+            f"{spread:.2g} of |mu| = 1 are not resolved")
+    if warning:
         warnings.append(warning)
         print(f"pinbore dynamics: warning: {warning}", file=sys.stderr)
     branches = []
