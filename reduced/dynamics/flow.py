@@ -305,7 +305,8 @@ def shooting(flow, state, multiple: int = 1, tol: float = 1e-9, iterations: int 
     """A periodic orbit of period `multiple` driving periods from a guess `state`, by Newton
     on P^m(x) - x = 0 in the flow's coordinates: continuation's Newton at a fixed parameter
     (Continuation.first; its monodromy by central differences at the step continuation
-    argues, along the joints' tangent space), until |P^m(x) - x| <= tol (1 + |x|). Returns
+    argues, along the joints' tangent space), until |P^m(x) - x| <= tol (1 + |x|), tol at
+    least continuation's NEWTON_TOL. Returns
     (state on the orbit, Floquet multipliers, residual history)."""
     family = FixedFlow(flow, state, tol)
     line = Continuation(family, 0.0, 1.0, multiple)
