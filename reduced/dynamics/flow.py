@@ -306,8 +306,9 @@ def shooting(flow, state, multiple: int = 1, tol: float = 1e-9, iterations: int 
     on P^m(x) - x = 0 in the flow's coordinates: continuation's Newton at a fixed parameter
     (Continuation.first; its monodromy by central differences at the step continuation
     argues, along the joints' tangent space), until |P^m(x) - x| <= tol (1 + |x|), tol at
-    least continuation's NEWTON_TOL. Returns
-    (state on the orbit, Floquet multipliers, residual history)."""
+    least continuation's NEWTON_TOL. Returns (state on the orbit, Floquet multipliers,
+    residual history, spread: how far the largest multiplier's modulus moves when the
+    difference step doubles, Continuation.spread)."""
     family = FixedFlow(flow, state, tol)
     line = Continuation(family, 0.0, 1.0, multiple)
     try:
@@ -318,4 +319,4 @@ def shooting(flow, state, multiple: int = 1, tol: float = 1e-9, iterations: int 
             raise FloatingPointError(f"shooting stopped after the residuals {residuals}: {err}") from None
         raise FloatingPointError(f"shooting did not converge in {iterations} Newton iterations "
                                  f"(residuals {residuals})") from None
-    return family.state(orbit.x), orbit.multipliers, line.residuals
+    return family.state(orbit.x), orbit.multipliers, line.residuals, line.spread(orbit)

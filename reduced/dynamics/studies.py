@@ -374,14 +374,28 @@ def periodic_orbit(target: SceneFile, options: ShootingOptions, tmp: Path) -> di
     flow = target.flow()
     state = flow.advance(flow.start(), options.transient)
     try:
-        orbit, multipliers, history = dynamics().shooting(flow, state, options.multiple)
+        orbit, multipliers, history, spread = dynamics().shooting(flow, state, options.multiple)
     except FloatingPointError as err:
         return {"converged": False, "reason": str(err)}
+    warnings = [spread_warning(target, spread, "the scene's own value")] \
+        if spread > continuation().SPREAD_WARNING else []
+    for warning in warnings:
+        print(f"pinbore dynamics: warning: {warning}", file=sys.stderr)
     return {"converged": True, "residuals": history,
             "floquet_multipliers": [[m.real, m.imag] for m in multipliers],
             "largest_multiplier_modulus": float(np.max(np.abs(multipliers))),
+            "multiplier_spread": spread,
             "stable": bool(np.max(np.abs(multipliers)) < 1),
-            "observed": flow.observed(orbit).tolist()}
+            "observed": flow.observed(orbit).tolist(), "warnings": warnings}
+
+
+def spread_warning(target: SceneFile, spread: float, where: str) -> str:
+    """The warning of a monodromy that does not resolve the stability (Continuation.spread
+    above SPREAD_WARNING)."""
+    return (f"{target.source}: the largest Floquet multiplier at {where} moves by {spread:.2g} when "
+            f"the monodromy's difference step doubles (the map is not smooth at that scale, "
+            f"whatever the tolerance): stability and bifurcations within {spread:.2g} of |mu| = 1 "
+            f"are not resolved")
 
 
 BIFURCATION_COLUMNS = ["value", "kind", "period", "lyapunov_per_s", "x_m", "y_m"]   # bifurcation.csv
@@ -550,11 +564,8 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
         spread, warning = None, (f"{target.source}: what the monodromy resolves of the stability at "
                                  f"{options.parameter} {start_value:g} is not measured ({err})")
     else:
-        warning = None if spread <= method.SPREAD_WARNING else (
-            f"{target.source}: the largest Floquet multiplier at {options.parameter} {start_value:g} "
-            f"moves by {spread:.2g} when the monodromy's difference step doubles (the map is not "
-            f"smooth at that scale, whatever the tolerance): stability and bifurcations within "
-            f"{spread:.2g} of |mu| = 1 are not resolved")
+        warning = None if spread <= method.SPREAD_WARNING else \
+            spread_warning(target, spread, f"{options.parameter} {start_value:g}")
     if warning:
         warnings.append(warning)
         print(f"pinbore dynamics: warning: {warning}", file=sys.stderr)
