@@ -377,10 +377,8 @@ def periodic_orbit(target: SceneFile, options: ShootingOptions, tmp: Path) -> di
         orbit, multipliers, history, spread = dynamics().shooting(flow, state, options.multiple)
     except FloatingPointError as err:
         return {"converged": False, "reason": str(err)}
-    warnings = [spread_warning(target, spread, "the scene's own value")] \
-        if spread > continuation().SPREAD_WARNING else []
-    for warning in warnings:
-        print(f"pinbore dynamics: warning: {warning}", file=sys.stderr)
+    warning = spread_warning(target, spread, "the scene's own value")
+    warnings = [warning] if warning else []
     return {"converged": True, "residuals": history,
             "floquet_multipliers": [[m.real, m.imag] for m in multipliers],
             "largest_multiplier_modulus": float(np.max(np.abs(multipliers))),
@@ -389,13 +387,21 @@ def periodic_orbit(target: SceneFile, options: ShootingOptions, tmp: Path) -> di
             "observed": flow.observed(orbit).tolist(), "warnings": warnings}
 
 
-def spread_warning(target: SceneFile, spread: float, where: str) -> str:
-    """The warning of a monodromy that does not resolve the stability (Continuation.spread
-    above SPREAD_WARNING)."""
-    return (f"{target.source}: the largest Floquet multiplier at {where} moves by {spread:.2g} when "
-            f"the monodromy's difference step doubles (the map is not smooth at that scale, "
-            f"whatever the tolerance): stability and bifurcations within {spread:.2g} of |mu| = 1 "
-            f"are not resolved")
+def spread_warning(target: SceneFile, spread: float | None, where: str) -> str | None:
+    """The warning, printed, of a monodromy that does not resolve the stability
+    (Continuation.spread above SPREAD_WARNING, or not measured); None when it does."""
+    if spread is not None and spread <= continuation().SPREAD_WARNING:
+        return None
+    if spread is None:
+        warning = (f"{target.source}: what the monodromy resolves of the stability at {where} is not "
+                   f"measured (an orbit perturbed by twice the difference step did not integrate)")
+    else:
+        warning = (f"{target.source}: the largest Floquet multiplier at {where} moves by {spread:.2g} "
+                   f"when the monodromy's difference step doubles (the map is not smooth at that "
+                   f"scale, whatever the tolerance): stability and bifurcations within {spread:.2g} of "
+                   f"|mu| = 1 are not resolved")
+    print(f"pinbore dynamics: warning: {warning}", file=sys.stderr)
+    return warning
 
 
 BIFURCATION_COLUMNS = ["value", "kind", "period", "lyapunov_per_s", "x_m", "y_m"]   # bifurcation.csv
@@ -558,17 +564,10 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
                   f"periods at {options.parameter} {start_value:g} ({err}); the motion there may "
                   f"not be periodic (--analysis poincare shows it)")
         return {"converged": False, "reason": reason, "parameter": options.parameter, "warnings": warnings}
-    try:
-        spread = line.spread(first)
-    except FloatingPointError as err:   # an orbit perturbed by twice the step did not integrate
-        spread, warning = None, (f"{target.source}: what the monodromy resolves of the stability at "
-                                 f"{options.parameter} {start_value:g} is not measured ({err})")
-    else:
-        warning = None if spread <= method.SPREAD_WARNING else \
-            spread_warning(target, spread, f"{options.parameter} {start_value:g}")
+    spread = line.spread(first)
+    warning = spread_warning(target, spread, f"{options.parameter} {start_value:g}")
     if warning:
         warnings.append(warning)
-        print(f"pinbore dynamics: warning: {warning}", file=sys.stderr)
     branches = []
     for direction in (-1.0, 1.0):
         if (direction < 0 and start_value <= low) or (direction > 0 and start_value >= high):
