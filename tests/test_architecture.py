@@ -40,9 +40,15 @@ def floor(name: str) -> int:
 def imports(path: Path, name: str, known: set[str]) -> set[str]:
     """The package's modules that `path` imports (`from pinbore.x import y` counts y when y is
     a module, else pinbore.x)."""
+    return imports_of(ast.parse(path.read_text(), str(path)), path, name, known)
+
+
+def imports_of(tree: ast.AST, path: Path, name: str, known: set[str]) -> set[str]:
+    """The package's modules that the statements of `tree` (of the module `name` at `path`)
+    import."""
     out = set()
     package = name if path.stem == "__init__" else name.rpartition(".")[0]
-    for node in ast.walk(ast.parse(path.read_text(), str(path))):
+    for node in ast.walk(tree):
         if isinstance(node, ast.Import):
             targets = [alias.name for alias in node.names]
         elif isinstance(node, ast.ImportFrom):
@@ -230,3 +236,31 @@ def test_every_package_folder_is_installed():
                 continue
             found.add(".".join([package, *path.relative_to(base).parts]))
     assert found == listed, (sorted(found - listed), sorted(listed - found))
+
+
+def test_cached_compiled_code_follows_the_files_it_calls():
+    """numba's on-disk cache checks only the file a function is defined in (core.compiled):
+    a module with cached compiled functions that imports a module with compiled code, or
+    the layout's constants, names that file to follow_compiled_in, and one that reaches the
+    bodies' hooks names both body kinds, which implement them. Otherwise an edit there alone
+    leaves stale machine code running (it did: bodies.dot1 kept the spatial vector_state of
+    before an edit)."""
+    found = modules()
+    compiled = {name for name, path in found.items() if name != "pinbore.core.compiled"
+                and any(mark in path.read_text() for mark in ("numba.njit(", "overload("))}
+    wrong = []
+    for name, path in found.items():
+        text = path.read_text()
+        if "cache=True" not in text:
+            continue
+        # what its compiled code can reach: the module-level imports (a function's own import
+        # serves its Python)
+        top = ast.Module(body=[node for node in ast.parse(text).body
+                               if isinstance(node, (ast.Import, ast.ImportFrom))], type_ignores=[])
+        reached = imports_of(top, path, name, set(found))
+        calls = {d for d in reached if d in compiled or d == f"{MECHANISM}.layout"}
+        if name == f"{MECHANISM}.bodies" or f"{MECHANISM}.bodies" in calls:
+            calls |= BACK_ENDS - {name}
+        wrong += [f"{name} does not follow {d}" for d in sorted(calls)
+                  if f'"{d.rpartition(".")[2]}"' not in text and f"{d.rpartition('.')[2]}.__file__" not in text]
+    assert not wrong, "\n".join(wrong)

@@ -151,7 +151,9 @@ flex, offsets): the bodies' kinetic energy (J).""")
 
 # ---- what the joints build of these, for every body kind
 import numba  # noqa: E402 (the declarations above are plain Python)
+from pathlib import Path  # noqa: E402
 
+from pinbore.core.compiled import follow_compiled_in  # noqa: E402
 from pinbore.reduced.mechanism.vectors import cross, dot  # noqa: E402
 
 
@@ -163,3 +165,9 @@ def dot1(bodies, bi, s_i, a_i, bj, s_j, b_j):
     a, ad, ac = vector_state(bodies, bi, s_i, a_i)
     b, bd, bc = vector_state(bodies, bj, s_j, b_j)
     return dot(a, b), cross(a, b), dot(ad, b) + dot(a, bd), dot(ac, b) + 2 * dot(ad, bd) + dot(a, bc)
+
+
+# numba's cache follows this file only: the compiled code here also calls into (or reads the
+# constants of) these files, and is compiled afresh when they change (core.compiled)
+follow_compiled_in(globals(), [str(Path(__file__).parent / f"{name}.py")
+                                for name in ("layout", "vectors", "linalg", "planar", "spatial")])

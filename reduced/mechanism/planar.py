@@ -10,10 +10,12 @@ its marker layout.PLANAR and for vectors of two components.
 """
 
 import math
+from pathlib import Path
 
 import numba
 import numpy as np
 
+from pinbore.core.compiled import follow_compiled_in
 from pinbore.core.errors import InputError
 from pinbore.reduced.mechanism import bodies, layout
 from pinbore.reduced.mechanism.layout import ANGLE, DOT2, POINT
@@ -788,3 +790,9 @@ def flow_consistent(model, y, args) -> np.ndarray:
     y = y.copy()
     y[:nq], y[nq:2 * nq], _ = project(model, y[:nq], y[nq:2 * nq], args.primitives, model.base.minv)
     return y
+
+
+# numba's cache follows this file only: the compiled code here also calls into (or reads the
+# constants of) these files, and is compiled afresh when they change (core.compiled)
+follow_compiled_in(globals(), [str(Path(__file__).parent / f"{name}.py")
+                                for name in ("bodies", "layout", "vectors", "linalg", "spatial")])

@@ -26,10 +26,12 @@ one array read in place.
 """
 
 import math
+from pathlib import Path
 
 import numba
 import numpy as np
 
+from pinbore.core.compiled import follow_compiled_in
 from pinbore.core.errors import InputError
 from pinbore.reduced.mechanism import bodies, layout
 from pinbore.reduced.mechanism.bodies import dot1
@@ -440,10 +442,18 @@ def vector_state(states, b, s, a_body):
     if b < 0:
         return a_body, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)
     w = row3(states, b, BODY_OMEGA)
-    if flexible(states, b):   # turned with the interface's frame by its small turn R_k eta
+    if flexible(states, b):
+        # turned with the interface's frame by its small turn R_k eta: a = A (a0 + theta x a0)
+        # turns at W = w + A theta', and W' = w' + A theta'' + w x A theta' (A theta' is
+        # given in the turning body): the velocity terms of a'' = W' x a + W x (W x a) are
+        # (w x A theta') x a + W x (W x a)
         f = face_of(states, b, s)
         a_body = add(a_body, cross(row3(states, b, f + F_TURN), a_body))
-        w = add(w, turned(states, b, row3(states, b, f + F_TURN_RATE)))
+        a = turned(states, b, a_body)
+        turn = turned(states, b, row3(states, b, f + F_TURN_RATE))
+        big = add(w, turn)
+        wa = cross(big, a)
+        return a, wa, add(cross(big, wa), cross(cross(w, turn), a))
     a = turned(states, b, a_body)
     wa = cross(w, a)
     return a, wa, cross(w, wa)
@@ -1207,3 +1217,9 @@ def flow_consistent(model, y, args) -> np.ndarray:
         if not engine.project_onto_constraints(0.0, y, args, work, 1e-14, 1e-14):
             break
     return y
+
+
+# numba's cache follows this file only: the compiled code here also calls into (or reads the
+# constants of) these files, and is compiled afresh when they change (core.compiled)
+follow_compiled_in(globals(), [str(Path(__file__).parent / f"{name}.py")
+                                for name in ("bodies", "layout", "vectors", "linalg", "planar")])
