@@ -72,6 +72,54 @@ def test_each_bifurcation_is_found_where_its_normal_form_has_it(kind):
     assert found[0][1] == pytest.approx(0.0, abs=1e-5)
 
 
+def test_two_doublings_within_one_step_are_both_found():
+    """Two flips at p = 0 and p = 0.005, a tenth of the first step apart: the products of
+    the multipliers' test functions do not change sign over a step holding both, so the
+    step is retried shorter until each lies in its own: each found, within a hundredth of
+    their distance (5e-5) of its value."""
+    family = NormalForm(lambda x, p: np.array([-(1 + p) * x[0] + x[0] ** 3,
+                                               -(1 + p - 0.005) * x[1] + x[1] ** 3]))
+    line = method.Continuation(family, -0.3, 0.3)
+    branch = line.run(line.first(np.zeros(2), -0.3, 1.0), 0.05, 200)
+    found = [(s.kind, s.p) for s in branch.specials]
+    assert [k for k, _ in found] == ["period_doubling"] * 2, found
+    assert [p for _, p in found] == pytest.approx([0.0, 0.005], abs=5e-5)
+
+
+def test_a_step_that_lands_on_a_bifurcation_reports_it():
+    """A flip -(1 + p) x whose branch has a point exactly at p = 0, where the test function
+    is 0: the step that reached it holds the doubling."""
+    family = NormalForm(lambda x, p: np.array([-(1 + p) * x[0], 0.5 * x[1]]))
+    line = method.Continuation(family, -0.5, 0.5)
+    branch = line.run(line.first(np.zeros(2), -0.5, 1.0), 0.5, 10)
+    assert any(pt.p == 0.0 for pt in branch.points)
+    assert [(s.kind, s.p) for s in branch.specials] == [("period_doubling", 0.0)]
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_the_doubled_branch_of_a_sub_and_a_supercritical_flip(sign):
+    """-(1 + p) x + s x^3 flips at p = 0; its 2-cycle is x^2 = s p: on the side where the
+    fixed point is unstable (p > 0, supercritical, s = +1: the 2-cycle stable) or stable
+    (p < 0, subcritical, s = -1: the 2-cycle unstable). The switch finds it either way."""
+    family = NormalForm(lambda x, p: np.array([-(1 + p) * x[0] + sign * x[0] ** 3, 0.5 * x[1]]))
+    line = method.Continuation(family, -0.3, 0.3)
+    branch = line.run(line.first(np.zeros(2), -0.3, 1.0), 0.05, 200)
+    (flip,) = [s for s in branch.specials if s.kind == "period_doubling"]
+    doubled = line.doubled(flip, 0.05, 20)
+    assert doubled is not None and doubled.multiple == 2
+    for pt in doubled.points:
+        assert sign * pt.p > 0 and pt.x[0] ** 2 == pytest.approx(sign * pt.p, rel=1e-6)
+        assert pt.stable == (sign > 0)
+
+
+def test_a_map_that_is_not_finite_is_a_failed_orbit():
+    """An integration that returns NaN without raising is a FloatingPointError, which every
+    caller takes as a failed orbit (a linear algebra error would escape them)."""
+    family = NormalForm(lambda x, p: x * math.nan)
+    with pytest.raises(FloatingPointError, match="not finite"):
+        method.Continuation(family, 0.0, 1.0).first(np.ones(2), 0.5, 1.0)
+
+
 # ---- the hardening Duffing oscillator x'' + 2 zeta x' + x + beta x^3 = F cos(w t)
 ZETA, BETA, FORCE = 0.05, 0.1, 0.5
 

@@ -46,7 +46,13 @@ extended Jacobian is singular), and the branch stops with the reason, its points
 
 Stability: the eigenvalues of P_x are the Floquet multipliers; the orbit is stable when all
 lie inside the unit circle. Bifurcations between consecutive points, each by a test
-function that changes sign there:
+function that changes sign there (or is exactly zero at the later point; a value that is
+not finite is no change). A product of factors changes sign for an odd number of
+crossings only: a step over which two real multipliers passed -1 (or +1), or two complex
+pairs the circle, is retried shorter until they part (`paired`; on two flips a tenth of
+the first step apart, each is then found), unless the orbit grazes in it (the multipliers
+jump there anyway). A map that is not finite (an integration that failed without saying
+so) is a failed orbit, as one that stops is:
 - fold (limit point, the jump of a frequency response): the tangent's q-component t_q;
 - branch point: a real multiplier passes +1 where the branch does not fold (a pitchfork,
   e.g. a symmetric orbit turning asymmetric): det(P_x - I) = prod (mu_i - 1);
@@ -150,8 +156,16 @@ class Continuation:
     def p(self, q: float) -> float:
         return self.low + q * self.width
 
+    def mapped(self, x, p, multiple: int | None = None):
+        """The family's map, FloatingPointError when it is not finite (an integration that
+        failed without saying so: every caller treats that error as a failed orbit)."""
+        y = self.family.map(x, p, self.multiple if multiple is None else multiple)
+        if not np.all(np.isfinite(y)):
+            raise FloatingPointError(f"the map at {p:.6g} is not finite")
+        return y
+
     def residual(self, x, p):
-        return self.family.map(x, p, self.multiple) - x
+        return self.mapped(x, p) - x
 
     def directions(self, x, p):
         """The directions the monodromy is differenced along and what turns their quotients
@@ -190,12 +204,11 @@ class Continuation:
                 jac[:, i] = (self.residual(x + dx, p) - self.residual(x - dx, p)) / (2 * step)
         else:
             quotients = np.column_stack([
-                (self.family.map(x + step * d, p, self.multiple)
-                 - self.family.map(x - step * d, p, self.multiple)) / (2 * step) for d in along.T])
+                (self.mapped(x + step * d, p) - self.mapped(x - step * d, p)) / (2 * step)
+                for d in along.T])
             jac[:, :n] = quotients @ onto - np.eye(n)
         q = self.q(p)
-        jac[:, n] = (self.family.map(x, self.p(q + FD_STEP), self.multiple)
-                     - self.family.map(x, self.p(q - FD_STEP), self.multiple)) / (2 * FD_STEP)
+        jac[:, n] = (self.mapped(x, self.p(q + FD_STEP)) - self.mapped(x, self.p(q - FD_STEP))) / (2 * FD_STEP)
         return jac
 
     def spread(self, point: Point) -> float | None:
@@ -233,7 +246,7 @@ class Continuation:
         converge in `iterations`, or when a residual exceeds `growth` times the first (a
         guess Newton leaves)."""
         history = self.residuals = []   # |G| at each iteration, kept for the caller
-        for _ in range(iterations):
+        for k in range(iterations + 1):   # the last update is tested too
             g = self.residual(x, p)
             history.append(float(np.linalg.norm(g)))
             if history[-1] > growth * history[0]:
@@ -243,6 +256,8 @@ class Continuation:
                 if start.tangent[-1] * direction < 0:
                     start.tangent = -start.tangent
                 return start
+            if k == iterations:
+                break
             jac = self.jacobian(x, p)
             x = x + np.linalg.lstsq(jac[:, :-1], -g, rcond=None)[0]
         raise FloatingPointError(f"the first periodic orbit at {p:.6g} did not converge "
@@ -321,6 +336,10 @@ class Continuation:
             except FloatingPointError as err:
                 branch.complete, branch.reason = False, f"at {p:.6g}: {err}"
                 break
+            if paired(last, new) and not grazes(last, new) and step * SHRINK >= ds_min:
+                ds = step * SHRINK   # two multipliers crossed together: a shorter step parts them
+                self.say(f"at {last.p:.6g}, two multipliers crossed in one step: retried shorter")
+                continue
             branch.specials += self.specials(last, new, step, len(branch.points))
             branch.points.append(new)
             bar.update()
@@ -352,13 +371,14 @@ class Continuation:
     def doubled(self, special: Special, ds: float, max_points: int, progress: bool = False) -> Branch | None:
         """The period-2m branch born at a period doubling, by switching onto it: from the
         orbit x* there along the eigenvector v of the multiplier nearest -1, the doubled
-        orbit at p* + h (h a hundredth of the range, towards where a multiplier lies beyond
-        -1: the supercritical side) is found by Newton on P^2m from x* +- e v (amplitudes e
-        from 1e-3 to 1 of the orbit's size: the doubled orbit grows as sqrt(h)), kept when
-        P^m moves it (a genuine period 2m), and continued away from p*. A guess gets the
-        corrector's iterations and is left when its residual grows SWITCH_GROWTH-fold (so a
-        spurious doubling costs at most 8 x 10 monodromies). None when no doubled orbit is
-        found."""
+        orbit at p* + h (h a hundredth of the range, first towards where one more multiplier
+        lies beyond -1: the supercritical side; then the other, where a subcritical doubling
+        has its unstable doubled orbit) is found by Newton on P^2m from x* +- e v
+        (amplitudes e from 1e-3 to 1 of the orbit's size: the doubled orbit grows as
+        sqrt(h)), kept when P^m moves it (a genuine period 2m), and continued away from p*.
+        A guess gets the corrector's iterations and is left when its residual grows
+        SWITCH_GROWTH-fold (so a spurious doubling costs at most 16 x 10 monodromies). None
+        when no doubled orbit is found."""
         point = special.point
         if point.jacobian is None:
             return None
@@ -369,17 +389,21 @@ class Continuation:
         side = special.side or 1.0
         twice = Continuation(self.family, self.low, self.high, 2 * self.multiple)
         size = 1.0 + float(np.linalg.norm(point.x))
-        p = point.p + side * 0.01 * self.width
-        guesses = [(a, sign) for a in (1e-3, 1e-2, 1e-1, 1.0) for sign in (1.0, -1.0)]
-        for amplitude, sign in tqdm(guesses, desc=f"switching at {point.p:.6g}", unit="guess",
-                                    disable=not progress, leave=False):
+        guesses = [(a, sign, way) for way in (side, -side) for a in (1e-3, 1e-2, 1e-1, 1.0)
+                   for sign in (1.0, -1.0)]
+        for amplitude, sign, way in tqdm(guesses, desc=f"switching at {point.p:.6g}", unit="guess",
+                                         disable=not progress, leave=False):
+            p = point.p + way * 0.01 * self.width
             try:   # a guess whose residual grows tenfold, or that does not converge as a
                 #    corrector does, is left for the next
-                start = twice.first(point.x + sign * amplitude * size * v, p, side,
+                start = twice.first(point.x + sign * amplitude * size * v, p, way,
                                     CORRECTOR_ITERATIONS, SWITCH_GROWTH)
             except FloatingPointError:
                 continue
-            once = self.family.map(start.x, p, self.multiple) - start.x
+            try:
+                once = self.mapped(start.x, p) - start.x
+            except FloatingPointError:
+                continue
             if np.linalg.norm(once) > 1e3 * NEWTON_TOL * size and \
                     np.linalg.norm(once) > 10 * getattr(self.family, "tolerance", 0.0) * size:
                 return twice.run(start, ds, max_points, progress)
@@ -393,17 +417,19 @@ class Continuation:
         continuous there) and the branch may turn (a nonsmooth fold): these changes belong
         to the grazing, which reports them."""
         found = []
-        folded = TESTS["fold"](a) * TESTS["fold"](b) < 0
+        folded = changes(TESTS["fold"](a), TESTS["fold"](b))
         torus = _outside_complex(a) != _outside_complex(b)
-        grazing = TESTS["grazing"](a) is not None and TESTS["grazing"](a) * TESTS["grazing"](b) < 0
+        grazing = grazes(a, b)
         for kind, test in TESTS.items():
-            fa, fb = test(a), test(b)
-            if fa is None or fb is None or fa * fb >= 0 or (kind == "branch_point" and folded) \
+            if not changes(test(a), test(b)) or (kind == "branch_point" and folded) \
                     or (kind == "neimark_sacker" and not torus) or (grazing and kind != "grazing"):
                 continue
             at = self.locate(kind, test, a, b, ds)
-            beyond = b if any(_real(m) and m.real < -1 for m in b.multipliers) else a
-            found.append(Special(kind, at.p, at, index, math.copysign(1.0, beyond.p - at.p)))
+            # the side where one more real multiplier lies beyond -1
+            beyond = b if crossings(b)[0] > crossings(a)[0] else a
+            side = math.copysign(1.0, beyond.p - at.p) if beyond.p != at.p else \
+                math.copysign(1.0, beyond.p - (a.p if beyond is b else b.p))
+            found.append(Special(kind, at.p, at, index, side))
         found.sort(key=lambda s: abs(s.p - a.p))
         return found
 
@@ -508,6 +534,37 @@ def _product(factors) -> float:
     """The real part of a product of factors that pair into conjugates (real, up to
     rounding)."""
     return float(np.real(np.prod(factors)))
+
+
+def changes(fa, fb) -> bool:
+    """A test function changes sign between two points: both values finite and of opposite
+    signs, or the second exactly zero (a zero at a point belongs to the step that reached
+    it, not to the next one)."""
+    if fa is None or fb is None or not (math.isfinite(fa) and math.isfinite(fb)):
+        return False
+    return fa * fb < 0 or (fb == 0 and fa != 0)
+
+
+def grazes(a: Point, b: Point) -> bool:
+    """The orbit's smallest gap to contact changes sign between a and b."""
+    return changes(TESTS["grazing"](a), TESTS["grazing"](b))
+
+
+def crossings(pt: Point) -> tuple[int, int, int]:
+    """The real multipliers beyond -1 and beyond +1, and the complex pairs outside the unit
+    circle: what a bifurcation changes by one."""
+    real = [m.real for m in pt.multipliers if _real(m)]
+    return sum(1 for m in real if m < -1), sum(1 for m in real if m > 1), _outside_complex(pt) // 2
+
+
+def paired(a: Point, b: Point) -> bool:
+    """Two multipliers crossed -1 or +1, or two complex pairs the unit circle, between a and
+    b: their test functions' product does not change sign, so no single step may hold
+    them. (A complex pair that meets on the real axis outside the circle moves between the
+    counts but leaves as many multipliers outside: that is no crossing.)"""
+    (n_a, p_a, c_a), (n_b, p_b, c_b) = crossings(a), crossings(b)
+    outside = (n_b + p_b + 2 * c_b) - (n_a + p_a + 2 * c_a)
+    return outside != 0 and max(abs(n_b - n_a), abs(p_b - p_a), abs(c_b - c_a)) > 1
 
 
 def _real(m) -> bool:

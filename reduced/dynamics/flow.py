@@ -315,7 +315,7 @@ def shooting(flow, state, multiple: int = 1, tol: float = 1e-9, iterations: int 
         orbit = line.first(family.origin, 0.5, 1.0, iterations)
     except FloatingPointError as err:
         residuals = ", ".join(f"{r:.2e}" for r in line.residuals)
-        if len(line.residuals) < iterations:   # an integration stopped
+        if len(line.residuals) <= iterations:   # an integration stopped (not every residual taken)
             raise FloatingPointError(f"shooting stopped after the residuals {residuals}: {err}") from None
         raise FloatingPointError(f"shooting did not converge in {iterations} Newton iterations "
                                  f"(residuals {residuals})") from None

@@ -569,9 +569,11 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
     if warning:
         warnings.append(warning)
     branches = []
+    template = family.template   # the first orbit's: each way starts from it, not from where the other ended
     for direction in (-1.0, 1.0):
         if (direction < 0 and start_value <= low) or (direction > 0 and start_value >= high):
             continue
+        family.template = template
         way = dataclasses.replace(first, tangent=direction * first.tangent)
         branches.append(line.run(way, ds, max(options.points // 2, 2), progress=True))
     specials = [s for b in branches for s in b.specials]
