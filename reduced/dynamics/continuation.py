@@ -156,10 +156,10 @@ class Continuation:
     def p(self, q: float) -> float:
         return self.low + q * self.width
 
-    def mapped(self, x, p, multiple: int | None = None):
+    def mapped(self, x, p):
         """The family's map, FloatingPointError when it is not finite (an integration that
         failed without saying so: every caller treats that error as a failed orbit)."""
-        y = self.family.map(x, p, self.multiple if multiple is None else multiple)
+        y = self.family.map(x, p, self.multiple)
         if not np.all(np.isfinite(y)):
             raise FloatingPointError(f"the map at {p:.6g} is not finite")
         return y
