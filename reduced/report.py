@@ -202,8 +202,9 @@ def check_bifurcation_table(path: Path, summary: dict) -> None:
 
 
 def dynamics_section(build_dir: Path, bench_dir: Path) -> str:
-    """Nonlinear dynamics: Poincare map, bifurcation diagram, design map (build/dynamics;
-    no benchmark of its own: `bench_dir`, the sections' common signature, is unused)."""
+    """Nonlinear dynamics: Poincare map, bifurcation diagram, design map, continued
+    responses (build/dynamics), and the continued responses too long for `make`, which
+    `make bench` writes (bench_dir/continuation_<scene>/)."""
     folder = build_dir / "dynamics"
     parts = ["<h2>Nonlinear dynamics of the slider-crank with clearance</h2>",
              "<p>Sampled once per crank revolution after a transient; points classified as "
@@ -244,6 +245,9 @@ def dynamics_section(build_dir: Path, bench_dir: Path) -> str:
             parts.append(figure(png_data(png), f"{caption} ({facts}; {s['wall_time_s']:.1f} s)."))
     for path in sorted(folder.glob("continuation*/summary.json")):
         parts.append(continuation_part(path))
+    for path in sorted(bench_dir.glob("continuation_*/summary.json")):
+        parts.append(continuation_part(path, "computed by <code>make bench</code> "
+                                               "(bench/continuation.py), not by <code>make</code>"))
     return "".join(parts)
 
 
@@ -251,16 +255,18 @@ CONTINUATION_KEYS = ("scene_file", "parameter", "start", "points", "converged", 
                      "start_floquet_multipliers", "start_stable", "seconds_per_point", "wall_time_s")
 
 
-def continuation_part(path: Path) -> str:
+def continuation_part(path: Path, source: str = "") -> str:
     """The continued response of a scene (build/dynamics/continuation*/: make dynamics runs
-    the impact oscillator's): its figure, the periodic orbit at the scene's own value with its
-    Floquet multipliers, and the bifurcations."""
+    the impact oscillator's; `source` says where another came from): its figure, the
+    periodic orbit at the scene's own value with its Floquet multipliers, and the
+    bifurcations."""
     s = load_json(path, "dynamics")
     for key in CONTINUATION_KEYS:
         if key not in s:
             raise InputError(f"{path}: {key}: required key is missing (run pinbore dynamics again)")
     moduli = sorted((abs(complex(*m)) for m in s["start_floquet_multipliers"]), reverse=True)
     parts = [f"<h3>Response by continuation: {html.escape(Path(s['scene_file']).stem)}</h3>",
+             f"<p class='note'>Results {source}.</p>" if source else "",
              f"<p>Periodic motions continued in {html.escape(s['parameter'])} (pseudo-arclength on "
              f"the period map, {s['points']} orbits, {s['seconds_per_point']:.2f} s an orbit); "
              f"stability from the Floquet multipliers. The orbit at the scene's own value "

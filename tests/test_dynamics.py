@@ -170,3 +170,24 @@ def test_the_report_checks_the_bifurcation_table_against_its_summary(tmp_path):
     plots.write_table(path, ["value", "kind"], rows)
     with pytest.raises(InputError, match="header"):
         report.check_bifurcation_table(path, {"counts": {}})
+
+
+def test_the_report_shows_a_continued_response_of_the_benchmarks(tmp_path):
+    """A continued response that `make bench` keeps (bench/continuation_<scene>/) shows in
+    the dynamics section beside make's own, said to come from there."""
+    import json
+
+    from pinbore.reduced import report
+
+    summary = {"scene_file": "scenes/reduced/deployed_panel_shaken.toml", "parameter": "frequency",
+               "start": 3.0, "points": 2, "converged": True, "reason": "",
+               "bifurcations": [{"kind": "fold", "value": 3.18, "amplitude_m": 1e-4,
+                                 "floquet_multipliers": [[1.0, 0.0], [0.5, 0.0]]}],
+               "start_floquet_multipliers": [[0.5, 0.0], [0.2, 0.1]], "start_stable": True,
+               "seconds_per_point": 1.5, "wall_time_s": 3.0}
+    (tmp_path / "build" / "dynamics").mkdir(parents=True)
+    (tmp_path / "bench" / "continuation_deployed_panel_shaken").mkdir(parents=True)
+    (tmp_path / "bench" / "continuation_deployed_panel_shaken" / "summary.json").write_text(json.dumps(summary))
+    page = report.dynamics_section(tmp_path / "build", tmp_path / "bench")
+    assert "Response by continuation: deployed_panel_shaken" in page
+    assert "computed by <code>make bench</code>" in page and "fold" in page
