@@ -38,6 +38,13 @@ def follow_compiled_in(namespace: dict, files) -> None:
         pass   # no writable cache: numba compiles afresh anyway
 
 
+def beside(file: str, *names: str) -> list[str]:
+    """The files of the modules `names` in the folder of `file` (a module's own __file__):
+    what its compiled code calls there, for follow_compiled_in."""
+    folder = Path(file).parent
+    return [str(folder / f"{name}.py") for name in names]
+
+
 def compile_on_use(namespace: dict, options: dict[str, dict]):
     """The plain functions of a module (its globals `namespace`) named by `options` (name ->
     numba.njit's options), compiled on first use: they leave the module's globals, and the

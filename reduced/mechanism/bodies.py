@@ -151,9 +151,8 @@ flex, offsets): the bodies' kinetic energy (J).""")
 
 # ---- what the joints build of these, for every body kind
 import numba  # noqa: E402 (the declarations above are plain Python)
-from pathlib import Path  # noqa: E402
 
-from pinbore.core.compiled import follow_compiled_in  # noqa: E402
+from pinbore.core.compiled import beside, follow_compiled_in  # noqa: E402
 from pinbore.reduced.mechanism.vectors import cross, dot  # noqa: E402
 
 
@@ -169,5 +168,4 @@ def dot1(bodies, bi, s_i, a_i, bj, s_j, b_j):
 
 # numba's cache follows this file only: the compiled code here also calls into (or reads the
 # constants of) these files, and is compiled afresh when they change (core.compiled)
-follow_compiled_in(globals(), [str(Path(__file__).parent / f"{name}.py")
-                                for name in ("layout", "vectors", "linalg", "planar", "spatial")])
+follow_compiled_in(globals(), beside(__file__, "layout", "vectors", "linalg", "planar", "spatial"))

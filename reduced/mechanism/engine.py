@@ -86,7 +86,7 @@ import numpy as np
 from numba.core.errors import NumbaIRAssumptionWarning
 from numba.extending import overload
 
-from pinbore.core.compiled import follow_compiled_in
+from pinbore.core.compiled import beside, follow_compiled_in
 from pinbore.laws import dissipative, friction, sliced, tables
 from pinbore.reduced.mechanism import bodies, integrator, layout, linalg, vectors
 from pinbore.reduced.mechanism.bodies import (
@@ -1573,8 +1573,6 @@ integrate = integrator.integrate
 # ---- the compiled code follows what it compiles in: the laws, the layout, the vectors, the
 # body kinds' implementations of reduced.mechanism.bodies (numba's cache checks only the file
 # a function is defined in; pinbore.core.compiled drops this module's cache when these change)
-HERE = __import__("pathlib").Path(__file__).parent
 COMPILED_IN = (friction.__file__, dissipative.__file__, tables.__file__, sliced.__file__,
-               *(str(HERE / f"{name}.py") for name in (
-                   "layout", "vectors", "bodies", "linalg", "integrator", "planar", "spatial")))
+               *beside(__file__, "layout", "vectors", "bodies", "linalg", "integrator", "planar", "spatial"))
 follow_compiled_in(globals(), COMPILED_IN)

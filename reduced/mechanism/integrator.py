@@ -34,12 +34,11 @@ every step.
 """
 
 import math
-from pathlib import Path
 
 import numba
 import numpy as np
 
-from pinbore.core.compiled import follow_compiled_in
+from pinbore.core.compiled import beside, follow_compiled_in
 from pinbore.laws import dissipative, friction, sliced, tables
 from pinbore.reduced.mechanism import layout
 from pinbore.reduced.mechanism.layout import (  # noqa: F401 (the codes are the integrator's)
@@ -313,8 +312,6 @@ def integrate(y0, t_end, args, method, rtol, atol, max_step, onset_tol, speed_fl
 # numba's cache checks only this file: the integrator compiles in the right-hand side and the
 # event code of the mechanism and what they call, so an edit there alone would leave its
 # cached code stale (pinbore.core.compiled drops the cache when those files change).
-HERE = Path(__file__).parent
 COMPILED_IN = (friction.__file__, dissipative.__file__, tables.__file__, sliced.__file__,
-               *(str(HERE / f"{name}.py") for name in (
-                   "layout", "vectors", "bodies", "linalg", "engine", "planar", "spatial")))
+               *beside(__file__, "layout", "vectors", "bodies", "linalg", "engine", "planar", "spatial"))
 follow_compiled_in(globals(), COMPILED_IN)

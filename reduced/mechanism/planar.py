@@ -10,12 +10,11 @@ its marker layout.PLANAR and for vectors of two components.
 """
 
 import math
-from pathlib import Path
 
 import numba
 import numpy as np
 
-from pinbore.core.compiled import follow_compiled_in
+from pinbore.core.compiled import beside, follow_compiled_in
 from pinbore.core.errors import InputError
 from pinbore.reduced.mechanism import bodies, layout
 from pinbore.reduced.mechanism.layout import ANGLE, DOT2, POINT
@@ -794,5 +793,4 @@ def flow_consistent(model, y, args) -> np.ndarray:
 
 # numba's cache follows this file only: the compiled code here also calls into (or reads the
 # constants of) these files, and is compiled afresh when they change (core.compiled)
-follow_compiled_in(globals(), [str(Path(__file__).parent / f"{name}.py")
-                                for name in ("bodies", "layout", "vectors", "linalg", "spatial")])
+follow_compiled_in(globals(), beside(__file__, "bodies", "layout", "vectors", "linalg", "spatial"))
