@@ -169,9 +169,11 @@ def panel_row(folder: Path) -> dict:
     import json
 
     s = json.loads((folder / "summary.json").read_text())
+    low, high = (float(v) for v in PANEL_OPTIONS[PANEL_OPTIONS.index("--range") + 1:][:2])
+    step = float(PANEL_OPTIONS[PANEL_OPTIONS.index("--step") + 1]) / (high - low)   # of the range
     values = [float(v) for v in csv_column(folder / "continuation.csv", "value")]
     return {"scene": "deployed_panel_shaken, frequency (the command, with sweeps)",
-            "tolerance_rtol": 100, "first_step": 0.05, "largest_step": 2.5, "points": s["points"],
+            "tolerance_rtol": 100, "first_step": step, "largest_step": 50 * step, "points": s["points"],
             "wall_time_s": f"{s['wall_time_s']:.1f}", "seconds_per_point": f"{s['seconds_per_point']:.3f}",
             "bifurcations": " ".join(f"{b['kind']}@{b['value']:.5g}" for b in s["bifurcations"]),
             "reached": f"{max(values):.5g}"}

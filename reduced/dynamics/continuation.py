@@ -425,11 +425,9 @@ class Continuation:
                     or (kind == "neimark_sacker" and not torus) or (grazing and kind != "grazing"):
                 continue
             at = self.locate(kind, test, a, b, ds)
-            # the side where one more real multiplier lies beyond -1
-            beyond = b if crossings(b)[0] > crossings(a)[0] else a
-            side = math.copysign(1.0, beyond.p - at.p) if beyond.p != at.p else \
-                math.copysign(1.0, beyond.p - (a.p if beyond is b else b.p))
-            found.append(Special(kind, at.p, at, index, side))
+            # the side where one more real multiplier lies beyond -1 (at lies between a and b)
+            beyond, other = (b, a) if crossings(b)[0] > crossings(a)[0] else (a, b)
+            found.append(Special(kind, at.p, at, index, math.copysign(1.0, beyond.p - other.p)))
         found.sort(key=lambda s: abs(s.p - a.p))
         return found
 
