@@ -10,10 +10,13 @@
    bifurcations. Also times the branch with the Newton tolerance at 10 rtol instead of 100
    rtol (the orbits' accuracy against the corrector's iterations: at 10 rtol the corrector
    meets the noise of the impacts' location).
-2. The Flores slider-crank with Coulomb friction (mu 0.1) over its crank's speed, from
-   100 rpm upwards (rtol 4e-8, SLIDER_POINTS orbits), counted the same way; and one monodromy
-   at its first orbit differenced along the tangent space of its joints and drive (2 r + 2
-   maps, r = 4) against one along every coordinate (2 n + 2, n = 18), timed.
+2. The Flores slider-crank with Coulomb friction (mu 0.1, rtol 4e-8) over its crank's speed,
+   both ways from 160 rpm across 155-175 rpm, where its period-1 motion loses stability,
+   counted the same way (the difference step the first orbit resolves its multipliers at,
+   and that spread); the period doubling against the brute-force attractors 1 rpm either
+   side of it, and its doubled orbit against the brute-force period-2 attractor; and one
+   monodromy at its first orbit differenced along the tangent space of its joints and drive
+   (2 r + 2 maps, r = 4) against one along every coordinate (2 n + 2, n = 18), timed.
 3. The deployed panel shaken through its hinge (scenes/reduced/deployed_panel_shaken.toml)
    over 3-4 Hz around its first mode, by the command a user types (`pinbore dynamics
    --analysis continuation`, with the doubled branches it switches onto and the direct up- and
@@ -36,13 +39,15 @@ ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "reduced" / "impact_oscillator.toml"
 LOW, HIGH, POINTS, STEP = 10.0, 30.0, 200, 0.01
 SLIDER = ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml"
-SLIDER_POINTS, SLIDER_HIGH = 30, 400.0
+SLIDER_START, SLIDER_RANGE, SLIDER_STEP, SLIDER_POINTS = 160.0, (155.0, 175.0), 0.05, 40
+FLIP_TRANSIENT = 300
 PANEL = ROOT / "scenes" / "reduced" / "deployed_panel_shaken.toml"
 PANEL_OPTIONS = ["--parameter", "frequency", "--range", "3", "4", "--points", "480", "--step", "0.05",
                  "--sweeps", "41", "--transient", "30", "--periods", "5"]
 COLUMNS = ["scene", "tolerance_rtol", "first_step", "largest_step", "points", "wall_time_s", "seconds_per_point", "maps", "maps_per_point",
            "seconds_per_map", "maps_in_monodromies", "maps_in_corrector", "maps_in_locating",
-           "bifurcations", "reached", "monodromy_s", "monodromy_every_coordinate_s"]
+           "bifurcations", "reached", "monodromy_s", "monodromy_every_coordinate_s", "difference_step",
+           "start_spread", "brute_force"]
 
 
 class Counted:
@@ -99,7 +104,7 @@ def branch(tolerance_factor: float, step: float, largest: float | None = None):
     line, counted = counting(family, LOW, HIGH)
     x = family.settle(start, 30)[1]
     began = time.perf_counter()
-    first = line.first(x, start, 1.0)
+    first, _ = line.resolve(line.first(x, start, 1.0))   # as the command does: FD_STEP here
     branches = [line.run(dataclasses.replace(first, tangent=-first.tangent), step, POINTS // 2, ds_max=largest),
                 line.run(first, step, POINTS // 2, ds_max=largest)]
     wall = time.perf_counter() - began
@@ -121,24 +126,38 @@ def row(scene: str, factor: float, step: float, largest: float, branches, calls:
 
 
 def slider_crank() -> dict:
-    """The slider-crank with friction continued from 100 rpm upwards, and its first orbit's
-    monodromy timed both ways."""
-    from pinbore.reduced.dynamics import continuation, studies
+    """The slider-crank with friction continued both ways from SLIDER_START across
+    SLIDER_RANGE (the command's procedure: the difference step chosen at the first orbit,
+    each way from the first orbit's template), the first period doubling checked against
+    the brute-force attractors 1 rpm either side of it (FLIP_TRANSIENT periods settled, then
+    20 sampled), and the first orbit's monodromy timed along the joints' tangent space and
+    along every coordinate."""
+    from pinbore.reduced.dynamics import continuation, flow, studies
 
     data = tomllib.loads(SLIDER.read_text())
-    data["drive"]["speed_rpm"] = 100.0
+    data["drive"]["speed_rpm"] = SLIDER_START
     data["clearance_joints"][0]["friction"] = {"law": "coulomb_ambrosio", "mu": 0.1}
     data["integrator"]["rtol"] = 4e-8
-    family = studies.MechanismFamily(studies.SceneFile(SLIDER, data), "speed", 100.0)
-    line, counted = counting(family, 100.0, SLIDER_HIGH)
-    state, x, _ = family.settle(100.0, 10)
-    family.template = state
+    family = studies.MechanismFamily(studies.SceneFile(SLIDER, data), "speed", SLIDER_START)
+    low, high = SLIDER_RANGE
+    line, counted = counting(family, low, high)
+    state, x, _ = family.settle(SLIDER_START, 10)
+    family.template = template = state
     began = time.perf_counter()
-    first = line.first(x, 100.0, 1.0)
-    up = line.run(first, 0.01, SLIDER_POINTS)
+    first, spread = line.resolve(line.first(x, SLIDER_START, 1.0))
+    branches = []
+    for direction in (-1.0, 1.0):
+        family.template = template
+        branches.append(line.run(dataclasses.replace(first, tangent=direction * first.tangent),
+                                 SLIDER_STEP, SLIDER_POINTS // 2))
     wall = time.perf_counter() - began
-    result = row("slider_crank_flores2004 mu 0.1, speed", 100, 0.01, 0.5, [up], counted.calls, wall)
-    plain = continuation.Continuation(family, 100.0, SLIDER_HIGH)
+    result = row("slider_crank_flores2004 mu 0.1, speed", 100, SLIDER_STEP, 50 * SLIDER_STEP, branches,
+                 counted.calls, wall)
+    result |= {"difference_step": f"{line.step:g}", "start_spread": f"{spread:.2g}"}
+    flips = sorted((s for b in branches for s in b.specials if s.kind == "period_doubling"), key=lambda s: s.p)
+    if flips:
+        result["brute_force"] = flip_checked(family, line, flips[0])
+    plain = continuation.Continuation(family, low, high)
     began = time.perf_counter()
     plain.jacobian(first.x, first.p)
     result["monodromy_s"] = f"{time.perf_counter() - began:.2f}"
@@ -147,6 +166,35 @@ def slider_crank() -> dict:
     plain.jacobian(first.x, first.p)
     result["monodromy_every_coordinate_s"] = f"{time.perf_counter() - began:.2f}"
     return result
+
+
+def flip_checked(family, line, flip) -> str:
+    """The period doubling at `flip` against the brute-force attractors 1 rpm either side of
+    it (FLIP_TRANSIENT periods from the scene's start, then 20 sampled): their periods, and
+    the distance (um) of the brute-force period-2 attractor's two points from those of the
+    doubled orbit (switched onto at the flip, continued, and converged by Newton at that
+    speed), the journal's centre in its bore at the section."""
+    import numpy as np
+
+    from pinbore.reduced.dynamics import continuation, flow
+
+    doubled = line.doubled(flip, SLIDER_STEP, 10)
+    said = []
+    for speed in (round(flip.p) - 1.0, round(flip.p) + 1.0):
+        here = family.flow(speed)
+        samples, states = flow.poincare(here, here.start(), FLIP_TRANSIENT, 20)
+        period = flow.period_of(samples)
+        said.append(f"{speed:g} rpm: period {period}")
+        if speed > flip.p and period == 2 and doubled is not None:
+            twice = continuation.Continuation(family, line.low, line.high, 2)
+            twice.step = line.step
+            near = min(doubled.points, key=lambda p: abs(p.p - speed))
+            orbit = family.state(here, twice.first(near.x, speed, 1.0).x)
+            ours = [here.observed(s)[:2] for s in (orbit, here.advance(orbit))]
+            theirs = [here.observed(s)[:2] for s in states[-2:]]
+            off = max(min(np.linalg.norm(a - b) for b in theirs) for a in ours)
+            said[-1] += f", {off * 1e6:.2g} um from the doubled orbit"
+    return "; ".join(said)
 
 
 def panel(folder: Path) -> dict:
@@ -187,7 +235,10 @@ def csv_column(path: Path, name: str) -> list[str]:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=ROOT / "bench")
-    out = parser.parse_args().out
+    parser.add_argument("--keep-panel", action="store_true",
+                        help="the shaken panel's row from its result kept in OUT (not run again: about an hour)")
+    args = parser.parse_args()
+    out = args.out
     out.mkdir(parents=True, exist_ok=True)
     rows = []
     branch(100, STEP)   # compile the engine (cached on disk) before timing
@@ -199,7 +250,8 @@ def main() -> int:
             picture(branches, out / "continuation.png")
     rows.append(slider_crank())
     print(rows[-1], file=sys.stderr)
-    rows.append(panel(out / "continuation_deployed_panel_shaken"))
+    kept = out / "continuation_deployed_panel_shaken"
+    rows.append(panel_row(kept) if args.keep_panel else panel(kept))
     print(rows[-1], file=sys.stderr)
     with open(out / "continuation.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=COLUMNS)

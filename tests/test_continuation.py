@@ -112,6 +112,28 @@ def test_the_doubled_branch_of_a_sub_and_a_supercritical_flip(sign):
         assert pt.stable == (sign > 0)
 
 
+def test_a_noisy_map_gets_the_difference_step_that_resolves_its_multipliers():
+    """A linear map with multipliers -0.6 and 0.3 plus a deterministic noise of 3e-6 that
+    varies on a scale of 1e-7 (an adaptive integration's error: its step sequence changes
+    with the state). At FD_STEP the quotients carry noise of about 3e-6 / 1e-4 = 0.03; the
+    step chosen at the first orbit is the smallest FD_STEP 2^k at which doubling it moves
+    the largest multiplier by at most SPREAD_WARNING, and there the multipliers are within
+    that of the exact ones (the noise falls as 1/h, and a linear map has no truncation)."""
+    a = np.array([[-0.6, 0.0], [0.0, 0.3]])
+
+    def noisy(x, p):
+        return a @ x + p + 3e-6 * np.sin(1e7 * x + np.array([0.3, 1.1]) * np.sum(1e7 * x))
+
+    line = method.Continuation(NormalForm(noisy), -1.0, 1.0)
+    start = line.first(np.linalg.solve(np.eye(2) - a, np.zeros(2)), 0.0, 1.0)
+    assert abs(np.max(np.abs(start.multipliers)) - 0.6) > method.SPREAD_WARNING   # noise at FD_STEP
+    point, spread = line.resolve(start)
+    assert line.step > method.FD_STEP and spread <= method.SPREAD_WARNING
+    assert np.sort(point.multipliers.real) == pytest.approx([-0.6, 0.3], abs=method.SPREAD_WARNING)
+    branch = line.run(point, 0.05, 4)   # the branch goes on at that step
+    assert all(abs(np.max(np.abs(q.multipliers)) - 0.6) <= method.SPREAD_WARNING for q in branch.points)
+
+
 def test_a_map_that_is_not_finite_is_a_failed_orbit():
     """An integration that returns NaN without raising is a FloatingPointError, which every
     caller takes as a failed orbit (a linear algebra error would escape them)."""
@@ -291,7 +313,8 @@ def test_linear_oscillator_response_and_multipliers_in_closed_form(tmp_path, sce
         decay = math.exp(-c / (2 * m) / point.p)
         assert moduli[:2] == pytest.approx([decay, decay], rel=1e-6)
         assert np.all(moduli[2:] < 1e-6)
-    assert line.spread(branch.points[0]) < 1e-8   # a linear map: its differences do not depend on the step
+    _, spread = line.resolve(branch.points[0])
+    assert spread < 1e-8 and line.step == method.FD_STEP   # a linear map: its differences do not depend on the step
 
 
 @pytest.mark.parametrize("scene", [linear_oscillator, spatial_linear_oscillator], ids=["planar", "spatial"])
@@ -534,3 +557,46 @@ def test_a_turning_drive_is_continued_over_its_speed(tmp_path, write_scene):
     flow = family.flow(100.0)
     marched = family.coordinates(flow, flow.advance(state, 40))
     assert np.linalg.norm(marched - orbit.x) <= family.tolerance * (1 + np.linalg.norm(orbit.x))
+
+
+@pytest.mark.slow
+def test_the_slider_crank_loses_stability_where_its_brute_force_attractor_doubles(tmp_path):
+    """The Flores slider-crank with Coulomb friction (mu 0.1, rtol 4e-8), continued up from
+    160 rpm: its period-1 orbit loses stability by a period doubling (a real multiplier
+    through -1), and the switched doubled branch is stable there (supercritical). Another
+    method, direct integration (300 turns settled, 20 sampled), finds a period-1 attractor
+    at 164 rpm and a period-2 attractor at 166 rpm: the doubling lies between them, and the
+    brute-force period-2 points lie on the doubled orbit converged at 166 rpm to within what
+    the corrector's tolerance allows (measured 0.024 um at 167 rpm; the doubled orbit's two
+    points lie about 40 um apart there, the bound 1 um)."""
+    from pinbore.reduced.dynamics import flow
+
+    data = tomllib.loads((ROOT / "scenes/reduced/slider_crank_flores2004.toml").read_text())
+    data["drive"]["speed_rpm"] = 160.0
+    data["clearance_joints"][0]["friction"] = {"law": "coulomb_ambrosio", "mu": 0.1}
+    data["integrator"]["rtol"] = 4e-8
+    family = family_of(data, "speed", 160.0, tmp_path)
+    state, x, _ = family.settle(160.0, 10)
+    family.template = state
+    line = method.Continuation(family, 150.0, 180.0)
+    first, spread = line.resolve(line.first(x, 160.0, 1.0))
+    assert first.stable and line.step > method.FD_STEP   # the integration's noise needs a larger step
+    branch = line.run(first, 0.05, 16)
+    flips = [s for s in branch.specials if s.kind == "period_doubling"]
+    assert flips and 164.0 < flips[0].p < 166.0
+    doubled = line.doubled(flips[0], 0.05, 10)
+    assert doubled is not None and doubled.points[0].stable
+    assert max(p.p for p in doubled.points) > 166.0   # it reaches the speed it is checked at
+
+    for speed, period in ((164.0, 1), (166.0, 2)):
+        here = family.flow(speed)
+        samples, states = flow.poincare(here, here.start(), 300, 20)
+        assert flow.period_of(samples) == period
+    twice = method.Continuation(family, 150.0, 180.0, 2)
+    twice.step = line.step
+    near = min(doubled.points, key=lambda p: abs(p.p - 166.0))
+    orbit = family.state(here, twice.first(near.x, 166.0, 1.0).x)
+    ours = [here.observed(s)[:2] for s in (orbit, here.advance(orbit))]
+    theirs = [here.observed(s)[:2] for s in states[-2:]]
+    assert np.linalg.norm(ours[0] - ours[1]) > 5e-6   # a genuine period 2
+    assert max(min(np.linalg.norm(a - b) for b in theirs) for a in ours) < 1e-6

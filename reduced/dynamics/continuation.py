@@ -23,8 +23,9 @@ meets the noise of the impacts' location; NEWTON_TOL at least). An iterate farth
 CORRECTOR_REACH steps from u_k has left the branch, and the step is retried shorter
 (measured: on the slider-crank with friction a corrector from 95 rpm ran to 69, 53 and
 11 rpm, each period at 11 rpm five times longer to integrate). P_x, the monodromy matrix,
-and P_q by central differences of the map (steps FD_STEP in x, in scaled units, and of the
-range in q; P_x of a mechanism along the tangent space of its ideal joints and drive only,
+and P_q by central differences of the map (a step h in x, in scaled units, and of the
+range in q, FD_STEP or, where the integration's noise needs it, a larger one chosen at the
+first orbit, `resolve`; P_x of a mechanism along the tangent space of its ideal joints and drive only,
 `directions`: on the Flores slider-crank 3.8 -> 1.0 s a monodromy): each perturbed state
 meets its contact onsets at its own (shifted) instants, so the difference quotient is the
 derivative of the map through the impacts, the saltation of each onset included. Its step
@@ -37,8 +38,9 @@ The tangent at a converged point is the null vector of [P_x - I, P_q], oriented 
 secant from the last point (oriented along the last tangent, the slider-crank's branch with
 friction turned back at 103 rpm and retraced its own orbits, a fold that was not one: its
 largest multiplier lies between 0.12 and 0.35 from orbit to orbit). What the monodromy
-resolves of the stability is measured at the first orbit (`spread`: the largest multiplier's
-move when the difference step doubles) and warned of above SPREAD_WARNING. Step control: ds
+resolves of the stability is measured at the first orbit (the spread: the largest
+multiplier's move when the difference step doubles), where the step is chosen as the
+smallest that resolves it (`resolve`), and warned of above SPREAD_WARNING. Step control: ds
 grows by 1.5 after a corrector that needed at most four (chord) iterations and halves after
 one that needed more than seven, up to 50 times the first step; a failed step is retried
 down to ds_min, then once at two and four times the step (over a branch point, where the
@@ -90,6 +92,7 @@ GROW, SHRINK = 1.5, 0.5
 LOCATE_ITERATIONS = 6
 LOCATE_TOL = 1e-6         # of the parameter range
 SPREAD_WARNING = 0.01     # a move of the largest multiplier (step doubled) above this is warned of
+STEP_DOUBLINGS = 8        # difference steps tried at the first orbit: FD_STEP .. 128 FD_STEP
 TANGENT_RANK = 1e-6       # a projection derivative's singular value below this (of the largest): normal
 
 
@@ -139,6 +142,7 @@ class Continuation:
     def __init__(self, family, low: float, high: float, multiple: int = 1):
         self.family, self.low, self.high, self.multiple = family, low, high, multiple
         self.width = high - low
+        self.step = FD_STEP   # the difference step of the monodromy and of P_q (`resolve`)
         self.bar = None   # the running branch's progress bar
 
     def say(self, doing: str) -> None:
@@ -191,9 +195,10 @@ class Continuation:
             return None, None
         return tangent, tangent.T @ onto
 
-    def jacobian(self, x, p, step: float = FD_STEP):
+    def jacobian(self, x, p, step: float | None = None):
         """[P_x - I, P_q] at (x, p) by central differences (P_x along `directions`, at `step`
-        in x)."""
+        in x, and P_q at `step` in q; the branch's difference step by default)."""
+        step = self.step if step is None else step
         n = x.size
         jac = np.empty((n, n + 1))
         along, onto = self.directions(x, p)
@@ -208,21 +213,54 @@ class Continuation:
                 for d in along.T])
             jac[:, :n] = quotients @ onto - np.eye(n)
         q = self.q(p)
-        jac[:, n] = (self.mapped(x, self.p(q + FD_STEP)) - self.mapped(x, self.p(q - FD_STEP))) / (2 * FD_STEP)
+        jac[:, n] = (self.mapped(x, self.p(q + step)) - self.mapped(x, self.p(q - step))) / (2 * step)
         return jac
 
-    def spread(self, point: Point) -> float | None:
-        """How far the largest multiplier's modulus moves when the difference step doubles:
-        what the monodromy resolves of an orbit's stability (None when an orbit perturbed by
-        twice the step does not integrate). Measured: the impact oscillator 0 (to 1e-5), the
-        shaken panel 1e-5, the Flores slider-crank with friction at 100 rpm 0.02 at rtol 4e-8
-        and 0.04 at 1e-8 (its map is not smooth at the step's scale: the journal slides 2e-4
-        clearances deep in its bore, the step is 1e-4)."""
+    def resolve(self, point: Point) -> tuple[Point, float | None]:
+        """The branch's difference step, chosen at its first orbit: the smallest h = FD_STEP 2^k
+        at which the largest multiplier's modulus moves by at most SPREAD_WARNING / 2 each
+        time the step doubles twice (h -> 2h -> 4h; one doubling alone passes by chance on
+        noise: on a noisy linear map, 0.003 at FD_STEP where the multiplier was 0.017 off).
+        The quotients carry the integration's error over the step as noise, which falls as
+        the step grows; their truncation grows with it. Returns the orbit with its monodromy
+        at h and the spread there, the larger of the two moves (what the monodromy resolves
+        of the orbit's stability); where no step up to FD_STEP 2^(STEP_DOUBLINGS - 1) passes,
+        the one of the smallest spread; spread None when no doubled step integrates.
+        Measured on the Flores slider-crank with friction (rtol 4e-8, the journal sliding
+        in contact): at 100 rpm the largest multiplier is -0.305, -0.286, -0.316 at steps
+        1e-4, 2e-4, 3e-4 and -0.282 .. -0.298 from 6e-4 to 1e-2; at 160 rpm -0.40 at 3e-4,
+        a scatter up to 0.11 in modulus to 2e-3, and 0.045-0.048 at 3e-3 and 6e-3, as at
+        rtol 1e-10 (0.02-0.07 from 3e-4 to 6e-3). The impact oscillator and the shaken panel
+        (moves below 1e-5) keep FD_STEP."""
+        tried = [(point, FD_STEP, float(np.max(np.abs(point.multipliers))))]
+        best = None
+        for k in range(1, STEP_DOUBLINGS):
+            step = FD_STEP * 2 ** k
+            moved = self._at_step(point, step)
+            if moved is None:
+                break
+            tried.append((moved, step, float(np.max(np.abs(moved.multipliers)))))
+            moves = [abs(tried[j][2] - tried[j - 1][2]) for j in range(max(1, k - 1), k + 1)]
+            start = tried[k - len(moves)]
+            if best is None or max(moves) < best[2] or len(moves) > best[3]:
+                best = (start[0], start[1], max(moves), len(moves))
+            if len(moves) == 2 and max(moves) <= SPREAD_WARNING / 2:
+                break
+        if best is None:
+            return point, None
+        point, self.step, spread, _ = best
+        return point, spread
+
+    def _at_step(self, point: Point, step: float) -> Point | None:
+        """The orbit's point with its monodromy and tangent at the difference step `step`."""
+        old, self.step = self.step, step
         try:
-            twice = self.jacobian(point.x, point.p, 2 * FD_STEP)[:, :-1] + np.eye(point.x.size)
+            moved = self.point(point.x, point.p, point.tangent, point.iterations)
         except FloatingPointError:
             return None
-        return abs(float(np.max(np.abs(np.linalg.eigvals(twice)))) - float(np.max(np.abs(point.multipliers))))
+        finally:
+            self.step = old
+        return moved
 
     def point(self, x, p, previous_tangent=None, iterations=0) -> Point:
         """The converged orbit at (x, p): monodromy, multipliers, tangent and measures."""
@@ -388,6 +426,7 @@ class Continuation:
         v /= np.linalg.norm(v)
         side = special.side or 1.0
         twice = Continuation(self.family, self.low, self.high, 2 * self.multiple)
+        twice.step = self.step   # the difference step the branch resolved its multipliers at
         size = 1.0 + float(np.linalg.norm(point.x))
         guesses = [(a, sign, way) for way in (side, -side) for a in (1e-3, 1e-2, 1e-1, 1.0)
                    for sign in (1.0, -1.0)]

@@ -308,7 +308,7 @@ def shooting(flow, state, multiple: int = 1, tol: float = 1e-9, iterations: int 
     argues, along the joints' tangent space), until |P^m(x) - x| <= tol (1 + |x|), tol at
     least continuation's NEWTON_TOL. Returns (state on the orbit, Floquet multipliers,
     residual history, spread: how far the largest multiplier's modulus moves when the
-    difference step doubles, Continuation.spread; None when not measured)."""
+    difference step doubles at the step Continuation.resolve chooses; None when not measured)."""
     family = FixedFlow(flow, state, tol)
     line = Continuation(family, 0.0, 1.0, multiple)
     try:
@@ -319,4 +319,5 @@ def shooting(flow, state, multiple: int = 1, tol: float = 1e-9, iterations: int 
             raise FloatingPointError(f"shooting stopped after the residuals {residuals}: {err}") from None
         raise FloatingPointError(f"shooting did not converge in {iterations} Newton iterations "
                                  f"(residuals {residuals})") from None
-    return family.state(orbit.x), orbit.multipliers, line.residuals, line.spread(orbit)
+    orbit, spread = line.resolve(orbit)
+    return family.state(orbit.x), orbit.multipliers, line.residuals, spread

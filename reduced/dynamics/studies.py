@@ -389,7 +389,8 @@ def periodic_orbit(target: SceneFile, options: ShootingOptions, tmp: Path) -> di
 
 def spread_warning(target: SceneFile, spread: float | None, where: str) -> str | None:
     """The warning, printed, of a monodromy that does not resolve the stability
-    (Continuation.spread above SPREAD_WARNING, or not measured); None when it does."""
+    (the spread of Continuation.resolve above SPREAD_WARNING at every step it tries, or not
+    measured); None when it does."""
     if spread is not None and spread <= continuation().SPREAD_WARNING:
         return None
     if spread is None:
@@ -397,8 +398,8 @@ def spread_warning(target: SceneFile, spread: float | None, where: str) -> str |
                    f"measured (an orbit perturbed by twice the difference step did not integrate)")
     else:
         warning = (f"{target.source}: the largest Floquet multiplier at {where} moves by {spread:.2g} "
-                   f"when the monodromy's difference step doubles (the map is not smooth at that "
-                   f"scale, whatever the tolerance): stability and bifurcations within {spread:.2g} of "
+                   f"when the monodromy's difference step doubles, at the least of the steps tried "
+                   f"(the map is not smooth at their scale): stability and bifurcations within {spread:.2g} of "
                    f"|mu| = 1 are not resolved")
     print(f"pinbore dynamics: warning: {warning}", file=sys.stderr)
     return warning
@@ -564,7 +565,7 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
                   f"periods at {options.parameter} {start_value:g} ({err}); the motion there may "
                   f"not be periodic (--analysis poincare shows it)")
         return {"converged": False, "reason": reason, "parameter": options.parameter, "warnings": warnings}
-    spread = line.spread(first)
+    first, spread = line.resolve(first)
     warning = spread_warning(target, spread, f"{options.parameter} {start_value:g}")
     if warning:
         warnings.append(warning)
@@ -608,7 +609,8 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
                              for s in specials],
             "stable_points": sum(r[4] for r in rows),
             "start_floquet_multipliers": [[m.real, m.imag] for m in first.multipliers],
-            "start_stable": first.stable, "start_multiplier_spread": spread, "warnings": warnings}
+            "start_stable": first.stable, "start_multiplier_spread": spread,
+            "difference_step": line.step, "warnings": warnings}
 
 
 CONTINUATION_COLUMNS = ["branch", "multiple", "value", "amplitude_m", "stable", "largest_multiplier_modulus",
