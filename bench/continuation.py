@@ -16,16 +16,22 @@
    and that spread); the period doubling against the brute-force attractors 1 rpm either
    side of it, and its doubled orbit against the brute-force period-2 attractor; and one
    monodromy at its first orbit differenced along the tangent space of its joints and drive
-   (2 r + 2 maps, r = 4) against one along every coordinate (2 n + 2, n = 18), timed.
+   (2 r + 2 maps, r = 4) against one along every coordinate (2 n + 2, n = 18), timed. Then
+   the same by the command a user types (with the doubled branch and the direct up- and
+   down-sweeps), its result kept in OUT/continuation_slider_crank_flores2004_friction/ for
+   the report (the scene it ran beside it, OUT/slider_crank_flores2004_friction.toml).
 3. The deployed panel shaken through its hinge (scenes/reduced/deployed_panel_shaken.toml)
-   over 3-4 Hz around its first mode, by the command a user types (`pinbore dynamics
+   over 3-4 Hz around its first mode, and its spatial twin on the ground, the hinge axis
+   vertical (deployed_panel_shaken_3d.toml), by the command a user types (`pinbore dynamics
    --analysis continuation`, with the doubled branches it switches onto and the direct up- and
-   down-sweeps): too long for `make` (minutes), so its result is kept here and the report
-   shows it.
+   down-sweeps): too long for `make` (minutes), so their results are kept here and the report
+   shows them.
 
 Writes OUT/continuation.csv (a row per setting), OUT/continuation.png (the oscillator's
-branch) and OUT/continuation_deployed_panel_shaken/ (the panel's continued response: the
-command's summary.json, response.png and tables)."""
+branch), OUT/continuation_slider_crank_flores2004_friction/ and
+OUT/continuation_deployed_panel_shaken/ and OUT/continuation_deployed_panel_shaken_3d/ (the
+continued responses: the command's summary.json, response.png and tables; --keep-panels
+takes the panels' rows from their kept results instead of running them again)."""
 
 import argparse
 import csv
@@ -41,9 +47,14 @@ LOW, HIGH, POINTS, STEP = 10.0, 30.0, 200, 0.01
 SLIDER = ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml"
 SLIDER_START, SLIDER_RANGE, SLIDER_STEP, SLIDER_POINTS = 160.0, (155.0, 175.0), 0.05, 40
 FLIP_TRANSIENT = 300
-PANEL = ROOT / "scenes" / "reduced" / "deployed_panel_shaken.toml"
-PANEL_OPTIONS = ["--parameter", "frequency", "--range", "3", "4", "--points", "480", "--step", "0.05",
-                 "--sweeps", "41", "--transient", "30", "--periods", "5"]
+SLIDER_OPTIONS = ["--parameter", "speed", "--range", "155", "175", "--points", "40", "--step", "1",
+                  "--sweeps", "21", "--transient", "30", "--periods", "5"]
+PANELS = [(ROOT / "scenes" / "reduced" / "deployed_panel_shaken.toml",
+           ["--parameter", "frequency", "--range", "3", "4", "--points", "480", "--step", "0.05",
+            "--sweeps", "41", "--transient", "30", "--periods", "5"]),
+          (ROOT / "scenes" / "reduced" / "deployed_panel_shaken_3d.toml",
+           ["--parameter", "frequency", "--range", "3", "4", "--points", "160", "--step", "0.05",
+            "--sweeps", "21", "--transient", "30", "--periods", "5"])]
 COLUMNS = ["scene", "tolerance_rtol", "first_step", "largest_step", "points", "wall_time_s", "seconds_per_point", "maps", "maps_per_point",
            "seconds_per_map", "maps_in_monodromies", "maps_in_corrector", "maps_in_locating",
            "bifurcations", "reached", "monodromy_s", "monodromy_every_coordinate_s", "difference_step",
@@ -134,11 +145,7 @@ def slider_crank() -> dict:
     along every coordinate."""
     from pinbore.reduced.dynamics import continuation, flow, studies
 
-    data = tomllib.loads(SLIDER.read_text())
-    data["drive"]["speed_rpm"] = SLIDER_START
-    data["clearance_joints"][0]["friction"] = {"law": "coulomb_ambrosio", "mu": 0.1}
-    data["integrator"]["rtol"] = 4e-8
-    family = studies.MechanismFamily(studies.SceneFile(SLIDER, data), "speed", SLIDER_START)
+    family = studies.MechanismFamily(studies.SceneFile(SLIDER, friction_scene()), "speed", SLIDER_START)
     low, high = SLIDER_RANGE
     line, counted = counting(family, low, high)
     state, x, _ = family.settle(SLIDER_START, 10)
@@ -197,34 +204,45 @@ def flip_checked(family, line, flip) -> str:
     return "; ".join(said)
 
 
-def panel(folder: Path) -> dict:
-    """The shaken panel's continued response by the command (its summary.json, response.png
-    and tables in `folder`), as a row (panel_row)."""
+def friction_scene() -> dict:
+    """The Flores slider-crank with Coulomb friction (mu 0.1) at SLIDER_START, rtol 4e-8."""
+    data = tomllib.loads(SLIDER.read_text())
+    data["drive"]["speed_rpm"] = SLIDER_START
+    data["clearance_joints"][0]["friction"] = {"law": "coulomb_ambrosio", "mu": 0.1}
+    data["integrator"]["rtol"] = 4e-8
+    return data
+
+
+def command(scene: Path, options: list[str], folder: Path, label: str) -> dict:
+    """A continued response by the command a user types (its summary.json, response.png and
+    tables in `folder`), as a row (command_row)."""
     import subprocess
 
     began = time.time()
-    done = subprocess.run([sys.executable, "-m", "pinbore.cli", "dynamics", str(PANEL.relative_to(ROOT)),
-                           "--analysis", "continuation", *PANEL_OPTIONS, "--out", str(folder)], cwd=ROOT)
+    scene = scene.relative_to(ROOT) if scene.is_relative_to(ROOT) else scene   # as a user names it
+    done = subprocess.run([sys.executable, "-m", "pinbore.cli", "dynamics", str(scene),
+                           "--analysis", "continuation", *options, "--out", str(folder)], cwd=ROOT)
     written = (folder / "summary.json").is_file() and (folder / "summary.json").stat().st_mtime >= began
     if done.returncode not in (0, 1) or not written:   # 1 with a summary: a branch marked partial
-        raise SystemExit(f"the shaken panel's continuation failed (exit {done.returncode})")
-    return panel_row(folder)
+        raise SystemExit(f"{label}: the continuation failed (exit {done.returncode})")
+    return command_row(folder, options, label)
 
 
-def panel_row(folder: Path) -> dict:
-    """The row of the shaken panel's continued response in `folder`: the command's own counts
-    (its maps are not counted)."""
+def command_row(folder: Path, options: list[str], label: str) -> dict:
+    """The row of a continued response the command wrote in `folder` with `options`: its own
+    counts (its maps are not counted)."""
     import json
 
     s = json.loads((folder / "summary.json").read_text())
-    low, high = (float(v) for v in PANEL_OPTIONS[PANEL_OPTIONS.index("--range") + 1:][:2])
-    step = float(PANEL_OPTIONS[PANEL_OPTIONS.index("--step") + 1]) / (high - low)   # of the range
+    low, high = (float(v) for v in options[options.index("--range") + 1:][:2])
+    step = float(options[options.index("--step") + 1]) / (high - low)   # of the range
     values = [float(v) for v in csv_column(folder / "continuation.csv", "value")]
-    return {"scene": "deployed_panel_shaken, frequency (the command, with sweeps)",
+    return {"scene": f"{label} (the command, with sweeps)",
             "tolerance_rtol": 100, "first_step": step, "largest_step": 50 * step, "points": s["points"],
             "wall_time_s": f"{s['wall_time_s']:.1f}", "seconds_per_point": f"{s['seconds_per_point']:.3f}",
             "bifurcations": " ".join(f"{b['kind']}@{b['value']:.5g}" for b in s["bifurcations"]),
-            "reached": f"{max(values):.5g}"}
+            "reached": f"{max(values):.5g}", "difference_step": s.get("difference_step", ""),
+            "start_spread": f"{s['start_multiplier_spread']:.2g}"}
 
 
 def csv_column(path: Path, name: str) -> list[str]:
@@ -235,8 +253,9 @@ def csv_column(path: Path, name: str) -> list[str]:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=ROOT / "bench")
-    parser.add_argument("--keep-panel", action="store_true",
-                        help="the shaken panel's row from its result kept in OUT (not run again: about an hour)")
+    parser.add_argument("--keep-panels", action="store_true",
+                        help="the shaken panels' rows from their results kept in OUT (not run again: "
+                             "over an hour)")
     args = parser.parse_args()
     out = args.out
     out.mkdir(parents=True, exist_ok=True)
@@ -250,9 +269,19 @@ def main() -> int:
             picture(branches, out / "continuation.png")
     rows.append(slider_crank())
     print(rows[-1], file=sys.stderr)
-    kept = out / "continuation_deployed_panel_shaken"
-    rows.append(panel_row(kept) if args.keep_panel else panel(kept))
+    import tomli_w
+
+    scene = out / "slider_crank_flores2004_friction.toml"   # the scene it ran, kept beside
+    scene.write_text("# bench/continuation.py: scenes/reduced/slider_crank_flores2004.toml with Coulomb "
+                     "friction (mu 0.1), at 160 rpm, rtol 4e-8\n" + tomli_w.dumps(friction_scene()))
+    rows.append(command(scene.resolve(), SLIDER_OPTIONS, out / "continuation_slider_crank_flores2004_friction",
+                        "slider_crank_flores2004 mu 0.1, speed"))
     print(rows[-1], file=sys.stderr)
+    for scene, options in PANELS:
+        kept, label = out / f"continuation_{scene.stem}", f"{scene.stem}, frequency"
+        rows.append(command_row(kept, options, label) if args.keep_panels
+                    else command(scene, options, kept, label))
+        print(rows[-1], file=sys.stderr)
     with open(out / "continuation.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=COLUMNS)
         writer.writeheader()
