@@ -115,10 +115,11 @@ def test_the_doubled_branch_of_a_sub_and_a_supercritical_flip(sign):
 def test_a_noisy_map_gets_the_difference_step_that_resolves_its_multipliers():
     """A linear map with multipliers -0.6 and 0.3 plus a deterministic noise of 3e-6 that
     varies on a scale of 1e-7 (an adaptive integration's error: its step sequence changes
-    with the state). At FD_STEP the quotients carry noise of about 3e-6 / 1e-4 = 0.03; the
-    step chosen at the first orbit is the smallest FD_STEP 2^k at which doubling it moves
-    the largest multiplier by at most SPREAD_WARNING, and there the multipliers are within
-    that of the exact ones (the noise falls as 1/h, and a linear map has no truncation)."""
+    with the state). At FD_STEP the quotients carry noise of about 3e-6 / 1e-4 = 0.03 (the
+    largest multiplier comes out 0.017 off); the step chosen at the first orbit is the
+    smallest FD_STEP 2^k from which two doublings each move the largest multiplier by at
+    most SPREAD_WARNING / 2, and there the multipliers are within SPREAD_WARNING of the
+    exact ones (the noise falls as 1/h, and a linear map has no truncation)."""
     a = np.array([[-0.6, 0.0], [0.0, 0.3]])
 
     def noisy(x, p):
@@ -567,8 +568,8 @@ def test_the_slider_crank_loses_stability_where_its_brute_force_attractor_double
     method, direct integration (300 turns settled, 20 sampled), finds a period-1 attractor
     at 164 rpm and a period-2 attractor at 166 rpm: the doubling lies between them, and the
     brute-force period-2 points lie on the doubled orbit converged at 166 rpm to within what
-    the corrector's tolerance allows (measured 0.024 um at 167 rpm; the doubled orbit's two
-    points lie about 40 um apart there, the bound 1 um)."""
+    the corrector's tolerance allows (the bench measured 0.024 um at 167 rpm; the doubled
+    orbit's two points lie about 40 um apart at 166 rpm; the bound 1 um)."""
     from pinbore.reduced.dynamics import flow
 
     data = tomllib.loads((ROOT / "scenes/reduced/slider_crank_flores2004.toml").read_text())
