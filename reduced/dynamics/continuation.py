@@ -252,25 +252,28 @@ class Continuation:
         return point, spread
 
     def _at_step(self, point: Point, step: float) -> Point | None:
-        """The orbit's point with its monodromy and tangent at the difference step `step`."""
+        """The orbit's point with its monodromy and tangent at the difference step `step` (its
+        measures are the orbit's: the same x and p)."""
         old, self.step = self.step, step
         try:
-            moved = self.point(point.x, point.p, point.tangent, point.iterations)
+            moved = self.point(point.x, point.p, point.tangent, point.iterations, point.measures)
         except FloatingPointError:
             return None
         finally:
             self.step = old
         return moved
 
-    def point(self, x, p, previous_tangent=None, iterations=0) -> Point:
-        """The converged orbit at (x, p): monodromy, multipliers, tangent and measures."""
+    def point(self, x, p, previous_tangent=None, iterations=0, measures=None) -> Point:
+        """The converged orbit at (x, p): monodromy, multipliers, tangent and measures (the
+        family's, unless the orbit's are given)."""
         jac = self.jacobian(x, p)
         tangent = null_vector(jac)
         if previous_tangent is not None and tangent @ previous_tangent < 0:
             tangent = -tangent
         monodromy = jac[:, :-1] + np.eye(x.size)
-        return Point(x, p, tangent, np.linalg.eigvals(monodromy), self.family.measure(x, p, self.multiple),
-                     iterations, jac)
+        if measures is None:
+            measures = self.family.measure(x, p, self.multiple)
+        return Point(x, p, tangent, np.linalg.eigvals(monodromy), measures, iterations, jac)
 
     def converged(self, g, x) -> bool:
         tol = max(NEWTON_TOL, getattr(self.family, "tolerance", NEWTON_TOL))
