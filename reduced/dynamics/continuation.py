@@ -232,41 +232,29 @@ class Continuation:
         a scatter up to 0.11 in modulus to 2e-3, and 0.045-0.048 at 3e-3 and 6e-3, as at
         rtol 1e-10 (0.02-0.07 from 3e-4 to 6e-3). The impact oscillator and the shaken panel
         (moves below 1e-5) keep FD_STEP."""
-        tried = [(point, FD_STEP, float(np.max(np.abs(point.multipliers))))]
-        best = None
+        ladder = [point]   # the orbit at FD_STEP 2^k
+        windows = []       # (-doublings, spread, k): two doublings first, then the smallest spread
         for k in range(1, STEP_DOUBLINGS):
-            step = FD_STEP * 2 ** k
-            moved = self._at_step(point, step)
-            if moved is None:
+            try:
+                ladder.append(self.point(point.x, point.p, point.tangent, point.iterations,
+                                         point.measures, FD_STEP * 2 ** k))
+            except FloatingPointError:
                 break
-            tried.append((moved, step, float(np.max(np.abs(moved.multipliers)))))
-            moves = [abs(tried[j][2] - tried[j - 1][2]) for j in range(max(1, k - 1), k + 1)]
-            start = tried[k - len(moves)]
-            if best is None or max(moves) < best[2] or len(moves) > best[3]:
-                best = (start[0], start[1], max(moves), len(moves))
+            moves = [abs(_largest(ladder[j]) - _largest(ladder[j - 1])) for j in range(max(1, k - 1), k + 1)]
+            windows.append((-len(moves), max(moves), k - len(moves)))
             if len(moves) == 2 and max(moves) <= SPREAD_WARNING / 2:
                 break
-        if best is None:
+        if not windows:
             return point, None
-        point, self.step, spread, _ = best
-        return point, spread
+        _, spread, k = min(windows)
+        self.step = FD_STEP * 2 ** k
+        return ladder[k], spread
 
-    def _at_step(self, point: Point, step: float) -> Point | None:
-        """The orbit's point with its monodromy and tangent at the difference step `step` (its
-        measures are the orbit's: the same x and p)."""
-        old, self.step = self.step, step
-        try:
-            moved = self.point(point.x, point.p, point.tangent, point.iterations, point.measures)
-        except FloatingPointError:
-            return None
-        finally:
-            self.step = old
-        return moved
-
-    def point(self, x, p, previous_tangent=None, iterations=0, measures=None) -> Point:
-        """The converged orbit at (x, p): monodromy, multipliers, tangent and measures (the
-        family's, unless the orbit's are given)."""
-        jac = self.jacobian(x, p)
+    def point(self, x, p, previous_tangent=None, iterations=0, measures=None, step=None) -> Point:
+        """The converged orbit at (x, p): monodromy (at the difference step `step`, the
+        branch's by default), multipliers, tangent and measures (the family's, unless the
+        orbit's are given)."""
+        jac = self.jacobian(x, p, step)
         tangent = null_vector(jac)
         if previous_tangent is not None and tangent @ previous_tangent < 0:
             tangent = -tangent
@@ -605,6 +593,11 @@ def paired(a: Point, b: Point) -> bool:
     (n_a, p_a, c_a), (n_b, p_b, c_b) = crossings(a), crossings(b)
     outside = (n_b + p_b + 2 * c_b) - (n_a + p_a + 2 * c_a)
     return outside != 0 and max(abs(n_b - n_a), abs(p_b - p_a), abs(c_b - c_a)) > 1
+
+
+def _largest(pt: Point) -> float:
+    """The largest multiplier's modulus."""
+    return float(np.max(np.abs(pt.multipliers)))
 
 
 def _real(m) -> bool:
