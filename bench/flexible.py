@@ -9,6 +9,9 @@ answer against the modes kept.
    every joint, law and tolerance the same, so the difference is what flexibility costs).
    Wall time of the integration (compiled code loaded: each run twice, the second timed),
    steps, right-hand sides, the peak contact force.
+   The fastest free motion (the largest |eigenvalue| of the linearised equations of motion
+   at a state out of contact) and the steps the run took a period of it on average: what
+   sets a flexible run's step.
 2. Mode truncation: the slider-crank's flexible rod reduced with 20 fixed-interface modes,
    kept 1 .. 20 of its free modes: the peak contact force, the rod's largest mid-span
    deflection and the wall time; the spin-up beam's peak tip deflection (hub frame) with
@@ -64,6 +67,27 @@ def peak_force(model, trajectory) -> float:
     return max(float(np.max(v)) for k, v in cols.items() if k.endswith("_normal_force_N"))
 
 
+def fastest_motion(model, trajectory) -> float:
+    """The largest |lambda| (rad/s) of the Jacobian df/dy of the equations of motion (central
+    differences of the right-hand side) at the first recorded state with no contact force:
+    the fastest free motion an integrator resolves, a flexible body's stiffest kept mode as
+    its joints constrain it."""
+    from pinbore.reduced.mechanism import engine
+
+    args = model.args()
+    for t, y in zip(trajectory.times, trajectory.states):
+        if not np.any(engine.rhs_value(t, y, args)[1]):
+            break
+    jacobian = np.empty((y.size, y.size))
+    for i in range(y.size):
+        h = 1e-7 * max(abs(y[i]), 1e-3)
+        up, down = y.copy(), y.copy()
+        up[i] += h
+        down[i] -= h
+        jacobian[:, i] = (engine.rhs_value(t, up, args)[0] - engine.rhs_value(t, down, args)[0]) / (2 * h)
+    return float(np.abs(np.linalg.eigvals(jacobian)).max())
+
+
 def against_rigid() -> list[dict]:
     """Each flexible scene and its rigid twin: rows (rigid, flexible) in turn."""
     rows = []
@@ -75,10 +99,16 @@ def against_rigid() -> list[dict]:
                          "steps": trajectory.times.size, "rhs": int(trajectory.counters[2]),
                          "rhs_us": 1e6 * wall / trajectory.counters[2],
                          "peak_force_N": peak_force(model, trajectory)})
+            # the step against the period of the fastest free motion
+            fastest = fastest_motion(model, trajectory)
+            rows[-1] |= {"fastest_rad_per_s": fastest,
+                         "steps_per_period": 2 * np.pi / fastest * trajectory.times.size / model.scene.duration}
         ratio = rows[-1]["wall_s"] / rows[-2]["wall_s"]
         print(f"{name}: {rows[-1]['wall_s']:.3f} s, {ratio:.1f} x its rigid twin "
               f"({rows[-1]['steps']} against {rows[-2]['steps']} steps, "
-              f"{rows[-1]['rhs_us']:.2f} against {rows[-2]['rhs_us']:.2f} us a right-hand side)")
+              f"{rows[-1]['rhs_us']:.2f} against {rows[-2]['rhs_us']:.2f} us a right-hand side); "
+              f"its fastest free motion {rows[-1]['fastest_rad_per_s']:.3g} rad/s, "
+              f"{rows[-1]['steps_per_period']:.1f} steps a period on average")
     return rows
 
 

@@ -172,8 +172,8 @@ def material_velocity(states, b, x):
     if flexible(states, b):
         s = turned_back(states, b, (x[0] - states[b, X], x[1] - states[b, Y]))
         f = face_of(states, b, s)
-        e0, e1, _ = undeformed(states, b, f, s)
-        rate = states[b, f + F_TURN_RATE]
+        e0, e1, k = undeformed(states, b, f, s)
+        rate = states[b, f + F_TURN_RATE] * k
         u = arm(states, b, (states[b, f + F_MOVE_RATE] - rate * e1, states[b, f + F_MOVE_RATE + 1] + rate * e0))
         return v[0] + u[0], v[1] + u[1]
     return v

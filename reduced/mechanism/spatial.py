@@ -397,6 +397,17 @@ def deformed(states, b, f, s):
 
 
 @numba.njit(cache=True, _nrt=False)
+def undeformed(states, b, f, s):
+    """The body point whose deformed place is s (body frame), from the interface centre, on
+    the interface at column f: e = s - x_k - T_k eta turned back by the inverse of
+    I + theta x (theta = R_k eta), (e - theta x e + (theta . e) theta) / (1 + |theta|^2)."""
+    theta = row3(states, b, f + F_TURN)
+    e = sub(sub(s, row3(states, b, f + F_CENTRE)), row3(states, b, f + F_MOVE))
+    return scaled(add(sub(e, cross(theta, e)), scaled(theta, dot(theta, e))),
+                  1.0 / (1.0 + dot(theta, theta)))
+
+
+@numba.njit(cache=True, _nrt=False)
 def modal_columns(jac, row, states, b, f, e, l, rho, sign, column):
     """Add sign (l . (T_k,j + R_k,j x e) + rho . R_k,j) to the modal columns of a row: l the
     row's linear coefficient in the body frame, e the point from the interface centre, rho the
@@ -467,8 +478,8 @@ def material_velocity(states, b, x):
     if flexible(states, b):
         s = unturned(states, b, arm)
         f = face_of(states, b, s)
-        e = sub(sub(s, row3(states, b, f + F_CENTRE)), row3(states, b, f + F_MOVE))
-        rate = add(row3(states, b, f + F_MOVE_RATE), cross(row3(states, b, f + F_TURN_RATE), e))
+        rate = add(row3(states, b, f + F_MOVE_RATE),
+                   cross(row3(states, b, f + F_TURN_RATE), undeformed(states, b, f, s)))
         return add(v, turned(states, b, rate))
     return v
 
@@ -503,8 +514,8 @@ def push(force, states, b, f, x, offsets):
     if flexible(states, b):
         s = unturned(states, b, arm)
         face = face_of(states, b, s)
-        e = sub(sub(s, row3(states, b, face + F_CENTRE)), row3(states, b, face + F_MOVE))
-        modal_forces(force, states, b, face, e, unturned(states, b, f), (0.0, 0.0, 0.0), col + COLUMNS)
+        modal_forces(force, states, b, face, undeformed(states, b, face, s), unturned(states, b, f),
+                     (0.0, 0.0, 0.0), col + COLUMNS)
 
 
 @numba.njit(cache=True, _nrt=False)
