@@ -93,8 +93,10 @@ def deformed(states, b, f, s):
 
 @numba.njit(cache=True, _nrt=False)
 def undeformed(states, b, f, s):
-    """The body point whose deformed place is s (body frame), on the interface at column f:
-    s - x_k - T_k eta turned back by R_k eta (the inverse of I + theta k x)."""
+    """The body point whose deformed place is s (body frame), on the interface at column f,
+    from the interface centre: d = s - x_k - T_k eta turned back by the inverse of
+    I + theta k x, (I - theta k x) d / (1 + theta^2), returned unscaled with its factor:
+    ((I - theta k x) d, 1 / (1 + theta^2))."""
     turn = states[b, f + F_TURN]
     e0 = s[0] - states[b, f] - states[b, f + F_MOVE]
     e1 = s[1] - states[b, f + 1] - states[b, f + F_MOVE + 1]
