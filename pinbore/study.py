@@ -86,11 +86,14 @@ KEPT_SUFFIXES = (".csv", ".json")
 PARQUET_ROWS = 1000
 # a label of a case or a value: a part of a point's name, and so of a folder's
 LabelText = Annotated[str, pydantic.Field(pattern=r"^[A-Za-z0-9_.+-]*$")]
-# the packages whose source may decide a point's result: every floor below the roof (a
-# mechanism reads a laws file through calibration/ and a flexible body through fem/modes/),
-# and the class that runs a point (Point; not the rest of this module: a new plot reruns nothing)
-CODE = ("pinbore.core", "pinbore.laws", "pinbore.meshes", "pinbore.fem", "pinbore.calibration",
-        "pinbore.reduced")
+# the packages whose source may decide a point's result, by the point's kind: the floors up
+# to its own (an FE or impact point runs fem/ on meshes/, laws/ and core/, which import
+# nothing above them; a mechanism also reads a laws file through calibration/ and a flexible
+# body through fem/modes/), and the class that runs a point (Point; not the rest of this
+# module: a new plot reruns nothing). An edit of the multibody engine so reruns no FE point.
+FE_CODE = ("pinbore.core", "pinbore.laws", "pinbore.meshes", "pinbore.fem")
+CODE = {"fem": FE_CODE, "impact": FE_CODE,
+        "mechanism": FE_CODE + ("pinbore.calibration", "pinbore.reduced")}
 
 
 class Grid(Strict):
@@ -538,7 +541,7 @@ class Plan:
         self.columns = [(c.name, c.column, c.statistic, c.window_s)
                         for c in study.collect if c.column is not None]
         files = digest_files(scenes.referenced_files(self.base_path))
-        code = source_hash(*CODE) + hashlib.sha256(inspect.getsource(Point).encode()).hexdigest()
+        code = source_hash(*CODE[self.kind]) + hashlib.sha256(inspect.getsource(Point).encode()).hexdigest()
         self.keys = [hashlib.sha256(json.dumps([self.kind, d, files, code, self.columns],
                                                sort_keys=True).encode()).hexdigest()
                      for d in self.scenes]

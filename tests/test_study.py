@@ -217,6 +217,25 @@ def test_a_study_reruns_only_what_changed(tmp_path):
     assert len(list(cache.glob("*.json"))) == 5
 
 
+def test_an_fe_point_is_keyed_on_every_package_its_run_loads():
+    """An FE or impact point's cache key covers the source of the packages study.CODE names
+    for it. Every pinbore module its run loads (pinbore.fem.run and pinbore.fem.impact.run
+    imported in a fresh interpreter) lies in one of them, so no edit its result could see
+    leaves its cached result standing; the multibody engine and the calibration are not among
+    them, so their edits rerun no FE point (a mechanism's key covers them)."""
+    from pinbore import study
+
+    loaded = subprocess.run(
+        [sys.executable, "-c", "import sys, pinbore.fem.run, pinbore.fem.impact.run; "
+         "print(' '.join(m for m in sys.modules if m.startswith('pinbore.')))"],
+        capture_output=True, text=True, check=True).stdout.split()
+    for kind in ("fem", "impact"):
+        code = study.CODE[kind]
+        assert [m for m in loaded if not any(m == p or m.startswith(p + ".") for p in code)] == []
+        assert "pinbore.reduced" not in code and "pinbore.calibration" not in code
+    assert {"pinbore.fem", "pinbore.calibration", "pinbore.reduced"} <= set(study.CODE["mechanism"])
+
+
 def test_a_killed_study_resumes_without_losing_or_repeating_a_point(tmp_path):
     """SIGKILL (the whole process group: the study and its workers) once some points are
     cached; the rerun runs exactly the others, leaves the cached ones untouched, and its table
