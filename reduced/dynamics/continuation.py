@@ -110,8 +110,13 @@ class Point:
     jacobian: np.ndarray | None = field(default=None, repr=False)   # [P_x - I, P_q] here
 
     @property
+    def largest(self) -> float:
+        """The largest multiplier's modulus."""
+        return float(np.max(np.abs(self.multipliers)))
+
+    @property
     def stable(self) -> bool:
-        return bool(np.max(np.abs(self.multipliers)) < 1.0)
+        return self.largest < 1.0
 
 
 @dataclass
@@ -240,7 +245,7 @@ class Continuation:
                                          point.measures, FD_STEP * 2 ** k))
             except FloatingPointError:
                 break
-            moves = [abs(_largest(ladder[j]) - _largest(ladder[j - 1])) for j in range(max(1, k - 1), k + 1)]
+            moves = [abs(ladder[j].largest - ladder[j - 1].largest) for j in range(max(1, k - 1), k + 1)]
             windows.append((-len(moves), max(moves), k - len(moves)))
             if len(moves) == 2 and max(moves) <= SPREAD_WARNING / 2:
                 break
@@ -593,11 +598,6 @@ def paired(a: Point, b: Point) -> bool:
     (n_a, p_a, c_a), (n_b, p_b, c_b) = crossings(a), crossings(b)
     outside = (n_b + p_b + 2 * c_b) - (n_a + p_a + 2 * c_a)
     return outside != 0 and max(abs(n_b - n_a), abs(p_b - p_a), abs(c_b - c_a)) > 1
-
-
-def _largest(pt: Point) -> float:
-    """The largest multiplier's modulus."""
-    return float(np.max(np.abs(pt.multipliers)))
 
 
 def _real(m) -> bool:

@@ -623,7 +623,7 @@ def point_row(branch: int, multiple: int, p) -> list:
     """A row of continuation.csv: the branch (0 the continued one, k the doubled branch of
     the k-th period doubling), its period in forcing periods, the orbit."""
     return [branch, multiple, p.p, p.measures["amplitude"], int(p.stable),
-            float(np.max(np.abs(p.multipliers))), p.measures["gap"], p.measures.get("peak_force"),
+            p.largest, p.measures["gap"], p.measures.get("peak_force"),
             " ".join(f"{v:.9g}" for v in p.x)]
 
 
