@@ -55,7 +55,9 @@ pairs the circle, is retried shorter until they part (`paired`; on two flips a t
 the first step apart, each is then found), unless the orbit grazes in it (the multipliers
 jump there anyway). A map that is not finite (an integration that failed without saying
 so) is a failed orbit, as one that stops is:
-- fold (limit point, the jump of a frequency response): the tangent's q-component t_q;
+- fold (limit point, the jump of a frequency response): the tangent's q-component t_q and
+  det(P_x - I) together (t_q is det(P_x - I) times the tangent's orientation: t_q changing
+  alone is the orientation flipping, which `oriented` turns back);
 - branch point: a real multiplier passes +1 where the branch does not fold (a pitchfork,
   e.g. a symmetric orbit turning asymmetric): det(P_x - I) = prod (mu_i - 1);
 - period doubling: a real multiplier passes -1: det(P_x + I) = prod (mu_i + 1); the
@@ -65,8 +67,10 @@ so) is a failed orbit, as one that stops is:
   the circle changes (a real pair with mu_i mu_j = 1, a neutral saddle, is no torus);
 - grazing: the orbit's smallest gap to contact passes 0, where impacting motion is born.
   A change of the multipliers or of t_q between two points where the orbit grazes is the
-  grazing's: the multipliers jump there, and the branch may turn without smoothness (a
-  nonsmooth fold). Where no orbit continues the branch past it, the branch stops at it,
+  grazing's once the step is cut (halved, each half corrected onto the branch) to
+  GRAZING_WIDTH of the range around it: the multipliers jump there, and the branch may
+  turn without smoothness (a nonsmooth fold), while a bifurcation just past the grazing
+  falls in a piece of its own. Where no orbit continues the branch past it, the branch stops at it,
   located by extrapolating the gap of its last two points.
 Fold, branch point, period doubling and Neimark-Sacker are located on the arclength from
 the last point before them, every trial corrected onto the branch, by Illinois regula falsi
@@ -91,6 +95,7 @@ SWITCH_GROWTH = 10.0      # a guess for the doubled orbit whose Newton residual 
 GROW, SHRINK = 1.5, 0.5
 LOCATE_ITERATIONS = 6
 LOCATE_TOL = 1e-6         # of the parameter range
+GRAZING_WIDTH = 1e-5      # of the range: a step over a grazing is cut down to this around it
 SPREAD_WARNING = 0.01     # a move of the largest multiplier (step doubled) above this is warned of
 STEP_DOUBLINGS = 8        # difference steps tried at the first orbit: FD_STEP .. 128 FD_STEP
 TANGENT_RANK = 1e-6       # a projection derivative's singular value below this (of the largest): normal
@@ -366,7 +371,7 @@ class Continuation:
             x, p, _, iterations = found
             try:
                 secant = np.append(x - last.x, self.q(p) - self.q(last.p))
-                new = self.point(x, p, secant, iterations)
+                new = oriented(last, self.point(x, p, secant, iterations))
             except FloatingPointError as err:
                 branch.complete, branch.reason = False, f"at {p:.6g}: {err}"
                 break
@@ -446,18 +451,28 @@ class Continuation:
 
     # -- bifurcations
     def specials(self, a: Point, b: Point, ds: float, index: int) -> list:
-        """The bifurcations between consecutive points a and b, located; a real multiplier
-        passing +1 is the fold when t_q changes sign too, a branch point otherwise. Where the
-        orbit grazes between them, the multipliers jump (the map's derivative is not
-        continuous there) and the branch may turn (a nonsmooth fold): these changes belong
-        to the grazing, which reports them."""
-        found = []
-        folded = changes(TESTS["fold"](a), TESTS["fold"](b))
-        torus = _outside_complex(a) != _outside_complex(b)
+        """The bifurcations between consecutive points a and b, located. A real multiplier
+        passing +1 (det(P_x - I) changes sign) is the fold when t_q changes sign too, a
+        branch point otherwise; t_q alone is no fold (`oriented` keeps it from flipping).
+        Where the orbit grazes between them, the multipliers jump (the map's derivative is
+        not continuous there) and the branch may turn (a nonsmooth fold): these changes
+        belong to the grazing, which reports them, once the step is cut down to
+        GRAZING_WIDTH of the range around it (`near_grazing`): a bifurcation just past the
+        grazing is found in its own piece."""
         grazing = grazes(a, b)
+        if grazing and (paired(a, b) or any(changes(TESTS[kind](a), TESTS[kind](b)) for kind in TESTS
+                                            if kind != "grazing")):
+            pieces = self.near_grazing(a, b, ds)
+            if pieces is not None:
+                return [s for left, right, length in pieces for s in self.specials(left, right, length, index)]
+        found = []
+        folded = changes(TESTS["fold"](a), TESTS["fold"](b)) and changes(TESTS["branch_point"](a),
+                                                                          TESTS["branch_point"](b))
+        torus = _outside_complex(a) != _outside_complex(b)
         for kind, test in TESTS.items():
             if not changes(test(a), test(b)) or (kind == "branch_point" and folded) \
-                    or (kind == "neimark_sacker" and not torus) or (grazing and kind != "grazing"):
+                    or (kind == "fold" and not folded) or (kind == "neimark_sacker" and not torus) \
+                    or (grazing and kind != "grazing"):
                 continue
             at = self.locate(kind, test, a, b, ds)
             # the side where one more real multiplier lies beyond -1 (at lies between a and b)
@@ -465,6 +480,22 @@ class Continuation:
             found.append(Special(kind, at.p, at, index, math.copysign(1.0, beyond.p - other.p)))
         found.sort(key=lambda s: abs(s.p - a.p))
         return found
+
+    def near_grazing(self, a: Point, b: Point, ds: float):
+        """The step from a to b, over which the orbit grazes and another test function changes
+        sign, cut in two at its middle (corrected onto the branch): the pieces as (left,
+        right, arclength), or None where the step spans at most GRAZING_WIDTH of the range in
+        p or its middle cannot be corrected (the changes then stay the grazing's). The
+        piece that holds the grazing is cut again by `specials` until the other changes lie
+        outside it (measured: the impact oscillator's symmetry-breaking branch point 5 mHz
+        above its grazing at 14.264 Hz, inside a step of 0.03 Hz)."""
+        if abs(b.p - a.p) <= GRAZING_WIDTH * self.width:
+            return None
+        self.say(f"cutting the step from {a.p:.6g} to {b.p:.6g} around a grazing")
+        middle = self.trial(a, ds / 2)
+        if middle is None or not min(a.p, b.p) <= middle.p <= max(a.p, b.p):
+            return None
+        return [(a, middle, ds / 2), (middle, b, self.arclength(middle, b))]
 
     def locate(self, kind, test, a: Point, b: Point, ds: float) -> Point:
         """The zero of `test` between a (arclength 0) and b (ds), each trial corrected onto
@@ -523,7 +554,7 @@ class Continuation:
                 continue
             moved = abs(p - outside[-1][0]) / self.width
             outside.append((p, f, trial))
-            if moved < LOCATE_TOL:
+            if k > 0 and moved < LOCATE_TOL:   # (the first probe's step is no measure of convergence)
                 break
         return outside[-1][2]
 
@@ -551,7 +582,7 @@ class Continuation:
         if found is None:
             return None
         x, p, _, _ = found
-        return self.point(x, p, a.tangent)
+        return oriented(a, self.point(x, p, a.tangent))
 
     def arclength(self, a: Point, b: Point) -> float:
         """b's distance from a along a's tangent (the corrector's constraint)."""
@@ -576,6 +607,18 @@ def changes(fa, fb) -> bool:
     if fa is None or fb is None or not (math.isfinite(fa) and math.isfinite(fb)):
         return False
     return fa * fb < 0 or (fb == 0 and fa != 0)
+
+
+def oriented(a: Point, b: Point) -> Point:
+    """b with its tangent turned where its orientation flipped against a's: t_q is det(P_x - I)
+    times the orientation (the null vector's last cofactor), so a t_q that changes sign where
+    det(P_x - I) does not (no multiplier passed +1: no fold) is the orientation flipping (a
+    secant that crossed the branch's turn, or noise in P_q), which would send the branch back
+    over its own orbits and report a fold that is not there."""
+    if changes(TESTS["fold"](a), TESTS["fold"](b)) and not changes(TESTS["branch_point"](a),
+                                                                   TESTS["branch_point"](b)):
+        b.tangent = -b.tangent
+    return b
 
 
 def grazes(a: Point, b: Point) -> bool:

@@ -32,9 +32,9 @@ import numpy as np
 from tqdm import tqdm
 
 from pinbore.reduced.dynamics.continuation import Continuation
-from pinbore.reduced.mechanism import engine
-from pinbore.reduced.mechanism.layout import (CONSTANT_SPEED, OK, PRIM_ANGLE0, PRIM_BODY_I, PRIM_BODY_J,
-                                              PRIM_PROFILE, PRIM_SPEED)
+from pinbore.reduced.mechanism import engine, outputs
+from pinbore.reduced.mechanism.layout import (CONSTANT_SPEED, DISSIPATED, OK, PRIM_ANGLE0, PRIM_BODY_I, PRIM_BODY_J,
+                                              PRIM_PROFILE, PRIM_SPEED, WORK_IN)
 from pinbore.reduced.mechanism.model import Model, translational_frames
 from pinbore.reduced.mechanism.run import STATUS, simulate
 
@@ -157,32 +157,40 @@ class MechanismFlow:
         return np.array(engine.relative_motion(y, args, work, *where))
 
     def orbit_measures(self) -> dict:
-        """What the last advance shows of its orbit: `amplitude`, half the peak-to-peak range
-        of the observed point's positions (m; the larger of its two directions),
-        `amplitudes` of each, `gap`, the smallest distance to contact over the orbit (m;
-        minus the deepest penetration when it touches), and `peak_force`, the first clearance
-        joint's largest normal force (N, its contacts summed; both None without clearance
-        joints), each refined by the parabola through the step at its extreme and its
-        neighbours."""
+        """What the last advance shows of its orbit, seen as the time-domain outputs see a run
+        (reduced.mechanism.outputs: each step with the law memory it was taken with, its
+        extremes refined between the steps on the cubic Hermite interpolant of the state):
+        `amplitude`, half the peak-to-peak range of the observed point's positions (m; the
+        larger of its two directions), `amplitudes` of each, `gap`, the smallest distance to
+        contact over the orbit (m; minus the deepest penetration when it touches), and
+        `peak_force`, the first clearance joint's largest normal force (N, as summary.json's
+        peak_normal_force_N; both None without clearance joints); `dissipated` and `work_in`,
+        the energy dissipated and the work of the drive and loads over the orbit (J: equal
+        on a periodic orbit, where every stored energy returns)."""
         model, run = self.model, self.last
-        args = model.args()
-        work = engine.workspace(args)
         where = self._observed_where()
-        positions = np.array([self._observed_at(y, args, work, where)[:2] for y in run.states])
-        amplitudes = 0.5 * (positions.max(axis=0) - positions.min(axis=0))
-        measures = {"amplitude": float(amplitudes.max()), "amplitudes": amplitudes.tolist(), "gap": None,
-                    "peak_force": None}
+        seen = outputs.observed_steps(model, run)
+        positions = np.array([self._observed_at(y, seen["args"], seen["work"], where)[:2] for y in run.states])
+
+        def extreme(i, sign):   # the largest of sign x position i, refined
+            along = lambda t, y, args, work: sign * self._observed_at(y, args, work, where)[i]   # noqa: E731
+            return outputs.refined_max(model, run, int(np.argmax(sign * positions[:, i])), along)[0]
+        amplitudes = [0.5 * (extreme(i, 1.0) + extreme(i, -1.0)) for i in range(positions.shape[1])]
+        book = run.states[:, 2 * model.nq + DISSIPATED: 2 * model.nq + WORK_IN + 1]
+        measures = {"amplitude": float(max(amplitudes)), "amplitudes": amplitudes, "gap": None,
+                    "peak_force": None, "dissipated": float(book[-1, 0] - book[0, 0]),
+                    "work_in": float(book[-1, 1] - book[0, 1])}
         nc = model.contacts.shape[0]
         if nc:
             dy, depth, offset = np.empty(run.states.shape[1]), np.empty(nc), np.zeros((nc, model.kind.dimension))
-            deepest, force = np.empty(len(run.times)), np.empty(len(run.times))
-            first = model.contact_rows[0]
-            for k, (t, y) in enumerate(zip(run.times, run.states)):
+
+            def deepest(t, y, args, work):
                 engine.observe(t, y, dy, args, work, depth, offset)
-                deepest[k] = depth.max()
-                force[k] = work.normal[first.start:first.stop].sum()
-            measures["gap"] = -float(vertex(run.times, deepest))
-            measures["peak_force"] = float(vertex(run.times, force))
+                return depth.max()
+            k = int(np.argmax(seen["depths"].max(axis=1)))
+            measures["gap"] = -outputs.refined_max(model, run, k, deepest)[0]
+            force = outputs.joint_force(outputs.roles(model, 0), seen["normals"])
+            measures["peak_force"] = outputs.joint_peak(model, 0, run, force)[0]
         return measures
 
     def observed_name(self) -> str:
@@ -190,21 +198,6 @@ class MechanismFlow:
             return (f"journal centre of {self.model.joints[0].name} relative to its bearing, "
                     "across the joint")
         return f"centre of body {self.model.names[self._free_body()]}"
-
-
-def vertex(t: np.ndarray, f: np.ndarray) -> float:
-    """The largest value of samples f(t), refined by the parabola through the largest and
-    its two neighbours (the largest sample at either end: itself)."""
-    i = int(np.argmax(f))
-    if i == 0 or i == f.size - 1:
-        return float(f[i])
-    (t0, t1, t2), (f0, f1, f2) = t[i - 1:i + 2], f[i - 1:i + 2]
-    a = ((f2 - f1) / (t2 - t1) - (f1 - f0) / (t1 - t0)) / (t2 - t0)
-    b = (f1 - f0) / (t1 - t0) - a * (t0 + t1)
-    if a >= 0:
-        return float(f1)
-    top = -b / (2 * a)
-    return float(f1 + (top - t1) * (b + a * (top + t1)))
 
 
 def poincare(flow, state, transient: int, periods: int, progress: bool = False):

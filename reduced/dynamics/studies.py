@@ -614,16 +614,17 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
 
 
 CONTINUATION_COLUMNS = ["branch", "multiple", "value", "amplitude_m", "stable", "largest_multiplier_modulus",
-                        "gap_m", "peak_force_N", "x"]
+                        "gap_m", "peak_force_N", "dissipated_J", "x"]
 SPECIAL_COLUMNS = ["kind", "value", "amplitude_m", "gap_m", "multipliers"]
 SWEEP_COLUMNS = ["direction", "value", "amplitude_m", "gap_m", "peak_force_N"]
 
 
 def point_row(branch: int, multiple: int, p) -> list:
     """A row of continuation.csv: the branch (0 the continued one, k the doubled branch of
-    the k-th period doubling), its period in forcing periods, the orbit."""
+    the k-th period doubling), its period in forcing periods, the orbit and its measures
+    (flow.MechanismFlow.orbit_measures; dissipated_J: the energy it dissipates in a period)."""
     return [branch, multiple, p.p, p.measures["amplitude"], int(p.stable),
-            p.largest, p.measures["gap"], p.measures.get("peak_force"),
+            p.largest, p.measures["gap"], p.measures.get("peak_force"), p.measures.get("dissipated"),
             " ".join(f"{v:.9g}" for v in p.x)]
 
 

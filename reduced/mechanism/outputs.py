@@ -51,10 +51,30 @@ def roles(model, j) -> dict:
     return {"main": [k for k in rows if k not in axial], "axial": axial}
 
 
-def joint_force(r, normal) -> float:
+def joint_force(r, normal):
     """The force a joint's peak is taken of: the larger of its main contacts' normal forces
-    summed and its axial ones' (N; r: the joint's roles)."""
-    return max(float(np.sum(normal[r["main"]])), float(np.sum(normal[r["axial"]])))
+    summed and its axial ones' (N; r: the joint's roles; normal: the contacts' normal
+    forces, or a row of them per step)."""
+    return np.maximum(np.sum(normal[..., r["main"]], axis=-1), np.sum(normal[..., r["axial"]], axis=-1))
+
+
+def observed_steps(model, run) -> dict:
+    """engine.observe at every accepted step of a Trajectory, each with the law memory (impact
+    speeds, latches, contact modes) it was taken with: per-step arrays by name (rates,
+    bodies, depths, normals, frictions, offsets, drift, kinetic, angles, stretches), and the
+    args and work it used."""
+    times, states = run.times, run.states
+    n, nc, nt = times.size, model.contacts.shape[0], model.torsion.shape[0]
+    args = model.args()
+    work = engine.workspace(args)
+    kept = model.kind.bodies().RIGID_COLUMNS   # of a body's row: its rigid motion
+    seen = {"rates": np.empty((n, states.shape[1])), "bodies": np.empty((n, work.bodies.shape[0], kept)),
+            "depths": np.empty((n, nc)), "normals": np.empty((n, nc)), "frictions": np.empty((n, nc)),
+            "offsets": np.zeros((n, nc, model.kind.dimension)), "drift": np.empty(n),
+            "kinetic": np.empty(n), "angles": np.empty((n, nt)),
+            "stretches": np.empty((n, args.springs.shape[0]))}
+    engine.observe_steps(times, states, run.speeds, run.latched, run.modes, args, work, *seen.values())
+    return seen | {"args": args, "work": work}
 
 
 def per_step(model, run):
@@ -62,20 +82,11 @@ def per_step(model, run):
     joint quantities; the energy book; the ideal joints' drift."""
     times, states = run.times, run.states
     n, nq = times.size, model.nq
-    nc, nt = model.contacts.shape[0], model.torsion.shape[0]
     dimension = model.kind.dimension
-    args = model.args()
-    work = engine.workspace(args)
-    rates = np.empty((n, states.shape[1]))
-    kept = model.kind.bodies().RIGID_COLUMNS   # of a body's row: its rigid motion
-    bodies = np.empty((n, work.bodies.shape[0], kept))
-    depths, normals, frictions = np.empty((n, nc)), np.empty((n, nc)), np.empty((n, nc))
-    offsets = np.zeros((n, nc, dimension))
-    drift, kinetic = np.empty(n), np.empty(n)
-    angles, stretches = np.empty((n, nt)), np.empty((n, args.springs.shape[0]))
-    engine.observe_steps(times, states, run.speeds, run.latched, run.modes, args, work, rates,
-                         bodies, depths, normals, frictions, offsets, drift, kinetic, angles,
-                         stretches)
+    seen = observed_steps(model, run)
+    args, work, rates, bodies = seen["args"], seen["work"], seen["rates"], seen["bodies"]
+    depths, normals, frictions, offsets = seen["depths"], seen["normals"], seen["frictions"], seen["offsets"]
+    drift, kinetic, angles, stretches = seen["drift"], seen["kinetic"], seen["angles"], seen["stretches"]
     elastic = elastic_energy(model, states, args, work, depths)
     cols = {"time_s": times} | model.kind.bodies().motion_columns(
         model, states[:, :nq], states[:, nq:2 * nq], rates[:, nq:2 * nq], bodies)
@@ -152,33 +163,66 @@ def hermite_basis(x: np.ndarray):
     return values, slopes
 
 
-def refined_peak(model, j, run, k, points=REFINE_POINTS):
-    """The peak normal force of clearance joint j (joint_force) near accepted step k, refined
-    between the steps k-1..k+1 on the cubic Hermite interpolant of the state: (peak force N,
-    its time s)."""
+def between_steps(model, run, k, points=REFINE_POINTS):
+    """The states around accepted step k as the outputs refine them: step k itself, then on
+    each step from k-1 to k+1 the cubic Hermite interpolant of y and f(y) at its two ends
+    at `points` fractions of it, as (t, y, args, work), args holding the law memory (impact
+    speeds, latches, contact modes) the step was taken with."""
     times, states = run.times, run.states
     nc, nt = model.contacts.shape[0], model.torsion.shape[0]
-    r = roles(model, j)
-    best = (0.0, float(times[k]))
-    x = np.linspace(0.0, 1.0, points)
-    basis, _ = hermite_basis(x)
+    basis, _ = hermite_basis(np.linspace(0.0, 1.0, points))
     args = model.args()
     work = engine.workspace(args)
     f0, f1 = np.empty(states.shape[1]), np.empty(states.shape[1])
+
+    def remember(a):   # the memory of the step that ends at a
+        args.speeds[:], args.latched[:] = run.speeds[a, :nc], run.latched[a, :nt]
+        args.mode[:] = run.modes[a, :nc]
+    remember(k)
+    yield float(times[k]), states[k], args, work
     for a in range(max(k - 1, 0), min(k + 1, times.size - 1)):
-        args.speeds[:], args.latched[:] = run.speeds[a + 1, :nc], run.latched[a + 1, :nt]
-        args.mode[:] = run.modes[a + 1, :nc]
+        remember(a + 1)
         h = times[a + 1] - times[a]
         engine.rhs(times[a], states[a], f0, args, work)
         engine.rhs(times[a + 1], states[a + 1], f1, args, work)
         ys = basis.T @ np.array([states[a], h * f0, states[a + 1], h * f1])
         for i in range(points):
-            t = times[a] + x[i] * h
-            engine.rhs(t, ys[i], f0, args, work)
-            force = joint_force(r, work.normal[:nc])
-            if force > best[0]:
-                best = (force, float(t))
+            yield float(times[a] + i / (points - 1) * h), ys[i], args, work
+
+
+def refined_max(model, run, k, quantity, points=REFINE_POINTS):
+    """The largest value of quantity(t, y, args, work) near accepted step k, refined between
+    the steps k-1..k+1 on the cubic Hermite interpolant of the state (`between_steps`):
+    (value, its time s)."""
+    best = None
+    for t, y, args, work in between_steps(model, run, k, points):
+        value = quantity(t, y, args, work)
+        if best is None or value > best[0]:
+            best = (float(value), t)
     return best
+
+
+def refined_peak(model, j, run, k, points=REFINE_POINTS):
+    """The peak normal force of clearance joint j (joint_force) near accepted step k,
+    refined between the steps (refined_max): (peak force N, its time s)."""
+    r = roles(model, j)
+    nc = model.contacts.shape[0]
+    dy = np.empty(run.states.shape[1])
+
+    def force(t, y, args, work):
+        engine.rhs(t, y, dy, args, work)
+        return joint_force(r, work.normal[:nc])
+    return refined_max(model, run, k, force, points)
+
+
+def joint_peak(model, j, run, force):
+    """Clearance joint j's largest normal force over a run and its time (N, s): the largest of
+    `force`, its joint_force at each accepted step, refined between the steps where its
+    contacts are continuous (refined_peak)."""
+    r = roles(model, j)
+    k = int(np.argmax(force))
+    continuous = all(int(model.contacts[i, CONTACT_IMPACT]) == CONTINUOUS for i in r["main"] + r["axial"])
+    return refined_peak(model, j, run, k) if continuous else (float(force[k]), float(run.times[k]))
 
 
 def sample(model, run):
@@ -204,12 +248,8 @@ def joint_peaks(model, series, run) -> dict:
     joints = {}
     steps = series["steps"]
     for j, c in enumerate(model.joints):
-        r = roles(model, j)
-        force = np.maximum(steps[f"{c.name}_normal_force_N"],
-                           steps.get(f"{c.name}_axial_force_N", 0.0))
-        k = int(np.argmax(force))
-        continuous = all(int(model.contacts[i, CONTACT_IMPACT]) == CONTINUOUS for i in r["main"] + r["axial"])
-        peak, when = refined_peak(model, j, run, k) if continuous else (float(force[k]), float(run.times[k]))
+        force = np.maximum(steps[f"{c.name}_normal_force_N"], steps.get(f"{c.name}_axial_force_N", 0.0))
+        peak, when = joint_peak(model, j, run, force)
         mine = run.impacts[run.impacts[:, LOG_JOINT] == j]
         penetration = max(np.max(steps[f"{c.name}_penetration_m"], initial=0.0),
                           np.max(steps.get(f"{c.name}_axial_penetration_m", 0.0), initial=0.0), 0.0)
