@@ -63,10 +63,13 @@ def check_cache(folder: Path, out: Path | None) -> Path:
     return folder
 
 
+COMPILED = ("pinbore.core.cpp",)   # the compiled core (cpp/): part of the floor it lies in
+
+
 def source_hash(*packages: str) -> str:
-    """SHA-256 of the source of the named packages (every .py file below each package's
-    folder, by relative path and content), found without importing them: a cache keyed on it
-    never serves a result of other code."""
+    """SHA-256 of the code of the named packages (every .py file below each package's folder,
+    by relative path and content, and the binary of each compiled module among them), found
+    without importing them: a cache keyed on it never serves a result of other code."""
     digest = hashlib.sha256()
     for package in packages:
         spec = importlib.util.find_spec(package)
@@ -74,6 +77,10 @@ def source_hash(*packages: str) -> str:
         for path in sorted(folder.rglob("*.py")):
             digest.update(f"{package}/{path.relative_to(folder)}\0".encode())
             digest.update(path.read_bytes())
+        for module in COMPILED:
+            if module.rpartition(".")[0] == package:
+                digest.update(f"{module}\0".encode())
+                digest.update(Path(importlib.util.find_spec(module).origin).read_bytes())
     return digest.hexdigest()
 
 

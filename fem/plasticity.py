@@ -45,7 +45,7 @@ FE discretisation
 The states (eps_p, p) and the stress live at the quadrature points of the cells (basix
 quadrature elements; P1 simplices have a constant strain, so one point per cell integrates
 the forms exactly). Each residual evaluation interpolates the strain of the iterate at the
-points (dolfinx.fem.Expression), runs the return map (compiled, all points at once) and
+points (dolfinx.fem.Expression), runs the return map (the compiled core, all points at once) and
 assembles
 
     f_int(u) = int sigma(u) : eps(v) dx,      K_t(u) = int eps(du) : C(u) : eps(v) dx,
@@ -83,12 +83,12 @@ import math
 import basix.ufl
 import dolfinx
 import dolfinx.fem.petsc
-import numba
 import numpy as np
 import ufl
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from pinbore.core import cpp
 from pinbore.meshes.model import HOUSING, PIN
 
 SQRT2 = np.sqrt(2.0)
@@ -97,105 +97,32 @@ ELASTIC = -1                            # the hardening index of a point that ne
 QUADRATURE_DEGREE = 0                   # P1 simplices: constant strain, one point per cell
 
 
-# --- the material point: hardening curve and radial return (compiled, all points at once) -----
+# --- the material point: hardening curve and radial return (the compiled core, all points at once)
 
-@numba.njit(cache=True)
-def yield_stress(p, strains, stresses, count, tail):
-    """sigma_y(p) (Pa) of a piecewise linear hardening curve, its slope H = d sigma_y / dp
-    (Pa) and the plastic strain where the segment holding p ends (inf on the last one).
-
-    The curve passes through (strains[k], stresses[k]), k < count (strains[0] = 0), and
-    continues beyond the last point with slope `tail` (linear hardening: one point (0, Y),
-    tail H; a table: tail 0, perfectly plastic beyond it)."""
-    k = count - 1
-    while k > 0 and p < strains[k]:
-        k -= 1
-    if k == count - 1:
-        return stresses[k] + tail * (p - strains[k]), tail, np.inf
-    slope = (stresses[k + 1] - stresses[k]) / (strains[k + 1] - strains[k])
-    return stresses[k] + slope * (p - strains[k]), slope, strains[k + 1]
-
-
-@numba.njit(cache=True)
 def radial_return(strain, plastic_strain, equivalent, shear_modulus, bulk_modulus, curve,
                   table_strains, table_stresses, table_counts, table_tails):
     """Von Mises radial return with isotropic hardening at n points (see the module
-    docstring for the equations; [SimoHughes1998] Box 3.2).
+    docstring for the equations; [SimoHughes1998] Box 3.2), in the compiled core
+    (cpp/plasticity.cpp).
 
     strain, plastic_strain: (n, 6) Mandel components of the total strain of the iterate and
     of the converged plastic strain; equivalent: (n,) converged equivalent plastic strain p;
     shear_modulus, bulk_modulus: (n,) mu and kappa (Pa); curve: (n,) the row of the hardening
     tables of each point (ELASTIC: never yields); table_*: the hardening curves, one row each
-    (yield_stress).
+    (hardening_tables): sigma_y(p) piecewise linear through the row's points, continued
+    beyond its last with slope `tail`.
 
     Returns the stress (n, 6) (Pa), the plastic strain (n, 6), the equivalent plastic strain
     (n,) and the consistent tangent d sigma / d eps (n, 6, 6) (Pa)."""
-    n = strain.shape[0]
-    stress = np.empty((n, 6))
-    eps_p = plastic_strain.copy()
-    p_new = equivalent.copy()
-    tangent = np.zeros((n, 6, 6))
-    s = np.empty(6)
-    for i in range(n):
-        mu, kappa = shear_modulus[i], bulk_modulus[i]
-        trace = 0.0
-        for a in range(3):
-            trace += strain[i, a] - plastic_strain[i, a]
-        norm2 = 0.0
-        for a in range(6):
-            s[a] = 2.0 * mu * (strain[i, a] - plastic_strain[i, a] - (trace / 3.0 if a < 3 else 0.0))
-            norm2 += s[a] * s[a]
-        norm = np.sqrt(norm2)
-        q = np.sqrt(1.5) * norm
-        theta, beta = 1.0, 0.0          # the elastic branch: C = kappa I (x) I + 2 mu I_dev
-        j = curve[i]
-        if j >= 0:
-            p = equivalent[i]
-            count, tail = table_counts[j], table_tails[j]
-            sigma_y, slope, end = yield_stress(p, table_strains[j], table_stresses[j], count, tail)
-            if q > sigma_y:
-                # segment by segment: q - 3 mu (p - p_n) = sigma_y(p)
-                while True:
-                    step = (q - 3.0 * mu * (p - equivalent[i]) - sigma_y) / (3.0 * mu + slope)
-                    if p + step <= end:
-                        p += step
-                        break
-                    p = end
-                    sigma_y, slope, end = yield_stress(p, table_strains[j], table_stresses[j],
-                                                       count, tail)
-                dp = p - equivalent[i]
-                theta = 1.0 - 3.0 * mu * dp / q
-                beta = 3.0 * mu / (3.0 * mu + slope) - 1.0 + theta
-                for a in range(6):
-                    eps_p[i, a] += 1.5 * dp * s[a] / q
-                p_new[i] = p
-        for a in range(6):
-            stress[i, a] = theta * s[a] + (kappa * trace if a < 3 else 0.0)
-            for b in range(6):
-                value = 2.0 * mu * theta * ((1.0 if a == b else 0.0)
-                                            - (1.0 / 3.0 if a < 3 and b < 3 else 0.0))
-                if beta != 0.0:
-                    value -= 2.0 * mu * beta * s[a] * s[b] / norm2
-                if a < 3 and b < 3:
-                    value += kappa
-                tangent[i, a, b] = value
-    return stress, eps_p, p_new, tangent
+    return cpp.radial_return(strain, plastic_strain, equivalent, shear_modulus, bulk_modulus,
+                             np.asarray(curve, np.int64), table_strains, table_stresses,
+                             np.asarray(table_counts, np.int64), table_tails)
 
 
-@numba.njit(cache=True)
 def elastic_energy(stress, shear_modulus, bulk_modulus):
     """Elastic energy density sigma : C^-1 : sigma / 2 (J/m^3) of stresses (n, 6) (Mandel):
-    mean stress^2 / (2 kappa) + s : s / (4 mu)."""
-    n = stress.shape[0]
-    out = np.empty(n)
-    for i in range(n):
-        mean = (stress[i, 0] + stress[i, 1] + stress[i, 2]) / 3.0
-        ss = 0.0
-        for a in range(6):
-            d = stress[i, a] - (mean if a < 3 else 0.0)
-            ss += d * d
-        out[i] = 0.5 * mean * mean / bulk_modulus[i] + ss / (4.0 * shear_modulus[i])
-    return out
+    mean stress^2 / (2 kappa) + s : s / (4 mu) (the compiled core)."""
+    return cpp.elastic_energy(stress, shear_modulus, bulk_modulus)
 
 
 def von_mises(stress: np.ndarray) -> np.ndarray:

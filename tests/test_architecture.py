@@ -222,20 +222,15 @@ def test_the_scene_knows_every_damping_law():
 
 
 def test_every_package_folder_is_installed():
-    """pyproject.toml lists the packages a wheel holds (`pip install .`): every folder of a
-    floor that holds Python modules is listed, so that a new room cannot work in the editable
-    install and be missing from a wheel."""
+    """pyproject.toml maps each floor's package to its folder (scikit-build-core copies a
+    folder whole, its rooms included, into a wheel: `pip install .`), every floor and nothing
+    else, so that a new floor cannot work in the editable install and be missing from a
+    wheel; the compiled core installs into the core's package."""
     import tomllib
 
-    listed = set(tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
-    found = set()
-    for folder, (package, _) in FLOORS.items():
-        base = ROOT / folder
-        for path in [base, *sorted(p for p in base.rglob("*") if p.is_dir())]:
-            if "__pycache__" in path.parts or not any(path.glob("*.py")):
-                continue
-            found.add(".".join([package, *path.relative_to(base).parts]))
-    assert found == listed, (sorted(found - listed), sorted(listed - found))
+    mapped = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["scikit-build"]["wheel"]["packages"]
+    assert mapped == {package.replace(".", "/"): folder for folder, (package, _) in FLOORS.items()}
+    assert "DESTINATION pinbore/core" in (ROOT / "CMakeLists.txt").read_text()
 
 
 def test_cached_compiled_code_follows_the_files_it_calls():

@@ -167,3 +167,18 @@ def test_only_a_hardening_table_has_an_end():
     assert table_end(Material(E=2e11, nu=0.3, yield_stress=Y)) == np.inf
     tabled = Material(E=2e11, nu=0.3, yield_stress=Y, hardening=[[0.0, Y], [0.02, 300e6]])
     assert table_end(tabled) == 0.02
+
+
+def test_the_compiled_return_map_refuses_arrays_of_the_wrong_shape():
+    """The compiled core checks what it is given: strains that are not (n, 6), a modulus
+    short of a point, a curve that names a table it was not given, each a ValueError naming
+    the rule (no read past an array)."""
+    strain, eps_p, p = np.zeros((2, 6)), np.zeros((2, 6)), np.zeros(2)
+    moduli, curve = (np.full(2, 8e10), np.full(2, 1.6e11)), np.zeros(2, np.int64)
+    tables = hardening_tables([([0.0], [2e8], 1e9)])
+    with pytest.raises(ValueError, match=r"must be \(n, 6\)"):
+        radial_return(np.zeros((2, 5)), eps_p, p, *moduli, curve, *tables)
+    with pytest.raises(ValueError, match="a value a point"):
+        radial_return(strain, eps_p, p, np.full(1, 8e10), moduli[1], curve, *tables)
+    with pytest.raises(ValueError, match="names a table"):
+        radial_return(strain, eps_p, p, *moduli, np.full(2, 3, np.int64), *tables)
