@@ -610,6 +610,26 @@ def absolute_files(data: dict, base: Path) -> dict:
     return data
 
 
+def named_files(scenes, base: Path) -> list[Path]:
+    """Every file the scenes name (a value of a `*_file` key, at any depth, tables in lists
+    included), relative names taken from `base`: what the points read, which --out may not
+    replace."""
+    found = set()
+
+    def walk(value, key=""):
+        if isinstance(value, dict):
+            for k, v in value.items():
+                walk(v, str(k))
+        elif isinstance(value, list):
+            for v in value:
+                walk(v, key)
+        elif key.endswith("_file") and isinstance(value, str):
+            found.add(base / value)
+    for scene in scenes:
+        walk(scene)
+    return sorted(found)
+
+
 def digest_files(paths) -> list[str]:
     """SHA-256 of each file a scene names (its laws file ...)."""
     return [hashlib.sha256(Path(p).read_bytes()).hexdigest() if Path(p).is_file() else str(p)
@@ -714,13 +734,15 @@ def run(study_file, options: Options) -> int:
     if options.ranks > 1 and plan.kind != "fem":
         raise InputError(f"--ranks: MPI ranks run FE points (pinbore fem); {path}'s points are "
                          f"{plan.kind} runs, which run on one process")
-    start = time.perf_counter()
-    task = Point(plan.kind, plan.base_path.parent, str(plan.base_path), plan.columns, options.ranks)
-    records, fresh = cached_map(task, plan.scenes, plan.keys, options.cache, options.workers,
-                                options.scheduler, desc="study")
-    wall = time.perf_counter() - start
-    rows = table(plan, records, fresh)
-    with atomic_directory(options.out, inputs=[path, plan.base_path, options.cache]) as tmp:
+    inputs = [path, plan.base_path, options.cache, *named_files(plan.scenes, plan.base_path.parent)]
+    # --out is checked against every file a point reads, and locked, before the points run
+    with atomic_directory(options.out, inputs=inputs) as tmp:
+        start = time.perf_counter()
+        task = Point(plan.kind, plan.base_path.parent, str(plan.base_path), plan.columns, options.ranks)
+        records, fresh = cached_map(task, plan.scenes, plan.keys, options.cache, options.workers,
+                                    options.scheduler, desc="study")
+        wall = time.perf_counter() - start
+        rows = table(plan, records, fresh)
         write_results(tmp / "results.csv", plan, rows)
         parquet = write_parquet(tmp / "results.parquet", plan, rows) if len(rows) >= PARQUET_ROWS else None
         for name, record in zip(plan.point_names, records):

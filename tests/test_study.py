@@ -680,3 +680,33 @@ def test_an_impact_study_is_the_impact_command_at_each_point(tmp_path):
         for name, key in (("restitution", "restitution"), ("peak_force", "peak_force_N_per_m"),
                           ("pin_mass", "pin_mass_kg_per_m")):
             assert float(row[name]) == pytest.approx(reference[key], rel=1e-9)
+
+
+def test_a_study_never_replaces_a_file_its_points_read(tmp_path):
+    """A study whose [set] names a laws file, run with --out that file's folder (a pinbore
+    output, which --out may otherwise replace): refused in one line before any point runs,
+    the laws file kept (every file a point names is declared to the output guard)."""
+    laws = tmp_path / "calibration"
+    laws.mkdir()
+    (laws / "laws.json").write_text("{}")
+    (laws / ".pinbore-output").touch()
+    study = tmp_path / "study.toml"
+    study.write_text(study_text([9.5e-3]).replace("[set]\n", f'[set]\nlaws_file = "{laws / "laws.json"}"\n'))
+    done = pinbore("study", study, "--out", laws)
+    assert done.returncode == 2 and "holds the input" in done.stderr, done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1
+    assert (laws / "laws.json").read_text() == "{}" and not (tmp_path / "calibration-cache").exists()
+
+
+def test_a_second_study_into_a_locked_out_is_refused_before_its_points_run(tmp_path):
+    """While another run holds --out's lock, a study is refused at once (exit 2, one line),
+    having run no point: the lock is taken before the work, not when the results are
+    written."""
+    from pinbore.core import output
+
+    study = tmp_path / "study.toml"
+    study.write_text(study_text([9.5e-3]))
+    with output._lock(tmp_path / "out"):
+        done = pinbore("study", study, "--out", tmp_path / "out")
+    assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stderr
+    assert not (tmp_path / "out-cache").exists()
