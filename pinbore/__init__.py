@@ -1,7 +1,7 @@
 """pinbore: finite-element contact study of pin-in-bore (revolute clearance) joints.
 
 One import package whose floors keep their folders at the top of the repository (a
-package-directory mapping in pyproject.toml). Data flows one way, and a floor imports only
+package mapping in pyproject.toml; the compiled core, pinbore.core.cpp, is cpp/). Data flows one way, and a floor imports only
 from the floors below it:
 
     pinbore.core         core/          errors, scene files, atomic outputs, figures, report pieces
@@ -12,6 +12,13 @@ from the floors below it:
     pinbore.reduced      reduced/       multibody models with clearance joints, nonlinear dynamics
     pinbore.cli, pinbore.report  pinbore/   the roof: the `pinbore` command and the HTML report
 """
+
+# An editable install (scikit-build-core's redirect) also lists the repository's root among
+# this package's folders, the parent of the floors' folders it maps: a root-level folder
+# (bench/, tests/) would then import as pinbore.<folder>. The package's folders are those
+# named pinbore (its source, and the installed tree that holds the compiled core); the
+# floors are found by their own mapping.
+__path__[:] = [p for p in __path__ if p.rstrip("/").rsplit("/", 1)[-1] == "pinbore"]   # noqa: F821
 
 API = ("scene", "run", "calibrate")   # pinbore.api: scenes and stages in process
 FLOORS = ("core", "laws", "meshes", "fem", "calibration", "reduced")

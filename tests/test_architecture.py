@@ -259,3 +259,14 @@ def test_cached_compiled_code_follows_the_files_it_calls():
         wrong += [f"{name} does not follow {d}" for d in sorted(calls)
                   if f'"{d.rpartition(".")[2]}"' not in text and f"{d.rpartition('.')[2]}.__file__" not in text]
     assert not wrong, "\n".join(wrong)
+
+
+def test_no_root_folder_imports_as_part_of_the_package():
+    """bench/, tests/ and docs/ are not pinbore's: none imports as pinbore.<folder> (the
+    editable install lists the repository's root among the package's folders; pinbore
+    keeps only its own)."""
+    import importlib
+
+    for folder in ("bench", "tests", "docs"):
+        with pytest.raises(ImportError):
+            importlib.import_module(f"pinbore.{folder}")

@@ -2,6 +2,7 @@
 nothing written. One table per class of fault, so a class cannot come back."""
 
 import copy
+import json
 import math
 import tomllib
 
@@ -138,6 +139,42 @@ def test_a_mesh_too_large_is_refused_before_meshing(write_scene, tmp_path, scene
     expect_one_line(pinbore(command, write_scene(scene), "--out", out), message, out)
 
 
+def modes_with(**body):
+    data = tomllib.loads((ROOT / "scenes" / "modes" / "panel_aluminium_3d.toml").read_text())
+    data["body"] |= body
+    return data
+
+
+# a flexible body's mesh likewise (Gmsh had grown to 6.9 GB over minutes, deaf to SIGTERM)
+MODES_TOO_LARGE = [(modes_with(cell_size=2e-5), "cells, more than 1.5e+05"),
+                   (modes_with(length=120.0), "cells, more than 1.5e+05"),
+                   (modes_with(max_cells=100), "cells, more than 100")]
+
+
+@pytest.mark.parametrize("scene, message", MODES_TOO_LARGE, ids=range(len(MODES_TOO_LARGE)))
+def test_a_flexible_bodys_mesh_too_large_is_refused_before_meshing(write_scene, tmp_path, scene, message):
+    out = tmp_path / "out"
+    expect_one_line(pinbore("modes", write_scene(scene), "--out", out), message, out)
+
+
+@pytest.mark.parametrize("path", sorted((ROOT / "scenes" / "modes").glob("*.toml")), ids=lambda p: p.stem)
+def test_a_flexible_bodys_cell_estimate_is_what_gmsh_meshes_within_a_factor_three(path):
+    """The estimate that guards the limit against the mesh Gmsh builds: 0.85-3 times it (a
+    panel's lugs refine the mesh around their bores)."""
+    import gmsh
+
+    from pinbore.core import scene as scenes
+    from pinbore.fem.modes.scene import ModesScene
+    from pinbore.meshes import body as body_mesh
+    from pinbore.meshes.model import gmsh_session
+
+    body = scenes.load(ModesScene, path).body
+    with gmsh_session():
+        body_mesh.build(gmsh, body)
+        cells = sum(len(tags) for tags in gmsh.model.mesh.getElements(body.dim)[1])
+    assert 0.85 <= cells / body.estimated_cells <= 3.0
+
+
 @pytest.mark.parametrize("name", ["steel_c10um", "flores_c500um", "steel_lug_3d"])
 def test_the_cell_estimate_matches_gmsh(name):
     """The estimate that guards the limit is within 25 % of the mesh Gmsh builds."""
@@ -257,3 +294,21 @@ def test_bad_input_is_answered_in_well_under_a_second_of_cpu(tmp_path, command):
     assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stderr
     assert cpu < 1.2, f"{command}: {cpu:.2f} s of CPU to refuse bad input"
     assert not (tmp_path / "out").exists()
+
+
+def test_a_reduced_body_that_fails_its_physical_checks_is_not_written(write_scene, tmp_path):
+    """A 10 um aluminium panel meshed with cells of 20 mm: its reduced stiffness loses its
+    positive definiteness in the round-off (the rigid-body motions come out stiff, a
+    flexible eigenvalue negative: a NaN frequency was written as complete). One line naming
+    the keys that decide it, exit 2, nothing written; the same panel 2 mm thick reduces
+    (its first free-free bending mode 3.56 sqrt(E t^2 / (12 rho L^4)) = 262 Hz, within 5 %)."""
+    panel = {"body": {"shape": "panel", "dim": 3, "length": 0.2, "width": 0.1, "thickness": 1e-5,
+                      "cell_size": 0.02},
+             "material": {"E": 7.0e10, "nu": 0.33, "density": 2700.0},
+             "reduction": {"interfaces": ["edge"], "fixed_interface_modes": 4, "modes": 2}}
+    out = tmp_path / "out"
+    expect_one_line(pinbore("modes", write_scene(panel), "--out", out), "body.thickness", out)
+    panel["body"]["thickness"] = 2e-3
+    assert pinbore("modes", write_scene(panel), "--out", out).returncode == 0
+    first = json.loads((out / "modes.json").read_text())["frequencies_Hz"][0]
+    assert first == pytest.approx(3.5608 * math.sqrt(7e10 * 4e-6 / (12 * 2700 * 0.2 ** 4)), rel=0.05)

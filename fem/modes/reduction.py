@@ -206,6 +206,16 @@ class Eigen:
     held: tuple = field(repr=False, default=())   # the solver and matrices the KSP lives on
 
 
+def unresolved(scene: ModesScene, what: str) -> InputError:
+    """The error of a reduction that came out unphysical: what, and the keys that decide it
+    (a body far thinner than its cells is ill-conditioned: its stiffness loses positive
+    definiteness in the round-off)."""
+    b = scene.body
+    return InputError(f"body: the reduction is not physical ({what}): the mesh does not resolve "
+                      f"the body (body.cell_size {b.cell_size:g} m against body.thickness "
+                      f"{b.thickness:g} m, body.dim {b.dim})")
+
+
 def lowest_modes(K: sp.csr_matrix, M: sp.csr_matrix, count: int, shift: float,
                  where: str) -> Eigen:
     """The `count` eigenpairs of (K, M) nearest `shift` (SLEPc Krylov-Schur, shift-invert,
@@ -230,8 +240,10 @@ def lowest_modes(K: sp.csr_matrix, M: sp.csr_matrix, count: int, shift: float,
     eps.solve()
     found = eps.getConverged()
     if found < count:
-        raise RuntimeError(f"{where}: SLEPc found {found} of {count} eigenpairs "
-                           f"(reason {eps.getConvergedReason()})")
+        raise InputError(f"{where}: SLEPc found {found} of the {count} eigenpairs asked for "
+                         f"(reason {eps.getConvergedReason()}): fewer modes "
+                         "(reduction.fixed_interface_modes, reduction.full_modes), or a finer mesh "
+                         "(body.cell_size)")
     values = np.empty(found)
     vectors = np.empty((K.shape[0], found))
     vr = Kp.createVecRight()
@@ -364,10 +376,12 @@ def reduce(scene: ModesScene, fe: FEBody | None = None, progress=None) -> Reduce
     Kr, Mr = B.T @ (K @ B), B.T @ (M @ B)
     Kr, Mr = (Kr + Kr.T) / 2, (Mr + Mr.T) / 2
     lam, V = scipy.linalg.eigh(Kr, Mr)
+    if not (np.all(np.isfinite(lam)) and lam[R] > 0):
+        raise unresolved(scene, f"the reduced body's first flexible eigenvalue is {lam[R]:.3g} 1/s^2")
     rigid_residual = float(np.max(np.abs(lam[:R])) / lam[R])
-    if rigid_residual > RIGID_ZERO:
-        raise RuntimeError(f"the reduced body's {R} rigid-body motions are not free: the largest "
-                           f"of their eigenvalues is {rigid_residual:.2g} of the first flexible one")
+    if not rigid_residual <= RIGID_ZERO:
+        raise unresolved(scene, f"its {R} rigid-body motions are not free: the largest of their "
+                                f"eigenvalues is {rigid_residual:.2g} of the first flexible one")
     n = scene.reduction.modes
     keep = V[:, R:R + n]
     psi_dofs = B @ keep
@@ -492,8 +506,9 @@ def free_modes(K: sp.csr_matrix, M: sp.csr_matrix, count: int, rigid: int, scale
     """The lowest `count` flexible free-free frequencies of the model (K, M) (rad/s):
     shift-invert about -scale / 10 (a shift of zero would factor a singular K)."""
     eig = lowest_modes(K, M, count + rigid, -scale / 10, "the whole model's free modes")
-    if np.max(np.abs(eig.values[:rigid])) > RIGID_ZERO * eig.values[rigid]:
-        raise RuntimeError("the whole model's free modes: the rigid-body motions did not come "
-                           "out at zero frequency")
+    if not (eig.values[rigid] > 0 and np.max(np.abs(eig.values[:rigid])) <= RIGID_ZERO * eig.values[rigid]):
+        raise InputError("reduction.full_modes: the whole model's rigid-body motions did not come out "
+                         "at zero frequency: the mesh does not resolve the body (body.cell_size "
+                         "against body.thickness)")
     return np.sqrt(eig.values[rigid:])
 

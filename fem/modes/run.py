@@ -3,6 +3,7 @@
 DIR/modes.json (frequencies, the reduction's error against the whole model, mass, times) and
 DIR/mode_shapes.png."""
 
+import math
 import platform
 import sys
 import time
@@ -38,12 +39,32 @@ def run(scene_path, out, scene: ModesScene | None = None) -> int:
         body = body_of(reduced, scene_path)
         body_file.write(tmp / body_file.BODY, body)
         summary = summarise(scene, scene_path, reduced, body, time.perf_counter() - start)
+        checked(summary)
         mode_shapes(tmp / "mode_shapes.png", body)
         body_file.write_summary(tmp / body_file.SUMMARY, summary)
     f = ", ".join(f"{v:.4g}" for v in summary.frequencies_Hz[:6])
     print(f"pinbore modes: {scene_path}: {reduced.dofs} dofs -> {body.modes} modes ({f} Hz) "
           f"in {summary.wall_time_s['total']:.1f} s", file=sys.stderr)
     return 0
+
+
+def checked(summary: body_file.ModesSummary) -> None:
+    """A reduced body that fails its own physical checks is not written (InputError naming
+    the check): frequencies positive and finite, the mass positive, the modes in the
+    mean-axis frame (body_file.MEAN_AXIS_TOLERANCE) and the rigid-body motions free."""
+    from pinbore.fem.modes.reduction import RIGID_ZERO   # noqa: PLC0415 (DOLFINx)
+
+    frequencies = np.asarray(summary.frequencies_Hz + summary.full_frequencies_Hz)
+    wrong = [name for name, fine in (
+        ("a frequency not positive and finite", np.all(np.isfinite(frequencies) & (frequencies > 0))),
+        (f"mass {summary.mass_kg:.3g} kg", math.isfinite(summary.mass_kg) and summary.mass_kg > 0),
+        (f"mean-axis residual {summary.mean_axis_residual:.3g}",
+         summary.mean_axis_residual <= body_file.MEAN_AXIS_TOLERANCE),
+        (f"rigid-body residual {summary.rigid_residual:.3g}", 0 <= summary.rigid_residual <= RIGID_ZERO))
+        if not fine]
+    if wrong:
+        raise InputError(f"body: the reduced body fails its checks ({'; '.join(wrong)}): the mesh "
+                         "does not resolve it (body.cell_size against body.thickness); nothing written")
 
 
 def body_of(reduced, scene_path) -> body_file.ReducedBody:
