@@ -32,6 +32,23 @@ from pinbore.core.scene import Record, read_json
 from pinbore.laws import elastic
 
 Range = Annotated[list[float], pydantic.Field(min_length=2, max_length=2)]   # [low, high]
+# the physical values of the file, range-checked on read as a scene's are (a Record's numbers
+# may otherwise be inf or nan: an error that a law without a solution records honestly)
+Positive = Annotated[float, pydantic.Field(gt=0, allow_inf_nan=False)]
+NonNegative = Annotated[float, pydantic.Field(ge=0, allow_inf_nan=False)]
+Poisson = Annotated[float, pydantic.Field(gt=-1, lt=0.5, allow_inf_nan=False)]
+EXPONENT_CORRECTION = 3.0   # |q| of a calibrated law beyond which it is no longer a contact's
+
+
+def _ordered(span: list[float]) -> list[float]:
+    if span[0] > span[1]:
+        raise ValueError(f"the range [{span[0]:g}, {span[1]:g}] runs backwards")
+    return span
+
+
+Span = Annotated[list[Annotated[float, pydantic.Field(allow_inf_nan=False)]],
+                 pydantic.Field(min_length=2, max_length=2),
+                 pydantic.AfterValidator(_ordered)]   # [low, high] of a range covered, low <= high
 MODEL = "P = scale * P_law(d) * (d / reference_approach_m)^exponent_correction"
 LAWS = list(elastic.PUBLISHED) + ["linear"]   # the laws a laws file holds, by name
 
@@ -56,12 +73,13 @@ class Fit(Record):
     the reference approach d_ref, with 95 % confidence intervals."""
 
     model: Literal[MODEL]
-    scale: float
+    scale: Positive
     scale_ci95: Range
-    exponent_correction: float
+    exponent_correction: float = pydantic.Field(ge=-EXPONENT_CORRECTION, le=EXPONENT_CORRECTION,
+                                                allow_inf_nan=False)
     exponent_correction_ci95: Range
-    reference_approach_m: float
-    points: int   # approaches the fit used
+    reference_approach_m: Positive
+    points: int = pydantic.Field(ge=1)   # approaches the fit used
 
     def force(self, name: str, d, joint) -> np.ndarray:
         """P(d) (N/m) of law `name` calibrated, at the approaches d (m), for `joint`."""
@@ -73,10 +91,10 @@ class Fit(Record):
 class Validity(Record):
     """The ranges the curves covered: a calibrated law is used beyond them by extrapolation."""
 
-    clearance_m: Range
-    clearance_ratio: Range
-    approach_m: Range
-    housing_ratio: Range
+    clearance_m: Span
+    clearance_ratio: Span
+    approach_m: Span
+    housing_ratio: Span
 
 
 class Law(Record):
@@ -93,13 +111,19 @@ class JointRecord(Record):
     """The joint a per-length law was evaluated for (pinbore.laws.elastic.Joint): radii (m),
     moduli (Pa), Poisson's ratios, and the axial length (m) the laws that need one take."""
 
-    r_bore: float
-    r_pin: float
-    E_bore: float
-    nu_bore: float
-    E_pin: float
-    nu_pin: float
-    length: float
+    r_bore: Positive
+    r_pin: Positive
+    E_bore: Positive
+    nu_bore: Poisson
+    E_pin: Positive
+    nu_pin: Poisson
+    length: Positive
+
+    @pydantic.model_validator(mode="after")
+    def _pin_in_bore(self):
+        if self.r_pin >= self.r_bore:
+            raise ValueError(f"r_pin {self.r_pin:g} m must be smaller than r_bore {self.r_bore:g} m")
+        return self
 
     @classmethod
     def of(cls, joint: elastic.Joint) -> "JointRecord":
@@ -141,9 +165,9 @@ class Errors3D(Record):
 
 
 class Validity3D(Record):
-    approach_m: Range
-    tilt_rad: Range
-    length_m: Range
+    approach_m: Span
+    tilt_rad: Span
+    length_m: Span
 
 
 SECTION_REACH = 2.0   # the section law holds up to this multiple of the FE's last approach
@@ -180,16 +204,16 @@ class SlicedLaw(Record):
     model: Literal[SLICED_MODEL]
     per_length_law: str            # a published law, calibrated:<law> of this file, or section
     section: Section | None        # the 2D FE curve of per_length_law = "section"
-    scale: float
+    scale: Positive
     scale_ci95: Range
-    end_length_m: float
+    end_length_m: float = pydantic.Field(allow_inf_nan=False)   # of either sign: an end stiffer or softer
     end_length_ci95: Range
-    bulk_compliance_m2_per_N: float
+    bulk_compliance_m2_per_N: NonNegative
     bulk_compliance_ci95: Range
     ends: Literal["flush", "running on"]
     materials: str
-    slices_for_1_percent: int
-    fit_slices: int                # the slicing the end length was fitted with
+    slices_for_1_percent: int = pydantic.Field(ge=1)
+    fit_slices: int = pydantic.Field(ge=1)   # the slicing the end length was fitted with
     joint: JointRecord             # the per-length law's joint (materials, law length)
     points: int                    # force and tilted-moment equations of the fit
     validity: Validity3D
@@ -224,18 +248,25 @@ class ImpactJoint(Record):
     (the pin's and the bore's elastic constants and densities, the radii, the pin's mass per
     length with the hub's added mass). Impacts of one joint are fitted together."""
 
-    pin_E_Pa: float
-    pin_nu: float
-    pin_density_kg_per_m3: float
-    bore_E_Pa: float
-    bore_nu: float
-    bore_density_kg_per_m3: float
-    pin_radius_m: float
-    bore_radius_m: float
-    pin_mass_kg_per_m: float       # rho_pin pi r_pin^2 + the hub's added mass
+    pin_E_Pa: Positive
+    pin_nu: Poisson
+    pin_density_kg_per_m3: Positive
+    bore_E_Pa: Positive
+    bore_nu: Poisson
+    bore_density_kg_per_m3: Positive
+    pin_radius_m: Positive
+    bore_radius_m: Positive
+    pin_mass_kg_per_m: Positive    # rho_pin pi r_pin^2 + the hub's added mass
     # an elasto-plastic body's yield stress and hardening (plasticity_label); None: elastic
     pin_plasticity: str | None = None
     bore_plasticity: str | None = None
+
+    @pydantic.model_validator(mode="after")
+    def _pin_in_bore(self):
+        if self.pin_radius_m >= self.bore_radius_m:
+            raise ValueError(f"pin_radius_m {self.pin_radius_m:g} m must be smaller than "
+                             f"bore_radius_m {self.bore_radius_m:g} m")
+        return self
 
     def key(self) -> str:
         """The law's key in laws.json: materials (with the plasticity of a plastic body),
@@ -281,8 +312,10 @@ class RestitutionLaw(Record):
     model: Literal[RESTITUTION_MODEL]
     joint: ImpactJoint | None = None   # None: a file of an older pinbore (one law, matched on
     #                                    its impacts' clearance and effective modulus)
-    coefficients: list[float] = pydantic.Field(min_length=1, max_length=4)   # a0, a1, ...
-    speed_range_m_per_s: Range
+    coefficients: list[Annotated[float, pydantic.Field(allow_inf_nan=False)]] = pydantic.Field(
+        min_length=1, max_length=4)   # a0, a1, ...
+    speed_range_m_per_s: Annotated[list[Positive], pydantic.Field(min_length=2, max_length=2),
+                                   pydantic.AfterValidator(_ordered)]
     max_fit_error: float           # largest |e_fit - e_FE|
     impacts: list[ImpactPoint]
 
@@ -314,7 +347,7 @@ UNITS = Units(approach="m", force="N/m (per unit length, plane strain)")
 
 class LawsFile(Record):
     units: Units
-    length_m: float | None   # axial length given to the laws that need one
+    length_m: Positive | None   # axial length given to the laws that need one
     length_note: str
     curves: list[CurveEntry]
     laws: dict[str, Law]

@@ -44,6 +44,9 @@ def selected(laws_data, laws_path: str, scene_path: str | None, joint_name: str 
     materials, length, damping and calibrated normal law) or the one joint of the file's
     curves (every fitted law, or `law_name`)."""
     fitted = laws_data.fitted()
+    if not fitted:
+        raise InputError(f"{laws_path}: laws: the file has no fitted law to export (run pinbore "
+                         "calibrate on curves that fix one)")
     if law_name is not None and law_name not in fitted:
         raise InputError(f"{laws_path}: --law: {law_name!r} is not a fitted law of the file; "
                          f"valid: {', '.join(fitted) or 'none'}")
@@ -73,6 +76,9 @@ def selected(laws_data, laws_path: str, scene_path: str | None, joint_name: str 
             raise InputError(f"{scene_path}: clearance_joints.{joint_name}.normal_law: "
                              f"{c.normal_law!r} is not a fitted law of {laws_path}; name one "
                              "with --law")
+    if c.length is None:   # every law of the file is a force per unit length
+        raise InputError(f"{scene_path}: clearance_joints.{joint_name}.length: the joint needs its "
+                         f"axial length (m) for the per-length law {law_name!r} (F = L P(d))")
     damping = c.damping_law if c.impact == "continuous" else "none"
     return [(law_name, c.elastic_joint(), damping, c.restitution)]
 
@@ -152,10 +158,15 @@ def run(laws_path: str, to: str, out, scene_path=None, joint_name=None, law_name
         laws = [contact.law_of(laws_data, *row, source=scene_path or laws_path) for row in chosen]
     except ValueError as err:
         raise InputError(str(err)) from None
+    tables = [force_table(law) for law in laws]
+    for law, table in zip(laws, tables):
+        if table.shape[0] < 2:   # a table needs two rows to interpolate
+            raise InputError(f"{laws_path}: laws.{law.name.split(':', 1)[1]}: the law gives no "
+                             "finite, positive force on the multibody model's approaches: nothing "
+                             "to export")
     with atomic_directory(out) as tmp:
-        for law in laws:
-            _write_csv(tmp / f"{law.name.split(':', 1)[1]}.csv", ["approach_m", "force_N"],
-                       force_table(law))
+        for law, table in zip(laws, tables):
+            _write_csv(tmp / f"{law.name.split(':', 1)[1]}.csv", ["approach_m", "force_N"], table)
         _write_csv(tmp / "damping.csv", ["impact_speed_m_per_s", "chi", "restitution"],
                    damping_table(laws[0]))
         (tmp / "export.json").write_text(json.dumps(description(laws), indent=2) + "\n")

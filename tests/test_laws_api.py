@@ -187,9 +187,44 @@ def test_export_without_a_scene_writes_every_law_of_the_files_joint(tmp_path):
      "--joint: 'crank' is not a revolute clearance joint of the scene; valid: rod_slider"),
     (["--scene", ROOT / "scenes/reduced/spatial_slider_crank_flores.toml"],
      "--scene: a planar mechanism"),
+    (["--scene", ROOT / "scenes/reduced/slider_crank_flores2004.toml", "--law", "liu"],
+     "clearance_joints.rod_slider.length: the joint needs its axial length"),
 ])
 def test_bad_export_is_one_line_exit_2(tmp_path, extra, message):
     done = pinbore("export", synthetic_laws_file(tmp_path), "--to", "table", "--out",
                    tmp_path / "out", *extra)
     assert done.returncode == 2 and message in done.stderr, done.stderr
     assert len(done.stderr.strip().splitlines()) == 1 and not (tmp_path / "out").exists()
+
+
+# a laws file's records are checked on read with ranges the laws can take (a table that was
+# its header alone, NaN forces, or a traceback came out of these)
+CORRUPT = [("laws", {}, "no fitted law to export"),
+           ("laws.liu.fitted.scale", float("nan"), "laws.liu.fitted.scale"),
+           ("laws.liu.fitted.scale", 0.0, "laws.liu.fitted.scale"),
+           ("laws.liu.fitted.scale", -1.0, "laws.liu.fitted.scale"),
+           ("laws.liu.fitted.exponent_correction", 50.0, "laws.liu.fitted.exponent_correction"),
+           ("laws.liu.fitted.reference_approach_m", -1e-6, "laws.liu.fitted.reference_approach_m"),
+           ("curves.0.joint.E_bore", -2e11, "curves.0.joint.E_bore"),
+           ("curves.0.joint.length", 0.0, "curves.0.joint.length"),
+           ("curves.0.joint.r_pin", 1.0, "r_pin 1 m must be smaller than r_bore")]
+
+
+@pytest.mark.parametrize("key, value, message", CORRUPT, ids=[c[0] + "=" + str(c[1]) for c in CORRUPT])
+def test_a_laws_file_out_of_range_is_one_line_exit_2(tmp_path, key, value, message):
+    path = synthetic_laws_file(tmp_path)
+    data = json.loads(path.read_text())
+    *parents, last = key.split(".")
+    place = data
+    for part in parents:
+        place = place[int(part)] if part.isdigit() else place[part]
+    place[last] = value
+    path.write_text(json.dumps(data))
+    done = pinbore("export", path, "--to", "table", "--out", tmp_path / "out")
+    assert done.returncode == 2 and message in done.stderr, done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1 and not (tmp_path / "out").exists()
+    if key != "laws":   # the Python API refuses the file alike
+        from pinbore.core.errors import InputError
+
+        with pytest.raises(InputError, match=message.split(" ")[0]):
+            pinbore_laws.load(path)
