@@ -70,14 +70,20 @@ def _rule(error: dict) -> str:
 
 
 def referenced_files(path: str | Path) -> list[Path]:
-    """The files a scene names: the string values of its keys `*_file` and the strings of its
-    lists `*_files`, in any table, relative to the scene's folder unless absolute. A scene that
-    cannot be read names none (reading it for its run says why)."""
+    """The files a scene file names (named_files), relative to its folder unless absolute. A
+    scene that cannot be read names none (reading it for its run says why)."""
     path = Path(path)
     try:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
         return []
+    return named_files(data, path.parent)
+
+
+def named_files(data, base: Path) -> list[Path]:
+    """The files scene data names: the string values of its keys `*_file` and the strings of
+    its lists `*_files`, in any table (tables in lists included), relative to `base` unless
+    absolute."""
     found = []
 
     def walk(node):
@@ -93,7 +99,7 @@ def referenced_files(path: str | Path) -> list[Path]:
             for item in node:
                 walk(item)
     walk(data)
-    return [Path(f) if Path(f).is_absolute() else path.parent / f for f in found]
+    return [Path(f) if Path(f).is_absolute() else Path(base) / f for f in found]
 
 
 def load(model: type[pydantic.BaseModel], path: str | Path) -> pydantic.BaseModel:

@@ -174,7 +174,7 @@ class Case(Strict):
 class Sampling(Strict):
     method: Literal["grid", "monte_carlo", "lhs", "sobol", "saltelli"] = "grid"
     points: int | None = pydantic.Field(default=None, ge=1)
-    seed: int = 0
+    seed: int = pydantic.Field(default=0, ge=0)
 
 
 class Surrogate(Strict):
@@ -540,7 +540,8 @@ class Plan:
         self.check_collect()
         self.columns = [(c.name, c.column, c.statistic, c.window_s)
                         for c in study.collect if c.column is not None]
-        files = digest_files(scenes.referenced_files(self.base_path))
+        files = digest_files([*scenes.referenced_files(self.base_path),
+                              *named_files(self.scenes, self.base_path.parent)])
         code = source_hash(*CODE[self.kind]) + hashlib.sha256(inspect.getsource(Point).encode()).hexdigest()
         self.keys = [hashlib.sha256(json.dumps([self.kind, d, files, code, self.columns],
                                                sort_keys=True).encode()).hexdigest()
@@ -568,6 +569,10 @@ class Plan:
                 raise InputError(f"{self.path}: collect.{i}.column: {c.column!r} is no column of "
                                  "the mechanism's time series (a column begins with a body, "
                                  f"clearance joint or output point: {', '.join(sorted(stems))})")
+            durations = [d["duration"] for d in self.scenes if isinstance(d.get("duration"), (int, float))]
+            if c.window_s is not None and durations and c.window_s[0] >= min(durations):
+                raise InputError(f"{self.path}: collect.{i}.window_s: starts at {c.window_s[0]:g} s, "
+                                 f"after the shortest run's end ({min(durations):g} s): no sample in it")
         for i, c in enumerate(self.study.collect):
             if c.path is None:
                 continue
@@ -610,24 +615,11 @@ def absolute_files(data: dict, base: Path) -> dict:
     return data
 
 
-def named_files(scenes, base: Path) -> list[Path]:
-    """Every file the scenes name (a value of a `*_file` key, at any depth, tables in lists
-    included), relative names taken from `base`: what the points read, which --out may not
-    replace."""
-    found = set()
-
-    def walk(value, key=""):
-        if isinstance(value, dict):
-            for k, v in value.items():
-                walk(v, str(k))
-        elif isinstance(value, list):
-            for v in value:
-                walk(v, key)
-        elif key.endswith("_file") and isinstance(value, str):
-            found.add(base / value)
-    for scene in scenes:
-        walk(scene)
-    return sorted(found)
+def named_files(points, base: Path) -> list[Path]:
+    """Every file the points' scenes name (core.scene.named_files; [set] and cases
+    included), relative names taken from `base`, once each: what the points read, which
+    --out may not replace and their keys cover."""
+    return sorted({f for data in points for f in scenes.named_files(data, base)})
 
 
 def digest_files(paths) -> list[str]:

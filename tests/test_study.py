@@ -442,6 +442,9 @@ BAD = [
     ("a surrogate too rich for the points",
      lambda t: t.replace("points = 50", "points = 10") + '[surrogate]\ndegree = 5\n',
      "needs sampling.points >= 12"),
+    ("a negative seed", lambda t: t.replace("seed = 4", "seed = -1"), "sampling.seed"),
+    ("a window after the run", lambda t: t + COLUMN.replace("[0.0, 0.0065]", "[0.5, 0.6]"),
+     "collect.2.window_s: starts at 0.5 s, after the shortest run's end"),
 ]
 
 
@@ -710,3 +713,40 @@ def test_a_second_study_into_a_locked_out_is_refused_before_its_points_run(tmp_p
         done = pinbore("study", study, "--out", tmp_path / "out")
     assert done.returncode == 2 and len(done.stderr.strip().splitlines()) == 1, done.stderr
     assert not (tmp_path / "out-cache").exists()
+
+
+BAD_OPTIONS = [
+    ("an address that is none", lambda t: ["--scheduler", "not an address"], "must be a scheduler's address"),
+    ("a cache inside a file", lambda t: ["--cache", t / "study.toml" / "cache"], "which is a file"),
+    ("a cache among other files", lambda t: ["--cache", ROOT / "scenes" / "reduced"], "not a cache entry"),
+    ("more workers than the cores can run", lambda t: ["--workers", "10000"], "--workers"),
+]
+
+
+@pytest.mark.parametrize("name, options, message", BAD_OPTIONS, ids=[b[0] for b in BAD_OPTIONS])
+def test_bad_study_options_are_one_line_writing_nothing(tmp_path, name, options, message):
+    study = tmp_path / "study.toml"
+    study.write_text(study_text([9.5e-3]))
+    before = sorted((ROOT / "scenes" / "reduced").iterdir())
+    run = main_in_child("study", study, "--out", tmp_path / "out", *options(tmp_path))
+    assert run.returncode == 2 and message in run.stderr, run.stderr
+    assert len(run.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists() and sorted((ROOT / "scenes" / "reduced").iterdir()) == before
+
+
+@pytest.mark.parametrize("edit", [lambda e: e | {"result": e["result"] | {"status": "complete", "seconds": -1.0}},
+                                  lambda e: {}, lambda e: None, lambda e: e["result"]],
+                         ids=["edited", "empty", "null", "unsealed"])
+def test_a_cache_entry_that_is_not_what_was_written_is_computed_again(tmp_path, edit):
+    """A cache entry carries the checksum of its result: one edited by hand (a value
+    changed), emptied, null, or without its seal is computed again, never served, and the
+    table is the one of a fresh run."""
+    study = tmp_path / "study.toml"
+    study.write_text(study_text([9.5e-3]))
+    assert pinbore("study", study, "--out", tmp_path / "out").returncode == 0
+    fresh = rows_of(tmp_path / "out")
+    (entry,) = (tmp_path / "out-cache").glob("*.json")
+    entry.write_text(json.dumps(edit(json.loads(entry.read_text()))))
+    assert pinbore("study", study, "--out", tmp_path / "out").returncode == 0
+    again = rows_of(tmp_path / "out")
+    assert again[0]["ran"] in ("True", "1", "true") and again[0]["peak_force_N"] == fresh[0]["peak_force_N"]
