@@ -10,7 +10,8 @@ What `--out` may be (`check_output`, applied by the CLI before any work and agai
 `atomic_directory` under its lock):
 - a path that does not exist yet, or an empty directory;
 - a directory that pinbore wrote itself (it holds the marker file `.pinbore-output`) and that
-  holds none of the run's inputs.
+  holds none of the run's inputs, by the same command (the marker names it) or by one that
+  did not say.
 The run's inputs are what the command declared (`declared_inputs`: the CLI declares every
 file each command reads, in one table) and what the stage itself passes; every check sees
 both, so a stage cannot forget an input its command reads.
@@ -40,6 +41,7 @@ from mpi4py import MPI
 from pinbore.core.errors import InputError
 
 _DECLARED: contextvars.ContextVar[tuple] = contextvars.ContextVar("declared_inputs", default=())
+_COMMAND: contextvars.ContextVar[str | None] = contextvars.ContextVar("declared_command", default=None)
 
 MARKER = ".pinbore-output"
 MARKER_TEXT = "Written by pinbore. A later run with this --out replaces this directory whole.\n"
@@ -111,6 +113,28 @@ def declared_inputs(paths):
         _DECLARED.reset(token)
 
 
+@contextlib.contextmanager
+def declared_command(name: str):
+    """Within the block, outputs are the command `name`'s: its marker says so, and an output
+    of another command is not replaced (a `pinbore export` into a `pinbore modes` folder
+    had replaced its body.npz)."""
+    token = _COMMAND.set(name)
+    try:
+        yield
+    finally:
+        _COMMAND.reset(token)
+
+
+def _writer(out: Path) -> str | None:
+    """The command that wrote the output `out`, from its marker (None: not said: an older
+    pinbore's marker, or no marker)."""
+    try:
+        lines = (out / MARKER).read_text().splitlines()
+    except (OSError, UnicodeDecodeError):
+        return None
+    return next((line.removeprefix("command: ") for line in lines if line.startswith("command: ")), None)
+
+
 def _inside(path: Path, folder: Path) -> bool:
     """Whether `path` is `folder` or lies below it (both resolved)."""
     return path == folder or folder in path.parents
@@ -139,6 +163,10 @@ def check_output(out, inputs=()) -> Path:
             raise InputError(f"--out {text}: a directory that pinbore did not write (no "
                              f"{MARKER} in it; older pinbore versions wrote none) and that is "
                              "not empty; choose another, or empty or remove it")
+        writer, command = _writer(out), _COMMAND.get()
+        if writer is not None and command is not None and writer != command:
+            raise InputError(f"--out {text}: holds the output of pinbore {writer}, which pinbore "
+                             f"{command} does not replace; choose another output directory")
     parent = where.parent
     while not parent.exists():
         parent = parent.parent
@@ -254,7 +282,8 @@ def _commit(tmp: Path, out: Path) -> None:
     if held:
         signal.pthread_sigmask(signal.SIG_BLOCK, signals)
     try:
-        (tmp / MARKER).write_text(MARKER_TEXT)
+        command = _COMMAND.get()
+        (tmp / MARKER).write_text(MARKER_TEXT + (f"command: {command}\n" if command else ""))
         if out.exists():
             old = out.with_name(f"{_temporary_prefix(out, os.getpid())}old.tmp")
             out.rename(old)

@@ -13,8 +13,8 @@ import traceback
 from pathlib import Path
 
 from pinbore.core.errors import InputError
-from pinbore.core.output import (Terminated, check_output, clear_stop_signal, declared_inputs,
-                                 stop_signal)
+from pinbore.core.output import (Terminated, check_output, clear_stop_signal, declared_command,
+                                 declared_inputs, stop_signal)
 from pinbore.core.scene import referenced_files
 
 
@@ -342,7 +342,7 @@ def main(argv=None) -> int:
     args = parser().parse_args(argv)
     clear_stop_signal()
     try:
-        with declared_inputs(INPUTS[args.command](args)):
+        with declared_command(args.command), declared_inputs(INPUTS[args.command](args)):
             check_output(args.out)
             return args.func(args)
     except InputError as err:

@@ -228,3 +228,20 @@ def test_a_laws_file_out_of_range_is_one_line_exit_2(tmp_path, key, value, messa
 
         with pytest.raises(InputError, match=message.split(" ")[0]):
             pinbore_laws.load(path)
+
+
+def test_an_output_of_another_command_is_not_replaced(tmp_path):
+    """A folder `pinbore modes` wrote (its marker names the command) is not replaced by
+    `pinbore export` (it had replaced the reduced body): one line, exit 2, the body kept;
+    the command that wrote it may write it again."""
+    folder = tmp_path / "modes"
+    folder.mkdir()
+    (folder / ".pinbore-output").write_text("Written by pinbore.\ncommand: modes\n")
+    (folder / "body.npz").write_bytes(b"body")
+    done = pinbore("export", synthetic_laws_file(tmp_path), "--to", "table", "--out", folder)
+    assert done.returncode == 2 and "holds the output of pinbore modes" in done.stderr, done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1 and (folder / "body.npz").read_bytes() == b"body"
+    out = tmp_path / "table"
+    for _ in range(2):   # its own output, twice
+        assert pinbore("export", synthetic_laws_file(tmp_path), "--to", "table", "--out", out).returncode == 0
+    assert "command: export" in (out / ".pinbore-output").read_text()
