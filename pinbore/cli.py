@@ -102,7 +102,7 @@ def _study(args) -> int:
     from pinbore import study
 
     options = study.options({"out": args.out, "workers": args.workers, "ranks": args.ranks,
-                             "scheduler": args.scheduler, "cache": args.cache})
+                             "scheduler": args.scheduler, "cache": args.cache, "force": args.force})
     return study.run(args.study, options)
 
 
@@ -290,6 +290,8 @@ def parser() -> argparse.ArgumentParser:
     st.add_argument("--out", required=True, type=Path, metavar="DIR",
                     help="output directory (replaced when complete)")
     _runner_options(st)
+    st.add_argument("--force", action="store_true",
+                    help="run a plan of more points than pinbore.study.MAX_POINTS (100,000)")
     st.add_argument("--ranks", type=int, default=None, metavar="N",
                     help="MPI ranks of each FE point (mpiexec -n N pinbore fem; default 1)")
     st.set_defaults(func=_study)

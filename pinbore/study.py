@@ -332,6 +332,7 @@ class Options(Strict):
     ranks: int = pydantic.Field(default=1, ge=1)   # MPI ranks of an FE point
     scheduler: str | None = None
     cache: Path
+    force: bool = False   # a plan of more than MAX_POINTS points
 
     @pydantic.model_validator(mode="before")
     @classmethod
@@ -469,6 +470,23 @@ def value_labels(study: Study, rows: int) -> list[tuple[str, ...]]:
     counts = [len(p.values) if p.values is not None else p.grid.num for p in specs]
     index = uq.grid([range(n) for n in counts]).astype(int)
     return [tuple(p.labels[k] if p.labels else "" for p, k in zip(specs, row)) for row in index]
+
+
+MAX_POINTS = 100_000   # a plan's points before it is built (each a scene in memory), unless --force
+
+
+def planned_points(study: Study) -> int:
+    """The points the study's plan has, counted before it is built: a grid's values and cases
+    multiplied, a random plan's points (saltelli: N (d + 2))."""
+    s = study.sampling
+    if s.method != "grid":
+        return s.points * (len(study.parameters) + 2 if s.method == "saltelli" else 1)
+    count = 1
+    for p in study.parameters.values():
+        count *= len(p.values) if p.values is not None else p.grid.num
+    for cases in study.cases.values():
+        count *= len(cases)
+    return count
 
 
 def matrix(study: Study) -> np.ndarray:
@@ -722,6 +740,10 @@ def run(study_file, options: Options) -> int:
     outputs. 0, or 1 when a point failed (the others are kept)."""
     path = Path(study_file)
     study = load(path)
+    if (count := planned_points(study)) > MAX_POINTS and not options.force:
+        raise InputError(f"{path}: the plan has {count:.3g} points, more than {MAX_POINTS:,} (each a "
+                         "scene in memory before the first runs): fewer values or sampling.points, "
+                         "or --force")
     plan = Plan(path, study)
     if options.ranks > 1 and plan.kind != "fem":
         raise InputError(f"--ranks: MPI ranks run FE points (pinbore fem); {path}'s points are "

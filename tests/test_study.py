@@ -750,3 +750,19 @@ def test_a_cache_entry_that_is_not_what_was_written_is_computed_again(tmp_path, 
     assert pinbore("study", study, "--out", tmp_path / "out").returncode == 0
     again = rows_of(tmp_path / "out")
     assert again[0]["ran"] in ("True", "1", "true") and again[0]["peak_force_N"] == fresh[0]["peak_force_N"]
+
+
+@pytest.mark.parametrize("edit", [lambda t: t.replace("points = 50", "points = 10000000"),
+                                  lambda t: t.replace('distribution = { kind = "uniform", low = 9.45e-3, high = 9.6e-3 }',
+                                                      "grid = { start = 9.45e-3, stop = 9.6e-3, num = 1000000 }")
+                                  .replace('method = "monte_carlo"\npoints = 50\nseed = 4', 'method = "grid"')],
+                         ids=["1e7 drawn", "1e6 on a grid"])
+def test_a_plan_too_large_is_refused_before_it_is_built(tmp_path, edit):
+    """A plan of more than MAX_POINTS points (each a scene in memory: 1e7 had run out of
+    memory after 258 s) is one line naming --force, in well under a second of CPU."""
+    study = tmp_path / "study.toml"
+    study.write_text(edit(study_text(distribution='{ kind = "uniform", low = 9.45e-3, high = 9.6e-3 }',
+                                     points=50)))
+    run = main_in_child("study", study, "--out", tmp_path / "out")
+    assert run.returncode == 2 and "--force" in run.stderr, run.stderr
+    assert len(run.stderr.strip().splitlines()) == 1 and float(run.stdout) < 1.0
