@@ -147,6 +147,9 @@ def modes_with(**body):
 
 # a flexible body's mesh likewise (Gmsh had grown to 6.9 GB over minutes, deaf to SIGTERM)
 MODES_TOO_LARGE = [(modes_with(cell_size=2e-5), "cells, more than 1.5e+05"),
+                   ({**modes_with(), "material": {"E": 1e-300, "nu": 0.3, "density": 2700.0}}, "material.E"),
+                   ({**modes_with(), "material": {"E": 1e300, "nu": 0.3, "density": 2700.0}}, "material.E"),
+                   ({**modes_with(), "material": {"E": 7e10, "nu": 0.3, "density": 1e300}}, "material.density"),
                    (modes_with(length=120.0), "cells, more than 1.5e+05"),
                    (modes_with(max_cells=100), "cells, more than 100")]
 

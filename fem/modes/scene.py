@@ -20,9 +20,11 @@ from pinbore.meshes.body import BodyGeometry
 class Material(Strict):
     """Isotropic, linear elastic, with its density."""
 
-    E: float = pydantic.Field(gt=0, description="Young's modulus (Pa)")
+    # the ranges of solid materials, which the FE forms and SLEPc take (E = 1e-300 or
+    # density = 1e300 failed inside SLEPc; E = 1e300 in the compiled form's code)
+    E: float = pydantic.Field(ge=1e3, le=1e13, description="Young's modulus (Pa): 1e3-1e13")
     nu: float = pydantic.Field(gt=-1, lt=0.5, description="Poisson's ratio")
-    density: float = pydantic.Field(gt=0, description="kg/m^3")
+    density: float = pydantic.Field(ge=0.1, le=1e5, description="kg/m^3: 0.1-1e5")
 
 
 class Reduction(Strict):
