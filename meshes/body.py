@@ -33,6 +33,7 @@ from pinbore.meshes.model import MAX_CELLS
 
 BODY = 1                      # the physical group of the body's cells
 SURFACE_TOLERANCE = 1e-6      # of the body's size: a facet on an interface's surface
+BORE_CELLS = 10               # a bore's radius is at least cell_size / BORE_CELLS
 
 
 class BodyGeometry(Strict):
@@ -86,6 +87,12 @@ class BodyGeometry(Strict):
                     raise ValueError("the lugs overlap: space them by more than lug_width")
         if self.cell_size > min(self.length, self.width) / 2:
             raise ValueError("cell_size must be at most half the body's length and width")
+        for key in ("eye_radius", "lug_bore_radius"):
+            bore = getattr(self, key)
+            if bore is not None and bore < self.cell_size / BORE_CELLS:
+                raise ValueError(f"{key} {bore:g} m is less than cell_size / {BORE_CELLS:g} "
+                                 f"({self.cell_size / BORE_CELLS:g} m): cells that large cannot "
+                                 "mesh the bore the interface is tied to")
         limit = self.max_cells or MAX_CELLS[self.dim]
         if self.estimated_cells > limit:
             raise ValueError(f"the mesh would have about {self.estimated_cells:.3g} cells, more than "

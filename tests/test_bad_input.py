@@ -151,6 +151,7 @@ MODES_TOO_LARGE = [(modes_with(cell_size=2e-5), "cells, more than 1.5e+05"),
                    ({**modes_with(), "material": {"E": 1e300, "nu": 0.3, "density": 2700.0}}, "material.E"),
                    ({**modes_with(), "material": {"E": 7e10, "nu": 0.3, "density": 1e300}}, "material.density"),
                    (modes_with(length=120.0), "cells, more than 1.5e+05"),
+                   (modes_with(lug_bore_radius=1e-7), "lug_bore_radius 1e-07 m is less than cell_size / 10"),
                    (modes_with(max_cells=100), "cells, more than 100")]
 
 

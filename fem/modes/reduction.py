@@ -211,9 +211,11 @@ def unresolved(scene: ModesScene, what: str) -> InputError:
     (a body far thinner than its cells is ill-conditioned: its stiffness loses positive
     definiteness in the round-off)."""
     b = scene.body
+    bore = next((f", body.{k} {getattr(b, k):g} m" for k in ("eye_radius", "lug_bore_radius")
+                 if getattr(b, k) is not None), "")
     return InputError(f"body: the reduction is not physical ({what}): the mesh does not resolve "
                       f"the body (body.cell_size {b.cell_size:g} m against body.thickness "
-                      f"{b.thickness:g} m, body.dim {b.dim})")
+                      f"{b.thickness:g} m{bore}, body.dim {b.dim})")
 
 
 def lowest_modes(K: sp.csr_matrix, M: sp.csr_matrix, count: int, shift: float,
