@@ -185,6 +185,8 @@ test-slow: $(STAMP) ## run the long tests too
 # the scenes' JSON Schemas (docs/schemas/) rewritten where a scene model changed, then the
 # site; -n: every reference must resolve; -W --keep-going: every warning shown, then a failure
 docs: $(STAMP) ## build the documentation into build/docs/html (Sphinx + MyST, offline; warnings are errors)
+	@for d in build/docs/doctrees build/docs/html; do if [ -e $$d ] && [ ! -d $$d ]; then \
+	    echo "make docs: $$d is a file, not a folder: remove it" >&2; exit 2; fi; done
 	$(PY) docs/_ext/scene_reference.py
 	$(PY) -m sphinx -W --keep-going -n -q -b html -d build/docs/doctrees docs build/docs/html
 	@echo "docs: $(abspath build/docs/html/index.html)"
