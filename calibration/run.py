@@ -160,6 +160,9 @@ def per_length(name: str | None, table, curves, curves_3d) -> "pinbore.calibrati
 
 
 def run(paths, out, length=None, per_length_name=None, impacts=()) -> int:
+    if length is not None and not (isinstance(length, (int, float)) and math.isfinite(length) and length > 0):
+        raise InputError(f"length: {length!r} must be a finite length above 0 m (or None: the bore "
+                         "diameter)")
     read = read_all(paths, length)
     restitution_laws = restitution.fit_all(impacts) if impacts else {}
     # the inputs read and checked: now the fits' and the figures' libraries

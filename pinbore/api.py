@@ -16,11 +16,14 @@ against `base` (default: the working folder), as a scene file's are against its 
 """
 
 import contextlib
+import os
 import tempfile
 from pathlib import Path
 
 from pinbore.core import scene as scenes
+from pinbore.core.errors import InputError
 from pinbore.core.output import declared_inputs
+
 
 def _absolute(node, base: Path):
     """The dict with every `*_file` string and `*_files` list made absolute against base."""
@@ -39,26 +42,50 @@ def _absolute(node, base: Path):
     return node
 
 
+def _path(name: str, value) -> Path:
+    """An argument that names a file or folder, as a Path; InputError naming the argument."""
+    if not isinstance(value, (str, os.PathLike)) or not str(value).strip():
+        raise InputError(f"{name}: {value!r} must be a path (a str or pathlib.Path)")
+    return Path(value)
+
+
+def _toml_ready(node, where: str = "") -> None:
+    """A dict scene TOML can hold: string keys, no None (TOML has no null: leave the key out);
+    InputError naming the key."""
+    if isinstance(node, dict):
+        for key, value in node.items():
+            if not isinstance(key, str):
+                raise InputError(f"scene: {where + ': ' if where else ''}the key {key!r} must be a string")
+            _toml_ready(value, f"{where}.{key}" if where else key)
+    elif isinstance(node, (list, tuple)):
+        for k, value in enumerate(node):
+            _toml_ready(value, f"{where}.{k}")
+    elif node is None:
+        raise InputError(f"scene: {where}: None is no TOML value (leave the key out for its default)")
+
+
 @contextlib.contextmanager
 def _scene_file(scene, base):
     """The scene's file for the block: its own, or a dict's written to a temporary folder
-    (removed after the block)."""
+    (removed after the block; an error of the block names the dict, `scene`, not that file)."""
     if not isinstance(scene, dict):
-        yield Path(scene)
+        yield _path("scene", scene)
         return
     import tomli_w   # noqa: PLC0415
 
+    _toml_ready(scene)
     with tempfile.TemporaryDirectory(prefix="pinbore-scene-") as folder:
         path = Path(folder) / "scene.toml"
-        path.write_text(tomli_w.dumps(_absolute(scene, Path(base or ".").resolve())))
-        yield path
+        path.write_text(tomli_w.dumps(_absolute(scene, _path("base", base or ".").resolve())))
+        try:
+            yield path
+        except InputError as err:
+            raise InputError(str(err).replace(str(path), "scene")) from None
 
 
 def scene(source, base=None):
     """The validated scene model of a file or a dict, by its `kind` (fem, impact, reduced,
     spatial; a modes scene has none, but a [body] table)."""
-    from pinbore.core.errors import InputError   # noqa: PLC0415
-
     with _scene_file(source, base) as path:
         data = scenes.read_toml(path)
         kind = data.get("kind", "modes" if "body" in data else None)
@@ -116,7 +143,7 @@ def run(stage: str, source, out, base=None):
     declared as inputs, which `out` may not hold); its result, read back typed."""
     if stage not in STAGES:
         raise ValueError(f"stage: {stage!r} is unknown; valid: {', '.join(STAGES)}")
-    out = Path(out)
+    out = _path("out", out)
     runner, result = STAGES[stage](out)
     with _scene_file(source, base) as path, declared_inputs([path, *scenes.referenced_files(path)]):
         runner(path, out)
@@ -129,7 +156,11 @@ def calibrate(curves, out, length=None, per_length=None, impacts=()):
     from pinbore.calibration import run   # noqa: PLC0415
     from pinbore.laws import lawsfile   # noqa: PLC0415
 
-    curves, impacts = [str(c) for c in curves], [str(i) for i in impacts]
+    if isinstance(curves, (str, os.PathLike)) or isinstance(impacts, (str, os.PathLike)):
+        raise InputError("curves, impacts: lists of paths (a single path: [path])")
+    curves = [str(_path(f"curves.{k}", c)) for k, c in enumerate(curves)]
+    impacts = [str(_path(f"impacts.{k}", i)) for k, i in enumerate(impacts)]
+    out = _path("out", out)
     with declared_inputs([*curves, *impacts]):
         run.run(curves, out, length, per_length, impacts)
-    return lawsfile.read(Path(out) / "laws.json")
+    return lawsfile.read(out / "laws.json")

@@ -44,3 +44,38 @@ def test_a_bad_scene_dict_is_one_input_error(tmp_path):
         pb.scene({"kind": "reduced", "duration": 1.0, "bodies": [{"name": "a", "mass": -1.0}]})
     with pytest.raises(ValueError, match="stage: 'mesh' is unknown"):
         pb.run("mesh", scene_dict(), tmp_path / "x")
+
+
+IMPACT_OSCILLATOR = ROOT / "scenes" / "reduced" / "impact_oscillator.toml"
+
+
+def oscillator() -> dict:
+    import tomllib
+
+    return tomllib.loads(IMPACT_OSCILLATOR.read_text())
+
+# the API checks its arguments as the CLI does, and names them (a library's TypeError, or an
+# error naming a deleted temporary file, had come out of these)
+BAD_CALLS = [
+    (lambda t: pb.run("reduced", None, t / "o"), "scene: None must be a path"),
+    (lambda t: pb.run("reduced", 5, t / "o"), "scene: 5 must be a path"),
+    (lambda t: pb.run("reduced", ["a.toml"], t / "o"), "scene: ['a.toml'] must be a path"),
+    (lambda t: pb.run("reduced", IMPACT_OSCILLATOR, None), "out: None must be a path"),
+    (lambda t: pb.run("reduced", IMPACT_OSCILLATOR, 3), "out: 3 must be a path"),
+    (lambda t: pb.run("reduced", oscillator() | {1: 2}, t / "o"), "the key 1 must be a string"),
+    (lambda t: pb.run("reduced", oscillator() | {"duration": None}, t / "o"),
+     "scene: duration: None is no TOML value"),
+    (lambda t: pb.run("reduced", oscillator() | {"duration": -1.0}, t / "o"),
+     "scene: duration:"),
+    (lambda t: pb.calibrate([ROOT / "nowhere.csv"], t / "c", length=-1.0), "length: -1.0 must be a finite length"),
+    (lambda t: pb.calibrate(ROOT / "nowhere.csv", t / "c"), "lists of paths"),
+    (lambda t: pb.calibrate([None], t / "c"), "curves.0: None must be a path"),
+]
+
+
+@pytest.mark.parametrize("call, message", BAD_CALLS, ids=range(len(BAD_CALLS)))
+def test_a_bad_argument_is_an_input_error_naming_it(tmp_path, call, message):
+    with pytest.raises(InputError) as caught:
+        call(tmp_path)
+    assert message in str(caught.value) and "pinbore-scene-" not in str(caught.value)
+    assert not (tmp_path / "o").exists() and not (tmp_path / "c").exists()
