@@ -112,6 +112,8 @@ def section(build_dir: Path, bench_dir: Path) -> str:
                         "RMS error, fitted", "max error, fitted"], rows))
     with open(folder / "ranking.csv", newline="") as f:
         ranking = list(csv.DictReader(f))
+    if not ranking:
+        raise ValueError(f"{folder / 'ranking.csv'}: no curve ranked (the table is its header alone)")
     parts.append("<h3>Recommendation: the best law per clearance, material pair and load range</h3>")
     parts.append(table(
         ["curve", "c/R", "materials", "load (kN/m)", "best published (RMS)", "runner-up (RMS)",

@@ -29,9 +29,16 @@ details > summary { cursor: pointer; } details > summary h2 { display: inline-bl
 """
 
 
+PNG_START, PNG_END = b"\x89PNG\r\n\x1a\n", b"IEND\xaeB`\x82"   # the signature and the IEND chunk
+
+
 def png_data(path: Path) -> str:
-    """A PNG file as base64."""
-    return base64.b64encode(Path(path).read_bytes()).decode()
+    """A PNG file as base64; ValueError for a file that is not a whole PNG (truncated, or
+    text), which the page would show as a broken image."""
+    data = Path(path).read_bytes()
+    if not (data.startswith(PNG_START) and data.endswith(PNG_END)):
+        raise ValueError(f"{path}: not a whole PNG image")
+    return base64.b64encode(data).decode()
 
 
 def figure_data(fig) -> str:

@@ -316,3 +316,50 @@ def test_a_reduced_body_that_fails_its_physical_checks_is_not_written(write_scen
     assert pinbore("modes", write_scene(panel), "--out", out).returncode == 0
     first = json.loads((out / "modes.json").read_text())["frequencies_Hz"][0]
     assert first == pytest.approx(3.5608 * math.sqrt(7e10 * 4e-6 / (12 * 2700 * 0.2 ** 4)), rel=0.05)
+
+
+SMALL_PANEL = {"body": {"shape": "panel", "dim": 3, "length": 0.2, "width": 0.1, "thickness": 2e-3,
+                        "cell_size": 0.02},
+               "material": {"E": 7.0e10, "nu": 0.33, "density": 2700.0},
+               "reduction": {"interfaces": ["edge"], "fixed_interface_modes": 4, "modes": 2}}
+
+
+@pytest.fixture(scope="module")
+def reduced_panel(tmp_path_factory):
+    """A small panel's `pinbore modes` output (its modes.json, body.npz, mode_shapes.png)."""
+    import tomli_w
+
+    folder = tmp_path_factory.mktemp("panel")
+    (folder / "panel.toml").write_text(tomli_w.dumps(SMALL_PANEL))
+    assert pinbore("modes", folder / "panel.toml", "--out", folder / "modes" / "panel").returncode == 0
+    return folder / "modes" / "panel"
+
+
+def _edit_json(path, key, value):
+    data = json.loads(path.read_text())
+    data[key] = value
+    path.write_text(json.dumps(data))
+
+
+@pytest.mark.parametrize("corrupt", [
+    lambda f: _edit_json(f / "modes.json", "frequencies_Hz", [float("nan"), 300.0]),
+    lambda f: _edit_json(f / "modes.json", "mass_kg", -0.1),
+    lambda f: _edit_json(f / "modes.json", "mean_axis_residual", 3.35),
+    lambda f: (f / "mode_shapes.png").write_bytes((f / "mode_shapes.png").read_bytes()[:500]),
+    lambda f: (f / "mode_shapes.png").write_text("not an image"),
+], ids=["NaN frequency", "negative mass", "mean-axis residual", "truncated PNG", "text PNG"])
+def test_the_report_marks_a_result_it_cannot_trust(tmp_path, reduced_panel, corrupt):
+    """A result whose values fail its record's physical rules, or whose picture is not a
+    whole PNG, is not drawn: its section is left out with one line and a note on the page,
+    exit 1 (it had been shown as a result, or as a broken image, exit 0)."""
+    import shutil
+
+    build = tmp_path / "build"
+    shutil.copytree(reduced_panel, build / "modes" / "panel")
+    done = pinbore("report", "--build", build, "--out", tmp_path / "report")
+    assert done.returncode == 0, done.stderr   # whole, it is drawn
+    corrupt(build / "modes" / "panel")
+    done = pinbore("report", "--build", build, "--out", tmp_path / "report")
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode == 1 and len(lines) == 1 and "flexible bodies section left out" in lines[0], done.stderr
+    assert "Not built:" in (tmp_path / "report" / "index.html").read_text()

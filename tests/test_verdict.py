@@ -139,3 +139,18 @@ def test_each_rule(changes, friction, phrase):
         assert found == []
     else:
         assert len(found) == 1 and phrase in found[0]
+
+
+def test_a_complete_summary_with_a_number_that_is_not_finite_does_not_read(tmp_path):
+    """A summary.json edited to a NaN peak while it says complete (a run that writes NaN is
+    judged suspect or incomplete) is refused on read, naming the file: the report and the
+    studies never show it as a result."""
+    from pinbore.core.errors import InputError
+    from pinbore.reduced.mechanism import summary as summary_file
+
+    path = tmp_path / "summary.json"
+    summary_file.write(path, summary_with())
+    assert summary_file.read(path).status == "complete"
+    summary_file.write(path, summary_with(**{"clearance_joints.rod_slider.peak_normal_force_N": float("nan")}))
+    with pytest.raises(InputError, match="not a finite number"):
+        summary_file.read(path)

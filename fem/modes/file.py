@@ -32,8 +32,10 @@ import hashlib
 import zipfile
 from dataclasses import dataclass, fields
 from pathlib import Path
+from typing import Annotated
 
 import numpy as np
+import pydantic
 
 from pinbore.core.errors import InputError
 from pinbore.core.scene import Record, read_json
@@ -217,23 +219,26 @@ def _check(body: ReducedBody, source: str, mesh_sha256: str) -> None:
                          "were computed on")
 
 
+Positive = Annotated[float, pydantic.Field(gt=0, allow_inf_nan=False)]
+
+
 class ModesSummary(Record):
     """modes.json: what `pinbore modes` computed, for a person and the report."""
 
     scene_file: str
     scene: dict
-    dofs: int
-    nodes: int
-    cells: int
-    mass_kg: float
+    dofs: int = pydantic.Field(ge=1)
+    nodes: int = pydantic.Field(ge=1)
+    cells: int = pydantic.Field(ge=1)
+    mass_kg: Positive
     centre_m: list[float]
     inertia_kg_m2: list[list[float]]
-    frequencies_Hz: list[float]                  # the reduced body's free modes
-    fixed_interface_frequencies_Hz: list[float]
-    full_frequencies_Hz: list[float]             # the whole FE model's free modes (if asked)
+    frequencies_Hz: list[Positive] = pydantic.Field(min_length=1)   # the reduced body's free modes
+    fixed_interface_frequencies_Hz: list[Positive]
+    full_frequencies_Hz: list[Positive]          # the whole FE model's free modes (if asked)
     reduction_error: list[float]                 # reduced / full - 1, mode by mode
-    mean_axis_residual: float                    # |1^T M Psi|, |x~^T M Psi| of sqrt(m) |X|
-    rigid_residual: float                        # rigid eigenvalues / the first flexible one
+    mean_axis_residual: float = pydantic.Field(ge=0, le=MEAN_AXIS_TOLERANCE)   # |1^T M Psi|, |x~^T M Psi| of sqrt(m) |X|
+    rigid_residual: float = pydantic.Field(ge=0, allow_inf_nan=False)   # rigid eigenvalues / the first flexible one
     wall_time_s: dict
     platform: dict
 

@@ -9,9 +9,11 @@ by another version of pinbore? run pinbore reduced again)`).
 """
 
 import json
+import math
 from pathlib import Path
 from typing import Literal
 
+from pinbore.core.errors import InputError
 from pinbore.core.scene import Record, read_json
 
 
@@ -76,5 +78,14 @@ def write(path: Path, summary: Summary) -> None:
 
 
 def read(path) -> Summary:
-    """summary.json validated."""
-    return read_json(Summary, path, "reduced")
+    """summary.json validated: its model, and a complete run's peaks and energy book finite
+    numbers (a run that writes NaN is marked suspect or incomplete by its verdict: a
+    complete one with NaN is not what pinbore wrote)."""
+    summary = read_json(Summary, path, "reduced")
+    if summary.status == "complete":
+        numbers = [v for j in summary.clearance_joints.values() for v in j.model_dump().values()]
+        numbers += list(summary.energy_balance.model_dump().values())
+        if not all(math.isfinite(v) for v in numbers):
+            raise InputError(f"{path}: status: complete, but a peak or the energy book is not a "
+                             "finite number (not a summary pinbore wrote: run pinbore reduced again)")
+    return summary
