@@ -430,6 +430,8 @@ def put(data: dict, key: str, value, create: bool = False) -> None:
         if last:
             if not create and (not isinstance(node[part], (int, float)) or isinstance(node[part], bool)):
                 raise KeyError(f"{key}: not a number in the base scene")
+            if not create and isinstance(node[part], int) and float(value).is_integer():
+                value = int(value)   # a count (modes, slices) stays an integer
             node[part] = value
         else:
             node = node[part]

@@ -766,3 +766,18 @@ def test_a_plan_too_large_is_refused_before_it_is_built(tmp_path, edit):
     run = main_in_child("study", study, "--out", tmp_path / "out")
     assert run.returncode == 2 and "--force" in run.stderr, run.stderr
     assert len(run.stderr.strip().splitlines()) == 1 and float(run.stdout) < 1.0
+
+
+def test_a_study_varies_an_integer_key(tmp_path):
+    """A count such as a sliced journal's slices is varied as the integer it is (its values
+    had been put as floats, which the strict scene refused)."""
+    from pinbore import study as runner
+
+    path = tmp_path / "study.toml"
+    path.write_text(f'base = "{ROOT / "scenes/reduced/deployed_panel_shaken_3d.toml"}"\n'
+                    '[parameters."clearance_joints.0.slices"]\nvalues = [4, 8]\n'
+                    '[sampling]\nmethod = "grid"\n'
+                    '[[collect]]\nname = "impacts"\npath = "impacts"\n')
+    plan = runner.Plan(path, runner.load(path))
+    assert [p["clearance_joints"][0]["slices"] for p in plan.scenes] == [4, 8]
+    assert all(type(p["clearance_joints"][0]["slices"]) is int for p in plan.scenes)
