@@ -19,7 +19,7 @@ spring has no published stiffness: it is fitted as P = s E* d (s alone). The fit
 import numpy as np
 from scipy import stats
 
-from pinbore.laws.lawsfile import MODEL, Errors, Fit, law_force
+from pinbore.laws.lawsfile import EXPONENT_CORRECTION, MODEL, Errors, Fit, law_force
 
 
 def errors(predicted, measured) -> Errors:
@@ -53,6 +53,9 @@ def fit(name: str, curves) -> Fit:
     sigma2 = float(np.sum((y - design @ coef) ** 2)) / dof
     half = stats.t.ppf(0.975, dof) * np.sqrt(np.diag(sigma2 * np.linalg.inv(design.T @ design)))
     q, q_half = (float(coef[1]), float(half[1])) if with_exponent else (0.0, 0.0)
+    if not (np.all(np.isfinite(coef)) and np.isfinite(np.exp(coef[0])) and abs(q) <= EXPONENT_CORRECTION):
+        raise NotFitted(f"{name}: the fit's scale {np.exp(coef[0]):.3g} or exponent correction "
+                        f"{q:.3g} is beyond a contact law's (|q| <= {EXPONENT_CORRECTION:g})")
     return Fit(model=MODEL, scale=float(np.exp(coef[0])),
                scale_ci95=[float(np.exp(coef[0] - half[0])), float(np.exp(coef[0] + half[0]))],
                exponent_correction=q, exponent_correction_ci95=[q - q_half, q + q_half],

@@ -29,9 +29,9 @@ from tqdm import tqdm
 from pinbore.core.errors import InputError
 
 SCHEDULER_TIMEOUT = 10   # s to connect to a Dask scheduler
-ADDRESS = re.compile(r"([a-z][a-z0-9+.-]*://)?[A-Za-z0-9_.\[\]:-]+:[0-9]{1,5}")   # [protocol://]host:port
+ADDRESS = re.compile(r"[a-z][a-z0-9+.-]*://\S+|[A-Za-z0-9_.\[\]:-]+:[0-9]{1,5}")   # protocol://..., host:port
 WORKERS_PER_CORE = 4
-ENTRY = re.compile(r"[^.].*\.json|\..+\.[0-9]+\.json\.tmp")   # a cache's files: entries, and entries being written
+ENTRY = re.compile(r"\..*|.*\.json")   # a cache's files: entries (and hidden ones: entries being written, .gitignore)
 
 
 def default_workers() -> int:
@@ -40,13 +40,13 @@ def default_workers() -> int:
 
 
 def check_scheduler(address: str | None) -> str | None:
-    """A Dask scheduler's address (None: local processes), [protocol://]host:port;
-    ValueError naming the rule."""
+    """A Dask scheduler's address (None: local processes), protocol://host[:port] or
+    host:port; ValueError naming the rule."""
     if address is None:
         return None
     if not ADDRESS.fullmatch(address.strip()):
-        raise ValueError(f"{address!r} must be a scheduler's address, [protocol://]host:port, "
-                         "e.g. tcp://host:8786")
+        raise ValueError(f"{address!r} must be a scheduler's address, protocol://host[:port] "
+                         "or host:port, e.g. tcp://host:8786")
     if importlib.util.find_spec("distributed") is None:
         raise ValueError("needs the dask 'distributed' package")
     return address
@@ -108,17 +108,26 @@ def source_hash(*packages: str) -> str:
     by relative path and content, and the binary of each compiled module among them), found
     without importing them: a cache keyed on it never serves a result of other code."""
     digest = hashlib.sha256()
+    for name, path in hashed_files(*packages):
+        digest.update(f"{name}\0".encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
+def hashed_files(*packages: str) -> list[tuple[str, Path]]:
+    """What source_hash reads, by name: the .py files below every folder of each package
+    (an editable install gives a package more than one: its source, and the installed tree
+    that holds a compiled module), and each compiled module among them."""
+    files = []
     for package in packages:
         spec = importlib.util.find_spec(package)
-        folder = Path(next(iter(spec.submodule_search_locations))).resolve()
-        for path in sorted(folder.rglob("*.py")):
-            digest.update(f"{package}/{path.relative_to(folder)}\0".encode())
-            digest.update(path.read_bytes())
-        for module in COMPILED:
-            if module.rpartition(".")[0] == package:
-                digest.update(f"{module}\0".encode())
-                digest.update(Path(importlib.util.find_spec(module).origin).read_bytes())
-    return digest.hexdigest()
+        folders = dict.fromkeys(Path(p).resolve() for p in spec.submodule_search_locations)
+        found = {f"{package}/{path.relative_to(folder)}": path
+                 for folder in folders for path in folder.rglob("*.py")}
+        files += sorted(found.items())
+        files += [(module, Path(importlib.util.find_spec(module).origin)) for module in COMPILED
+                  if module.rpartition(".")[0] == package]
+    return files
 
 
 def cached_map(task, items, names, cache: Path, workers: int, scheduler: str | None,

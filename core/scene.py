@@ -80,26 +80,35 @@ def referenced_files(path: str | Path) -> list[Path]:
     return named_files(data, path.parent)
 
 
-def named_files(data, base: Path) -> list[Path]:
-    """The files scene data names: the string values of its keys `*_file` and the strings of
-    its lists `*_files`, in any table (tables in lists included), relative to `base` unless
-    absolute."""
-    found = []
+def _map_files(node, f):
+    """Scene data with f applied to every file it names: the string value of a key `*_file`
+    and each string of a list `*_files`, in any table (tables in lists included)."""
+    if isinstance(node, dict):
+        out = {}
+        for key, value in node.items():
+            if key.endswith("_file") and isinstance(value, str):
+                out[key] = f(value)
+            elif key.endswith("_files") and isinstance(value, list):
+                out[key] = [f(v) if isinstance(v, str) else v for v in value]
+            else:
+                out[key] = _map_files(value, f)
+        return out
+    if isinstance(node, list):
+        return [_map_files(v, f) for v in node]
+    return node
 
-    def walk(node):
-        if isinstance(node, dict):
-            for key, value in node.items():
-                if key.endswith("_file") and isinstance(value, str):
-                    found.append(value)
-                elif key.endswith("_files") and isinstance(value, list):
-                    found.extend(v for v in value if isinstance(v, str))
-                else:
-                    walk(value)
-        elif isinstance(node, list):
-            for item in node:
-                walk(item)
-    walk(data)
+
+def named_files(data, base: Path) -> list[Path]:
+    """The files scene data names (_map_files), relative to `base` unless absolute."""
+    found = []
+    _map_files(data, lambda name: found.append(name) or name)
     return [Path(f) if Path(f).is_absolute() else Path(base) / f for f in found]
+
+
+def absolute_files(data, base: Path):
+    """A copy of scene data with the files it names made absolute against `base` (what a
+    scene file's names are against its folder)."""
+    return _map_files(data, lambda name: str(Path(base) / name))
 
 
 def load(model: type[pydantic.BaseModel], path: str | Path) -> pydantic.BaseModel:

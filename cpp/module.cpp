@@ -6,6 +6,7 @@
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <initializer_list>
@@ -70,10 +71,20 @@ NB_MODULE(cpp, m)
                    and table_stresses.shape(1) == width and table_tails.shape(0) == m,
                "radial_return: the hardening tables must be (m, k), their counts and tails (m,)");
         for (std::size_t i = 0; i < n; ++i)
-          expect(curve(i) < static_cast<std::int64_t>(m), "radial_return: curve names a table it was not given");
+          expect(curve(i) >= -1 and curve(i) < static_cast<std::int64_t>(m),
+                 "radial_return: curve names a table it was not given (-1: never yields)");
         for (std::size_t j = 0; j < m; ++j)
-          expect(table_counts(j) >= 1 and table_counts(j) <= static_cast<std::int64_t>(width),
+        {
+          const std::int64_t count = table_counts(j);
+          expect(count >= 1 and count <= static_cast<std::int64_t>(width),
                  "radial_return: a table's count must lie in [1, its width]");
+          expect(table_strains(j, 0) == 0.0 and std::isfinite(table_tails(j)),
+                 "radial_return: a table starts at plastic strain 0, its tail finite");
+          for (std::int64_t k = 0; k < count; ++k)
+            expect(std::isfinite(table_stresses(j, k))
+                       and (k == 0 or table_strains(j, k) > table_strains(j, k - 1)),
+                   "radial_return: a table's strains increase, its stresses are finite");
+        }
         Out stress = empty({n, 6}), eps_p = empty({n, 6}), p = empty({n}), tangent = empty({n, 6, 6});
         {
           nb::gil_scoped_release release;

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <stdexcept>
 
 namespace pinbore::plasticity
 {
@@ -57,19 +58,26 @@ void radial_return(const Points& points, const Tables& tables, std::span<double>
       YieldPoint y = yield_stress(p, curve);
       if (q > y.stress)
       {
-        // segment by segment: q - 3 mu (p - p_n) = sigma_y(p)
-        while (true)
+        // segment by segment: q - 3 mu (p - p_n) = sigma_y(p); a segment at most once each
+        // (the tables' strains increase), and the last one runs on without end
+        bool returned = false;
+        for (std::int64_t pass = 0; pass <= curve.count and not returned; ++pass)
         {
           const double step
               = (q - 3.0 * mu * (p - points.equivalent[i]) - y.stress) / (3.0 * mu + y.slope);
           if (p + step <= y.end)
           {
             p += step;
-            break;
+            returned = true;
           }
-          p = y.end;
-          y = yield_stress(p, curve);
+          else
+          {
+            p = y.end;
+            y = yield_stress(p, curve);
+          }
         }
+        if (not returned)
+          throw std::runtime_error("radial_return: the return did not end on a segment of its table");
         const double dp = p - points.equivalent[i];
         theta = 1.0 - 3.0 * mu * dp / q;
         beta = 3.0 * mu / (3.0 * mu + y.slope) - 1.0 + theta;

@@ -114,9 +114,12 @@ def radial_return(strain, plastic_strain, equivalent, shear_modulus, bulk_modulu
 
     Returns the stress (n, 6) (Pa), the plastic strain (n, 6), the equivalent plastic strain
     (n,) and the consistent tangent d sigma / d eps (n, 6, 6) (Pa)."""
+    curve, table_counts = np.asarray(curve), np.asarray(table_counts)
+    if not (np.issubdtype(curve.dtype, np.integer) and np.issubdtype(table_counts.dtype, np.integer)):
+        raise ValueError("radial_return: curve and table_counts are indices (integers)")
     return cpp.radial_return(strain, plastic_strain, equivalent, shear_modulus, bulk_modulus,
-                             np.asarray(curve, np.int64), table_strains, table_stresses,
-                             np.asarray(table_counts, np.int64), table_tails)
+                             curve.astype(np.int64), table_strains, table_stresses,
+                             table_counts.astype(np.int64), table_tails)
 
 
 def elastic_energy(stress, shear_modulus, bulk_modulus):
@@ -144,6 +147,7 @@ def hardening_tables(curves):
     tail): padded tables (m, k), counts (m,) and tails (m,)."""
     width = max((len(c[0]) for c in curves), default=1)
     strains, stresses = np.full((max(len(curves), 1), width), np.inf), np.zeros((max(len(curves), 1), width))
+    strains[:, 0] = 0.0   # every curve starts at p = 0 (the row of no curve too)
     counts, tails = np.ones(max(len(curves), 1), dtype=np.int64), np.zeros(max(len(curves), 1))
     for j, (e, s, tail) in enumerate(curves):
         strains[j, :len(e)], stresses[j, :len(s)], counts[j], tails[j] = e, s, len(e), tail

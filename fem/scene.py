@@ -54,7 +54,7 @@ class Material(Strict):
     @property
     def hardening_curve(self) -> tuple[list[float], list[float], float]:
         """(plastic strains, yield stresses (Pa), slope beyond the last point (Pa)), the form
-        fem.plasticity.yield_stress reads."""
+        the compiled return map reads (fem.plasticity.hardening_tables)."""
         if self.hardening is not None:
             return [e for e, _ in self.hardening], [s for _, s in self.hardening], 0.0
         return [0.0], [self.yield_stress], self.hardening_modulus or 0.0

@@ -40,6 +40,12 @@ Poisson = Annotated[float, pydantic.Field(gt=-1, lt=0.5, allow_inf_nan=False)]
 EXPONENT_CORRECTION = 3.0   # |q| of a calibrated law beyond which it is no longer a contact's
 
 
+def pin_in_bore(pin: float, bore: float, names: tuple[str, str]) -> None:
+    """ValueError unless the pin's radius is smaller than the bore's (m)."""
+    if pin >= bore:
+        raise ValueError(f"{names[0]} {pin:g} m must be smaller than {names[1]} {bore:g} m")
+
+
 def _ordered(span: list[float]) -> list[float]:
     if span[0] > span[1]:
         raise ValueError(f"the range [{span[0]:g}, {span[1]:g}] runs backwards")
@@ -121,8 +127,7 @@ class JointRecord(Record):
 
     @pydantic.model_validator(mode="after")
     def _pin_in_bore(self):
-        if self.r_pin >= self.r_bore:
-            raise ValueError(f"r_pin {self.r_pin:g} m must be smaller than r_bore {self.r_bore:g} m")
+        pin_in_bore(self.r_pin, self.r_bore, ("r_pin", "r_bore"))
         return self
 
     @classmethod
@@ -263,9 +268,7 @@ class ImpactJoint(Record):
 
     @pydantic.model_validator(mode="after")
     def _pin_in_bore(self):
-        if self.pin_radius_m >= self.bore_radius_m:
-            raise ValueError(f"pin_radius_m {self.pin_radius_m:g} m must be smaller than "
-                             f"bore_radius_m {self.bore_radius_m:g} m")
+        pin_in_bore(self.pin_radius_m, self.bore_radius_m, ("pin_radius_m", "bore_radius_m"))
         return self
 
     def key(self) -> str:

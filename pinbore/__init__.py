@@ -15,10 +15,12 @@ from the floors below it:
 
 # An editable install (scikit-build-core's redirect) also lists the repository's root among
 # this package's folders, the parent of the floors' folders it maps: a root-level folder
-# (bench/, tests/) would then import as pinbore.<folder>. The package's folders are those
-# named pinbore (its source, and the installed tree that holds the compiled core); the
-# floors are found by their own mapping.
-__path__[:] = [p for p in __path__ if p.rstrip("/").rsplit("/", 1)[-1] == "pinbore"]   # noqa: F821
+# (bench/, tests/) would then import as pinbore.<folder>. The root, the folder above this
+# file's, is dropped by identity (a clone is often itself named pinbore); the floors are
+# found by their own mapping.
+__path__[:] = [p for p in __path__   # noqa: F821
+               if __import__("os").path.abspath(p) != __import__("os").path.dirname(
+                   __import__("os").path.dirname(__import__("os").path.abspath(__file__)))]
 
 API = ("scene", "run", "calibrate")   # pinbore.api: scenes and stages in process
 FLOORS = ("core", "laws", "meshes", "fem", "calibration", "reduced")

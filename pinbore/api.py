@@ -25,23 +25,6 @@ from pinbore.core.errors import InputError
 from pinbore.core.output import declared_inputs
 
 
-def _absolute(node, base: Path):
-    """The dict with every `*_file` string and `*_files` list made absolute against base."""
-    if isinstance(node, dict):
-        out = {}
-        for key, value in node.items():
-            if key.endswith("_file") and isinstance(value, str):
-                out[key] = str(base / value)
-            elif key.endswith("_files") and isinstance(value, list):
-                out[key] = [str(base / v) if isinstance(v, str) else v for v in value]
-            else:
-                out[key] = _absolute(value, base)
-        return out
-    if isinstance(node, list):
-        return [_absolute(v, base) for v in node]
-    return node
-
-
 def _path(name: str, value) -> Path:
     """An argument that names a file or folder, as a Path; InputError naming the argument."""
     if not isinstance(value, (str, os.PathLike)) or not str(value).strip():
@@ -76,7 +59,7 @@ def _scene_file(scene, base):
     _toml_ready(scene)
     with tempfile.TemporaryDirectory(prefix="pinbore-scene-") as folder:
         path = Path(folder) / "scene.toml"
-        path.write_text(tomli_w.dumps(_absolute(scene, _path("base", base or ".").resolve())))
+        path.write_text(tomli_w.dumps(scenes.absolute_files(scene, _path("base", base or ".").resolve())))
         try:
             yield path
         except InputError as err:

@@ -622,16 +622,7 @@ def point_scene(study_file, name: str, out=None) -> dict:
     if out is not None:
         import tomli_w   # noqa: PLC0415
 
-        Path(out).write_text(tomli_w.dumps(absolute_files(data, plan.base_path.parent)))
-    return data
-
-
-def absolute_files(data: dict, base: Path) -> dict:
-    """A copy of scene data with the names of the files it refers to (`*_file`) absolute."""
-    data = json.loads(json.dumps(data))
-    for key, value in flatten(data).items():
-        if key.endswith("_file") and isinstance(value, str) and not Path(value).is_absolute():
-            put(data, key, str(base / value), create=True)
+        Path(out).write_text(tomli_w.dumps(scenes.absolute_files(data, plan.base_path.parent)))
     return data
 
 
@@ -718,7 +709,7 @@ class Point:
         temporary folder (names of files made absolute), and read its result."""
         import tomli_w   # noqa: PLC0415
 
-        data = absolute_files(data, self.base)
+        data = scenes.absolute_files(data, self.base)
         with tempfile.TemporaryDirectory(prefix="pinbore-study-") as folder:
             path = Path(folder) / "scene.toml"
             path.write_text(tomli_w.dumps(data))

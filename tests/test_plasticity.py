@@ -182,3 +182,16 @@ def test_the_compiled_return_map_refuses_arrays_of_the_wrong_shape():
         radial_return(strain, eps_p, p, np.full(1, 8e10), moduli[1], curve, *tables)
     with pytest.raises(ValueError, match="names a table"):
         radial_return(strain, eps_p, p, *moduli, np.full(2, 3, np.int64), *tables)
+
+
+def test_the_return_map_refuses_curves_that_are_no_indices_and_tables_that_do_not_increase():
+    strain, eps_p, p = np.zeros((1, 6)), np.zeros((1, 6)), np.zeros(1)
+    moduli = (np.full(1, 8e10), np.full(1, 1.6e11))
+    tables = hardening_tables([([0.0, 0.1], [2e8, 3e8], 0.0)])
+    with pytest.raises(ValueError, match="integers"):
+        radial_return(strain, eps_p, p, *moduli, np.array([0.7]), *tables)
+    with pytest.raises(ValueError, match="names a table"):
+        radial_return(strain, eps_p, p, *moduli, np.array([-5]), *tables)
+    backwards = (tables[0][:, ::-1].copy(), *tables[1:])
+    with pytest.raises(ValueError, match="strains increase|starts at plastic strain 0"):
+        radial_return(strain, eps_p, p, *moduli, np.array([0]), *backwards)

@@ -781,3 +781,17 @@ def test_a_study_varies_an_integer_key(tmp_path):
     plan = runner.Plan(path, runner.load(path))
     assert [p["clearance_joints"][0]["slices"] for p in plan.scenes] == [4, 8]
     assert all(type(p["clearance_joints"][0]["slices"]) is int for p in plan.scenes)
+
+
+def test_a_points_cache_key_reads_every_source_file_of_its_floors():
+    """The code an FE point's key hashes: every .py file of core, laws, meshes and fem in the
+    repository, and the compiled core's binary (an editable install gives pinbore.core two
+    folders: its source, and the installed tree of the compiled module, which holds no .py)."""
+    from pinbore.core.parallel import hashed_files
+    from pinbore.study import FE_CODE
+
+    names = {name for name, _ in hashed_files(*FE_CODE)}
+    for floor in ("core", "laws", "meshes", "fem"):
+        for path in (ROOT / floor).rglob("*.py"):
+            assert f"pinbore.{floor}/{path.relative_to(ROOT / floor)}" in names
+    assert "pinbore.core.cpp" in names
