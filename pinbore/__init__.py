@@ -18,9 +18,10 @@ from the floors below it:
 # (bench/, tests/) would then import as pinbore.<folder>. The root, the folder above this
 # file's, is dropped by identity (a clone is often itself named pinbore); the floors are
 # found by their own mapping.
-__path__[:] = [p for p in __path__   # noqa: F821
-               if __import__("os").path.abspath(p) != __import__("os").path.dirname(
-                   __import__("os").path.dirname(__import__("os").path.abspath(__file__)))]
+import os as _os   # noqa: E402
+
+_ROOT = _os.path.dirname(_os.path.dirname(_os.path.abspath(__file__)))
+__path__[:] = [p for p in __path__ if _os.path.abspath(p) != _ROOT]   # noqa: F821
 
 API = ("scene", "run", "calibrate")   # pinbore.api: scenes and stages in process
 FLOORS = ("core", "laws", "meshes", "fem", "calibration", "reduced")
