@@ -8,6 +8,7 @@ and a broken rule is reported as one line `<file>: <key>: <rule>`.
 import json
 import tomllib
 from pathlib import Path
+from typing import Annotated
 
 import pydantic
 
@@ -23,6 +24,11 @@ class Strict(pydantic.BaseModel):
 
     model_config = pydantic.ConfigDict(extra="forbid", strict=True, frozen=True,
                                        allow_inf_nan=False)
+
+
+# a physical value of a Record that must be a positive number (a Record's numbers may otherwise
+# be inf or nan, which a run that blew up honestly records)
+Positive = Annotated[float, pydantic.Field(gt=0, allow_inf_nan=False)]
 
 
 class Record(Strict):

@@ -28,13 +28,12 @@ import numpy as np
 import pydantic
 
 from pinbore.core.errors import InputError
-from pinbore.core.scene import Record, read_json
+from pinbore.core.scene import Positive, Record, read_json
 from pinbore.laws import elastic
 
 Range = Annotated[list[float], pydantic.Field(min_length=2, max_length=2)]   # [low, high]
 # the physical values of the file, range-checked on read as a scene's are (a Record's numbers
 # may otherwise be inf or nan: an error that a law without a solution records honestly)
-Positive = Annotated[float, pydantic.Field(gt=0, allow_inf_nan=False)]
 NonNegative = Annotated[float, pydantic.Field(ge=0, allow_inf_nan=False)]
 Poisson = Annotated[float, pydantic.Field(gt=-1, lt=0.5, allow_inf_nan=False)]
 EXPONENT_CORRECTION = 3.0   # |q| of a calibrated law beyond which it is no longer a contact's

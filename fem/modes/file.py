@@ -32,13 +32,11 @@ import hashlib
 import zipfile
 from dataclasses import dataclass, fields
 from pathlib import Path
-from typing import Annotated
-
 import numpy as np
 import pydantic
 
 from pinbore.core.errors import InputError
-from pinbore.core.scene import Record, read_json
+from pinbore.core.scene import Positive, Record, read_json
 
 FORMAT = "pinbore-reduced-body"
 VERSION = 1
@@ -217,9 +215,6 @@ def _check(body: ReducedBody, source: str, mesh_sha256: str) -> None:
     if mesh_sha256 != body.mesh_sha256:
         raise InputError(f"{source}: mesh_sha256: the nodes and cells are not those the modes "
                          "were computed on")
-
-
-Positive = Annotated[float, pydantic.Field(gt=0, allow_inf_nan=False)]
 
 
 class ModesSummary(Record):

@@ -67,9 +67,10 @@ def summarise(scene, scene_path, reduced, body, total) -> body_file.ModesSummary
     try:
         return _summary(scene, scene_path, reduced, body, total)
     except pydantic.ValidationError as err:
+        from pinbore.fem.modes.reduction import unresolved   # noqa: PLC0415 (DOLFINx)
+
         wrong = "; ".join(f"{'.'.join(map(str, e['loc']))}: {e['msg']}" for e in err.errors()[:3])
-        raise InputError(f"body: the reduced body fails its checks ({wrong}): the mesh does not "
-                         "resolve it (body.cell_size against body.thickness); nothing written") from None
+        raise unresolved(scene, f"its record fails {wrong}; nothing written") from None
 
 
 def _summary(scene, scene_path, reduced, body, total) -> body_file.ModesSummary:
