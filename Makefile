@@ -66,7 +66,7 @@ help: ## list the targets
 venv: $(STAMP) ## create .venv with Python 3.12 and the pinned dependencies
 
 # the compiled core (cpp/) builds in the editable install; a change of it rebuilds it
-$(STAMP): requirements.lock pyproject.toml CMakeLists.txt $(wildcard cpp/*.cpp cpp/*.h)
+$(STAMP): requirements.lock pyproject.toml CMakeLists.txt $(wildcard cpp/*.cpp cpp/*.h cpp/*/*.cpp cpp/*/*.h)
 	@test -n "$(PYTHON312)" || { echo "make: Python 3.12 not found (PATH or ~/.pyenv/versions/3.12.*); set PYTHON312=/path/to/python3.12" >&2; exit 2; }
 	$(PYTHON312) -m venv $(VENV)
 	$(VENV)/bin/pip install --quiet --disable-pip-version-check -r requirements.lock

@@ -1,6 +1,7 @@
 // pinbore.core.cpp: the compiled core's Python module (nanobind). Each binding takes NumPy
 // arrays (converted to C-contiguous doubles and int64 where they are not), checks their
 // shapes, releases the GIL and calls the core; what it returns it allocates.
+#include "mechanism/bindings.h"
 #include "plasticity.h"
 
 #include <nanobind/nanobind.h>
@@ -52,6 +53,7 @@ void expect(bool rule, const std::string& what)
 NB_MODULE(cpp, m)
 {
   m.doc() = "pinbore's compiled core";
+  pinbore::mechanism::bind_mechanism(m);
 
   m.def(
       "radial_return",

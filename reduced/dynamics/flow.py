@@ -32,7 +32,7 @@ import numpy as np
 from tqdm import tqdm
 
 from pinbore.reduced.dynamics.continuation import Continuation
-from pinbore.reduced.mechanism import engine, outputs
+from pinbore.reduced.mechanism import kernel, outputs
 from pinbore.reduced.mechanism.layout import (CONSTANT_SPEED, DISSIPATED, OK, PRIM_ANGLE0, PRIM_BODY_I, PRIM_BODY_J,
                                               PRIM_PROFILE, PRIM_SPEED, WORK_IN)
 from pinbore.reduced.mechanism.model import Model, translational_frames
@@ -140,7 +140,7 @@ class MechanismFlow:
         body's two directions across the joint; without clearance joints, the centre of the
         first body that is not driven (x, y global)."""
         args = self.model.args()
-        return self._observed_at(state.y, args, engine.workspace(args), self._observed_where())
+        return self._observed_at(state.y, args, kernel.workspace(args), self._observed_where())
 
     def _observed_where(self):
         """What the observed point is measured from: the first clearance joint's bodies,
@@ -154,7 +154,7 @@ class MechanismFlow:
         if not self.model.joints:
             nq = self.model.nq
             return np.array([*y[where:where + 2], *y[nq + where:nq + where + 2]])
-        return np.array(engine.relative_motion(y, args, work, *where))
+        return np.array(kernel.relative_motion(y, args, work, *where))
 
     def orbit_measures(self) -> dict:
         """What the last advance shows of its orbit, seen as the time-domain outputs see a run
@@ -185,7 +185,7 @@ class MechanismFlow:
             dy, depth, offset = np.empty(run.states.shape[1]), np.empty(nc), np.zeros((nc, model.kind.dimension))
 
             def deepest(t, y, args, work):
-                engine.observe(t, y, dy, args, work, depth, offset)
+                kernel.observe(t, y, dy, args, work, depth, offset)
                 return depth.max()
             k = int(np.argmax(seen["depths"].max(axis=1)))
             measures["gap"] = -outputs.refined_max(model, run, k, deepest)[0]

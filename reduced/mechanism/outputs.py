@@ -30,7 +30,7 @@ import csv
 import numpy as np
 
 from pinbore.core.figures import plt, save_png
-from pinbore.reduced.mechanism import engine, layout
+from pinbore.reduced.mechanism import kernel, layout
 from pinbore.reduced.mechanism.layout import (
     CONTACT_COMPLIANCE, CONTACT_IMPACT, CONTACT_KIND, CONTACT_LENGTH, CONTACT_SLICES, CONTINUOUS,
     DISSIPATED, LATCH, OK, LOG_IMPULSE, LOG_JOINT, LOG_RATE, PLANE, SLICED, SPRING, STOP, TORSION_KIND,
@@ -59,21 +59,21 @@ def joint_force(r, normal):
 
 
 def observed_steps(model, run) -> dict:
-    """engine.observe at every accepted step of a Trajectory, each with the law memory (impact
+    """kernel.observe at every accepted step of a Trajectory, each with the law memory (impact
     speeds, latches, contact modes) it was taken with: per-step arrays by name (rates,
     bodies, depths, normals, frictions, offsets, drift, kinetic, angles, stretches), and the
     args and work it used."""
     times, states = run.times, run.states
     n, nc, nt = times.size, model.contacts.shape[0], model.torsion.shape[0]
     args = model.args()
-    work = engine.workspace(args)
+    work = kernel.workspace(args)
     kept = model.kind.bodies().RIGID_COLUMNS   # of a body's row: its rigid motion
     seen = {"rates": np.empty((n, states.shape[1])), "bodies": np.empty((n, work.bodies.shape[0], kept)),
             "depths": np.empty((n, nc)), "normals": np.empty((n, nc)), "frictions": np.empty((n, nc)),
             "offsets": np.zeros((n, nc, model.kind.dimension)), "drift": np.empty(n),
             "kinetic": np.empty(n), "angles": np.empty((n, nt)),
             "stretches": np.empty((n, args.springs.shape[0]))}
-    engine.observe_steps(times, states, run.speeds, run.latched, run.modes, args, work, *seen.values())
+    kernel.observe_steps(times, states, run.speeds, run.latched, run.modes, args, work, *seen.values())
     return seen | {"args": args, "work": work}
 
 
@@ -146,7 +146,7 @@ def elastic_energy(model, states, args, work, depths) -> np.ndarray:
             total += model.elastic_energy(k, depths[:, k])
             continue
         approaches, weights = np.empty((2, states.shape[0], int(row[CONTACT_SLICES])))
-        moved = np.array([engine.slice_approaches(y, args, work, k, approaches[s], weights[s])
+        moved = np.array([kernel.slice_approaches(y, args, work, k, approaches[s], weights[s])
                           for s, y in enumerate(states)])
         total += np.sum(weights * model.elastic_energy(k, approaches), axis=1)
         if row[CONTACT_COMPLIANCE] > 0:
@@ -172,7 +172,7 @@ def between_steps(model, run, k, points=REFINE_POINTS):
     nc, nt = model.contacts.shape[0], model.torsion.shape[0]
     basis, _ = hermite_basis(np.linspace(0.0, 1.0, points))
     args = model.args()
-    work = engine.workspace(args)
+    work = kernel.workspace(args)
     f0, f1 = np.empty(states.shape[1]), np.empty(states.shape[1])
 
     def remember(a):   # the memory of the step that ends at a
@@ -183,8 +183,8 @@ def between_steps(model, run, k, points=REFINE_POINTS):
     for a in range(max(k - 1, 0), min(k + 1, times.size - 1)):
         remember(a + 1)
         h = times[a + 1] - times[a]
-        engine.rhs(times[a], states[a], f0, args, work)
-        engine.rhs(times[a + 1], states[a + 1], f1, args, work)
+        kernel.rhs(times[a], states[a], f0, args, work)
+        kernel.rhs(times[a + 1], states[a + 1], f1, args, work)
         ys = basis.T @ np.array([states[a], h * f0, states[a + 1], h * f1])
         for i in range(points):
             yield float(times[a] + i / (points - 1) * h), ys[i], args, work
@@ -210,7 +210,7 @@ def refined_peak(model, j, run, k, points=REFINE_POINTS):
     dy = np.empty(run.states.shape[1])
 
     def force(t, y, args, work):
-        engine.rhs(t, y, dy, args, work)
+        kernel.rhs(t, y, dy, args, work)
         return joint_force(r, work.normal[:nc])
     return refined_max(model, run, k, force, points)
 

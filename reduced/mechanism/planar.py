@@ -680,7 +680,7 @@ def project(model, q, qd, primitives, minv, t=0.0, movable=None):
     velocities projected onto Phi_q q' = -Phi_t with least change in kinetic-energy norm (minv:
     M^-1's diagonal, exact for a flexible body undeformed); only the coordinates and rates
     `movable` (default all) change. Returns (q, q', largest remaining position gap)."""
-    from pinbore.reduced.mechanism.engine import constraint_values   # noqa: PLC0415 (compiled)
+    from pinbore.reduced.mechanism.kernel import constraint_values   # noqa: PLC0415 (the engine)
 
     q, qd = q.copy(), qd.copy()
     args = model.args(primitives=np.array(primitives, float).reshape(-1, layout.PRIMITIVE_COLUMNS),

@@ -1019,7 +1019,7 @@ class Geometry(FlexibleGeometry):
         velocities as given (each body's r' and global w, on the positions found), projected
         onto the ideal joints and the clearance joints that start "ideal" (those that start
         "free" keep their relative velocity; "placed" ones keep their positions too)."""
-        from pinbore.reduced.mechanism import engine   # noqa: PLC0415 (compiled)
+        from pinbore.reduced.mechanism import kernel as engine   # noqa: PLC0415 (the engine)
 
         s = self.scene
         nb = len(s.bodies)
@@ -1219,7 +1219,7 @@ def flow_coordinates(model, y, primitives) -> np.ndarray:
 def flow_consistent(model, y, args) -> np.ndarray:
     """y made consistent with the ideal joints and the drive (Euler parameters normalised;
     Gauss-Newton projection, engine.project_onto_constraints)."""
-    from pinbore.reduced.mechanism import engine   # noqa: PLC0415 (the engine imports us)
+    from pinbore.reduced.mechanism import kernel as engine   # noqa: PLC0415 (the engine imports us)
 
     y = y.copy()
     work = engine.workspace(args)

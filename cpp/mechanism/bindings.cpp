@@ -1,0 +1,496 @@
+// The multibody engine's Python bindings (pinbore.core.cpp.mechanism): each function takes
+// the mechanism as pinbore.reduced.mechanism.layout.Args and, where Python keeps the
+// right-hand side's buffers, layout.Work (namedtuples of NumPy arrays), reads their arrays in
+// place (the impact speeds, latch flags and contact modes are updated in place, as the
+// integrator does) and releases the GIL while it computes.
+#include "bindings.h"
+#include "integrator.h"
+#include "planar.h"
+
+#include <nanobind/ndarray.h>
+#include <nanobind/stl/array.h>
+#include <nanobind/stl/string.h>
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace nb = nanobind;
+
+namespace pinbore::mechanism
+{
+namespace
+{
+template <typename T>
+using Array = nb::ndarray<T, nb::c_contig, nb::device::cpu>;
+
+/// The arrays a call reads, kept alive while it runs.
+struct Held
+{
+  std::vector<nb::object> objects;
+};
+
+template <typename T>
+Array<T> array(nb::handle bundle, const char* name, Held& held, int ndim)
+{
+  nb::object value = nb::getattr(bundle, name);
+  Array<T> a;
+  if (not nb::try_cast(value, a, false) or static_cast<int>(a.ndim()) != ndim)
+    throw std::invalid_argument(std::string("mechanism: ") + name + " must be a C-contiguous "
+                                + std::to_string(ndim) + "-D array of "
+                                + (std::is_same_v<std::remove_const_t<T>, double> ? "float64" : "int64"));
+  held.objects.push_back(value);
+  return a;
+}
+
+template <typename T>
+std::span<T> flat(nb::handle bundle, const char* name, Held& held)
+{
+  auto a = array<T>(bundle, name, held, 1);
+  return {a.data(), a.shape(0)};
+}
+
+template <typename T>
+Matrix<T> matrix(nb::handle bundle, const char* name, Held& held, int ndim = 2)
+{
+  auto a = array<T>(bundle, name, held, ndim);
+  const auto rows = static_cast<std::ptrdiff_t>(a.shape(0));
+  return {a.data(), rows, rows == 0 ? 0 : static_cast<std::ptrdiff_t>(a.size()) / rows};
+}
+
+Args args_of(nb::handle a, Held& held)
+{
+  Args args;
+  args.nq = nb::cast<int>(nb::getattr(a, "nq"));
+  args.project_first = nb::cast<bool>(nb::getattr(a, "project_first"));
+  args.masses = flat<const double>(a, "masses", held);
+  args.minv = flat<const double>(a, "minv", held);
+  args.inertia = matrix<const double>(a, "inertia", held, 3);
+  args.inertia_inv = matrix<const double>(a, "inertia_inv", held, 3);
+  args.gravity = flat<const double>(a, "gravity", held);
+  args.offsets = flat<const std::int64_t>(a, "offsets", held);
+  args.primitives = matrix<const double>(a, "primitives", held);
+  args.baumgarte = nb::cast<double>(nb::getattr(a, "baumgarte"));
+  args.contacts = matrix<const double>(a, "contacts", held);
+  args.speeds = flat<double>(a, "speeds", held);
+  args.grid_log0 = nb::cast<double>(nb::getattr(a, "grid_log0"));
+  args.grid_step = nb::cast<double>(nb::getattr(a, "grid_step"));
+  args.tables = matrix<const double>(a, "tables", held);
+  args.torsion = matrix<const double>(a, "torsion", held);
+  args.latched = flat<double>(a, "latched", held);
+  args.mode = flat<std::int64_t>(a, "mode", held);
+  args.profile = matrix<const double>(a, "profile", held);
+  args.flex = matrix<const double>(a, "flex", held);
+  args.springs = matrix<const double>(a, "springs", held);
+  args.loads = matrix<const double>(a, "loads", held);
+  const std::ptrdiff_t nb_ = args.bodies(), nc = args.ncontacts();
+  if (static_cast<std::ptrdiff_t>(args.offsets.size()) != nb_ + 1
+      or args.offsets[nb_] != static_cast<std::int64_t>(args.nq)
+      or static_cast<std::ptrdiff_t>(args.minv.size()) != args.nq)
+    throw std::invalid_argument("mechanism: offsets must hold each body's first column and nq");
+  if (static_cast<std::ptrdiff_t>(args.speeds.size()) != nc
+      or static_cast<std::ptrdiff_t>(args.mode.size()) != nc
+      or static_cast<std::ptrdiff_t>(args.latched.size()) != args.torsion.rows)
+    throw std::invalid_argument("mechanism: speeds and mode need a value a contact, latched "
+                                "one a torsion element");
+  if ((nc and args.contacts.cols != CONTACT_COLUMNS)
+      or (args.primitives.rows and args.primitives.cols != PRIMITIVE_COLUMNS)
+      or (args.torsion.rows and args.torsion.cols != TORSION_COLUMNS)
+      or (args.springs.rows and args.springs.cols != SPRING_COLUMNS)
+      or (args.loads.rows and args.loads.cols != LOAD_COLUMNS))
+    throw std::invalid_argument("mechanism: a row array has the wrong number of columns");
+  for (std::ptrdiff_t k = 0; k < nc; ++k)
+  {
+    const auto table = static_cast<std::ptrdiff_t>(args.contacts(k, CONTACT_TABLE));
+    if (table < 0 or table >= args.tables.rows)
+      throw std::invalid_argument("mechanism: a contact names a table it was not given");
+  }
+  return args;
+}
+
+Work work_of(nb::handle w, Held& held)
+{
+  Work work;
+  work.bodies = matrix<double>(w, "bodies", held);
+  work.velocities = flat<double>(w, "velocities", held);
+  work.jac = matrix<double>(w, "jac", held);
+  work.phi = flat<double>(w, "phi", held);
+  work.phi_t = flat<double>(w, "phi_t", held);
+  work.rhs_c = flat<double>(w, "rhs_c", held);
+  work.schur = matrix<double>(w, "schur", held);
+  work.force = flat<double>(w, "force", held);
+  work.normal = flat<double>(w, "normal", held);
+  work.friction = flat<double>(w, "friction", held);
+  work.mjac = matrix<double>(w, "mjac", held);
+  work.row_bodies = matrix<std::int64_t>(w, "row_bodies", held);
+  work.first = flat<std::int64_t>(w, "first", held);
+  return work;
+}
+
+/// The planar rigid kind only, for now: a planar mechanism of rigid bodies.
+void check_kind(const Args& args)
+{
+  for (std::ptrdiff_t b = 0; b < args.bodies(); ++b)
+    if (args.offsets[b + 1] - args.offsets[b] != Planar::COLUMNS)
+      throw std::invalid_argument("mechanism: the compiled engine runs planar rigid bodies");
+}
+
+void check_work(const Args& args, const Work& w, std::size_t ny)
+{
+  const std::ptrdiff_t m = Engine<Planar>::constraint_count(args.primitives) + args.ncontacts();
+  if (w.bodies.rows != args.bodies() or w.bodies.cols != Planar::BODY_COLUMNS
+      or static_cast<std::ptrdiff_t>(w.velocities.size()) != args.nq or w.jac.rows != m
+      or w.jac.cols != args.nq or w.mjac.rows != m or w.schur.rows != m
+      or static_cast<std::ptrdiff_t>(w.rhs_c.size()) != m
+      or static_cast<std::ptrdiff_t>(w.first.size()) != m
+      or static_cast<std::ptrdiff_t>(w.normal.size()) < args.ncontacts())
+    throw std::invalid_argument("mechanism: work is not this mechanism's workspace");
+  if (ny < static_cast<std::size_t>(2 * args.nq + ENERGY_STATES))
+    throw std::invalid_argument("mechanism: y is shorter than the mechanism's state");
+}
+
+template <typename T>
+nb::ndarray<nb::numpy, T> owned(std::vector<T>&& data, std::initializer_list<std::size_t> shape)
+{
+  auto* heap = new std::vector<T>(std::move(data));
+  nb::capsule owner(heap, [](void* p) noexcept { delete static_cast<std::vector<T>*>(p); });
+  return nb::ndarray<nb::numpy, T>(heap->data(), shape, owner);
+}
+
+std::span<const double> values(const Array<const double>& a) { return {a.data(), a.size()}; }
+std::span<double> values(const Array<double>& a) { return {a.data(), a.size()}; }
+
+using E = Engine<Planar>;
+
+/// f(t, y) into dy; each contact's deepest penetration into depth and its journal point's
+/// offset from its bearing point into offset (rows of `width`); the ideal joints' largest
+/// gap |Phi| (no held rows).
+double observe(double t, std::span<const double> y, std::span<double> dy, const Args& args,
+               const Work& work, double* depth, double* offset, std::ptrdiff_t width)
+{
+  E::rhs(t, y, dy, args, work);
+  const Rows& contacts = args.contacts;
+  for (std::ptrdiff_t k = 0; k < contacts.rows; ++k)
+  {
+    depth[k] = E::contact_depth(work.bodies, contacts, k).delta;
+    const Vec2 e = sub(Planar::point_state(work.bodies, E::body(contacts, k, CONTACT_JOURNAL_BODY),
+                                           contacts.cell<2>(k, CONTACT_JOURNAL_POINT)).position,
+                       Planar::point_state(work.bodies, E::body(contacts, k, CONTACT_BEARING_BODY),
+                                           contacts.cell<2>(k, CONTACT_BEARING_POINT)).position);
+    offset[k * width] = e[0];
+    offset[k * width + 1] = e[1];
+  }
+  std::vector<std::int64_t> none(std::max<std::ptrdiff_t>(contacts.rows, 1), 0);
+  const std::ptrdiff_t m = E::constraint_rows(t, args, work, 0.0, none);
+  double gap = 0.0;
+  for (std::ptrdiff_t i = 0; i < m; ++i)
+    gap = std::max(gap, std::abs(work.phi[i]));
+  return gap;
+}
+} // namespace
+
+void bind_mechanism(nb::module_& parent)
+{
+  nb::module_ m = parent.def_submodule(
+      "mechanism", "The multibody engine: planar rigid bodies, their joints, contacts and "
+                   "integrators");
+
+  m.def(
+      "workspace",
+      [](nb::handle a)
+      {
+        Held held;
+        const Args args = args_of(a, held);
+        check_kind(args);
+        Workspace<Planar> space(args);
+        const auto nb_ = static_cast<std::size_t>(args.bodies());
+        const auto cols = static_cast<std::size_t>(args.nq);
+        const std::size_t mm = space.phi.size(), nn = space.normal.size();
+        return nb::make_tuple(
+            owned(std::move(space.bodies), {nb_, std::size_t(Planar::BODY_COLUMNS)}),
+            owned(std::move(space.velocities), {cols}), owned(std::move(space.jac), {mm, cols}),
+            owned(std::move(space.phi), {mm}), owned(std::move(space.phi_t), {mm}),
+            owned(std::move(space.rhs_c), {mm}), owned(std::move(space.schur), {mm, mm}),
+            owned(std::move(space.force), {cols}), owned(std::move(space.normal), {nn}),
+            owned(std::move(space.friction), {nn}), owned(std::move(space.mjac), {mm, cols}),
+            owned(std::move(space.row_bodies), {mm, 2}), owned(std::move(space.first), {mm}));
+      },
+      nb::arg("args"), "The right-hand side's buffers (the fields of layout.Work, in order).");
+
+  m.def(
+      "rhs",
+      [](double t, Array<const double> y, Array<double> dy, nb::handle a, nb::handle w)
+      {
+        Held held;
+        const Args args = args_of(a, held);
+        check_kind(args);
+        const Work work = work_of(w, held);
+        check_work(args, work, y.size());
+        if (dy.size() != y.size())
+          throw std::invalid_argument("rhs: dy must be as long as y");
+        nb::gil_scoped_release release;
+        E::rhs(t, values(y), values(dy), args, work);
+      },
+      nb::arg("t"), nb::arg("y"), nb::arg("dy"), nb::arg("args"), nb::arg("work"),
+      "dy = f(t, y); the contacts' forces in work.normal and work.friction.");
+
+  m.def(
+      "integrate",
+      [](Array<const double> y0, double t_end, nb::handle a, int method, double rtol,
+         double atol, double max_step, double onset_tol, double speed_floor,
+         std::int64_t max_steps)
+      {
+        Held held;
+        const Args args = args_of(a, held);
+        check_kind(args);
+        if (y0.size() < static_cast<std::size_t>(2 * args.nq + ENERGY_STATES))
+          throw std::invalid_argument("integrate: y0 is shorter than the mechanism's state");
+        if (method < DOPRI5 or method > ROSENBROCK23 or not(max_step > 0.0))
+          throw std::invalid_argument("integrate: unknown method or a step that is not positive");
+        Integration out;
+        {
+          nb::gil_scoped_release release;
+          Workspace<Planar> space(args);
+          Integrator<Planar> integrator(args, space.work, static_cast<std::ptrdiff_t>(y0.size()));
+          out = integrator.integrate(values(y0), t_end,
+                                     {method, rtol, atol, max_step, onset_tol, speed_floor,
+                                      max_steps});
+        }
+        const std::size_t n = out.count, ny = y0.size();
+        const std::size_t wc = std::max<std::ptrdiff_t>(args.ncontacts(), 1),
+                          wt = std::max<std::ptrdiff_t>(args.torsion.rows, 1);
+        std::vector<std::int64_t> counters(out.counters.begin(), out.counters.end());
+        return nb::make_tuple(owned(std::move(out.times), {n}), owned(std::move(out.states), {n, ny}),
+                              owned(std::move(out.speeds), {n, wc}), owned(std::move(out.modes), {n, wc}),
+                              owned(std::move(out.latched), {n, wt}),
+                              owned(std::move(out.log), {out.impacts, std::size_t(LOG_COLUMNS)}),
+                              owned(std::move(counters), {4}), out.status, out.t_end);
+      },
+      nb::arg("y0"), nb::arg("t_end"), nb::arg("args"), nb::arg("method"), nb::arg("rtol"),
+      nb::arg("atol"), nb::arg("max_step"), nb::arg("onset_tol"), nb::arg("speed_floor"),
+      nb::arg("max_steps"),
+      "Integrate from t = 0 (the fields of layout.Integration, in order).");
+
+  m.def(
+      "observe",
+      [](double t, Array<const double> y, Array<double> dy, nb::handle a, nb::handle w,
+         Array<double> depth, Array<double> offset)
+      {
+        Held held;
+        const Args args = args_of(a, held);
+        check_kind(args);
+        const Work work = work_of(w, held);
+        check_work(args, work, y.size());
+        const std::ptrdiff_t nc = args.ncontacts();
+        if (dy.size() != y.size() or depth.size() < static_cast<std::size_t>(nc)
+            or offset.ndim() != 2 or offset.shape(0) < static_cast<std::size_t>(nc)
+            or (nc and offset.shape(1) < 2))
+          throw std::invalid_argument("observe: dy as long as y, depth a value and offset a row a contact");
+        nb::gil_scoped_release release;
+        return observe(t, values(y), values(dy), args, work, depth.data(), offset.data(),
+                       nc ? static_cast<std::ptrdiff_t>(offset.shape(1)) : 0);
+      },
+      nb::arg("t"), nb::arg("y"), nb::arg("dy"), nb::arg("args"), nb::arg("work"),
+      nb::arg("depth"), nb::arg("offset"),
+      "One state as the outputs see it: f(t, y) into dy, each contact's deepest penetration "
+      "and journal offset; returns the ideal joints' largest gap |Phi|.");
+
+  m.def(
+      "observe_steps",
+      [](Array<const double> times, Array<const double> states, Array<const double> speeds,
+         Array<const double> latched, Array<const std::int64_t> modes, nb::handle a,
+         nb::handle w, Array<double> rates, Array<double> bodies, Array<double> depths,
+         Array<double> normals, Array<double> frictions, Array<double> offsets,
+         Array<double> drift, Array<double> kinetic, Array<double> angles,
+         Array<double> stretches)
+      {
+        Held held;
+        const Args args = args_of(a, held);
+        check_kind(args);
+        const Work work = work_of(w, held);
+        const std::size_t n = times.size();
+        const std::size_t ny = states.ndim() == 2 ? states.shape(1) : 0;
+        check_work(args, work, ny);
+        const auto nc = static_cast<std::size_t>(args.ncontacts());
+        const auto nt = static_cast<std::size_t>(args.torsion.rows);
+        const auto ns = static_cast<std::size_t>(args.springs.rows);
+        const std::size_t kept = bodies.ndim() == 3 ? bodies.shape(2) : 0;
+        const std::size_t width = offsets.ndim() == 3 ? offsets.shape(2) : 0;
+        auto rows = [n](const auto& x, std::size_t ndim, std::size_t columns)
+        { return x.ndim() == ndim and x.shape(0) == n and (ndim == 1 or x.size() == n * columns); };
+        if (states.shape(0) != n or not rows(speeds, 2, speeds.ndim() == 2 ? speeds.shape(1) : 0)
+            or speeds.shape(1) < nc or not rows(modes, 2, modes.ndim() == 2 ? modes.shape(1) : 0)
+            or modes.shape(1) < nc or not rows(latched, 2, latched.ndim() == 2 ? latched.shape(1) : 0)
+            or latched.shape(1) < nt or not rows(rates, 2, ny)
+            or bodies.shape(0) != n or bodies.shape(1) != static_cast<std::size_t>(args.bodies())
+            or kept > static_cast<std::size_t>(Planar::BODY_COLUMNS) or not rows(depths, 2, nc)
+            or not rows(normals, 2, nc) or not rows(frictions, 2, nc) or offsets.shape(0) != n
+            or (nc and (width < 2 or offsets.shape(1) != nc)) or not rows(drift, 1, 1)
+            or not rows(kinetic, 1, 1) or not rows(angles, 2, nt) or not rows(stretches, 2, ns))
+          throw std::invalid_argument("observe_steps: the arrays must have a row a step of this "
+                                      "mechanism's sizes");
+        nb::gil_scoped_release release;
+        const std::size_t sw = speeds.shape(1), mw = modes.shape(1), lw = latched.shape(1);
+        std::vector<double> depth(std::max<std::size_t>(nc, 1)), offset(std::max<std::size_t>(nc, 1) * width);
+        for (std::size_t k = 0; k < n; ++k)
+        {
+          for (std::size_t i = 0; i < nc; ++i)
+          {
+            args.speeds[i] = speeds.data()[k * sw + i];
+            args.mode[i] = modes.data()[k * mw + i];
+          }
+          for (std::size_t i = 0; i < nt; ++i)
+            args.latched[i] = latched.data()[k * lw + i];
+          std::span<const double> y(states.data() + k * ny, ny);
+          std::span<double> dy(rates.data() + k * ny, ny);
+          drift.data()[k] = observe(times.data()[k], y, dy, args, work, depth.data(),
+                                    offset.data(), static_cast<std::ptrdiff_t>(width));
+          for (std::ptrdiff_t b = 0; b < args.bodies(); ++b)
+            for (std::size_t c = 0; c < kept; ++c)
+              bodies.data()[(k * args.bodies() + b) * kept + c] = work.bodies(b, c);
+          for (std::size_t i = 0; i < nc; ++i)
+          {
+            depths.data()[k * nc + i] = depth[i];
+            normals.data()[k * nc + i] = work.normal[i];
+            frictions.data()[k * nc + i] = work.friction[i];
+            for (std::size_t c = 0; c < width; ++c)
+              offsets.data()[(k * nc + i) * width + c] = offset[i * width + c];
+          }
+          kinetic.data()[k] = Planar::kinetic_energy(args, y);
+          E::refresh(args, y, work);
+          for (std::size_t r = 0; r < nt; ++r)
+            angles.data()[k * nt + r] = E::torsion_angle(work.bodies, args.torsion, r).first;
+          for (std::size_t r = 0; r < ns; ++r)
+            stretches.data()[k * ns + r] = E::spring_ends(work.bodies, args.springs, r).length
+                                           - args.springs(r, SPRING_LENGTH);
+        }
+      },
+      nb::arg("times"), nb::arg("states"), nb::arg("speeds"), nb::arg("latched"),
+      nb::arg("modes"), nb::arg("args"), nb::arg("work"), nb::arg("rates"), nb::arg("bodies"),
+      nb::arg("depths"), nb::arg("normals"), nb::arg("frictions"), nb::arg("offsets"),
+      nb::arg("drift"), nb::arg("kinetic"), nb::arg("angles"), nb::arg("stretches"),
+      "observe, the kinetic energy, the torsion angles and the springs' stretches at every "
+      "recorded step (each with the impact speeds, latches and modes it was taken with, put "
+      "into args in place), into the rows of the output arrays.");
+
+  m.def(
+      "constraint_values",
+      [](double t, Array<const double> y, nb::handle a)
+      {
+        Held held;
+        const Args args = args_of(a, held);
+        check_kind(args);
+        Workspace<Planar> space(args);
+        std::ptrdiff_t m;
+        {
+          nb::gil_scoped_release release;
+          E::refresh(args, values(y), space.work);
+          m = E::fill_constraints(t, args, space.work, 0.0);
+        }
+        const auto cols = static_cast<std::size_t>(args.nq);
+        std::vector<double> jac(space.jac.begin(), space.jac.begin() + m * args.nq);
+        std::vector<double> phi(space.phi.begin(), space.phi.begin() + m);
+        std::vector<double> phi_t(space.phi_t.begin(), space.phi_t.begin() + m);
+        const auto rows = static_cast<std::size_t>(m);
+        return nb::make_tuple(owned(std::move(jac), {rows, cols}), owned(std::move(phi), {rows}),
+                              owned(std::move(phi_t), {rows}));
+      },
+      nb::arg("t"), nb::arg("y"), nb::arg("args"),
+      "(Phi_q, Phi, Phi_t) of the ideal joints, the drive and the held contacts.");
+
+  m.def(
+      "energy_of",
+      [](Array<const double> y, nb::handle a)
+      {
+        Held held;
+        const Args args = args_of(a, held);
+        check_kind(args);
+        return Planar::kinetic_energy(args, values(y));
+      },
+      nb::arg("y"), nb::arg("args"), "The bodies' kinetic energy (J).");
+
+  m.def(
+      "project_onto_constraints",
+      [](double t, Array<double> y, nb::handle a, nb::handle w, double tolerance,
+         double rate_tolerance)
+      {
+        Held held;
+        const Args args = args_of(a, held);
+        check_kind(args);
+        const Work work = work_of(w, held);
+        check_work(args, work, y.size());
+        nb::gil_scoped_release release;
+        return E::project_onto_constraints(t, values(y), args, work, tolerance, rate_tolerance);
+      },
+      nb::arg("t"), nb::arg("y"), nb::arg("args"), nb::arg("work"), nb::arg("tolerance"),
+      nb::arg("rate_tolerance"),
+      "One mass-weighted Gauss-Newton step of positions and of velocities onto the "
+      "constraints where they drifted; whether one was taken.");
+
+  m.def(
+      "relative_motion",
+      [](Array<const double> y, nb::handle a, nb::handle w, std::int64_t bb,
+         std::array<double, 2> s_b, std::int64_t bj, std::array<double, 2> s_j,
+         std::array<double, 2> f, std::array<double, 2> g)
+      {
+        Held held;
+        const Args args = args_of(a, held);
+        check_kind(args);
+        const Work work = work_of(w, held);
+        check_work(args, work, y.size());
+        if (bb < -1 or bb >= args.bodies() or bj < -1 or bj >= args.bodies())
+          throw std::invalid_argument("relative_motion: no such body");
+        E::refresh(args, values(y), work);
+        const Matrix<double>& s = work.bodies;
+        const Vec2 sb{s_b[0], s_b[1]}, sj{s_j[0], s_j[1]};
+        const Vec2 pj = Planar::point_state(s, bj, sj).position;
+        const Vec2 e = sub(pj, Planar::point_state(s, bb, sb).position);
+        const Vec2 v = sub(Planar::material_velocity(s, bj, pj), Planar::material_velocity(s, bb, pj));
+        const Vec2 ff = Planar::vector_state(s, bb, sb, {f[0], f[1]}).value;
+        const Vec2 gg = Planar::vector_state(s, bb, sb, {g[0], g[1]}).value;
+        return nb::make_tuple(dot(e, ff), dot(e, gg), dot(v, ff), dot(v, gg));
+      },
+      nb::arg("y"), nb::arg("args"), nb::arg("work"), nb::arg("bb"), nb::arg("s_b"),
+      nb::arg("bj"), nb::arg("s_j"), nb::arg("f"), nb::arg("g"),
+      "Body bj's point s_j relative to body bb's point s_b along bb's vectors f and g: "
+      "(e.f, e.g, v.f, v.g).");
+
+  m.def(
+      "torsion_angles",
+      [](Array<const double> y, nb::handle a, nb::handle w, Array<double> angles)
+      {
+        Held held;
+        const Args args = args_of(a, held);
+        check_kind(args);
+        const Work work = work_of(w, held);
+        check_work(args, work, y.size());
+        if (angles.size() < static_cast<std::size_t>(args.torsion.rows))
+          throw std::invalid_argument("torsion_angles: angles needs a value a torsion element");
+        E::refresh(args, values(y), work);
+        for (std::ptrdiff_t r = 0; r < args.torsion.rows; ++r)
+          angles.data()[r] = E::torsion_angle(work.bodies, args.torsion, r).first;
+      },
+      nb::arg("y"), nb::arg("args"), nb::arg("work"), nb::arg("angles"),
+      "Each torsion element's angle beyond its free angle (rad).");
+
+  m.def(
+      "spring_lengths",
+      [](Array<const double> y, nb::handle a, nb::handle w, Array<double> lengths)
+      {
+        Held held;
+        const Args args = args_of(a, held);
+        check_kind(args);
+        const Work work = work_of(w, held);
+        check_work(args, work, y.size());
+        if (lengths.size() < static_cast<std::size_t>(args.springs.rows))
+          throw std::invalid_argument("spring_lengths: lengths needs a value a spring");
+        E::refresh(args, values(y), work);
+        for (std::ptrdiff_t r = 0; r < args.springs.rows; ++r)
+          lengths.data()[r] = E::spring_ends(work.bodies, args.springs, r).length
+                              - args.springs(r, SPRING_LENGTH);
+      },
+      nb::arg("y"), nb::arg("args"), nb::arg("work"), nb::arg("lengths"),
+      "Each spring-damper's length beyond its free length (m).");
+}
+
+} // namespace pinbore::mechanism
