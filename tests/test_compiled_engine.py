@@ -1,8 +1,9 @@
 """The compiled core's multibody engine (pinbore.core.cpp.mechanism, C++) against numba's
 (reduced.mechanism.engine), while the core takes the engine over body kind by body kind: on
-the planar rigid mechanisms it runs, the two are the same arithmetic, operation by operation,
-so the shipped scenes and each friction law integrate to the same bits (steps, states,
-impacts, counters) and are observed alike. The physics of each is checked by the tests of
+the rigid mechanisms it runs, planar and spatial, the two are the same arithmetic, operation
+by operation, so the shipped scenes and each friction law (of a point contact in the plane, of
+a sliced journal's slices in space) integrate to the same bits (steps, states, impacts,
+counters) and are observed alike. The physics of each is checked by the tests of
 its scene and law; this holds the port to the engine those tests validated."""
 
 import tomllib
@@ -19,7 +20,9 @@ from pinbore.reduced.mechanism.scene import MAX_STEPS
 
 SCENES = ["slider_crank_flores2004", "slider_crank_flores2004_ideal", "slider_crank_flores2004_impulse",
           "slider_crank_translational", "impact_oscillator", "solar_panel_deployment",
-          "solar_panel_deployment_two_panels", "deployed_panel_shaken"]
+          "solar_panel_deployment_two_panels", "deployed_panel_shaken", "spatial_slider_crank_flores",
+          "spatial_slider_crank_flores_misaligned", "spatial_four_bar_spherical",
+          "deployed_panel_shaken_3d", "solar_panel_deployment_3d"]
 FRICTION = {
     "stribeck": {"law": "stribeck", "mu_static": 0.15, "mu_min": 0.1, "v_min": 0.05},
     "linear": {"law": "linear", "mu_static": 0.1, "alpha": 0.02},
@@ -66,9 +69,10 @@ def test_a_shipped_planar_scene_integrates_to_the_same_bits_in_the_core(name):
     assert_same(core, reference, model.contacts.shape[0])
 
 
+@pytest.mark.parametrize("kind", ["slider_crank_flores2004", "spatial_slider_crank_flores_misaligned"])
 @pytest.mark.parametrize("law", FRICTION)
-def test_each_friction_law_integrates_to_the_same_bits_in_the_core(law):
-    data = scene("slider_crank_flores2004")
+def test_each_friction_law_integrates_to_the_same_bits_in_the_core(law, kind):
+    data = scene(kind)
     data["clearance_joints"][0]["friction"] = FRICTION[law]
     model, core, reference = both(data, law, 0.02)
     assert np.any(core.states[:, 2 * model.nq + layout.ENERGY_STATES:] != 0.0) or law in (
@@ -76,23 +80,30 @@ def test_each_friction_law_integrates_to_the_same_bits_in_the_core(law):
     assert_same(core, reference, model.contacts.shape[0])
 
 
-def test_the_core_observes_the_steps_as_numbas_engine_does():
-    """observe_steps (the outputs' pass), constraint_values and the kinetic energy."""
+@pytest.mark.parametrize("name", ["slider_crank_translational", "spatial_slider_crank_flores"])
+def test_the_core_observes_the_steps_as_numbas_engine_does(name):
+    """observe_steps (the outputs' pass), constraint_values, and a sliced journal's slices."""
     from pinbore.reduced.mechanism import engine   # noqa: PLC0415
 
-    data = scene("slider_crank_translational")
-    model, core, _ = both(data, "translational", 0.01)
+    model, core, _ = both(scene(name), name, 0.01)
+    dimension, kept = len(model.args().like), model.kind.bodies().RIGID_COLUMNS
     seen = {}
-    for name, module, work_of in (("core", kernel, kernel.workspace), ("numba", engine, engine.workspace)):
+    for name, module in (("core", cpp.mechanism), ("numba", engine)):
         args = model.args()
-        work = work_of(args)
+        work = layout.Work(*module.workspace(args))
         n, nc = core.times.size, model.contacts.shape[0]
-        arrays = [np.empty((n, core.states.shape[1])), np.empty((n, model.names.__len__(), 8)),
-                  np.empty((n, nc)), np.empty((n, nc)), np.empty((n, nc)), np.zeros((n, nc, 2)),
-                  np.empty(n), np.empty(n), np.empty((n, 0)), np.empty((n, 0))]
-        (cpp.mechanism if name == "core" else engine).observe_steps(
-            core.times, core.states, core.speeds, core.latched, core.modes, args, work, *arrays)
-        seen[name] = arrays + list((cpp.mechanism if name == "core" else engine).constraint_values(
-            0.003, core.states[5], args))
-    for a, b in zip(seen["core"], seen["numba"]):
+        arrays = [np.empty((n, core.states.shape[1])), np.empty((n, len(model.names), kept)),
+                  np.empty((n, nc)), np.empty((n, nc)), np.empty((n, nc)),
+                  np.zeros((n, nc, dimension)), np.empty(n), np.empty(n),
+                  np.empty((n, model.torsion.shape[0])), np.empty((n, args.springs.shape[0]))]
+        module.observe_steps(core.times, core.states, core.speeds, core.latched, core.modes, args,
+                             work, *arrays)
+        seen[name] = arrays + list(module.constraint_values(0.003, core.states[-1], args))
+        for k in np.flatnonzero(model.contacts[:, layout.CONTACT_KIND] == layout.SLICED):
+            slices = int(model.contacts[k, layout.CONTACT_SLICES])
+            approaches, weights = np.empty(slices), np.empty(slices)
+            moved = module.slice_approaches(core.states[-1], args, work, k, approaches, weights)
+            seen[name] += [approaches, weights, np.array(moved)]
+    assert len(seen["core"]) > 12 or dimension == 2
+    for a, b in zip(seen["core"], seen["numba"], strict=True):
         assert np.array_equal(a, b)

@@ -6,9 +6,10 @@
 #include "bindings.h"
 #include "integrator.h"
 #include "planar.h"
+#include "spatial.h"
 
 #include <nanobind/ndarray.h>
-#include <nanobind/stl/array.h>
+#include <nanobind/stl/vector.h>
 #include <nanobind/stl/string.h>
 
 #include <stdexcept>
@@ -54,8 +55,10 @@ template <typename T>
 Matrix<T> matrix(nb::handle bundle, const char* name, Held& held, int ndim = 2)
 {
   auto a = array<T>(bundle, name, held, ndim);
-  const auto rows = static_cast<std::ptrdiff_t>(a.shape(0));
-  return {a.data(), rows, rows == 0 ? 0 : static_cast<std::ptrdiff_t>(a.size()) / rows};
+  std::ptrdiff_t cols = 1;
+  for (int d = 1; d < ndim; ++d)
+    cols *= static_cast<std::ptrdiff_t>(a.shape(d));
+  return {a.data(), static_cast<std::ptrdiff_t>(a.shape(0)), cols};
 }
 
 Args args_of(nb::handle a, Held& held)
@@ -84,10 +87,10 @@ Args args_of(nb::handle a, Held& held)
   args.springs = matrix<const double>(a, "springs", held);
   args.loads = matrix<const double>(a, "loads", held);
   const std::ptrdiff_t nb_ = args.bodies(), nc = args.ncontacts();
-  if (static_cast<std::ptrdiff_t>(args.offsets.size()) != nb_ + 1
-      or args.offsets[nb_] != static_cast<std::int64_t>(args.nq)
-      or static_cast<std::ptrdiff_t>(args.minv.size()) != args.nq)
-    throw std::invalid_argument("mechanism: offsets must hold each body's first column and nq");
+  if (static_cast<std::ptrdiff_t>(args.offsets.size()) != nb_ + 1 or args.offsets[0] != 0
+      or args.offsets[nb_] != static_cast<std::int64_t>(args.minv.size()))
+    throw std::invalid_argument("mechanism: offsets must hold each body's first velocity column "
+                                "and their number");
   if (static_cast<std::ptrdiff_t>(args.speeds.size()) != nc
       or static_cast<std::ptrdiff_t>(args.mode.size()) != nc
       or static_cast<std::ptrdiff_t>(args.latched.size()) != args.torsion.rows)
@@ -127,20 +130,34 @@ Work work_of(nb::handle w, Held& held)
   return work;
 }
 
-/// The planar rigid kind only, for now: a planar mechanism of rigid bodies.
-void check_kind(const Args& args)
+/// The body kind of a mechanism (its dimension, the length of Args.like), its bodies rigid;
+/// f<K>() called with it.
+template <typename F>
+auto with_kind(nb::handle a, const Args& args, F&& f)
 {
+  const std::size_t dimension = nb::len(nb::getattr(a, "like"));
+  const int columns = dimension == 2 ? Planar::COLUMNS : Spatial::COLUMNS;
+  if (dimension != 2 and dimension != 3)
+    throw std::invalid_argument("mechanism: like must be a vector of 2 or 3 components");
   for (std::ptrdiff_t b = 0; b < args.bodies(); ++b)
-    if (args.offsets[b + 1] - args.offsets[b] != Planar::COLUMNS)
-      throw std::invalid_argument("mechanism: the compiled engine runs planar rigid bodies");
+    if (args.offsets[b + 1] - args.offsets[b] != columns)
+      throw std::invalid_argument("mechanism: the compiled engine runs rigid bodies");
+  // a spatial body has 7 coordinates (r, Euler parameters) for its 6 velocity columns
+  const std::ptrdiff_t coordinates = args.offsets[args.bodies()] + (dimension == 3 ? args.bodies() : 0);
+  if (args.nq != coordinates or args.gravity.size() != dimension or args.inertia.rows != args.bodies()
+      or args.inertia.cols != 9 or args.inertia_inv.rows != args.bodies() or args.inertia_inv.cols != 9)
+    throw std::invalid_argument("mechanism: nq, gravity or the inertia tensors do not fit the bodies");
+  return dimension == 2 ? f.template operator()<Planar>() : f.template operator()<Spatial>();
 }
 
+template <class K>
 void check_work(const Args& args, const Work& w, std::size_t ny)
 {
-  const std::ptrdiff_t m = Engine<Planar>::constraint_count(args.primitives) + args.ncontacts();
-  if (w.bodies.rows != args.bodies() or w.bodies.cols != Planar::BODY_COLUMNS
-      or static_cast<std::ptrdiff_t>(w.velocities.size()) != args.nq or w.jac.rows != m
-      or w.jac.cols != args.nq or w.mjac.rows != m or w.schur.rows != m
+  const std::ptrdiff_t m = Engine<K>::constraint_count(args.primitives) + args.ncontacts();
+  if (w.bodies.rows != args.bodies() or w.bodies.cols != K::BODY_COLUMNS
+      or static_cast<std::ptrdiff_t>(w.velocities.size()) != args.offsets[args.bodies()]
+      or w.jac.rows != m or w.jac.cols != args.offsets[args.bodies()] or w.mjac.rows != m
+      or w.mjac.cols != w.jac.cols or w.schur.rows != m or w.schur.cols != m
       or static_cast<std::ptrdiff_t>(w.rhs_c.size()) != m
       or static_cast<std::ptrdiff_t>(w.first.size()) != m
       or static_cast<std::ptrdiff_t>(w.normal.size()) < args.ncontacts())
@@ -160,25 +177,25 @@ nb::ndarray<nb::numpy, T> owned(std::vector<T>&& data, std::initializer_list<std
 std::span<const double> values(const Array<const double>& a) { return {a.data(), a.size()}; }
 std::span<double> values(const Array<double>& a) { return {a.data(), a.size()}; }
 
-using E = Engine<Planar>;
-
 /// f(t, y) into dy; each contact's deepest penetration into depth and its journal point's
 /// offset from its bearing point into offset (rows of `width`); the ideal joints' largest
 /// gap |Phi| (no held rows).
+template <class K>
 double observe(double t, std::span<const double> y, std::span<double> dy, const Args& args,
                const Work& work, double* depth, double* offset, std::ptrdiff_t width)
 {
+  using E = Engine<K>;
   E::rhs(t, y, dy, args, work);
   const Rows& contacts = args.contacts;
   for (std::ptrdiff_t k = 0; k < contacts.rows; ++k)
   {
     depth[k] = E::contact_depth(work.bodies, contacts, k).delta;
-    const Vec2 e = sub(Planar::point_state(work.bodies, E::body(contacts, k, CONTACT_JOURNAL_BODY),
-                                           contacts.cell<2>(k, CONTACT_JOURNAL_POINT)).position,
-                       Planar::point_state(work.bodies, E::body(contacts, k, CONTACT_BEARING_BODY),
-                                           contacts.cell<2>(k, CONTACT_BEARING_POINT)).position);
-    offset[k * width] = e[0];
-    offset[k * width + 1] = e[1];
+    const auto e = sub(K::point_state(work.bodies, E::body(contacts, k, CONTACT_JOURNAL_BODY),
+                                      contacts.cell<K::D>(k, CONTACT_JOURNAL_POINT)).position,
+                       K::point_state(work.bodies, E::body(contacts, k, CONTACT_BEARING_BODY),
+                                      contacts.cell<K::D>(k, CONTACT_BEARING_POINT)).position);
+    for (int i = 0; i < K::D; ++i)
+      offset[k * width + i] = e[i];
   }
   std::vector<std::int64_t> none(std::max<std::ptrdiff_t>(contacts.rows, 1), 0);
   const std::ptrdiff_t m = E::constraint_rows(t, args, work, 0.0, none);
@@ -187,13 +204,25 @@ double observe(double t, std::span<const double> y, std::span<double> dy, const 
     gap = std::max(gap, std::abs(work.phi[i]));
   return gap;
 }
+
+template <int D>
+Vec<D> vec(const std::vector<double>& v, const char* name)
+{
+  if (v.size() != static_cast<std::size_t>(D))
+    throw std::invalid_argument(std::string("mechanism: ") + name + " must have "
+                                + std::to_string(D) + " components");
+  Vec<D> out;
+  for (int i = 0; i < D; ++i)
+    out[i] = v[i];
+  return out;
+}
 } // namespace
 
 void bind_mechanism(nb::module_& parent)
 {
   nb::module_ m = parent.def_submodule(
-      "mechanism", "The multibody engine: planar rigid bodies, their joints, contacts and "
-                   "integrators");
+      "mechanism", "The multibody engine: rigid bodies in the plane and in space, their joints, "
+                   "contacts and integrators");
 
   m.def(
       "workspace",
@@ -201,19 +230,21 @@ void bind_mechanism(nb::module_& parent)
       {
         Held held;
         const Args args = args_of(a, held);
-        check_kind(args);
-        Workspace<Planar> space(args);
-        const auto nb_ = static_cast<std::size_t>(args.bodies());
-        const auto cols = static_cast<std::size_t>(args.nq);
-        const std::size_t mm = space.phi.size(), nn = space.normal.size();
-        return nb::make_tuple(
-            owned(std::move(space.bodies), {nb_, std::size_t(Planar::BODY_COLUMNS)}),
-            owned(std::move(space.velocities), {cols}), owned(std::move(space.jac), {mm, cols}),
-            owned(std::move(space.phi), {mm}), owned(std::move(space.phi_t), {mm}),
-            owned(std::move(space.rhs_c), {mm}), owned(std::move(space.schur), {mm, mm}),
-            owned(std::move(space.force), {cols}), owned(std::move(space.normal), {nn}),
-            owned(std::move(space.friction), {nn}), owned(std::move(space.mjac), {mm, cols}),
-            owned(std::move(space.row_bodies), {mm, 2}), owned(std::move(space.first), {mm}));
+        return with_kind(a, args, [&]<class K>()
+        {
+          Workspace<K> space(args);
+          const auto nb_ = static_cast<std::size_t>(args.bodies());
+          const auto cols = static_cast<std::size_t>(args.offsets[args.bodies()]);
+          const std::size_t mm = space.phi.size(), nn = space.normal.size();
+          return nb::make_tuple(
+              owned(std::move(space.bodies), {nb_, std::size_t(K::BODY_COLUMNS)}),
+              owned(std::move(space.velocities), {cols}), owned(std::move(space.jac), {mm, cols}),
+              owned(std::move(space.phi), {mm}), owned(std::move(space.phi_t), {mm}),
+              owned(std::move(space.rhs_c), {mm}), owned(std::move(space.schur), {mm, mm}),
+              owned(std::move(space.force), {cols}), owned(std::move(space.normal), {nn}),
+              owned(std::move(space.friction), {nn}), owned(std::move(space.mjac), {mm, cols}),
+              owned(std::move(space.row_bodies), {mm, 2}), owned(std::move(space.first), {mm}));
+        });
       },
       nb::arg("args"), "The right-hand side's buffers (the fields of layout.Work, in order).");
 
@@ -223,13 +254,15 @@ void bind_mechanism(nb::module_& parent)
       {
         Held held;
         const Args args = args_of(a, held);
-        check_kind(args);
         const Work work = work_of(w, held);
-        check_work(args, work, y.size());
-        if (dy.size() != y.size())
-          throw std::invalid_argument("rhs: dy must be as long as y");
-        nb::gil_scoped_release release;
-        E::rhs(t, values(y), values(dy), args, work);
+        with_kind(a, args, [&]<class K>()
+        {
+          check_work<K>(args, work, y.size());
+          if (dy.size() != y.size())
+            throw std::invalid_argument("rhs: dy must be as long as y");
+          nb::gil_scoped_release release;
+          Engine<K>::rhs(t, values(y), values(dy), args, work);
+        });
       },
       nb::arg("t"), nb::arg("y"), nb::arg("dy"), nb::arg("args"), nb::arg("work"),
       "dy = f(t, y); the contacts' forces in work.normal and work.friction.");
@@ -242,20 +275,19 @@ void bind_mechanism(nb::module_& parent)
       {
         Held held;
         const Args args = args_of(a, held);
-        check_kind(args);
         if (y0.size() < static_cast<std::size_t>(2 * args.nq + ENERGY_STATES))
           throw std::invalid_argument("integrate: y0 is shorter than the mechanism's state");
         if (method < DOPRI5 or method > ROSENBROCK23 or not(max_step > 0.0))
           throw std::invalid_argument("integrate: unknown method or a step that is not positive");
-        Integration out;
+        Integration out = with_kind(a, args, [&]<class K>()
         {
           nb::gil_scoped_release release;
-          Workspace<Planar> space(args);
-          Integrator<Planar> integrator(args, space.work, static_cast<std::ptrdiff_t>(y0.size()));
-          out = integrator.integrate(values(y0), t_end,
-                                     {method, rtol, atol, max_step, onset_tol, speed_floor,
-                                      max_steps});
-        }
+          Workspace<K> space(args);
+          Integrator<K> integrator(args, space.work, static_cast<std::ptrdiff_t>(y0.size()));
+          return integrator.integrate(values(y0), t_end,
+                                      {method, rtol, atol, max_step, onset_tol, speed_floor,
+                                       max_steps});
+        });
         const std::size_t n = out.count, ny = y0.size();
         const std::size_t wc = std::max<std::ptrdiff_t>(args.ncontacts(), 1),
                           wt = std::max<std::ptrdiff_t>(args.torsion.rows, 1);
@@ -278,17 +310,20 @@ void bind_mechanism(nb::module_& parent)
       {
         Held held;
         const Args args = args_of(a, held);
-        check_kind(args);
         const Work work = work_of(w, held);
-        check_work(args, work, y.size());
-        const std::ptrdiff_t nc = args.ncontacts();
-        if (dy.size() != y.size() or depth.size() < static_cast<std::size_t>(nc)
-            or offset.ndim() != 2 or offset.shape(0) < static_cast<std::size_t>(nc)
-            or (nc and offset.shape(1) < 2))
-          throw std::invalid_argument("observe: dy as long as y, depth a value and offset a row a contact");
-        nb::gil_scoped_release release;
-        return observe(t, values(y), values(dy), args, work, depth.data(), offset.data(),
-                       nc ? static_cast<std::ptrdiff_t>(offset.shape(1)) : 0);
+        return with_kind(a, args, [&]<class K>()
+        {
+          check_work<K>(args, work, y.size());
+          const std::ptrdiff_t nc = args.ncontacts();
+          if (dy.size() != y.size() or depth.size() < static_cast<std::size_t>(nc)
+              or offset.ndim() != 2 or offset.shape(0) < static_cast<std::size_t>(nc)
+              or (nc and offset.shape(1) < static_cast<std::size_t>(K::D)))
+            throw std::invalid_argument("observe: dy as long as y, depth a value and offset a "
+                                        "row a contact");
+          nb::gil_scoped_release release;
+          return observe<K>(t, values(y), values(dy), args, work, depth.data(), offset.data(),
+                            nc ? static_cast<std::ptrdiff_t>(offset.shape(1)) : 0);
+        });
       },
       nb::arg("t"), nb::arg("y"), nb::arg("dy"), nb::arg("args"), nb::arg("work"),
       nb::arg("depth"), nb::arg("offset"),
@@ -306,64 +341,69 @@ void bind_mechanism(nb::module_& parent)
       {
         Held held;
         const Args args = args_of(a, held);
-        check_kind(args);
         const Work work = work_of(w, held);
-        const std::size_t n = times.size();
-        const std::size_t ny = states.ndim() == 2 ? states.shape(1) : 0;
-        check_work(args, work, ny);
-        const auto nc = static_cast<std::size_t>(args.ncontacts());
-        const auto nt = static_cast<std::size_t>(args.torsion.rows);
-        const auto ns = static_cast<std::size_t>(args.springs.rows);
-        const std::size_t kept = bodies.ndim() == 3 ? bodies.shape(2) : 0;
-        const std::size_t width = offsets.ndim() == 3 ? offsets.shape(2) : 0;
-        auto rows = [n](const auto& x, std::size_t ndim, std::size_t columns)
-        { return x.ndim() == ndim and x.shape(0) == n and (ndim == 1 or x.size() == n * columns); };
-        if (states.shape(0) != n or not rows(speeds, 2, speeds.ndim() == 2 ? speeds.shape(1) : 0)
-            or speeds.shape(1) < nc or not rows(modes, 2, modes.ndim() == 2 ? modes.shape(1) : 0)
-            or modes.shape(1) < nc or not rows(latched, 2, latched.ndim() == 2 ? latched.shape(1) : 0)
-            or latched.shape(1) < nt or not rows(rates, 2, ny)
-            or bodies.shape(0) != n or bodies.shape(1) != static_cast<std::size_t>(args.bodies())
-            or kept > static_cast<std::size_t>(Planar::BODY_COLUMNS) or not rows(depths, 2, nc)
-            or not rows(normals, 2, nc) or not rows(frictions, 2, nc) or offsets.shape(0) != n
-            or (nc and (width < 2 or offsets.shape(1) != nc)) or not rows(drift, 1, 1)
-            or not rows(kinetic, 1, 1) or not rows(angles, 2, nt) or not rows(stretches, 2, ns))
-          throw std::invalid_argument("observe_steps: the arrays must have a row a step of this "
-                                      "mechanism's sizes");
-        nb::gil_scoped_release release;
-        const std::size_t sw = speeds.shape(1), mw = modes.shape(1), lw = latched.shape(1);
-        std::vector<double> depth(std::max<std::size_t>(nc, 1)), offset(std::max<std::size_t>(nc, 1) * width);
-        for (std::size_t k = 0; k < n; ++k)
+        with_kind(a, args, [&]<class K>()
         {
-          for (std::size_t i = 0; i < nc; ++i)
+          using E = Engine<K>;
+          const std::size_t n = times.size();
+          const std::size_t ny = states.ndim() == 2 ? states.shape(1) : 0;
+          check_work<K>(args, work, ny);
+          const auto nc = static_cast<std::size_t>(args.ncontacts());
+          const auto nt = static_cast<std::size_t>(args.torsion.rows);
+          const auto ns = static_cast<std::size_t>(args.springs.rows);
+          const std::size_t kept = bodies.ndim() == 3 ? bodies.shape(2) : 0;
+          const std::size_t width = offsets.ndim() == 3 ? offsets.shape(2) : 0;
+          auto rows = [n](const auto& x, std::size_t ndim, std::size_t columns)
+          { return x.ndim() == ndim and x.shape(0) == n and (ndim == 1 or x.size() == n * columns); };
+          auto wide = [n](const auto& x, std::size_t least)
+          { return x.ndim() == 2 and x.shape(0) == n and x.shape(1) >= least; };
+          if (states.shape(0) != n or not wide(speeds, nc) or not wide(modes, nc)
+              or not wide(latched, nt) or not rows(rates, 2, ny) or bodies.shape(0) != n
+              or bodies.shape(1) != static_cast<std::size_t>(args.bodies())
+              or kept > static_cast<std::size_t>(K::BODY_COLUMNS) or not rows(depths, 2, nc)
+              or not rows(normals, 2, nc) or not rows(frictions, 2, nc) or offsets.shape(0) != n
+              or (nc and (width < static_cast<std::size_t>(K::D) or offsets.shape(1) != nc))
+              or not rows(drift, 1, 1) or not rows(kinetic, 1, 1) or not rows(angles, 2, nt)
+              or not rows(stretches, 2, ns))
+            throw std::invalid_argument("observe_steps: the arrays must have a row a step of "
+                                        "this mechanism's sizes");
+          nb::gil_scoped_release release;
+          const std::size_t sw = speeds.shape(1), mw = modes.shape(1), lw = latched.shape(1);
+          std::vector<double> depth(std::max<std::size_t>(nc, 1)),
+              offset(std::max<std::size_t>(nc, 1) * std::max<std::size_t>(width, 1));
+          for (std::size_t k = 0; k < n; ++k)
           {
-            args.speeds[i] = speeds.data()[k * sw + i];
-            args.mode[i] = modes.data()[k * mw + i];
+            for (std::size_t i = 0; i < nc; ++i)
+            {
+              args.speeds[i] = speeds.data()[k * sw + i];
+              args.mode[i] = modes.data()[k * mw + i];
+            }
+            for (std::size_t i = 0; i < nt; ++i)
+              args.latched[i] = latched.data()[k * lw + i];
+            std::span<const double> y(states.data() + k * ny, ny);
+            std::span<double> dy(rates.data() + k * ny, ny);
+            drift.data()[k] = observe<K>(times.data()[k], y, dy, args, work, depth.data(),
+                                         offset.data(), static_cast<std::ptrdiff_t>(width));
+            for (std::ptrdiff_t b = 0; b < args.bodies(); ++b)
+              for (std::size_t c = 0; c < kept; ++c)
+                bodies.data()[(k * args.bodies() + b) * kept + c] = work.bodies(b, c);
+            for (std::size_t i = 0; i < nc; ++i)
+            {
+              depths.data()[k * nc + i] = depth[i];
+              normals.data()[k * nc + i] = work.normal[i];
+              frictions.data()[k * nc + i] = work.friction[i];
+              for (std::size_t c = 0; c < width; ++c)
+                offsets.data()[(k * nc + i) * width + c] = offset[i * width + c];
+            }
+            kinetic.data()[k] = K::kinetic_energy(args, y);
+            E::refresh(args, y, work);
+            for (std::size_t r = 0; r < nt; ++r)
+              angles.data()[k * nt + r] = E::torsion_angle(work.bodies, args.torsion, r).first;
+            for (std::size_t r = 0; r < ns; ++r)
+              stretches.data()[k * ns + r] = E::spring_ends(work.bodies, args.springs, r).length
+                                             - args.springs(r, SPRING_LENGTH);
           }
-          for (std::size_t i = 0; i < nt; ++i)
-            args.latched[i] = latched.data()[k * lw + i];
-          std::span<const double> y(states.data() + k * ny, ny);
-          std::span<double> dy(rates.data() + k * ny, ny);
-          drift.data()[k] = observe(times.data()[k], y, dy, args, work, depth.data(),
-                                    offset.data(), static_cast<std::ptrdiff_t>(width));
-          for (std::ptrdiff_t b = 0; b < args.bodies(); ++b)
-            for (std::size_t c = 0; c < kept; ++c)
-              bodies.data()[(k * args.bodies() + b) * kept + c] = work.bodies(b, c);
-          for (std::size_t i = 0; i < nc; ++i)
-          {
-            depths.data()[k * nc + i] = depth[i];
-            normals.data()[k * nc + i] = work.normal[i];
-            frictions.data()[k * nc + i] = work.friction[i];
-            for (std::size_t c = 0; c < width; ++c)
-              offsets.data()[(k * nc + i) * width + c] = offset[i * width + c];
-          }
-          kinetic.data()[k] = Planar::kinetic_energy(args, y);
-          E::refresh(args, y, work);
-          for (std::size_t r = 0; r < nt; ++r)
-            angles.data()[k * nt + r] = E::torsion_angle(work.bodies, args.torsion, r).first;
-          for (std::size_t r = 0; r < ns; ++r)
-            stretches.data()[k * ns + r] = E::spring_ends(work.bodies, args.springs, r).length
-                                           - args.springs(r, SPRING_LENGTH);
-        }
+        });
       },
       nb::arg("times"), nb::arg("states"), nb::arg("speeds"), nb::arg("latched"),
       nb::arg("modes"), nb::arg("args"), nb::arg("work"), nb::arg("rates"), nb::arg("bodies"),
@@ -379,21 +419,25 @@ void bind_mechanism(nb::module_& parent)
       {
         Held held;
         const Args args = args_of(a, held);
-        check_kind(args);
-        Workspace<Planar> space(args);
-        std::ptrdiff_t m;
+        if (y.size() < static_cast<std::size_t>(2 * args.nq + ENERGY_STATES))
+          throw std::invalid_argument("constraint_values: y is shorter than the mechanism's state");
+        return with_kind(a, args, [&]<class K>()
         {
-          nb::gil_scoped_release release;
-          E::refresh(args, values(y), space.work);
-          m = E::fill_constraints(t, args, space.work, 0.0);
-        }
-        const auto cols = static_cast<std::size_t>(args.nq);
-        std::vector<double> jac(space.jac.begin(), space.jac.begin() + m * args.nq);
-        std::vector<double> phi(space.phi.begin(), space.phi.begin() + m);
-        std::vector<double> phi_t(space.phi_t.begin(), space.phi_t.begin() + m);
-        const auto rows = static_cast<std::size_t>(m);
-        return nb::make_tuple(owned(std::move(jac), {rows, cols}), owned(std::move(phi), {rows}),
-                              owned(std::move(phi_t), {rows}));
+          Workspace<K> space(args);
+          std::ptrdiff_t m;
+          {
+            nb::gil_scoped_release release;
+            Engine<K>::refresh(args, values(y), space.work);
+            m = Engine<K>::fill_constraints(t, args, space.work, 0.0);
+          }
+          const std::ptrdiff_t cols = args.offsets[args.bodies()];
+          std::vector<double> jac(space.jac.begin(), space.jac.begin() + m * cols);
+          std::vector<double> phi(space.phi.begin(), space.phi.begin() + m);
+          std::vector<double> phi_t(space.phi_t.begin(), space.phi_t.begin() + m);
+          const auto rows = static_cast<std::size_t>(m);
+          return nb::make_tuple(owned(std::move(jac), {rows, static_cast<std::size_t>(cols)}),
+                                owned(std::move(phi), {rows}), owned(std::move(phi_t), {rows}));
+        });
       },
       nb::arg("t"), nb::arg("y"), nb::arg("args"),
       "(Phi_q, Phi, Phi_t) of the ideal joints, the drive and the held contacts.");
@@ -404,8 +448,9 @@ void bind_mechanism(nb::module_& parent)
       {
         Held held;
         const Args args = args_of(a, held);
-        check_kind(args);
-        return Planar::kinetic_energy(args, values(y));
+        if (y.size() < static_cast<std::size_t>(2 * args.nq))
+          throw std::invalid_argument("energy_of: y is shorter than the mechanism's state");
+        return with_kind(a, args, [&]<class K>() { return K::kinetic_energy(args, values(y)); });
       },
       nb::arg("y"), nb::arg("args"), "The bodies' kinetic energy (J).");
 
@@ -416,11 +461,14 @@ void bind_mechanism(nb::module_& parent)
       {
         Held held;
         const Args args = args_of(a, held);
-        check_kind(args);
         const Work work = work_of(w, held);
-        check_work(args, work, y.size());
-        nb::gil_scoped_release release;
-        return E::project_onto_constraints(t, values(y), args, work, tolerance, rate_tolerance);
+        return with_kind(a, args, [&]<class K>()
+        {
+          check_work<K>(args, work, y.size());
+          nb::gil_scoped_release release;
+          return Engine<K>::project_onto_constraints(t, values(y), args, work, tolerance,
+                                                     rate_tolerance);
+        });
       },
       nb::arg("t"), nb::arg("y"), nb::arg("args"), nb::arg("work"), nb::arg("tolerance"),
       nb::arg("rate_tolerance"),
@@ -430,25 +478,28 @@ void bind_mechanism(nb::module_& parent)
   m.def(
       "relative_motion",
       [](Array<const double> y, nb::handle a, nb::handle w, std::int64_t bb,
-         std::array<double, 2> s_b, std::int64_t bj, std::array<double, 2> s_j,
-         std::array<double, 2> f, std::array<double, 2> g)
+         std::vector<double> s_b, std::int64_t bj, std::vector<double> s_j,
+         std::vector<double> f, std::vector<double> g)
       {
         Held held;
         const Args args = args_of(a, held);
-        check_kind(args);
         const Work work = work_of(w, held);
-        check_work(args, work, y.size());
         if (bb < -1 or bb >= args.bodies() or bj < -1 or bj >= args.bodies())
           throw std::invalid_argument("relative_motion: no such body");
-        E::refresh(args, values(y), work);
-        const Matrix<double>& s = work.bodies;
-        const Vec2 sb{s_b[0], s_b[1]}, sj{s_j[0], s_j[1]};
-        const Vec2 pj = Planar::point_state(s, bj, sj).position;
-        const Vec2 e = sub(pj, Planar::point_state(s, bb, sb).position);
-        const Vec2 v = sub(Planar::material_velocity(s, bj, pj), Planar::material_velocity(s, bb, pj));
-        const Vec2 ff = Planar::vector_state(s, bb, sb, {f[0], f[1]}).value;
-        const Vec2 gg = Planar::vector_state(s, bb, sb, {g[0], g[1]}).value;
-        return nb::make_tuple(dot(e, ff), dot(e, gg), dot(v, ff), dot(v, gg));
+        return with_kind(a, args, [&]<class K>()
+        {
+          constexpr int D = K::D;
+          check_work<K>(args, work, y.size());
+          Engine<K>::refresh(args, values(y), work);
+          const Matrix<double>& s = work.bodies;
+          const auto sb = vec<D>(s_b, "s_b");
+          const auto pj = K::point_state(s, bj, vec<D>(s_j, "s_j")).position;
+          const auto e = sub(pj, K::point_state(s, bb, sb).position);
+          const auto v = sub(K::material_velocity(s, bj, pj), K::material_velocity(s, bb, pj));
+          const auto ff = K::vector_state(s, bb, sb, vec<D>(f, "f")).value;
+          const auto gg = K::vector_state(s, bb, sb, vec<D>(g, "g")).value;
+          return nb::make_tuple(dot(e, ff), dot(e, gg), dot(v, ff), dot(v, gg));
+        });
       },
       nb::arg("y"), nb::arg("args"), nb::arg("work"), nb::arg("bb"), nb::arg("s_b"),
       nb::arg("bj"), nb::arg("s_j"), nb::arg("f"), nb::arg("g"),
@@ -456,41 +507,44 @@ void bind_mechanism(nb::module_& parent)
       "(e.f, e.g, v.f, v.g).");
 
   m.def(
-      "torsion_angles",
-      [](Array<const double> y, nb::handle a, nb::handle w, Array<double> angles)
+      "slice_approaches",
+      [](Array<const double> y, nb::handle a, nb::handle w, std::int64_t k,
+         Array<double> approaches, Array<double> weights)
       {
         Held held;
         const Args args = args_of(a, held);
-        check_kind(args);
         const Work work = work_of(w, held);
-        check_work(args, work, y.size());
-        if (angles.size() < static_cast<std::size_t>(args.torsion.rows))
-          throw std::invalid_argument("torsion_angles: angles needs a value a torsion element");
+        if (nb::len(nb::getattr(a, "like")) != 3)
+          throw std::invalid_argument("slice_approaches: a sliced contact is spatial");
+        check_work<Spatial>(args, work, y.size());
+        using E = Engine<Spatial>;
+        if (k < 0 or k >= args.ncontacts()
+            or static_cast<int>(args.contacts(k, CONTACT_KIND)) != SLICED)
+          throw std::invalid_argument("slice_approaches: k is not a sliced contact");
+        const auto slices = static_cast<std::size_t>(args.contacts(k, CONTACT_SLICES));
+        if (approaches.size() < slices or weights.size() < slices)
+          throw std::invalid_argument("slice_approaches: approaches and weights need a value a slice");
+        with_kind(a, args, [&]<class K>() { return 0; });   // rigid bodies only
         E::refresh(args, values(y), work);
-        for (std::ptrdiff_t r = 0; r < args.torsion.rows; ++r)
-          angles.data()[r] = E::torsion_angle(work.bodies, args.torsion, r).first;
+        const auto bore = E::bore_section(work.bodies, args.contacts, k);
+        const auto fr = E::section_frame(bore.ub, bore.a0, bore.a1);
+        const laws::Section sec = E::section(args, k, fr);
+        const double scale = args.contacts(k, CONTACT_SCALE),
+                     end_length = args.contacts(k, CONTACT_END_LENGTH);
+        const auto [dx, dy] = laws::bore_displacement(sec, end_length, scale,
+                                                      args.contacts(k, CONTACT_COMPLIANCE));
+        for (long i = 0; i < sec.slices; ++i)
+        {
+          approaches.data()[i] = laws::slice_contact(i, dx, dy, sec).approach;
+          weights.data()[i] = scale * laws::slice_geometry(i, sec.length, sec.slices, end_length).weight;
+        }
+        const Vec3 d = add(scaled(fr.f, dx), scaled(fr.g, dy));
+        return nb::make_tuple(d[0], d[1], d[2]);
       },
-      nb::arg("y"), nb::arg("args"), nb::arg("work"), nb::arg("angles"),
-      "Each torsion element's angle beyond its free angle (rad).");
-
-  m.def(
-      "spring_lengths",
-      [](Array<const double> y, nb::handle a, nb::handle w, Array<double> lengths)
-      {
-        Held held;
-        const Args args = args_of(a, held);
-        check_kind(args);
-        const Work work = work_of(w, held);
-        check_work(args, work, y.size());
-        if (lengths.size() < static_cast<std::size_t>(args.springs.rows))
-          throw std::invalid_argument("spring_lengths: lengths needs a value a spring");
-        E::refresh(args, values(y), work);
-        for (std::ptrdiff_t r = 0; r < args.springs.rows; ++r)
-          lengths.data()[r] = E::spring_ends(work.bodies, args.springs, r).length
-                              - args.springs(r, SPRING_LENGTH);
-      },
-      nb::arg("y"), nb::arg("args"), nb::arg("work"), nb::arg("lengths"),
-      "Each spring-damper's length beyond its free length (m).");
+      nb::arg("y"), nb::arg("args"), nb::arg("work"), nb::arg("k"), nb::arg("approaches"),
+      nb::arg("weights"),
+      "The slices of sliced contact k with the bore moved by its bulk compliance: each "
+      "slice's approach (m) and weight (m); returns the bore's displacement (global).");
 }
 
 } // namespace pinbore::mechanism

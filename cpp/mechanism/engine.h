@@ -6,6 +6,7 @@
 // reached only through its kind K (K::point_state, K::put, K::push, ...).
 #pragma once
 
+#include "bodies.h"
 #include "data.h"
 #include "laws.h"
 
@@ -165,8 +166,7 @@ struct Engine
     {
       const std::int64_t b = w.row_bodies(i, side);
       if (b >= 0)
-        for (std::ptrdiff_t c = args.offsets[b]; c < args.offsets[b + 1]; ++c)
-          rate += w.jac(i, c) * w.velocities[c];
+        rate = K::row_rate(rate, w.jac, i, b, w.bodies, w.velocities, args.offsets);
     }
     return rate;
   }
@@ -229,24 +229,6 @@ struct Engine
               c1 + tau * (2 * c2 + 3 * c3 * tau), 2 * c2 + 6 * c3 * tau};
     }
     return {speed * t, speed, 0.0};
-  }
-
-  struct Dot1
-  {
-    double value;
-    Ang coefficient;
-    double rate, centripetal;
-  };
-
-  /// a_i . b_j of a vector of body i and one of body j ([Nikravesh1988] dot-1).
-  static Dot1 dot1(const Matrix<double>& s, std::int64_t bi, const V& s_i, const V& a_i,
-                   std::int64_t bj, const V& s_j, const V& b_j)
-  {
-    const auto a = K::vector_state(s, bi, s_i, a_i);
-    const auto b = K::vector_state(s, bj, s_j, b_j);
-    return {dot(a.value, b.value), cross(a.value, b.value),
-            dot(a.rate, b.value) + dot(a.value, b.rate),
-            dot(a.centripetal, b.value) + 2 * dot(a.rate, b.rate) + dot(a.value, b.centripetal)};
   }
 
   /// The dot-2 row a_i . (P_j - P_i) into row `row`: (value, gamma).
@@ -355,7 +337,12 @@ struct Engine
       return {g.delta, g.rate};
     }
     if (kind == SLICED)
-      return {-std::numeric_limits<double>::infinity(), 0.0};   // the plane has none
+    {
+      if constexpr (D == 3)
+        return sliced_depth(s, contacts, k);
+      else
+        return {-std::numeric_limits<double>::infinity(), 0.0};   // the plane has none
+    }
     const Radial g = radial_geometry(s, contacts, k);
     return {g.delta, g.rate};
   }
@@ -439,7 +426,7 @@ struct Engine
       }
       if (kind == DOT1)
       {
-        const Dot1 r = dot1(s, bi, s_i, pr.cell<D>(k, PRIM_A_I), bj, s_j, pr.cell<D>(k, PRIM_B_J));
+        const auto r = dot1<K>(s, bi, s_i, pr.cell<D>(k, PRIM_A_I), bj, s_j, pr.cell<D>(k, PRIM_B_J));
         K::put(w.jac, row, s, bi, s_i, zero<D>(), r.coefficient, 1.0, args.offsets);
         K::put(w.jac, row, s, bj, s_j, zero<D>(), r.coefficient, -1.0, args.offsets);
         w.phi[row] = r.value;
@@ -637,12 +624,18 @@ struct Engine
     return power;
   }
 
-  static Friction contact_friction(const Args& args, const Work&, std::ptrdiff_t k, double f_n,
+  /// Friction at a contact point: in the plane along its tangent, in space against the
+  /// slip with a state law's state following the normal's turn (normal_spin).
+  static Friction contact_friction(const Args& args, const Work& w, std::ptrdiff_t k, double f_n,
                                    const V& n, const V& v, std::span<const double> y,
-                                   std::span<double> dy, std::ptrdiff_t index, const V&, double)
+                                   std::span<double> dy, std::ptrdiff_t index, const V& xj,
+                                   double delta)
   {
-    static_assert(D == 2, "friction in space: the spatial kind's step");
-    return planar_friction(args.contacts, k, f_n, n, v, y, dy, index);
+    if constexpr (D == 2)
+      return planar_friction(args.contacts, k, f_n, n, v, y, dy, index);
+    else
+      return spatial_friction(w.bodies, args.contacts, k, f_n, n, v, y, dy, index,
+                              normal_spin(w.bodies, args.contacts, k, n, xj, delta), 1.0);
   }
 
   /// Every continuous contact's forces; per contact its normal and friction forces; the
@@ -658,7 +651,21 @@ struct Engine
     {
       if (static_cast<int>(contacts(k, CONTACT_IMPACT)) == CONTINUOUS)
       {
-        const double p = point_contact(args, w, y, dy, k, args.speeds[k]);
+        double p;
+        if (static_cast<int>(contacts(k, CONTACT_KIND)) == SLICED)
+        {
+          if constexpr (D == 3)
+          {
+            const Sliced r = sliced_forces(args, w, y, dy, k, true);
+            w.normal[k] = r.normal;
+            w.friction[k] = r.tangential;
+            p = r.power;
+          }
+          else
+            p = 0.0;
+        }
+        else
+          p = point_contact(args, w, y, dy, k, args.speeds[k]);
         if (not std::isfinite(p))
           return NaN;
         joint_power += p;
@@ -670,6 +677,294 @@ struct Engine
       }
     }
     return dissipation;
+  }
+
+  // ---- friction in space
+  /// The normal's turn against the bearing body of a point contact in space (a state law
+  /// needs it; zero for a face and for the static laws).
+  static V normal_spin(const Matrix<double>& s, const Rows& contacts, std::ptrdiff_t k, const V& n,
+                       const V& x, double delta)
+  {
+    if (static_cast<int>(contacts(k, CONTACT_KIND)) == PLANE
+        or static_cast<int>(contacts(k, CONTACT_FRICTION_LAW)) <= LINEAR)
+      return zero<D>();
+    const V w = sub(K::material_velocity(s, body(contacts, k, CONTACT_JOURNAL_BODY), x),
+                    K::material_velocity(s, body(contacts, k, CONTACT_BEARING_BODY), x));
+    return scaled(sub(w, scaled(n, dot(n, w))), 1.0 / (delta + contacts(k, CONTACT_CLEARANCE)));
+  }
+
+  static V state_vector(const Matrix<double>& s, std::int64_t bb, std::span<const double> y,
+                        std::ptrdiff_t i)
+  {
+    return K::turned(s, bb, V{y[i], y[i + 1], y[i + 2]});
+  }
+
+  /// Friction at a contact in space: the slip v - n (v.n) and the law's force against it; a
+  /// state law's state a vector in the bearing body's frame, of which the tangent part acts
+  /// (its rate gains -n (spin.z), which keeps it tangent); a slice's Iwan element carries its
+  /// `share` of k1, k2. (force on the journal, power, the force's size).
+  static Friction spatial_friction(const Matrix<double>& s, const Rows& contacts, std::ptrdiff_t k,
+                                   double f_n, const V& n, const V& v, std::span<const double> y,
+                                   std::span<double> dy, std::ptrdiff_t index, const V& spin,
+                                   double share)
+  {
+    const int law = static_cast<int>(contacts(k, CONTACT_FRICTION_LAW));
+    const V slip = sub(v, scaled(n, dot(v, n)));
+    const double speed = std::sqrt(dot(slip, slip));
+    if (law <= LINEAR)
+    {
+      if (speed > 0.0)
+      {
+        const double f_t = scalar_friction(contacts.row(k), f_n, speed, 0.0).first;
+        return {scaled(slip, -f_t / speed), f_t * speed, f_t};
+      }
+      return {zero<D>(), 0.0, 0.0};
+    }
+    const std::int64_t bb = body(contacts, k, CONTACT_BEARING_BODY);
+    const std::ptrdiff_t state = law == IWAN ? index + 3 * STATE_STRETCH : index;
+    V z = state_vector(s, bb, y, state);
+    z = sub(z, scaled(n, dot(z, n)));
+    V rate, f;
+    if (law == LUGRE)
+    {
+      const double sigma0 = contacts(k, LUGRE_SIGMA0);
+      const double g = laws::lugre_g(speed, contacts(k, LUGRE_MU_COULOMB), contacts(k, LUGRE_MU_STATIC),
+                                     contacts(k, LUGRE_STRIBECK_SPEED));
+      rate = sub(slip, scaled(z, sigma0 * speed / g));
+      f = scaled(add(add(scaled(z, sigma0), scaled(rate, contacts(k, LUGRE_SIGMA1))),
+                     scaled(slip, contacts(k, LUGRE_SIGMA2))),
+                 f_n);
+      rate = sub(rate, scaled(n, dot(spin, z)));
+    }
+    else if (law == DAHL)
+    {
+      const double mu = contacts(k, DAHL_MU);
+      rate = sub(scaled(sub(slip, scaled(z, speed / mu)), contacts(k, DAHL_SIGMA)),
+                 scaled(n, dot(spin, z)));
+      f = scaled(z, f_n);
+    }
+    else   // IWAN: travel then stretch
+    {
+      const double k1 = share * contacts(k, IWAN_K1);
+      const double limit = contacts(k, IWAN_MU) * f_n / k1;
+      V travel = state_vector(s, bb, y, index);
+      travel = sub(travel, scaled(n, dot(travel, n)));
+      const double size = std::sqrt(dot(z, z));
+      rate = slip;
+      if (size >= limit and dot(z, slip) > 0.0)
+        rate = sub(slip, scaled(z, dot(z, slip) / (size * size)));
+      const V held = size > limit ? scaled(z, limit / size) : z;
+      f = add(scaled(held, k1), scaled(travel, share * contacts(k, IWAN_K2)));
+      rate = sub(rate, scaled(n, dot(spin, z)));
+      const V moved = K::unturned(s, bb, sub(slip, scaled(n, dot(spin, travel))));
+      dy[index] = moved[0], dy[index + 1] = moved[1], dy[index + 2] = moved[2];
+    }
+    const V moved = K::unturned(s, bb, rate);
+    dy[state] = moved[0], dy[state + 1] = moved[1], dy[state + 2] = moved[2];
+    return {negated(f), dot(f, slip), std::sqrt(dot(f, f))};
+  }
+
+  /// The Iwan slider of a contact point held to its strength after a step (in the plane a
+  /// float, in space the size of the stretch's tangent part; a slice's k1 its `share`):
+  /// whether it moved.
+  static bool iwan_return(const Matrix<double>& s, const Rows& contacts, std::ptrdiff_t k,
+                          double f_n, const V& n, std::span<double> y, std::ptrdiff_t index,
+                          double share)
+  {
+    if constexpr (D == 2)
+    {
+      const std::ptrdiff_t stretch = index + STATE_STRETCH;
+      const double held = laws::iwan_return_map(y[stretch], contacts(k, IWAN_K1),
+                                                contacts(k, IWAN_MU) * f_n);
+      if (held != y[stretch])
+      {
+        y[stretch] = held;
+        return true;
+      }
+      return false;
+    }
+    else
+    {
+      const std::int64_t bb = body(contacts, k, CONTACT_BEARING_BODY);
+      const std::ptrdiff_t stretch = index + 3 * STATE_STRETCH;
+      const V z = state_vector(s, bb, y, stretch);
+      const V tangential = sub(z, scaled(n, dot(z, n)));
+      const double size = std::sqrt(dot(tangential, tangential));
+      const double limit = contacts(k, IWAN_MU) * f_n / (share * contacts(k, IWAN_K1));
+      if (size <= limit)
+        return false;
+      const V held = K::unturned(s, bb, scaled(tangential, limit / size));
+      y[stretch] = held[0], y[stretch + 1] = held[1], y[stretch + 2] = held[2];
+      return true;
+    }
+  }
+
+  // ---- a journal along its bore (space only)
+  struct Bore
+  {
+    V pj, uj, ub, a0, a1;
+  };
+
+  /// A SLICED contact in its bore's section: the journal's point and axis, the bore's axis,
+  /// the mid-plane eccentricity a0 and the lean a1 (their parts normal to u_b).
+  static Bore bore_section(const Matrix<double>& s, const Rows& contacts, std::ptrdiff_t k)
+  {
+    const std::int64_t bb = body(contacts, k, CONTACT_BEARING_BODY),
+                       bj = body(contacts, k, CONTACT_JOURNAL_BODY);
+    const V bp = contacts.cell<D>(k, CONTACT_BEARING_POINT), jp = contacts.cell<D>(k, CONTACT_JOURNAL_POINT);
+    const V pb = K::point_state(s, bb, bp).position;
+    const V ub = K::vector_state(s, bb, bp, contacts.cell<D>(k, CONTACT_BEARING_AXIS)).value;
+    const V pj = K::point_state(s, bj, jp).position;
+    const V uj = K::vector_state(s, bj, jp, contacts.cell<D>(k, CONTACT_JOURNAL_AXIS)).value;
+    const V e = sub(pj, pb), lean = sub(uj, ub);
+    return {pj, uj, ub, sub(e, scaled(ub, dot(e, ub))), sub(lean, scaled(ub, dot(lean, ub)))};
+  }
+
+  static double end_offset(const Rows& contacts, std::ptrdiff_t k)
+  {
+    const auto slices = static_cast<long>(contacts(k, CONTACT_SLICES));
+    return laws::slice_geometry(slices - 1, contacts(k, CONTACT_LENGTH), slices, 0.0).offset;
+  }
+
+  static double slice_rate(const Matrix<double>& s, const Rows& contacts, std::ptrdiff_t k,
+                           const V& n, const V& x, const V& b)
+  {
+    return dot(n, sub(K::material_velocity(s, body(contacts, k, CONTACT_JOURNAL_BODY), x),
+                      K::material_velocity(s, body(contacts, k, CONTACT_BEARING_BODY), b)));
+  }
+
+  /// A unit vector normal to the unit vector u (across the axis of u's smallest component).
+  static V perpendicular(const V& u)
+  {
+    const double a0 = std::abs(u[0]), a1 = std::abs(u[1]), a2 = std::abs(u[2]);
+    const V helper = a0 <= a1 and a0 <= a2 ? V{1.0, 0.0, 0.0}
+                                           : (a1 <= a2 ? V{0.0, 1.0, 0.0} : V{0.0, 0.0, 1.0});
+    const V f = cross(u, helper);
+    return scaled(f, 1.0 / std::sqrt(dot(f, f)));
+  }
+
+  struct Frame
+  {
+    V f, g;
+    double ax, ay, bx, by;
+  };
+  /// The bore's section in 2D: f along a0 (where the journal is off centre), g = u_b x f.
+  static Frame section_frame(const V& ub, const V& a0, const V& a1)
+  {
+    const double size = std::sqrt(dot(a0, a0));
+    const V f = size > 0.0 ? scaled(a0, 1.0 / size) : perpendicular(ub);
+    const V g = cross(ub, f);
+    return {f, g, dot(a0, f), dot(a0, g), dot(a1, f), dot(a1, g)};
+  }
+
+  /// The deepest slice (an end slice) with the bore unmoved, and its approach rate.
+  static Depth sliced_depth(const Matrix<double>& s, const Rows& contacts, std::ptrdiff_t k)
+  {
+    const Bore bore = bore_section(s, contacts, k);
+    double zz = end_offset(contacts, k);
+    V plus = add(bore.a0, scaled(bore.a1, zz));
+    const V minus = sub(bore.a0, scaled(bore.a1, zz));
+    if (dot(minus, minus) > dot(plus, plus))
+      zz = -zz, plus = minus;
+    const double size = std::sqrt(dot(plus, plus));
+    const V n = size > 0.0 ? scaled(plus, 1.0 / size) : axis<D>(0);
+    const V x = add(bore.pj, scaled(bore.uj, zz));
+    return {size - contacts(k, CONTACT_CLEARANCE), slice_rate(s, contacts, k, n, x, sub(x, plus))};
+  }
+
+  static laws::Section section(const Args& args, std::ptrdiff_t k, const Frame& fr)
+  {
+    const Rows& c = args.contacts;
+    const auto table = static_cast<std::ptrdiff_t>(c(k, CONTACT_TABLE));
+    return {fr.ax, fr.ay, fr.bx, fr.by, c(k, CONTACT_CLEARANCE), false, c(k, CONTACT_LENGTH),
+            static_cast<long>(c(k, CONTACT_SLICES)), args.grid_log0, args.grid_step,
+            args.tables.row(table), static_cast<std::size_t>(args.tables.cols)};
+  }
+
+  struct Sliced
+  {
+    double normal, power, tangential;
+  };
+
+  /// A journal along its bore cut into slices (pinbore.reduced.mechanism.engine's
+  /// sliced_forces_3d states the construction): each slice's force on the journal at its
+  /// axis point and on the bore at its (moved) axis, its friction at the contact point.
+  /// apply = false: the forces are not pushed, only the slices' Iwan sliders held (in dy,
+  /// the state y itself).
+  static Sliced sliced_forces(const Args& args, const Work& w, std::span<const double> y,
+                              std::span<double> dy, std::ptrdiff_t k, bool apply)
+  {
+    const Rows& contacts = args.contacts;
+    const Matrix<double>& s = w.bodies;
+    Sliced out{0.0, 0.0, 0.0};
+    const Bore bore = bore_section(s, contacts, k);
+    const double zz = end_offset(contacts, k);
+    const V plus = add(bore.a0, scaled(bore.a1, zz)), minus = sub(bore.a0, scaled(bore.a1, zz));
+    const double clearance = contacts(k, CONTACT_CLEARANCE);
+    if (std::max(dot(plus, plus), dot(minus, minus)) <= clearance * clearance)
+      return out;
+    const Frame fr = section_frame(bore.ub, bore.a0, bore.a1);
+    const laws::Section sec = section(args, k, fr);
+    const double length = contacts(k, CONTACT_LENGTH), scale = contacts(k, CONTACT_SCALE),
+                 end_length = contacts(k, CONTACT_END_LENGTH);
+    const auto [dx, dy_] = laws::bore_displacement(sec, end_length, scale, contacts(k, CONTACT_COMPLIANCE));
+    if (not std::isfinite(dx))
+      return {NaN, NaN, NaN};
+    const std::int64_t bb = body(contacts, k, CONTACT_BEARING_BODY),
+                       bj = body(contacts, k, CONTACT_JOURNAL_BODY);
+    const double speed = args.speeds[k];
+    const double chi = contact_chi(contacts, k, speed);
+    const auto index = static_cast<std::ptrdiff_t>(contacts(k, CONTACT_STATE));
+    const int law = static_cast<int>(contacts(k, CONTACT_FRICTION_LAW));
+    const std::ptrdiff_t per_slice = index < 0 ? 0 : (law == IWAN ? 6 : 3);
+    const double total = length + 2.0 * end_length;
+    for (long i = 0; i < sec.slices; ++i)
+    {
+      const laws::SliceContact sc = laws::slice_contact(i, dx, dy_, sec);
+      if (sc.approach <= 0.0)
+        continue;
+      const double weight = laws::slice_geometry(i, length, sec.slices, end_length).weight;
+      const V n = add(scaled(fr.f, sc.nx), scaled(fr.g, sc.ny));
+      const V x = add(bore.pj, scaled(bore.uj, sc.offset));
+      const V b = sub(x, scaled(n, sc.approach + clearance));
+      const double f_el = scale * weight * sc.force;
+      const double rate = slice_rate(s, contacts, k, n, x, b);
+      const double f_n = laws::hysteresis_force(f_el, rate, speed, chi);
+      const std::ptrdiff_t state = index + i * per_slice;
+      const V c = add(b, scaled(n, contacts(k, CONTACT_RADIUS)));
+      if (not apply)
+      {
+        if (law == IWAN)
+          iwan_return(s, contacts, k, f_n, n, dy, state, weight / total);
+        continue;
+      }
+      K::push(w.force, s, bj, scaled(n, -f_n), x, args.offsets);
+      K::push(w.force, s, bb, scaled(n, f_n), b, args.offsets);
+      double p = (f_n - f_el) * rate;
+      if (law != NO_FRICTION)
+      {
+        const V v = sub(K::material_velocity(s, bj, c), K::material_velocity(s, bb, c));
+        V spin = zero<D>();
+        if (law > LINEAR)
+        {
+          V wv = sub(K::material_velocity(s, bj, x), K::material_velocity(s, bb, x));
+          wv = sub(wv, add(scaled(n, dot(n, wv)), scaled(bore.ub, dot(bore.ub, wv))));
+          spin = scaled(wv, 1.0 / (sc.approach + clearance));
+        }
+        const Friction r = spatial_friction(s, contacts, k, f_n, n, v, y, dy, state, spin,
+                                            weight / total);
+        out.tangential += r.size;
+        if (r.power != 0.0 or dot(r.force, r.force) > 0.0)
+        {
+          K::push(w.force, s, bj, r.force, c, args.offsets);
+          K::push(w.force, s, bb, negated(r.force), c, args.offsets);
+          p += r.power;
+        }
+      }
+      out.normal += f_n;
+      out.power += p;
+    }
+    return out;
   }
 
   // ---- torsion elements, spring-dampers, loads
@@ -929,7 +1224,7 @@ struct Engine
     w.rhs_c[row] = poisson ? rate : (1.0 + e) * rate;
     solve_rows(args, w, m);
     const double scale = poisson ? (1.0 + e) : 1.0;
-    K::mass_weighted_step(args, y, args.nq, w, w.rhs_c, m, scale);
+    K::velocity_step(args, y, w, w.rhs_c, m, scale);
     const double after = K::kinetic_energy(args, y);
     double work_in = 0.0;
     for (std::ptrdiff_t i = 0; i < m; ++i)
@@ -962,7 +1257,10 @@ struct Engine
         continue;
       changed = true;
       solve_rows(args, w, m);
-      K::mass_weighted_step(args, y, level == 0 ? 0 : args.nq, w, w.rhs_c, m, 1.0);
+      if (level == 0)
+        K::position_step(args, y, w, w.rhs_c, m);
+      else
+        K::velocity_step(args, y, w, w.rhs_c, m, 1.0);
     }
     if (changed)
       refresh(args, y, w);

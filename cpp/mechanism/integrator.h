@@ -260,7 +260,6 @@ struct Hooks
   static bool iwan_slider_return(std::span<double> y, const Args& args, const Work& w,
                                  const Tracked& tr)
   {
-    static_assert(D == 2, "the spatial sliders: the spatial kind's step");
     const Rows& contacts = args.contacts;
     E::refresh(args, y, w);
     bool changed = false;
@@ -268,16 +267,23 @@ struct Hooks
     {
       if (static_cast<int>(contacts(k, CONTACT_FRICTION_LAW)) != IWAN or not tr.in_contact[k])
         continue;
+      if (static_cast<int>(contacts(k, CONTACT_KIND)) == SLICED)
+      {
+        if constexpr (D == 3)
+          E::sliced_forces(args, w, y, y, k, false);
+        continue;
+      }
       double delta, rate;
+      typename K::V n;
       if (static_cast<int>(contacts(k, CONTACT_KIND)) == PLANE)
       {
         const auto p = E::plane_geometry(w.bodies, contacts, k);
-        delta = p.delta, rate = p.rate;
+        delta = p.delta, rate = p.rate, n = p.normal;
       }
       else
       {
         const auto g = E::radial_geometry(w.bodies, contacts, k);
-        delta = g.delta, rate = g.rate;
+        delta = g.delta, rate = g.rate, n = g.normal;
       }
       double f_n = 0.0;
       if (delta > 0.0)
@@ -286,15 +292,8 @@ struct Hooks
         f_n = laws::hysteresis_force(f_el, rate, args.speeds[k],
                                      E::contact_chi(contacts, k, args.speeds[k]));
       }
-      const std::ptrdiff_t stretch = static_cast<std::ptrdiff_t>(contacts(k, CONTACT_STATE))
-                                     + STATE_STRETCH;
-      const double held = laws::iwan_return_map(y[stretch], contacts(k, IWAN_K1),
-                                                contacts(k, IWAN_MU) * f_n);
-      if (held != y[stretch])
-      {
-        y[stretch] = held;
-        changed = true;
-      }
+      changed |= E::iwan_return(w.bodies, contacts, k, f_n, n, y,
+                                static_cast<std::ptrdiff_t>(contacts(k, CONTACT_STATE)), 1.0);
     }
     return changed;
   }

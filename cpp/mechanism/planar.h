@@ -6,6 +6,7 @@
 // rates, the projection's steps, its energy). Bodies are numbered from 0; -1 is the ground.
 #pragma once
 
+#include "bodies.h"
 #include "data.h"
 
 #include <cmath>
@@ -24,13 +25,11 @@ struct Planar
   static constexpr int BODY_COLUMNS = 405;
   static constexpr int COLUMNS = 3;
 
-  struct Point
+  using Point = PointState<V>;
+  using Vector = VectorState<V>;
+  struct Rotation
   {
-    V position, velocity, centripetal, arm;
-  };
-  struct Vector
-  {
-    V value, rate, centripetal;
+    double angle, coefficient, rate, centripetal;
   };
 
   static V arm(const Matrix<double>& s, std::ptrdiff_t b, const V& v)
@@ -118,10 +117,6 @@ struct Planar
     return centripetal_term(s, bj, arm_j, a) - centripetal_term(s, bi, arm_i, a);
   }
 
-  struct Rotation
-  {
-    double angle, coefficient, rate, centripetal;
-  };
   static Rotation relative_rotation(const Matrix<double>& s, std::ptrdiff_t bi,
                                     std::ptrdiff_t bj, const V&, const V&, const V&, const V&,
                                     const V&, double offset, double drift)
@@ -135,6 +130,16 @@ struct Planar
                               const V&)
   {
     return 1.0;
+  }
+
+  /// rate plus body b's part of constraint row i's rate (its columns times their velocities).
+  static double row_rate(double rate, const Matrix<double>& jac, std::ptrdiff_t i,
+                         std::ptrdiff_t b, const Matrix<double>&, std::span<const double> velocities,
+                         std::span<const std::int64_t> offsets)
+  {
+    for (std::ptrdiff_t c = offsets[b]; c < offsets[b + 1]; ++c)
+      rate += jac(i, c) * velocities[c];
+    return rate;
   }
 
   // ---- the whole body
@@ -161,6 +166,8 @@ struct Planar
       work.velocities[j] = y[nq + j];
   }
 
+  static constexpr bool MASS_LEFT = true;   // the Schur sums' order (linalg)
+
   /// Gravity on each body; returns the power its modal damping dissipates (none: rigid).
   static double body_forces(const Args& args, const Work& work)
   {
@@ -174,8 +181,6 @@ struct Planar
     }
     return 0.0;
   }
-
-  static constexpr bool MASS_LEFT = true;   // the Schur sums' order (linalg)
 
   static void mass_rows(const Args& args, const Work& work, std::ptrdiff_t i, std::ptrdiff_t b)
   {
@@ -211,6 +216,17 @@ struct Planar
         y[start + c] -= scale * args.minv[c] * v;
       }
     }
+  }
+
+  static void position_step(const Args& args, std::span<double> y, const Work& w,
+                            std::span<const double> x, std::ptrdiff_t m)
+  {
+    mass_weighted_step(args, y, 0, w, x, m, 1.0);
+  }
+  static void velocity_step(const Args& args, std::span<double> y, const Work& w,
+                            std::span<const double> x, std::ptrdiff_t m, double scale)
+  {
+    mass_weighted_step(args, y, args.nq, w, x, m, scale);
   }
 
   static void normalise(const Args&, std::span<double>) {}

@@ -1,9 +1,10 @@
 """The engine that runs a mechanism, chosen by its arguments: the compiled core
-(pinbore.core.cpp.mechanism, C++) for the bodies it implements, planar rigid ones, and
-numba's (reduced.mechanism.engine, loaded only then) for the others, spatial and flexible,
-until the core covers them. Both take layout.Args and layout.Work and give the same numbers
-(the core's arithmetic is the numba engine's, operation by operation: the shipped planar
-scenes integrate to the same bits). Every caller of the engine comes through here.
+(pinbore.core.cpp.mechanism, C++) for the bodies it implements, rigid ones in the plane and in
+space, and numba's (reduced.mechanism.engine, loaded only then) for a mechanism with a
+flexible body, until the core covers them. Both take layout.Args and layout.Work and give the
+same numbers (the core's arithmetic is the numba engine's, operation by operation: the
+shipped rigid scenes integrate to the same bits). Every caller of the engine comes through
+here.
 """
 
 import numpy as np
@@ -11,13 +12,12 @@ import numpy as np
 from pinbore.core import cpp
 from pinbore.reduced.mechanism import layout
 
-RIGID_PLANAR_COLUMNS = 3   # a planar rigid body's velocity columns: x', y', w
+RIGID_COLUMNS = {2: 3, 3: 6}   # a rigid body's velocity columns: x', y', w; r', w
 
 
 def compiled(args) -> bool:
-    """Whether the compiled core runs this mechanism: planar, every body rigid."""
-    return isinstance(args.kind, layout.PlanarKind) and bool(
-        np.all(np.diff(args.offsets) == RIGID_PLANAR_COLUMNS))
+    """Whether the compiled core runs this mechanism: every body rigid."""
+    return bool(np.all(np.diff(args.offsets) == RIGID_COLUMNS[len(args.like)]))
 
 
 def _numba():
@@ -90,5 +90,8 @@ def energy_of(y, args) -> float:
 
 
 def slice_approaches(y, args, work, k, approaches, weights):
-    """A sliced contact's slices (space only: engine.slice_approaches)."""
+    """The slices of sliced contact k: their approaches and weights into the arrays; the
+    bore's displacement (engine.slice_approaches)."""
+    if compiled(args):
+        return cpp.mechanism.slice_approaches(y, args, work, k, approaches, weights)
     return _numba().slice_approaches(y, args, work, k, approaches, weights)
