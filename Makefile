@@ -42,17 +42,12 @@ STUDY_RUNS := $(patsubst studies/%.toml,build/study/%/summary.json,$(wildcard st
 CALIBRATION_STUDIES := $(addprefix build/study/,$(addsuffix /summary.json,calibration_2d calibration_3d restitution))
 REDUCED_CODE := $(wildcard core/*.py laws/*.py fem/modes/file.py reduced/mechanism/*.py)
 DYNAMICS_CODE := $(wildcard pinbore/cli.py reduced/dynamics/*.py) $(REDUCED_CODE) $(STAMP)
-# numba compiles the multibody engine once per body kind into its on-disk cache: the first run
-# of each kind goes before the other runs of that kind and before the analyses, which then load
-# it instead of each compiling it again at the same time; only the runs whose scene reads the
-# laws file wait for the calibration
+# the multibody engine is the compiled core's (built by make venv): every run may start at
+# once; only the runs whose scene reads the laws file wait for the calibration
 REDUCED_OF = $(patsubst scenes/reduced/%.toml,build/reduced/%/summary.json,$(shell grep -l $(1) scenes/reduced/*.toml))
-SPATIAL_RUNS := $(call REDUCED_OF,'^kind = "spatial"')
 LAWS_RUNS := $(call REDUCED_OF,'^laws_file')
-PLANAR_FIRST := build/reduced/slider_crank_flores2004/summary.json
-SPATIAL_FIRST := build/reduced/spatial_slider_crank_flores/summary.json
-DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(DYNAMICS_CODE) $(PLANAR_FIRST)
-SPATIAL_DYNAMICS_DEPS := $(SPATIAL_DYNAMICS_SCENE) $(DYNAMICS_CODE) $(SPATIAL_FIRST)
+DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(DYNAMICS_CODE)
+SPATIAL_DYNAMICS_DEPS := $(SPATIAL_DYNAMICS_SCENE) $(DYNAMICS_CODE)
 
 .PHONY: all venv mesh fem impact modes calibration reduced dynamics study report bench stress test test-slow docs clean help
 .DELETE_ON_ERROR:
@@ -106,8 +101,6 @@ $(CALIBRATION_STUDIES): build/study/%/summary.json: studies/%.toml studies/bases
 
 reduced: $(REDUCED_RUNS) ## run the mechanisms with clearance joints (build/reduced/<scene>/)
 
-$(filter-out $(PLANAR_FIRST) $(SPATIAL_RUNS),$(REDUCED_RUNS)): $(PLANAR_FIRST)
-$(filter-out $(SPATIAL_FIRST),$(SPATIAL_RUNS)): $(SPATIAL_FIRST)
 $(LAWS_RUNS): build/calibration/laws.json
 build/reduced/%/summary.json: scenes/reduced/%.toml $(MODES_RUNS) $(REDUCED_CODE) $(STAMP)
 	$(PINBORE) reduced $< --out build/reduced/$*
@@ -116,8 +109,8 @@ dynamics: $(DYNAMICS) ## Poincare maps, bifurcation diagrams and design map of t
 
 study: $(STUDY_RUNS) ## the studies of studies/: the calibration curves and impacts, Monte Carlo of the Flores slider-crank (exceedance, tolerance band), Sobol indices of the solar-panel deployment (build/study/)
 
-# (a mechanism study's points run on the local cores after the first planar run compiled the engine)
-build/study/%/summary.json: studies/%.toml $(wildcard scenes/reduced/*.toml) $(REDUCED_CODE) pinbore/study.py $(PLANAR_FIRST) $(STAMP)
+# (a mechanism study's points run on the local cores)
+build/study/%/summary.json: studies/%.toml $(wildcard scenes/reduced/*.toml) $(REDUCED_CODE) pinbore/study.py $(STAMP)
 	$(PINBORE) study $< --out build/study/$* --cache build/study/cache
 
 # (the sweeps run their points on the local cores; their per-point caches make a rerun resume)
@@ -145,7 +138,7 @@ build/dynamics/spatial_bifurcation/summary.json: $(SPATIAL_DYNAMICS_DEPS)
 
 # the frequency response of the impact oscillator: its periodic motions continued through
 # grazing and its bifurcations, beside direct up- and down-sweeps (the hysteresis)
-build/dynamics/continuation/summary.json: $(CONTINUATION_SCENE) $(DYNAMICS_CODE) $(PLANAR_FIRST)
+build/dynamics/continuation/summary.json: $(CONTINUATION_SCENE) $(DYNAMICS_CODE)
 	$(PINBORE) dynamics $< --analysis continuation --parameter frequency --range 10 30 --points 200 \
 	    --transient 30 --sweeps 41 --periods 5 --out build/dynamics/continuation
 

@@ -35,7 +35,7 @@ import numpy as np
 
 from pinbore.core.figures import plt, save_png
 from pinbore.fem.modes import file as modes_file
-from pinbore.reduced.mechanism.engine import spin_up
+from pinbore.core.cpp.mechanism import spin_up
 from pinbore.reduced.mechanism.model import build
 from pinbore.reduced.mechanism.outputs import per_step
 from pinbore.reduced.mechanism.run import simulate
@@ -73,11 +73,11 @@ def fastest_motion(model, trajectory) -> float:
     (the shipped flexible scenes: their start, undeformed): the fastest free motion an
     integrator resolves, a flexible body's stiffest kept mode as its joints constrain it.
     (Of a rigid mechanism it would measure the constraints' Baumgarte terms, not a motion.)"""
-    from pinbore.reduced.mechanism import engine
+    from pinbore.reduced.mechanism import kernel
 
     args = model.args()
     for t, y in zip(trajectory.times, trajectory.states):
-        if not np.any(engine.rhs_value(t, y, args)[1]):
+        if not np.any(kernel.rhs_value(t, y, args)[1]):
             break
     else:
         raise RuntimeError("no recorded state is out of contact")
@@ -87,7 +87,7 @@ def fastest_motion(model, trajectory) -> float:
         up, down = y.copy(), y.copy()
         up[i] += h
         down[i] -= h
-        jacobian[:, i] = (engine.rhs_value(t, up, args)[0] - engine.rhs_value(t, down, args)[0]) / (2 * h)
+        jacobian[:, i] = (kernel.rhs_value(t, up, args)[0] - kernel.rhs_value(t, down, args)[0]) / (2 * h)
     return float(np.abs(np.linalg.eigvals(jacobian)).max())
 
 

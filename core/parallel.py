@@ -3,8 +3,8 @@
 
 `cached_map(task, items, names, cache, workers, scheduler)` calls `task(item)` for every item
 whose result is not yet in `cache` (one JSON file per item, named by `names`), in parallel: on
-local processes (a pool of `workers` long-lived processes: each imports the code and compiles
-numba once, then runs point after point in process), or on a Dask cluster (`scheduler`: its
+local processes (a pool of `workers` long-lived processes: each imports the code once, then
+runs point after point in process), or on a Dask cluster (`scheduler`: its
 address, through the client's executor). Each result is written atomically (a temporary file
 renamed into place) as soon as it arrives, so a run stopped in any way, SIGKILL included,
 resumes with every finished point kept and none computed twice; the points under way when it
@@ -168,7 +168,7 @@ def executor(workers: int, scheduler: str | None, pending: int | None = None):
     SIGTERM, an error) cancels the points not yet started instead of waiting for them; the
     Dask client is closed. An unreachable scheduler is one InputError line."""
     if scheduler is None:
-        # spawned, not forked: the parent runs threads (numba, tqdm) that fork would copy mid-state
+        # spawned, not forked: the parent runs threads (tqdm, BLAS) that fork would copy mid-state
         pool = concurrent.futures.ProcessPoolExecutor(
             max_workers=max(1, min(workers, pending or workers)),
             mp_context=multiprocessing.get_context("spawn"))

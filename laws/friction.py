@@ -1,5 +1,5 @@
 """Friction laws for the tangential force at a contact, as scalar functions compiled with numba:
-the multibody engine (pinbore.reduced.mechanism.engine) evaluates these very functions inside its
+the multibody engine (the compiled core, cpp/mechanism/laws.h) evaluates their C++ forms inside its
 right-hand side, and the tests check them against closed forms.
 
 v is the slip velocity (m/s). Every law gives F, the friction force along the slip: the

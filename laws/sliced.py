@@ -53,7 +53,7 @@ positive definite, K = a sum_i w_i [f'_i n_i n_i^T + f_i / |P_i - d| (I - n_i n_
 when every step that overshoots the minimum along its direction is cut back to it
 (bore_displacement). The plane law above is the in-plane case: P_i = (delta + theta z'_i) along
 x, c = 0, the approach taken along x (no curvature term), d = (c_b F / L, 0), so
-x = delta - d_x; the spatial mechanisms (pinbore.reduced.mechanism.engine) take the general one.
+x = delta - d_x; the spatial mechanisms (the compiled core, cpp/mechanism/laws.h) take the general one.
 This section geometry and its potential are the project's own construction.
 
 F and M are the generalised forces conjugate to delta and theta (the virtual work of the

@@ -47,19 +47,19 @@ def section(build_dir: Path, bench_dir: Path) -> str:
              "constraints with Lagrange multipliers (Baumgarte stabilisation), clearance joints "
              "whose contacts carry a normal law (elastic part from the law library or calibrated "
              "on the FE study, Hunt-Crossley-type damping) and friction, or rigid impacts (Newton "
-             "or Poisson restitution, then held contact); adaptive Dormand-Prince 5(4), compiled "
-             "with numba, that lands every contact onset on a step boundary (a stiff Rosenbrock "
-             "2(3) is the alternative).</p>"]
+             "or Poisson restitution, then held contact); adaptive Dormand-Prince 5(4), in the "
+             "compiled core (C++), that lands every contact onset on a step boundary (a stiff "
+             "Rosenbrock 2(3) is the alternative).</p>"]
     if not runs:
         return "".join(parts + [note("No runs under build/reduced: run <code>make reduced</code>.")]
                        + stress_part(bench_dir))
     summaries = {path.parent: summary.read(path) for path in runs}
     rows = [[folder.name, s.status, s.impacts, f"{s.peak_normal_force_N:.4g}", s.steps,
-             s.rhs_evaluations, f"{s.wall_time_s:.3f}", f"{s.compile_time_s:.2f}",
+             s.rhs_evaluations, f"{s.wall_time_s:.3f}",
              f"{s.energy_balance.relative_to_peak_kinetic:.1e}", f"{s.constraint_drift_max:.1e}"]
             for folder, s in summaries.items()]
     parts.append(table(["scene", "status", "impacts", "peak contact force (N)", "steps",
-                        "RHS evaluations", "integration wall time (s)", "compilation before it (s)",
+                        "RHS evaluations", "integration wall time (s)",
                         "energy residual / peak kinetic", "constraint drift (m)"], rows))
     for folder, s in summaries.items():
         if s.verdict:

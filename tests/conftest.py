@@ -120,17 +120,17 @@ def compound_pendulum(t, mass, inertia, arm, gravity=9.81):
 def kinematic_duality(data: dict, point, seed=0, eta=1e-3, rates=1.0):
     """A flexible body (the scene's first) at a state whose modal coordinates (about `eta`,
     m sqrt(kg)) and every rate (about `rates`) are random, and the body point `point` (body
-    frame) on it: (P' of the point (reduced.mechanism.<kind>.point_state), the velocity of
+    frame) on it: (P' of the point (the core's point_state of its body kind), the velocity of
     the material at its deformed place P (material_velocity), f . P' and G . q' with G the
     generalised force of a force f acting at P (push) and q' the bodies' velocities, for a
     random f). The first two are one velocity reached two ways (from the material point and
     back from its place), the last two the power of f by virtual work."""
-    from pinbore.reduced.mechanism import engine, kinds
+    from pinbore.core import cpp
+    from pinbore.reduced.mechanism import kernel, kinds
     from pinbore.reduced.mechanism.model import build
 
     scene = kinds.validate(data, "test")
     model = build(scene, "test", ROOT)
-    body = kinds.of_scene(scene).bodies()
     args = model.args()
     rng = np.random.default_rng(seed)
     y = model.y0.copy()
@@ -144,16 +144,10 @@ def kinematic_duality(data: dict, point, seed=0, eta=1e-3, rates=1.0):
         p = y[3:7] / np.linalg.norm(y[3:7])
         y[3:7] = p
         y[nq + 3:nq + 7] -= p * (p @ y[nq + 3:nq + 7])
-    work = engine.workspace(args)
-    engine.refresh(y, args, work)
-    states = work.bodies
-    s = tuple(float(c) for c in point)
-    place, velocity, _, _ = body.point_state(states, 0, s)
-    material = body.material_velocity(states, 0, place)
-    f = tuple(float(c) for c in rng.standard_normal(len(s)))
-    force = np.zeros(work.velocities.size)
-    body.push(force, states, 0, f, place, args.offsets)
-    return np.array(velocity), np.array(material), float(np.dot(f, velocity)), float(force @ work.velocities)
+    work = kernel.workspace(args)
+    f = rng.standard_normal(len(point))
+    _, velocity, material, force = cpp.mechanism.point_kinematics(y, args, work, 0, list(point), list(f))
+    return velocity, material, float(np.dot(f, velocity)), float(force @ work.velocities)
 
 
 def simulated(data: dict):

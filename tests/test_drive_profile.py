@@ -34,7 +34,7 @@ def test_the_spin_up_is_smooth_and_reaches_its_speed():
     """The compiled profile against its definition, and its rate and acceleration against
     central differences of it; the acceleration is zero at both ends of the spin-up (the
     profile's point: no jerk at the start, none when the speed is reached)."""
-    from pinbore.reduced.mechanism.engine import spin_up
+    from pinbore.core.cpp.mechanism import spin_up
 
     t = np.linspace(0.0, 2 * T_S, 601)
     values = np.array([spin_up(x, OMEGA_S, T_S) for x in t])

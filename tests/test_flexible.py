@@ -287,7 +287,7 @@ def spin_up_beam(path, stiffening=True, duration=20.0):
 
 def hub_deflection(model, trajectory):
     """(times, the tip's deflection across the hub's axis (m), the hub's angle theta(t))."""
-    from pinbore.reduced.mechanism.engine import spin_up
+    from pinbore.core.cpp.mechanism import spin_up
     from pinbore.reduced.mechanism.outputs import per_step
 
     cols, _, _ = per_step(model, trajectory)
@@ -326,7 +326,7 @@ def test_the_spin_up_beam_bends_quasi_statically_then_vibrates_at_the_rotating_f
     deflection peaks between 0.3 and 0.7 m during the spin-up and, at 6 rad/s after it, the tip
     vibrates about the hub's axis (within 1 mm) by a few millimetres at the first lead-lag
     frequency of the rotating cantilever (4.51 rad/s, 19 % above the still one) within 1 %."""
-    from pinbore.reduced.mechanism.engine import spin_up
+    from pinbore.core.cpp.mechanism import spin_up
 
     model, trajectory = simulated(spin_up_beam(bodies["spinup_beam_2d"], duration=26.0))
     t, deflection = hub_deflection(model, trajectory)
@@ -385,10 +385,15 @@ def test_bad_flexible_attachments_are_one_line(bodies, write_scene, tmp_path, ch
 
 
 def test_the_layout_of_a_flexible_row_fits_its_modes():
-    """The engine's row of a flexible body holds the most modes and interfaces a scene may ask
-    for (the scene's bound is the engine's)."""
-    from pinbore.reduced.mechanism import planar, scene
+    """The core's row of a flexible body holds the most modes and interfaces a scene may ask
+    for (the scene's bound is the core's), and the layout the core reads its arrays by is
+    pinbore.reduced.mechanism.layout's, name by name."""
+    from pinbore.core.cpp import mechanism as core
+    from pinbore.reduced.mechanism import planar, scene, spatial
 
-    assert scene.FLEXIBLE_MODES == planar.MODES
-    assert planar.FACES + planar.INTERFACES * planar.FACE == planar.BODY_COLUMNS
+    assert scene.FLEXIBLE_MODES == planar.MODES == spatial.MODES == core.MODES
+    assert planar.INTERFACES == spatial.INTERFACES == core.INTERFACES
+    assert spatial.BODY_COLUMNS == core.BODY_COLUMNS[1]
+    assert len(core.LAYOUT) > 100
+    assert {name: getattr(layout, name) for name in core.LAYOUT} == core.LAYOUT
     assert layout.TORSION_S_J + 3 == layout.TORSION_COLUMNS

@@ -19,7 +19,7 @@ different times, so each model's state at an instant is the cubic Hermite interp
 state and rate at the ends of the step holding it (the interpolation of
 reduced.mechanism.outputs.refined_peak; fourth order: on the steps of a few hundred
 nanoseconds through an impact of about 50 us it is 1e-10 of the state's own scale or better),
-and the forces are each engine's at that state (engine.observe). A step whose end state was
+and the forces are each engine's at that state (kernel.observe). A step whose end state was
 changed by an impulse or a contact's release is not interpolated across (its end state is
 not the integral of its rates); the samples falling in such a step are left out.
 
@@ -44,7 +44,7 @@ import numpy as np
 import pytest
 from conftest import ROOT
 
-from pinbore.reduced.mechanism import engine, kinds
+from pinbore.reduced.mechanism import kernel, kinds
 from pinbore.reduced.mechanism.layout import LOG_IMPULSE, LOG_RATE, LOG_TIME
 from pinbore.reduced.mechanism.model import build
 from pinbore.reduced.mechanism.outputs import hermite_basis, roles
@@ -149,12 +149,12 @@ def observed(model, run, times):
         a = min(max(int(np.searchsorted(run.times, t, side="right")) - 1, 0), run.times.size - 2)
         args = model.args(run.speeds[a, :nc], run.latched[a, :nt], run.modes[a, :nc])
         h = run.times[a + 1] - run.times[a]
-        f0 = engine.rhs_value(run.times[a], run.states[a], args)[0]
-        f1 = engine.rhs_value(run.times[a + 1], run.states[a + 1], args)[0]
+        f0 = kernel.rhs_value(run.times[a], run.states[a], args)[0]
+        f1 = kernel.rhs_value(run.times[a + 1], run.states[a + 1], args)[0]
         basis, _ = hermite_basis(np.array([(t - run.times[a]) / h]))
         y = basis[:, 0] @ np.array([run.states[a], h * f0, run.states[a + 1], h * f1])
-        work = engine.workspace(args)
-        engine.observe(t, y, dy, args, work, depth, offset)
+        work = kernel.workspace(args)
+        kernel.observe(t, y, dy, args, work, depth, offset)
         for b, name in enumerate(BODIES):
             q = y[per_body * model.names.index(name):][:per_body]
             out[i, 3 * b:3 * b + 2] = q[:2]

@@ -26,7 +26,7 @@ def listed() -> set[str]:
 
 def cited() -> dict[str, set[str]]:
     where = {}
-    for path in tracked("*.py", "*.toml", "README.md", "docs/*.md"):   # docs/: every page, nested too
+    for path in tracked("*.py", "*.toml", "*.h", "*.cpp", "README.md", "docs/*.md"):   # docs/: every page, nested too
         for key in KEY.findall(path.read_text()):
             where.setdefault(key, set()).add(str(path.relative_to(ROOT)))
     return where

@@ -1,7 +1,7 @@
 """The sliced cylindrical-joint law (pinbore.laws.sliced) against closed forms of a linear
 per-length law, convergence orders as the slices double, symmetry, the edge relief's arc,
 the end correction and a law beyond its table; the table lookup it shares with the mechanism
-engine (pinbore.laws.tables, pinbore.reduced.mechanism.engine).
+engine (pinbore.laws.tables, the compiled core's Engine::elastic_force).
 
 Notation: bore length L, slices n of width h = L/n, offsets s = z - L/2, approach
 delta(s) = delta + theta s - r(z), per-length law f (N/m)."""
@@ -15,7 +15,7 @@ import pytest
 from pinbore.laws import elastic as el
 from pinbore.laws import sliced as sl
 from pinbore.laws import tables
-from pinbore.reduced.mechanism import engine
+from pinbore.core.cpp import mechanism as core
 from pinbore.reduced.mechanism.layout import CONTACT_COLUMNS, CONTACT_STIFFNESS, CONTACT_TABLE
 
 L = 0.02            # m, bore length
@@ -75,12 +75,9 @@ def fitted_order(slices, errors):
 # ---- the table lookup shared with the mechanism engine
 
 def test_the_engine_looks_laws_up_with_the_laws_table():
-    """One implementation: the mechanism engine calls pinbore.laws.tables.table_force, and its
-    numba cache follows that file. The engine's elastic force of a contact with a tabulated
-    law (no linear stiffness) is the table's force to the bit, NaN beyond the table: it
-    picks the contact's table and looks nothing up itself."""
-    assert engine.tables.table_force is tables.table_force
-    assert tables.__file__ in engine.COMPILED_IN
+    """The engine's elastic force of a contact with a tabulated law (no linear stiffness) is
+    pinbore.laws.tables' force to the bit, NaN beyond the table: it picks the contact's table
+    and looks it up as the laws do."""
     grid_log0, grid_step, log_f = law_table("liu", TIGHT)
     contacts = np.zeros((2, CONTACT_COLUMNS))
     contacts[1, CONTACT_TABLE] = 1          # the second contact's law is the second table
@@ -88,9 +85,9 @@ def test_the_engine_looks_laws_up_with_the_laws_table():
     laws = np.stack([np.full(log_f.size, np.log(1.0)), log_f])
     for d in (3.3e-12, 1e-9, 2.718e-7, 4e-6, 9.99e-5, 1.01e-4):
         expected = tables.table_force(d, grid_log0, grid_step, log_f)
-        got = engine.elastic_force(contacts, 1, d, grid_log0, grid_step, laws)
+        got = core.elastic_force(contacts, 1, d, grid_log0, grid_step, laws)
         assert got == expected or (math.isnan(got) and math.isnan(expected)), (d, got, expected)
-    assert math.isnan(engine.elastic_force(contacts, 1, 1.01e-4, grid_log0, grid_step, laws))
+    assert math.isnan(core.elastic_force(contacts, 1, 1.01e-4, grid_log0, grid_step, laws))
 
 
 def test_table_is_exact_for_a_power_law_and_nan_beyond():

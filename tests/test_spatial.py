@@ -14,7 +14,8 @@ from scipy.special import ellipk
 
 from pinbore.laws import sliced
 from pinbore.laws.tables import tabulate
-from pinbore.reduced.mechanism import engine, kinds, spatial
+from pinbore.core.cpp import mechanism as core
+from pinbore.reduced.mechanism import kinds
 from pinbore.reduced.mechanism.layout import (
     CONTACT_BEARING_AXIS, CONTACT_BEARING_BODY, CONTACT_CLEARANCE, CONTACT_COLUMNS,
     CONTACT_COMPLIANCE, CONTACT_END_LENGTH, CONTACT_JOURNAL_AXIS, CONTACT_JOURNAL_BODY,
@@ -23,6 +24,7 @@ from pinbore.reduced.mechanism.layout import (
 from pinbore.reduced.mechanism.model import build
 from pinbore.reduced.mechanism.outputs import per_step
 from pinbore.reduced.mechanism.run import simulate
+from pinbore.reduced.mechanism.scene import rotation_matrix
 from pinbore.reduced.mechanism.spatial import BODY_COLUMNS, BODY_JINV, BODY_POS, BODY_ROT
 
 SCENES = ROOT / "scenes" / "reduced"
@@ -85,7 +87,7 @@ def angular_momentum(cols, model):
     for k in range(cols["time_s"].size):
         p = [cols[f"body_e{i}_1"][k] for i in range(4)]
         a = np.empty((3, 3))
-        spatial.rotation(np.array(p), a)
+        a[:] = rotation_matrix(np.array(p))
         w = np.array([cols[f"body_w{c}_rad_per_s"][k] for c in "xyz"])
         out.append(a @ model.base.inertia[0] @ a.T @ w)
     return np.array(out)
@@ -135,7 +137,7 @@ def test_intermediate_axis_flip_has_the_closed_form_period():
     body_w2 = []
     for k in range(t.size):   # the body-frame component about the intermediate axis
         a = np.empty((3, 3))
-        spatial.rotation(np.array([cols[f"body_e{i}_1"][k] for i in range(4)]), a)
+        a[:] = rotation_matrix(np.array([cols[f"body_e{i}_1"][k] for i in range(4)]))
         body_w2.append((a.T @ np.array([cols[f"body_w{c}_rad_per_s"][k] for c in "xyz"]))[1])
     body_w2 = np.array(body_w2)
     crossings = t[:-1][np.diff(np.sign(body_w2)) != 0]
@@ -161,7 +163,7 @@ def journal(position, parameters):
     Euler parameters (unit inverse inertia)."""
     bodies = np.zeros((1, BODY_COLUMNS))
     rot = np.empty((3, 3))
-    spatial.rotation(np.asarray(parameters, float), rot)
+    rot[:] = rotation_matrix(np.asarray(parameters, float))
     bodies[0, BODY_POS:BODY_POS + 3] = position
     bodies[0, BODY_ROT:BODY_ROT + 9] = rot.ravel()
     bodies[0, BODY_JINV:BODY_JINV + 9] = np.eye(3).ravel()
@@ -174,10 +176,8 @@ def tilted_journal_forces(contacts, table, delta, theta):
     the radial normal force the engine's slice sum returns."""
     bodies = journal([contacts[0, CONTACT_CLEARANCE] + delta, 0, 0],
                      [math.cos(theta / 2), 0, math.sin(theta / 2), 0])
-    force = np.zeros(6)
-    f_n = engine.sliced_forces_3d(force, np.zeros(1), np.zeros(1), bodies, contacts,
-                                  np.array([0, 6]), np.ones(1), table[2][None, :], table[0],
-                                  table[1], 0, True)[0]
+    force, f_n, _, _ = core.sliced_forces(bodies, contacts, np.array([0, 6]), np.ones(1),
+                                          table[2][None, :], table[0], table[1], 0)
     return force, f_n
 
 
@@ -189,7 +189,7 @@ def test_slice_sum_equals_the_sliced_law(end_length, scale, compliance):
     equal laws.sliced.sliced(delta, sin theta, ..., scale, compliance) to round-off (1e-12;
     with a bulk compliance both solve for the bore's displacement to 1e-12 of its scale, the
     kernel by the 2D Newton across the section, the law along the load): the same slices,
-    weights and law (reduced.mechanism.engine.sliced_forces_3d)."""
+    weights and law (the core's Engine::sliced_forces)."""
     grid_log0, grid_step, table = tabulate(lambda d: 3e10 * d**1.1, 1e-12, 1e-3, 400)
     contacts = cylinder(end_length=end_length, scale=scale, compliance=compliance)
     delta, theta = 2e-6, 1.5e-4

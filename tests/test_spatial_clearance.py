@@ -14,7 +14,8 @@ from conftest import ROOT
 from scipy.optimize import fsolve, root
 
 from pinbore.laws import elastic, sliced, tables
-from pinbore.reduced.mechanism import engine, kinds, spatial
+from pinbore.core.cpp import mechanism as core
+from pinbore.reduced.mechanism import kernel, kinds
 from pinbore.reduced.mechanism.layout import (
     CONTACT_BEARING_AXIS, CONTACT_BEARING_BODY, CONTACT_CLEARANCE, CONTACT_COLUMNS,
     CONTACT_COMPLIANCE, CONTACT_JOURNAL_AXIS, CONTACT_JOURNAL_BODY, CONTACT_KIND, CONTACT_LENGTH,
@@ -22,6 +23,7 @@ from pinbore.reduced.mechanism.layout import (
 from pinbore.reduced.mechanism.model import build
 from pinbore.reduced.mechanism.outputs import per_step
 from pinbore.reduced.mechanism.run import simulate
+from pinbore.reduced.mechanism.scene import rotation_matrix
 from pinbore.reduced.mechanism.spatial import BODY_COLUMNS, BODY_JINV, BODY_POS, BODY_ROT
 
 K = 4e10            # N/m^2, the linear per-length law f = K delta
@@ -44,19 +46,17 @@ def cylinder(slices, compliance):
 def journal_forces(contacts, table, centre, axis_angle, axis_direction):
     """Force and torque about its centre (6) on a journal at rest with its centre at `centre`
     and its axis turned by `axis_angle` from z towards `axis_direction` (a unit vector normal
-    to z): the engine's slice sum (reduced.mechanism.engine.sliced_forces_3d)."""
+    to z): the engine's slice sum (the core's Engine::sliced_forces)."""
     turn = np.cross([0, 0, 1], axis_direction)
     parameters = [math.cos(axis_angle / 2), *(math.sin(axis_angle / 2) * turn)]
     bodies = np.zeros((1, BODY_COLUMNS))
     rot = np.empty((3, 3))
-    spatial.rotation(np.array(parameters), rot)
+    rot[:] = rotation_matrix(np.array(parameters))
     bodies[0, BODY_POS:BODY_POS + 3] = centre
     bodies[0, BODY_ROT:BODY_ROT + 9] = rot.ravel()
     bodies[0, BODY_JINV:BODY_JINV + 9] = np.eye(3).ravel()
-    force = np.zeros(6)
-    engine.sliced_forces_3d(force, np.zeros(1), np.zeros(1), bodies, contacts, np.array([0, 6]),
-                            np.ones(1), table[2][None, :], table[0], table[1], 0, True)
-    return force
+    return core.sliced_forces(bodies, contacts, np.array([0, 6]), np.ones(1), table[2][None, :],
+                              table[0], table[1], 0)[0]
 
 
 @pytest.mark.parametrize("slices", [1, 8, 64])
@@ -154,10 +154,8 @@ def final_pose(data):
     assert run.status == 0, run.status
     y = run.states[-1]
     args = model.args()
-    work = engine.workspace(args)
-    engine.refresh(y, args, work)
-    pj, _, _, a0, a1 = engine.bore_section(work.bodies, model.contacts, model.contact_rows[0][0],
-                                           (0.0, 0.0, 0.0))
+    work = kernel.workspace(args)
+    pj, _, _, a0, a1 = core.bore_section(y, args, work, model.contact_rows[0][0])
     cols = per_step(model, run)[0]
     late = cols["time_s"] > 0.9 * cols["time_s"][-1]
     speed = np.max(np.abs(np.stack([cols[f"journal_v{c}_m_per_s"][late] for c in "xyz"])))

@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 from conftest import ROOT
 
+from pinbore.core.cpp.mechanism import cholesky_solve
 from pinbore.reduced.mechanism import kinds
-from pinbore.reduced.mechanism.engine import workspace
-from pinbore.reduced.mechanism.linalg import cholesky_solve
+from pinbore.reduced.mechanism.kernel import workspace
 from pinbore.reduced.mechanism.model import build
 from pinbore.reduced.mechanism.outputs import per_step, refined_peak
 from pinbore.reduced.mechanism.run import simulate

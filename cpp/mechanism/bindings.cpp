@@ -140,8 +140,20 @@ auto with_kind(nb::handle a, const Args& args, F&& f)
   if (dimension != 2 and dimension != 3)
     throw std::invalid_argument("mechanism: like must be a vector of 2 or 3 components");
   for (std::ptrdiff_t b = 0; b < args.bodies(); ++b)
-    if (args.offsets[b + 1] - args.offsets[b] != columns)
-      throw std::invalid_argument("mechanism: the compiled engine runs rigid bodies");
+  {
+    const std::ptrdiff_t modes = args.offsets[b + 1] - args.offsets[b] - columns;
+    if (modes < 0 or modes > Planar::MODES)
+      throw std::invalid_argument("mechanism: a body's velocity columns are its rigid ones and "
+                                  "its modes (at most 24)");
+    if (modes == 0)
+      continue;
+    const double faces = args.flex.rows == args.bodies() and args.flex.cols > 2 ? args.flex(b, 1) : -1.0;
+    const std::ptrdiff_t needed = dimension == 2
+                                      ? Planar::flex_column(modes, 5, static_cast<std::ptrdiff_t>(faces))
+                                      : Spatial::flex_column(modes, 6, static_cast<std::ptrdiff_t>(faces));
+    if (faces < 0 or faces > Planar::INTERFACES or args.flex.cols < needed)
+      throw std::invalid_argument("mechanism: a flexible body's constants do not fit its modes");
+  }
   // a spatial body has 7 coordinates (r, Euler parameters) for its 6 velocity columns
   const std::ptrdiff_t coordinates = args.offsets[args.bodies()] + (dimension == 3 ? args.bodies() : 0);
   if (args.nq != coordinates or args.gravity.size() != dimension or args.inertia.rows != args.bodies()
@@ -221,8 +233,60 @@ Vec<D> vec(const std::vector<double>& v, const char* name)
 void bind_mechanism(nb::module_& parent)
 {
   nb::module_ m = parent.def_submodule(
-      "mechanism", "The multibody engine: rigid bodies in the plane and in space, their joints, "
-                   "contacts and integrators");
+      "mechanism", "The multibody engine: rigid and flexible bodies in the plane and in space, "
+                   "their joints, contacts and integrators");
+
+  // the layout the engine reads its arrays by (pinbore.reduced.mechanism.layout names the
+  // same numbers; a test holds them equal), and the most a flexible body may hold
+  nb::dict layout;
+#define PINBORE_LAYOUT(name) layout[#name] = name;
+  PINBORE_LAYOUT(CONTACT_CHI) PINBORE_LAYOUT(CONTACT_FRICTION_LAW) PINBORE_LAYOUT(CONTACT_FRICTION)
+  PINBORE_LAYOUT(CONTACT_STATE) PINBORE_LAYOUT(CONTACT_IMPACT) PINBORE_LAYOUT(CONTACT_RESTITUTION)
+  PINBORE_LAYOUT(CONTACT_REST_SPEED) PINBORE_LAYOUT(CONTACT_CHI_LOG_SPEED)
+  PINBORE_LAYOUT(CONTACT_CHI_STEP) PINBORE_LAYOUT(CONTACT_CHI_TABLE) PINBORE_LAYOUT(CHI_POINTS)
+  PINBORE_LAYOUT(CONTACT_KIND) PINBORE_LAYOUT(CONTACT_JOINT) PINBORE_LAYOUT(CONTACT_TABLE)
+  PINBORE_LAYOUT(CONTACT_BEARING_BODY) PINBORE_LAYOUT(CONTACT_JOURNAL_BODY)
+  PINBORE_LAYOUT(CONTACT_BEARING_POINT) PINBORE_LAYOUT(CONTACT_BEARING_AXIS)
+  PINBORE_LAYOUT(CONTACT_JOURNAL_POINT) PINBORE_LAYOUT(CONTACT_JOURNAL_AXIS)
+  PINBORE_LAYOUT(CONTACT_CLEARANCE) PINBORE_LAYOUT(CONTACT_RADIUS) PINBORE_LAYOUT(CONTACT_SIDE)
+  PINBORE_LAYOUT(CONTACT_AT_CONTACT) PINBORE_LAYOUT(CONTACT_STIFFNESS)
+  PINBORE_LAYOUT(CONTACT_FRICTION_ON) PINBORE_LAYOUT(CONTACT_LENGTH) PINBORE_LAYOUT(CONTACT_SLICES)
+  PINBORE_LAYOUT(CONTACT_END_LENGTH) PINBORE_LAYOUT(CONTACT_SCALE) PINBORE_LAYOUT(CONTACT_COMPLIANCE)
+  PINBORE_LAYOUT(CONTACT_COLUMNS) PINBORE_LAYOUT(RADIAL) PINBORE_LAYOUT(SLICED) PINBORE_LAYOUT(PLANE)
+  PINBORE_LAYOUT(AXIS_RADIAL) PINBORE_LAYOUT(NO_FRICTION) PINBORE_LAYOUT(COULOMB)
+  PINBORE_LAYOUT(STRIBECK) PINBORE_LAYOUT(LINEAR) PINBORE_LAYOUT(LUGRE) PINBORE_LAYOUT(DAHL)
+  PINBORE_LAYOUT(IWAN) PINBORE_LAYOUT(REGULARISATION_V0) PINBORE_LAYOUT(REGULARISATION_V1)
+  PINBORE_LAYOUT(LUGRE_SIGMA0) PINBORE_LAYOUT(LUGRE_SIGMA1) PINBORE_LAYOUT(LUGRE_SIGMA2)
+  PINBORE_LAYOUT(DAHL_SIGMA) PINBORE_LAYOUT(IWAN_K2) PINBORE_LAYOUT(IWAN_MU)
+  PINBORE_LAYOUT(STATE_STRETCH) PINBORE_LAYOUT(CONTINUOUS) PINBORE_LAYOUT(NEWTON) PINBORE_LAYOUT(POISSON)
+  PINBORE_LAYOUT(POINT) PINBORE_LAYOUT(DOT1) PINBORE_LAYOUT(DOT2) PINBORE_LAYOUT(ANGLE)
+  PINBORE_LAYOUT(PRIM_KIND) PINBORE_LAYOUT(PRIM_BODY_I) PINBORE_LAYOUT(PRIM_BODY_J)
+  PINBORE_LAYOUT(PRIM_S_I) PINBORE_LAYOUT(PRIM_S_J) PINBORE_LAYOUT(PRIM_A_I) PINBORE_LAYOUT(PRIM_B_J)
+  PINBORE_LAYOUT(PRIM_C_I) PINBORE_LAYOUT(PRIM_SPEED) PINBORE_LAYOUT(PRIM_ANGLE0)
+  PINBORE_LAYOUT(PRIM_PROFILE) PINBORE_LAYOUT(PRIM_PROFILE_TIME) PINBORE_LAYOUT(PRIM_PROFILE_ROWS)
+  PINBORE_LAYOUT(PRIMITIVE_COLUMNS) PINBORE_LAYOUT(CONSTANT_SPEED) PINBORE_LAYOUT(SPIN_UP)
+  PINBORE_LAYOUT(TABLE) PINBORE_LAYOUT(HARMONIC) PINBORE_LAYOUT(SEG_TIME) PINBORE_LAYOUT(SEG_C3)
+  PINBORE_LAYOUT(PROFILE_COLUMNS) PINBORE_LAYOUT(HARM_AMPLITUDE) PINBORE_LAYOUT(HARM_OMEGA)
+  PINBORE_LAYOUT(HARM_PHASE) PINBORE_LAYOUT(TORSION_BODY_I) PINBORE_LAYOUT(TORSION_BODY_J)
+  PINBORE_LAYOUT(TORSION_STIFFNESS) PINBORE_LAYOUT(TORSION_DAMPING) PINBORE_LAYOUT(TORSION_FREE_ANGLE)
+  PINBORE_LAYOUT(TORSION_KIND) PINBORE_LAYOUT(TORSION_A_I) PINBORE_LAYOUT(TORSION_B_J)
+  PINBORE_LAYOUT(TORSION_C_I) PINBORE_LAYOUT(TORSION_S_I) PINBORE_LAYOUT(TORSION_S_J)
+  PINBORE_LAYOUT(TORSION_COLUMNS) PINBORE_LAYOUT(SPRING) PINBORE_LAYOUT(STOP) PINBORE_LAYOUT(LATCH)
+  PINBORE_LAYOUT(SPRING_BODY_I) PINBORE_LAYOUT(SPRING_BODY_J) PINBORE_LAYOUT(SPRING_S_I)
+  PINBORE_LAYOUT(SPRING_S_J) PINBORE_LAYOUT(SPRING_STIFFNESS) PINBORE_LAYOUT(SPRING_DAMPING)
+  PINBORE_LAYOUT(SPRING_LENGTH) PINBORE_LAYOUT(SPRING_COLUMNS) PINBORE_LAYOUT(LOAD_BODY)
+  PINBORE_LAYOUT(LOAD_POINT) PINBORE_LAYOUT(LOAD_FORCE) PINBORE_LAYOUT(LOAD_TORQUE)
+  PINBORE_LAYOUT(LOAD_OMEGA) PINBORE_LAYOUT(LOAD_PHASE) PINBORE_LAYOUT(LOAD_COLUMNS)
+  PINBORE_LAYOUT(DISSIPATED) PINBORE_LAYOUT(WORK_IN) PINBORE_LAYOUT(ENERGY_STATES)
+  PINBORE_LAYOUT(LOG_TIME) PINBORE_LAYOUT(LOG_JOINT) PINBORE_LAYOUT(LOG_RATE) PINBORE_LAYOUT(LOG_IMPULSE)
+  PINBORE_LAYOUT(LOG_COLUMNS) PINBORE_LAYOUT(OK) PINBORE_LAYOUT(BLOWN_UP) PINBORE_LAYOUT(TOO_MANY_STEPS)
+  PINBORE_LAYOUT(STEP_TOO_SMALL) PINBORE_LAYOUT(DOPRI5) PINBORE_LAYOUT(DOPRI5_FIXED)
+  PINBORE_LAYOUT(ROSENBROCK23)
+#undef PINBORE_LAYOUT
+  m.attr("LAYOUT") = layout;
+  m.attr("MODES") = Planar::MODES;
+  m.attr("INTERFACES") = Planar::INTERFACES;
+  m.attr("BODY_COLUMNS") = nb::make_tuple(Planar::BODY_COLUMNS, Spatial::BODY_COLUMNS);
 
   m.def(
       "workspace",
@@ -545,6 +609,148 @@ void bind_mechanism(nb::module_& parent)
       nb::arg("weights"),
       "The slices of sliced contact k with the bore moved by its bulk compliance: each "
       "slice's approach (m) and weight (m); returns the bore's displacement (global).");
+
+  // ---- the engine's pieces, for the tests that check them alone
+  m.def(
+      "spin_up", [](double t, double speed, double duration)
+      {
+        const auto p = Engine<Planar>::spin_up(t, speed, duration);
+        return nb::make_tuple(p.theta, p.rate, p.acceleration);
+      },
+      nb::arg("t"), nb::arg("speed"), nb::arg("duration"),
+      "The drive's smooth spin-up [SimoVuQuoc1986]: (theta (rad), rate, acceleration).");
+
+  m.def(
+      "point_kinematics",
+      [](Array<const double> y, nb::handle a, nb::handle w, std::int64_t b, std::vector<double> p,
+         std::vector<double> f)
+      {
+        Held held;
+        const Args args = args_of(a, held);
+        const Work work = work_of(w, held);
+        if (b < 0 or b >= args.bodies())
+          throw std::invalid_argument("point_kinematics: no such body");
+        return with_kind(a, args, [&]<class K>()
+        {
+          constexpr int D = K::D;
+          check_work<K>(args, work, y.size());
+          Engine<K>::refresh(args, values(y), work);
+          const Matrix<double>& s = work.bodies;
+          const auto point = K::point_state(s, b, vec<D>(p, "p"));
+          const auto material = K::material_velocity(s, b, point.position);
+          std::vector<double> force(work.velocities.size(), 0.0);
+          K::push(std::span<double>(force), s, b, vec<D>(f, "f"), point.position, args.offsets);
+          std::vector<double> place(point.position.v, point.position.v + D),
+              velocity(point.velocity.v, point.velocity.v + D), moving(material.v, material.v + D);
+          return nb::make_tuple(owned(std::move(place), {std::size_t(D)}),
+                                owned(std::move(velocity), {std::size_t(D)}),
+                                owned(std::move(moving), {std::size_t(D)}),
+                                owned(std::move(force), {work.velocities.size()}));
+        });
+      },
+      nb::arg("y"), nb::arg("args"), nb::arg("work"), nb::arg("b"), nb::arg("p"), nb::arg("f"),
+      "Body b's point p (body frame) at the state y: its place P and velocity P', the "
+      "velocity of the material at P, and the generalised forces of the force f acting at P.");
+
+  m.def(
+      "sliced_forces",
+      [](Array<const double> bodies, Array<const double> contacts, Array<const std::int64_t> offsets,
+         Array<double> speeds, Array<const double> tables, double grid_log0, double grid_step,
+         std::int64_t k)
+      {
+        if (bodies.ndim() != 2 or bodies.shape(1) != static_cast<std::size_t>(Spatial::BODY_COLUMNS)
+            or contacts.ndim() != 2 or contacts.shape(1) != static_cast<std::size_t>(CONTACT_COLUMNS)
+            or offsets.size() != bodies.shape(0) + 1 or speeds.size() != contacts.shape(0)
+            or tables.ndim() != 2 or k < 0 or static_cast<std::size_t>(k) >= contacts.shape(0))
+          throw std::invalid_argument("sliced_forces: spatial body rows, contact rows, offsets, a "
+                                      "speed a contact and the law tables");
+        Args args;
+        args.contacts = {contacts.data(), static_cast<std::ptrdiff_t>(contacts.shape(0)), CONTACT_COLUMNS};
+        args.offsets = {offsets.data(), offsets.size()};
+        args.speeds = values(speeds);
+        args.tables = {tables.data(), static_cast<std::ptrdiff_t>(tables.shape(0)),
+                       static_cast<std::ptrdiff_t>(tables.shape(1))};
+        args.grid_log0 = grid_log0, args.grid_step = grid_step;
+        const auto table = static_cast<std::ptrdiff_t>(args.contacts(k, CONTACT_TABLE));
+        if (table < 0 or table >= args.tables.rows
+            or static_cast<int>(args.contacts(k, CONTACT_KIND)) != SLICED
+            or args.contacts(k, CONTACT_STATE) >= 0)
+          throw std::invalid_argument("sliced_forces: k must be a sliced contact without states");
+        std::vector<double> rows(bodies.data(), bodies.data() + bodies.size());
+        std::vector<double> force(offsets.data()[bodies.shape(0)], 0.0);
+        Work work;
+        work.bodies = {rows.data(), static_cast<std::ptrdiff_t>(bodies.shape(0)), Spatial::BODY_COLUMNS};
+        work.force = force;
+        const auto r = Engine<Spatial>::sliced_forces(args, work, {}, {}, k, true);
+        return nb::make_tuple(owned(std::move(force), {work.force.size()}), r.normal, r.power,
+                              r.tangential);
+      },
+      nb::arg("bodies"), nb::arg("contacts"), nb::arg("offsets"), nb::arg("speeds"),
+      nb::arg("tables"), nb::arg("grid_log0"), nb::arg("grid_step"), nb::arg("k"),
+      "A sliced contact's forces on the bodies of the spatial body rows given: (generalised "
+      "forces, normal force N, dissipated power W, friction force N).");
+
+  m.def(
+      "elastic_force",
+      [](Array<const double> contacts, std::int64_t k, double delta, double grid_log0,
+         double grid_step, Array<const double> tables)
+      {
+        if (contacts.ndim() != 2 or contacts.shape(1) != static_cast<std::size_t>(CONTACT_COLUMNS)
+            or k < 0 or static_cast<std::size_t>(k) >= contacts.shape(0) or tables.ndim() != 2)
+          throw std::invalid_argument("elastic_force: contact rows, a contact and the law tables");
+        Args args;
+        args.contacts = {contacts.data(), static_cast<std::ptrdiff_t>(contacts.shape(0)), CONTACT_COLUMNS};
+        args.tables = {tables.data(), static_cast<std::ptrdiff_t>(tables.shape(0)),
+                       static_cast<std::ptrdiff_t>(tables.shape(1))};
+        args.grid_log0 = grid_log0, args.grid_step = grid_step;
+        const auto table = static_cast<std::ptrdiff_t>(args.contacts(k, CONTACT_TABLE));
+        if (args.contacts(k, CONTACT_STIFFNESS) <= 0.0 and (table < 0 or table >= args.tables.rows))
+          throw std::invalid_argument("elastic_force: the contact names a table it was not given");
+        return Engine<Planar>::elastic_force(args, k, delta);
+      },
+      nb::arg("contacts"), nb::arg("k"), nb::arg("delta"), nb::arg("grid_log0"),
+      nb::arg("grid_step"), nb::arg("tables"),
+      "F_el(delta) of contact k: its linear law, or its table (NaN beyond it).");
+
+  m.def(
+      "bore_section",
+      [](Array<const double> y, nb::handle a, nb::handle w, std::int64_t k)
+      {
+        Held held;
+        const Args args = args_of(a, held);
+        const Work work = work_of(w, held);
+        if (nb::len(nb::getattr(a, "like")) != 3 or k < 0 or k >= args.ncontacts()
+            or static_cast<int>(args.contacts(k, CONTACT_KIND)) != SLICED)
+          throw std::invalid_argument("bore_section: k must be a sliced contact of a spatial mechanism");
+        check_work<Spatial>(args, work, y.size());
+        Engine<Spatial>::refresh(args, values(y), work);
+        const auto bore = Engine<Spatial>::bore_section(work.bodies, args.contacts, k);
+        auto list = [](const Vec3& v) { return nb::make_tuple(v[0], v[1], v[2]); };
+        return nb::make_tuple(list(bore.pj), list(bore.uj), list(bore.ub), list(bore.a0),
+                              list(bore.a1));
+      },
+      nb::arg("y"), nb::arg("args"), nb::arg("work"), nb::arg("k"),
+      "Sliced contact k in its bore's section at the state y: (the journal's point and axis, "
+      "the bore's axis, the mid-plane eccentricity a0, the lean a1).");
+
+  m.def(
+      "cholesky_solve",
+      [](Array<double> a, Array<double> b, std::int64_t m, Array<const std::int64_t> first)
+      {
+        if (a.ndim() != 2 or m < 0 or a.shape(0) < static_cast<std::size_t>(m)
+            or a.shape(1) < static_cast<std::size_t>(m) or b.size() < static_cast<std::size_t>(m)
+            or first.size() < static_cast<std::size_t>(m))
+          throw std::invalid_argument("cholesky_solve: a (m x m or larger), b and first (m or longer)");
+        for (std::int64_t i = 0; i < m; ++i)
+          if (first.data()[i] < 0 or first.data()[i] > i)
+            throw std::invalid_argument("cholesky_solve: first[i] must lie in [0, i]");
+        cholesky_solve({a.data(), static_cast<std::ptrdiff_t>(a.shape(0)), static_cast<std::ptrdiff_t>(a.shape(1))},
+                       values(b), m, {first.data(), first.size()});
+      },
+      nb::arg("a"), nb::arg("b"), nb::arg("m"), nb::arg("first"),
+      "Solve a x = b in place (x in b) for the leading m x m block of a symmetric positive "
+      "semi-definite a (its lower triangle, overwritten) within the envelope `first`; a "
+      "dependent row's unknown is 0.");
 }
 
 } // namespace pinbore::mechanism

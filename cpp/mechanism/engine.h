@@ -1,9 +1,46 @@
-// The mechanism, written once for every body kind (pinbore.reduced.mechanism.engine states
-// its equations): ideal joints and the drive as primitive constraints, torsion elements,
-// spring-dampers and harmonic loads, the clearance joints' contacts with their laws, the
-// equations of motion with their constraints (the Schur system), impacts, the projection
-// onto the constraints and what the integrator asks of a mechanism (its hooks). A body is
-// reached only through its kind K (K::point_state, K::put, K::push, ...).
+// The mechanism, written once for every body kind K (planar.h, spatial.h): ideal joints and
+// the drive, torsion springs, stops and latches, spring-dampers and harmonic loads, clearance
+// joints and their contacts, the equations of motion with their constraints, impacts, the
+// projection onto the constraints and the integrator's hooks (integrator.h). A body is
+// reached only through K (K::point_state, K::put, K::push, ...).
+//
+// Equations of motion ([Cao2013] eq. 21; stabilised after [Baumgarte1972]), in the bodies'
+// velocity columns v (planar: x', y', w; spatial: r', w; a flexible body's modal rates after):
+//
+//     M v' + D^T lambda = Q(q, v, t),     D v' = gamma - 2 a Phi' - a^2 Phi,
+//
+// lambda from the Schur system (D M^-1 D^T) lambda = D M^-1 Q - gamma~ (Cholesky within its
+// envelope: two rows couple only through a body they share), then v' = M^-1 (Q - D^T lambda),
+// and the body kind turns v' into the coordinates' second derivatives.
+//
+// Ideal joints and the drive are primitive constraints ([Nikravesh1988] ch. 7): a point of
+// body i on a point of body j (POINT: D rows), a vector of i normal to a vector of j (DOT1), a
+// vector of i normal to the line between two points (DOT2), the relative angle about an axis
+// (ANGLE: angle0 + theta(t)). Each row gives its value, its Jacobian, its explicit time rate
+// and gamma, the velocity terms of its second derivative with the sign changed: for a body
+// point P'' = r'' + w' x s + w x (w x s), for a body vector a'' = w' x a + w x (w x a).
+//
+// Clearance joints are contacts, each a distance that closes:
+// - RADIAL: a journal point X (a planar journal's centre; a ball's in its socket, the dry
+//   spherical joint of [FloresLankarani2010] and [Tian2009]) from a bearing point P:
+//   delta = |X - P| - c, normal n = (X - P)/|X - P|, contact point C = P + R_b n;
+// - AXIS_RADIAL: a journal point from the bore's axis u: delta = |(X - P) - ((X - P).u) u| - c;
+// - PLANE: a journal point against a face of the bearing body, normal N, offset d:
+//   delta = s N.(X - P) - d on the face's side s (a translational joint's slider corners; a
+//   cylindrical joint's shoulders, two-sided);
+// - SLICED: a journal along its bore in space, cut into slices ([Cao2013]'s 3D joint, the
+//   sliced law with its bulk compliance): sliced_forces.
+// A continuous contact carries F_n = F_el(delta) (1 + chi delta'/v0) while delta > 0, F_el
+// tabulated (laws.h) or linear, chi the damping law's hysteresis factor (or, calibrated, of
+// the laws file's e(v0) at v0), v0 the approach rate at this impact's onset; friction opposes
+// the slip at the contact point (the laws of laws.h; in the plane along the tangent, in space
+// against the slip with a state law's state a vector in the bearing body's frame). Impulse
+// contacts (Newton or Poisson): rigid impacts between steps (apply_impulse), and below a rest
+// speed held contact: the constraint delta = 0 joins the ideal ones until its multiplier (the
+// normal force) would pull. While delta <= 0 no law is evaluated.
+//
+// Extra states integrate the energy dissipated in the contacts, dampers and modal damping and
+// the work of the constraint forces (the drive) and of the loads, for the energy book.
 #pragma once
 
 #include "bodies.h"
@@ -886,9 +923,15 @@ struct Engine
     double normal, power, tangential;
   };
 
-  /// A journal along its bore cut into slices (pinbore.reduced.mechanism.engine's
-  /// sliced_forces_3d states the construction): each slice's force on the journal at its
-  /// axis point and on the bore at its (moved) axis, its friction at the contact point.
+  /// A journal along its bore, cut into n slices (laws::slice_geometry: offset z_i from the
+  /// mid-plane, weight w_i = L/n + e at each end slice). At slice i the journal's axis point
+  /// X_i = P_j + z_i u_j is off the bore's axis by e_i across it: delta_i = |e_i| - c along
+  /// n_i. Each slice carries a f_el(delta_i) (1 + chi delta_i'/v0) w_i, -f n_i on the journal at
+  /// X_i and +f n_i on the bore at B_i = X_i - e_i, its point on the bore's axis (the pair has
+  /// no moment, delta_i' = n_i . (v_J(X_i) - v_B(B_i)) exactly); friction acts at
+  /// C_i = B_i + R_b n_i. With a bulk compliance the bore's axis first moves across by d
+  /// (laws::bore_displacement) and the slices see e_i - d. The deepest slice is an end slice:
+  /// a journal whose end slices are free skips the slices.
   /// apply = false: the forces are not pushed, only the slices' Iwan sliders held (in dy,
   /// the state y itself).
   static Sliced sliced_forces(const Args& args, const Work& w, std::span<const double> y,

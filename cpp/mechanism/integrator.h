@@ -1,7 +1,8 @@
-// The integrators of the mechanism (pinbore.reduced.mechanism.integrator states them):
-// Dormand-Prince 5(4) [DormandPrince1980] with a PI step-size controller and event location
-// (a step ends at its first contact onset, held contact's release or latch), at a fixed step,
-// or Rosenbrock 2(3) [ShampineReichelt1997]; and the mechanism's hooks: the contact state at
+// The integrators of the mechanism: Dormand-Prince 5(4) [DormandPrince1980] with a PI
+// step-size controller (on q, q' and the friction states; the energy integrals are outputs)
+// and event location (a step ends at its first contact onset, held contact's release or
+// latch), at a fixed step, or Rosenbrock 2(3) [ShampineReichelt1997]; and the mechanism's
+// hooks: the contact state at
 // the start, the fraction of a trial step that ends it at its first event, the updates of an
 // accepted step (onsets with their impact speeds, impacts, held contacts, Iwan sliders,
 // latches, the projection onto the constraints).

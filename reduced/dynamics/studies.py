@@ -57,8 +57,8 @@ def figures():
 
 
 def dynamics():
-    """The flow and its analyses (reduced.dynamics.flow; importing it loads numba, which a
-    scene is validated without)."""
+    """The flow and its analyses (reduced.dynamics.flow; imported only once a scene has been
+    validated)."""
     from pinbore.reduced.dynamics import flow   # noqa: PLC0415
 
     return flow
@@ -290,7 +290,7 @@ def run(scene_file: str | Path, analysis: str, options: Analysis) -> int:
     options; outputs in options.out (replaced when complete). 1 if shooting did not
     converge (its outputs are written, marked)."""
     path = Path(scene_file)
-    scene = kinds.load(path)   # validates (without numba), one-line errors
+    scene = kinds.load(path)   # validates, one-line errors
     target = SceneFile(path, scene.model_dump(exclude_none=True))
     check_scene(scene, target, options)
     _, analyse = ANALYSES[analysis]

@@ -1,3 +1,3 @@
-"""The mechanism model: planar and spatial multibody mechanisms with ideal and clearance joints,
-written once (reduced.mechanism.engine) over the kinds of body (reduced.mechanism.planar,
-reduced.mechanism.spatial) through what a body offers the joints (reduced.mechanism.bodies)."""
+"""The mechanism model: planar and spatial multibody mechanisms with ideal and clearance joints:
+their scenes, the build into the arrays of the compiled core's engine (reduced.mechanism.kernel,
+cpp/mechanism/), the kinds of body (reduced.mechanism.planar, .spatial) and the outputs."""

@@ -2,11 +2,11 @@
 here which kind a scene is and never branch on it themselves.
 
 A kind names its scene model (reduced.mechanism.scene: pure pydantic, so that a scene is
-validated without numba), its body kind's module (compiled: reduced.mechanism.planar or
+validated before any model is built), its body kind's module (reduced.mechanism.planar or
 .spatial, loaded only to build a model) and what its state's coordinates are (recorded in
 summary.json). A flexible body (its FE modes in a floating frame) is a body of a kind, not a
-kind: a mechanism mixes rigid and flexible bodies, and the kind's body functions branch on the
-body (reduced.mechanism.bodies).
+kind: a mechanism mixes rigid and flexible bodies, and the core's body functions branch on the
+body (cpp/mechanism/planar.h, spatial.h).
 """
 
 import importlib
@@ -23,7 +23,7 @@ class Kind:
     name: str                  # "planar" or "spatial" (summary.json's `model`)
     scene_kind: str            # the scene's `kind` key
     scene: type                # its scene model
-    module: str                # its body kind's module (compiled)
+    module: str                # its body kind's module
     coordinates: str           # its state's coordinates per body, for summary.json
     dimension: int
     eccentricity_columns: bool   # a revolute joint's journal offset (ecc_x, ecc_y) in the outputs
@@ -32,8 +32,8 @@ class Kind:
     joint_caption: str         # what a clearance joint's figure shows
 
     def bodies(self):
-        """The body kind's module: its compiled body functions and how its scenes become the
-        model's arrays (importing it loads numba)."""
+        """The body kind's module: how its scenes become the model's arrays, its outputs'
+        columns and its flows' coordinates."""
         return importlib.import_module(self.module)
 
 

@@ -1,15 +1,15 @@
-"""Named layouts of the mechanism's compiled data: the columns of its row arrays, the codes
-stored in them, and the bundles it passes around, for planar and spatial mechanisms alike.
+"""Named layouts of the mechanism's data: the columns of its row arrays, the codes stored in
+them, and the bundles passed to the compiled core's engine (pinbore.core.cpp.mechanism,
+whose cpp/mechanism/data.h holds the same numbers), for planar and spatial mechanisms alike.
 
-Rows are float arrays (one row per element) addressed by the column names below: module
-integers, which numba freezes into the compiled code as constants. A vector in a row takes
-three columns, of which a planar mechanism reads two (reduced.mechanism.vectors.vec). The
-bundles are namedtuples, which numba compiles as plain structs and caches like tuples.
+Rows are float arrays (one row per element) addressed by the column names below. A vector in
+a row takes three columns, of which a planar mechanism reads two. The bundles are
+namedtuples of NumPy arrays, which the core reads in place.
 
 The state vector y of the integrator holds the bodies' coordinates q (a body kind's own: x,
 y, phi of a planar body's centre of mass; the centre r and the Euler parameters p of a
 spatial one), their rates q', the energy dissipated in the contacts, the work of the
-constraint forces, then the friction states of the contacts (reduced.mechanism.engine).
+constraint forces, then the friction states of the contacts.
 """
 
 from collections import namedtuple
@@ -138,15 +138,9 @@ LOG_TIME, LOG_JOINT, LOG_RATE, LOG_IMPULSE = 0, 1, 2, 3   # s, joint, approach r
 LOG_COLUMNS = 4
 
 # ---- bundles
-# The body kinds' markers: empty namedtuples, whose class numba chooses a kind's body
-# functions on (reduced.mechanism.bodies), at no cost.
-PlanarKind = namedtuple("PlanarKind", [])
-SpatialKind = namedtuple("SpatialKind", [])
-PLANAR, SPATIAL = PlanarKind(), SpatialKind()
-
 # The arguments of the right-hand side and of the integrator (reduced.mechanism.model.Model.
-# args), one set of fields for every body kind: `kind` its marker, `like` a zero vector of the
-# mechanism's dimension, on whose length numba chooses the vector functions, `project_first`
+# args), one set of fields for every body kind: `like` a zero vector of the mechanism's
+# dimension, on whose length the core chooses the body kind (planar, spatial), `project_first`
 # whether an accepted step is projected onto the constraints before its events are read
 # (spatial) or after (planar): each kind keeps the order it has always had, so that a run
 # gives the numbers it gave before to the last bit (in a chaotic mechanism a rounding apart
@@ -160,7 +154,7 @@ PLANAR, SPATIAL = PlanarKind(), SpatialKind()
 # speeds: impact speed per contact; latched: a flag per torsion element; mode: per contact 1
 # while an impulse contact is held; all updated in place by the integrator.
 Args = namedtuple("Args", [
-    "kind", "nq", "like", "project_first", "masses", "minv", "inertia", "inertia_inv", "gravity",
+    "nq", "like", "project_first", "masses", "minv", "inertia", "inertia_inv", "gravity",
     "offsets", "primitives", "baumgarte", "contacts", "speeds", "grid_log0", "grid_step", "tables",
     "torsion", "latched", "mode", "profile", "flex", "springs", "loads"])
 

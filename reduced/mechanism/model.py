@@ -1,5 +1,5 @@
 """From a mechanism scene of any kind to the arrays of the compiled engine
-(reduced.mechanism.engine), with consistent initial conditions, written once: the laws file,
+(reduced.mechanism.kernel), with consistent initial conditions, written once: the laws file,
 the tables of the normal laws, the contacts of every clearance joint with their damping and
 friction, the torsion elements, the spring-dampers and harmonic loads, the friction states,
 the fixed step. What only a kind knows (its bodies' coordinates and mass, its ideal joints
@@ -163,7 +163,7 @@ def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
     states = assign_friction_states(contacts, geometry.nq, kind.dimension)
     masses, minv, inertia = geometry.mass()
     args = layout.Args(
-        kind=body_kind.MARKER, nq=geometry.nq, like=(0.0,) * kind.dimension,
+        nq=geometry.nq, like=(0.0,) * kind.dimension,
         project_first=body_kind.PROJECT_FIRST, masses=masses, minv=minv, inertia=inertia,
         inertia_inv=np.linalg.inv(inertia) if kind.dimension == 3 else inertia,
         gravity=np.asarray(scene.gravity, float), offsets=geometry.offsets(),

@@ -287,7 +287,6 @@ def summary(model, series, run, status_text, scene_file) -> Summary:
         "impacts": int(counters[3]),
         "steps": int(counters[0]), "rejected_steps": int(counters[1]),
         "rhs_evaluations": int(counters[2]), "wall_time_s": run.seconds,
-        "compile_time_s": run.compile_seconds,
         "energy_balance": {"max_residual_J": float(np.max(np.abs(total - total[0]))),
                            "relative_to_peak_kinetic": float(np.max(np.abs(total - total[0])) / scale),
                            "dissipated_J": float(e["dissipated"][-1]),

@@ -43,7 +43,6 @@ class Trajectory:
     status: int
     t_end: float
     seconds: float               # of the integration
-    compile_seconds: float = 0.0   # of numba's compilation (or cache load) before it, if any
 
 
 def onset_tolerance(model) -> float:
@@ -56,7 +55,7 @@ def simulate(model, y0=None, duration=None, args=None) -> Trajectory:
     """Integrate the model from y0 (default: its consistent initial state) over `duration`
     (default: the scene's), with the engine's arguments `args` (default: model.args(), a
     fresh start; the integrator updates their speeds, latches and modes in place)."""
-    from pinbore.reduced.mechanism import kernel   # noqa: PLC0415 (the engine)
+    from pinbore.reduced.mechanism import kernel   # noqa: PLC0415 (the compiled core)
     from pinbore.reduced.mechanism.model import SPEED_FLOOR, fixed_step   # noqa: PLC0415
 
     s = model.scene.integrator
@@ -65,20 +64,15 @@ def simulate(model, y0=None, duration=None, args=None) -> Trajectory:
     step = fixed_step(model) if s.method == "dopri5_fixed" else s.max_step
     fixed = (METHODS[s.method], s.rtol, s.atol, step, onset_tolerance(model), SPEED_FLOOR, MAX_STEPS)
     start = time.perf_counter()
-    # the first run of this process and kind of mechanism that numba's engine runs compiles
-    # (or loads) it; later, and in the compiled core, this returns at once
-    kernel.integrate(y0, 0.0, model.args(), *fixed)
-    compiled = time.perf_counter()
     result = kernel.integrate(y0, model.scene.duration if duration is None else duration, args,
                               *fixed)
-    return Trajectory(**result._asdict(), seconds=time.perf_counter() - compiled,
-                      compile_seconds=compiled - start)
+    return Trajectory(**result._asdict(), seconds=time.perf_counter() - start)
 
 
 def run(scene_path, out) -> int:
     """`pinbore reduced`: a mechanism scene of any kind (reduced.mechanism.kinds)."""
     scene_path = Path(scene_path)
-    scene = kinds.load(scene_path)   # validated before numba is loaded
+    scene = kinds.load(scene_path)   # validated before the model is built
     from pinbore.reduced.mechanism import outputs   # noqa: PLC0415 (compiled)
     from pinbore.reduced.mechanism.model import build, laws_path   # noqa: PLC0415
 

@@ -9,8 +9,8 @@ outputs, and the rules across a scene (names, run size, a periodic forcing).
 Body positions, angles and velocities are initial guesses for the centres of mass; pinbore
 makes them consistent with the joints before integrating (a clearance joint starts closed
 unless it starts "placed"). Points and axes of a body are in its own frame (origin at its
-centre of mass), those of the ground global. Validating a scene needs neither numba nor
-DOLFINx: a bad scene costs a fraction of a second.
+centre of mass), those of the ground global. Validating a scene needs neither the compiled
+core nor DOLFINx: a bad scene costs a fraction of a second.
 """
 
 import math
@@ -31,8 +31,8 @@ GROUND = "ground"
 MAX_STEPS = 5_000_000
 MAX_SAMPLES = 2_000_000
 ELASTIC_LAWS = ["hertz_point"] + sorted(PUBLISHED)
-# the hysteresis laws of pinbore.laws.dissipative.HYSTERESIS by name (that module compiles
-# with numba, which validating a scene must not load; a test holds the two lists equal)
+# the hysteresis laws of pinbore.laws.dissipative.HYSTERESIS by name (a test holds the two
+# lists equal)
 HYSTERESIS_LAWS = ("flores", "gonthier", "herbert_mcwhannell", "hu_guo", "hunt_crossley",
                    "lankarani_nikravesh", "lee_wang", "zhiying_qishao")
 DAMPING_LAWS = ["none", *HYSTERESIS_LAWS, "calibrated"]   # calibrated: laws file
@@ -56,7 +56,7 @@ def unit_axis(v, key):
 
 def rotation_matrix(p) -> np.ndarray:
     """A(p) of unit Euler parameters p = (e0, e1, e2, e3) ([Nikravesh1988] ch. 6), in the
-    operations of the spatial body kind's compiled A(p) (reduced.mechanism.spatial.rotation),
+    operations of the spatial body kind's A(p) in the compiled core (cpp/mechanism/spatial.h),
     so that both give the same numbers."""
     e0, e1, e2, e3 = (float(c) for c in p)
     a = np.array([[e0 * e0 + e1 * e1 - 0.5, e1 * e2 - e0 * e3, e1 * e3 + e0 * e2],

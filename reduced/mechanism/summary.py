@@ -60,7 +60,6 @@ class Summary(Record):
     rejected_steps: int
     rhs_evaluations: int
     wall_time_s: float          # of the integration
-    compile_time_s: float = 0.0   # numba's compilation (or cache load) before it, if any
     energy_balance: EnergyBalance
     constraint_drift_max: float   # m, the largest gap of the ideal joints
     warnings: list[str]         # e.g. a calibrated law used beyond its calibrated range
