@@ -5,7 +5,8 @@
 - `output`: outputs that appear whole or not at all;
 - `figures`: pictures written byte for byte the same from the same data;
 - `html`: the pieces of the report page (figures inline, tables);
-- `compiled`: numba's on-disk cache kept in step with the files compiled code calls into.
+- `cpp`: the compiled core (C++, cpp/): the contact laws, the multibody engine, the
+  elasto-plastic return map.
 
 It imports no stage: `pinbore.laws`, `meshes`, `fem`, `calibration`, `reduced` build on it.
 """

@@ -1,6 +1,7 @@
 // pinbore.core.cpp: the compiled core's Python module (nanobind). Each binding takes NumPy
 // arrays (converted to C-contiguous doubles and int64 where they are not), checks their
 // shapes, releases the GIL and calls the core; what it returns it allocates.
+#include "laws_bindings.h"
 #include "mechanism/bindings.h"
 #include "plasticity.h"
 
@@ -54,6 +55,7 @@ NB_MODULE(cpp, m)
 {
   m.doc() = "pinbore's compiled core";
   pinbore::mechanism::bind_mechanism(m);
+  pinbore::laws::bind_laws(m);
 
   m.def(
       "radial_return",

@@ -12,7 +12,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from pinbore.core.compiled import compile_on_use
+from pinbore.core.cpp import laws as _core
 from pinbore.laws.elastic import warn_once
 
 
@@ -76,11 +76,11 @@ HYSTERESIS = {f.__name__: f for f in (hunt_crossley, lankarani_nikravesh, lee_wa
                                        hu_guo)}
 
 
-def hysteresis_force(elastic, rate, impact_speed, chi):
-    """F = max(F_el (1 + chi d' / v0), 0): the Hunt-Crossley family (N, or N/m with F_el per
-    length), never pulling (the bracket turns negative when the bodies separate faster than
-    v0 / chi). The normal force of the multibody kernel's continuous contact."""
-    return max(elastic * (1.0 + chi * rate / impact_speed), 0.0)
+# F = max(F_el (1 + chi d' / v0), 0): the Hunt-Crossley family (N, or N/m with F_el per
+# length), never pulling (the bracket turns negative when the bodies separate faster than
+# v0 / chi). The normal force of the multibody engine's continuous contact: the compiled
+# core's (cpp/mechanism/laws.h), the very function the engine calls.
+hysteresis_force = _core.hysteresis_force
 
 
 def kelvin_voigt(d, rate, stiffness, damping):
@@ -197,10 +197,3 @@ def restitution_of_speed(speed, coefficients, low, high):
     for k in range(len(coefficients) - 1, -1, -1):
         e = e * x + coefficients[k]
     return min(max(e, 1e-6), 1.0)
-
-
-# compiled on first use: a scene's validation reads the hysteresis laws without numba
-__getattr__ = compile_on_use(globals(), {
-    "hysteresis_force": {"cache": True, "_nrt": False},
-    "hysteresis_for_restitution": {"cache": True},
-    "restitution_of_speed": {"cache": True}})

@@ -64,202 +64,46 @@ the widths L/n of the slices with delta_i > 0.
 
 The local law enters as a table of ln f_loc on a uniform grid of ln u (pinbore.laws.tables:
 exact for a power law, NaN beyond the table, so a slice beyond the law's range makes F, M
-and z_F NaN rather than a silent number). The functions are compiled (numba) so the
-multibody kernel can call them in its right-hand side.
+and z_F NaN rather than a silent number). The functions are the compiled core's, the ones the
+multibody engine calls in its right-hand side.
 """
 
 import math
 
-import numba
-import numpy as np
+from pinbore.core.cpp import laws as _core
 
-from pinbore.core.compiled import follow_compiled_in
-from pinbore.laws import relief, tables
-
-
-@numba.njit(cache=True, _nrt=False)
-def slice_geometry(i, length, slices, end_length):
-    """Slice i of `slices` over a bore of `length` (m): its offset z_i - L/2 from the
-    mid-plane, its width L/n and its weight w_i = L/n + end_length at each end slice (m)."""
-    width = length / slices
-    offset = (i + 0.5 - 0.5 * slices) * width          # antisymmetric about the mid-plane
-    return offset, width, width + end_length * ((i == 0) + (i == slices - 1))
-
-
-@numba.njit(cache=True, _nrt=False)
-def slice_contact(i, dx, dy, ax, ay, bx, by, clearance, planar, length, slices, grid_log0,
-                  grid_step, table, relief_length, relief_depth):
-    """Slice i of `slices` in the bore's section (module docstring, "The section in 2D"): the
-    journal's axis at P_i = (ax, ay) + z'_i (bx, by) (m) against the bore moved by (dx, dy)
-    (m). planar: the section's in-plane case, approach P_ix - dx - clearance - r(z_i) along
-    x; else the approach |P_i - d| - clearance - r(z_i) along n_i = (P_i - d) / |P_i - d|.
-    Returns (z'_i = z_i - z_mid (m), approach delta_i (m), n_ix, n_iy, the curvature
-    1/|P_i - d| of the approach across n_i (1/m; 0 in plane), local per-length force f_i (N/m;
-    0 when delta_i <= 0), df_i/d delta_i (N/m^2))."""
-    offset = slice_geometry(i, length, slices, 0.0)[0]
-    px, py = ax + bx * offset - dx, ay + by * offset - dy
-    if planar:
-        rho, nx, ny, curvature = px, 1.0, 0.0, 0.0
-    else:
-        rho = math.sqrt(px * px + py * py)
-        nx, ny, curvature = (px / rho, py / rho, 1.0 / rho) if rho > 0.0 else (1.0, 0.0, 0.0)
-    approach = rho - clearance
-    if relief_length > 0.0 and relief_depth > 0.0:
-        approach -= relief.relief_at(0.5 * length + offset, 0.0, length, relief_length,
-                                     relief_depth)[0]
-    if approach <= 0.0:
-        return offset, approach, nx, ny, curvature, 0.0, 0.0
-    force, slope = tables.table_force_slope(approach, grid_log0, grid_step, table)
-    return offset, approach, nx, ny, curvature, force, slope
-
-
-@numba.njit(cache=True, _nrt=False)
-def section_sums(dx, dy, ax, ay, bx, by, clearance, planar, length, slices, grid_log0,
-                 grid_step, table, relief_length, relief_depth, end_length, scale):
-    """The slices' resultants at the bore displacement (dx, dy) (slice_contact's geometry):
-    (F_x, F_y (N), M_x, M_y (N m: sum of f_i z'_i w_i n_i), the stiffness -dF/dd (N/m, 2 x 2:
-    K_xx, K_xy, K_yy), contact length (m)), F = a sum_i f_i w_i n_i and
-    K = a sum_i w_i [f'_i n_i n_i^T + f_i / |P_i - d| (I - n_i n_i^T)]."""
-    fx = fy = mx = my = kxx = kxy = kyy = contact = 0.0
-    for i in range(slices):
-        offset, approach, nx, ny, curvature, f, slope = slice_contact(
-            i, dx, dy, ax, ay, bx, by, clearance, planar, length, slices, grid_log0, grid_step,
-            table, relief_length, relief_depth)
-        if approach <= 0.0:
-            continue
-        _, width, weight = slice_geometry(i, length, slices, end_length)
-        weight *= scale
-        fx += f * weight * nx
-        fy += f * weight * ny
-        mx += f * offset * weight * nx
-        my += f * offset * weight * ny
-        across = f * curvature
-        kxx += weight * (slope * nx * nx + across * (1.0 - nx * nx))
-        kxy += weight * (slope - across) * nx * ny
-        kyy += weight * (slope * ny * ny + across * (1.0 - ny * ny))
-        contact += width
-    return fx, fy, mx, my, kxx, kxy, kyy, contact
-
-
-@numba.njit(cache=True, _nrt=False)
-def bore_displacement(ax, ay, bx, by, clearance, planar, length, slices, grid_log0, grid_step,
-                      table, relief_length, relief_depth, end_length, scale, compliance):
-    """The bore's uniform displacement d (m, 2: d_x, d_y) under its bulk compliance (m^2/N):
-    the root of g(d) = d - compliance F(d) / L (module docstring, "The section in 2D"), the
-    minimum of the strongly convex potential Psi(d) = |d|^2/2 + (compliance / L) sum_i a w_i
-    U(delta_i(d)), U' = f_loc. Newton's method with the Jacobian I + (compliance / L) K (SPD)
-    from d = 0; a step that overshoots the minimum along its direction (g(d + s) . s > 0) is
-    cut back to it by regula falsi (Illinois) on the monotone g(d + t s) . s, so Psi falls at
-    every step. |d| <= compliance |F(0)| / L (strong convexity) sets the scale of the
-    tolerance, 1e-12 of it plus the section's size |P|. (0, 0) without compliance or contact
-    at d = 0; NaN when F is NaN."""
-    if compliance == 0.0:
-        return 0.0, 0.0
-    c = compliance / length
-    size = math.sqrt(ax * ax + ay * ay) + 0.5 * length * math.sqrt(bx * bx + by * by)
-    dx = dy = 0.0
-    fx, fy, _, _, kxx, kxy, kyy, _ = section_sums(
-        dx, dy, ax, ay, bx, by, clearance, planar, length, slices, grid_log0, grid_step, table,
-        relief_length, relief_depth, end_length, scale)
-    if not (math.isfinite(fx) and math.isfinite(fy)):
-        return math.nan, math.nan
-    if fx == 0.0 and fy == 0.0:
-        return 0.0, 0.0
-    tolerance = 1e-12 * (size + c * math.sqrt(fx * fx + fy * fy))
-    gx, gy = -c * fx, -c * fy
-    for _ in range(100):
-        jxx, jxy, jyy = 1.0 + c * kxx, c * kxy, 1.0 + c * kyy
-        det = jxx * jyy - jxy * jxy
-        sx, sy = -(jyy * gx - jxy * gy) / det, -(jxx * gy - jxy * gx) / det
-        if math.sqrt(sx * sx + sy * sy) <= tolerance:
-            return dx + sx, dy + sy
-        low, slope_low = 0.0, gx * sx + gy * sy      # < 0: s is a descent direction of Psi
-        high, slope_high = 1.0, 0.0
-        t, side = 1.0, 0
-        for search in range(60):
-            fx, fy, _, _, kxx, kxy, kyy, _ = section_sums(
-                dx + t * sx, dy + t * sy, ax, ay, bx, by, clearance, planar, length, slices,
-                grid_log0, grid_step, table, relief_length, relief_depth, end_length, scale)
-            if not (math.isfinite(fx) and math.isfinite(fy)):
-                return math.nan, math.nan
-            gx, gy = dx + t * sx - c * fx, dy + t * sy - c * fy
-            slope = gx * sx + gy * sy
-            if slope <= 0.0 and search == 0:
-                break                                 # the full Newton step
-            if slope > 0.0:
-                high, slope_high = t, slope
-                if side > 0:
-                    slope_low *= 0.5                  # Illinois: the stale end's weight halved
-                side = 1
-            else:
-                low, slope_low = t, slope
-                if side < 0:
-                    slope_high *= 0.5
-                side = -1
-            if (high - low) * math.sqrt(sx * sx + sy * sy) <= tolerance or slope == 0.0 \
-                    or search == 59:
-                break
-            t = (low * slope_high - high * slope_low) / (slope_high - slope_low)
-        dx, dy = dx + t * sx, dy + t * sy
-    return dx, dy
-
-
-@numba.njit(cache=True, _nrt=False)
-def shared_approach(delta, theta, length, slices, grid_log0, grid_step, table, relief_length,
-                    relief_depth, end_length, scale, compliance):
-    """The approach x = delta - compliance F(x) / L the slices share once the bore has moved
-    by its bulk compliance (m^2/N) times F / L (module docstring): the in-plane case of
-    bore_displacement. NaN when F is NaN."""
-    return delta - bore_displacement(delta, 0.0, theta, 0.0, 0.0, True, length, slices,
-                                     grid_log0, grid_step, table, relief_length, relief_depth,
-                                     end_length, scale, compliance)[0]
-
-
-@numba.njit(cache=True, _nrt=False)
-def sliced(delta, theta, length, slices, grid_log0, grid_step, table, relief_length, relief_depth,
-           end_length, scale, compliance):
-    """(F (N), M (N m), z_F (m), contact length (m)) of a pin approached by delta (m) and
-    tilted by theta (rad) in a bore of `length` (m) cut into `slices` slices, the local
-    per-length law f_loc (N/m) given by its table (grid_log0, grid_step, table = ln f_loc:
-    pinbore.laws.tables), the bore's edge relief over `relief_length` to `relief_depth` (m;
-    0 for none), `end_length` (m) of law added at each end, the stiffness factor `scale` and
-    the bulk compliance `compliance` (m^2/N; 0: independent slices):
-
-        F = a sum_i f_loc(delta_i) w_i,   M = a sum_i f_loc(delta_i) (z_i - L/2) w_i,
-        delta_i = delta - c_b F / L + theta (z_i - L/2) - r(z_i),
-        w_i = L/n + end_length at i = 0 and at i = n - 1,   z_F = L/2 + M/F
-
-    (module docstring; [Johnson1985] for the elastic-foundation idealisation). z_F is NaN
-    when F = 0; F, M, z_F are NaN when a slice is beyond the table."""
-    shift = bore_displacement(delta, 0.0, theta, 0.0, 0.0, True, length, slices, grid_log0,
-                              grid_step, table, relief_length, relief_depth, end_length, scale,
-                              compliance)[0]
-    if not math.isfinite(shift):
-        return math.nan, math.nan, math.nan, math.nan
-    force, _, moment, _, _, _, _, contact = section_sums(
-        shift, 0.0, delta, 0.0, theta, 0.0, 0.0, True, length, slices, grid_log0, grid_step,
-        table, relief_length, relief_depth, end_length, scale)
-    resultant = 0.5 * length + moment / force if force != 0.0 else math.nan
-    return force, moment, resultant, contact
-
-
-@numba.njit(cache=True)
-def sliced_profile(delta, theta, length, slices, grid_log0, grid_step, table, relief_length,
-                   relief_depth, end_length, scale, compliance):
-    """The slices of `sliced` (same arguments): arrays of their midpoints z_i (m),
-    approaches delta_i (m) and per-length forces a f_loc(delta_i) (N/m), the line load along
-    the pin as the law sees it (the end lengths' share not included)."""
-    shift = bore_displacement(delta, 0.0, theta, 0.0, 0.0, True, length, slices, grid_log0,
-                              grid_step, table, relief_length, relief_depth, end_length, scale,
-                              compliance)[0]
-    z, approach, force = np.empty(slices), np.empty(slices), np.empty(slices)
-    for i in range(slices):
-        offset, approach[i], _, _, _, f, _ = slice_contact(
-            i, shift, 0.0, delta, 0.0, theta, 0.0, 0.0, True, length, slices, grid_log0,
-            grid_step, table, relief_length, relief_depth)
-        force[i] = scale * f
-        z[i] = 0.5 * length + offset
-    return z, approach, force
+# the law's functions, the compiled core's (cpp/mechanism/laws.h), which the multibody
+# engine's sliced journal evaluates:
+# - slice_geometry(i, length, slices, end_length): slice i's offset z_i - L/2 from the
+#   mid-plane, its width L/n and its weight w_i = L/n + end_length at each end slice (m);
+# - slice_contact(i, dx, dy, ax, ay, bx, by, clearance, planar, length, slices, grid_log0,
+#   grid_step, table, relief_length, relief_depth): slice i in the bore's section ("The
+#   section in 2D"), the journal's axis at P_i = (ax, ay) + z'_i (bx, by) against the bore
+#   moved by (dx, dy); planar: the in-plane case, approach P_ix - dx - clearance - r(z_i)
+#   along x, else |P_i - d| - clearance - r(z_i) along n_i. (z'_i (m), approach (m), n_ix,
+#   n_iy, the curvature 1/|P_i - d| (1/m; 0 in plane), f_i (N/m; 0 when open), df_i/d delta_i);
+# - section_sums(dx, dy, ..., end_length, scale): (F_x, F_y (N), M_x, M_y (N m), the stiffness
+#   -dF/dd (K_xx, K_xy, K_yy, N/m), contact length (m)), F = a sum_i f_i w_i n_i and
+#   K = a sum_i w_i [f'_i n_i n_i^T + f_i / |P_i - d| (I - n_i n_i^T)];
+# - bore_displacement(ax, ay, bx, by, clearance, planar, length, slices, ..., end_length,
+#   scale, compliance): (d_x, d_y) the root of g(d) = d - compliance F(d) / L, Newton's method
+#   with the Jacobian I + (compliance / L) K from d = 0, a step that overshoots the minimum of
+#   Psi along its direction cut back by regula falsi (Illinois), to 1e-12 of the section's
+#   size; (0, 0) without compliance or contact, NaN when F is NaN;
+# - shared_approach(delta, theta, length, slices, ..., compliance): x = delta - compliance
+#   F(x) / L, the in-plane case of bore_displacement;
+# - sliced(delta, theta, length, slices, grid_log0, grid_step, table, relief_length,
+#   relief_depth, end_length, scale, compliance): (F (N), M (N m), z_F (m), contact length
+#   (m)) as the module docstring gives them, z_F NaN when F = 0, all NaN beyond the table;
+# - sliced_profile(same arguments): arrays of the slices' midpoints z_i (m), approaches (m)
+#   and per-length forces a f_loc(delta_i) (N/m).
+slice_geometry = _core.slice_geometry
+slice_contact = _core.slice_contact
+section_sums = _core.section_sums
+bore_displacement = _core.bore_displacement
+shared_approach = _core.shared_approach
+sliced = _core.sliced
+sliced_profile = _core.sliced_profile
 
 
 def slices_for_force(delta, theta, length, grid_log0, grid_step, table, relief_length=0.0,
@@ -300,8 +144,3 @@ def slices_for_force(delta, theta, length, grid_log0, grid_step, table, relief_l
     if coarse[0] == 0.0:
         return start
     raise ValueError(f"the sliced force does not settle within {tolerance:g} by {most} slices")
-
-
-# numba's cache follows only this file: the law compiles in the table lookup and the relief.
-COMPILED_IN = (tables.__file__, relief.__file__)
-follow_compiled_in(globals(), COMPILED_IN)

@@ -1,4 +1,5 @@
-"""Force laws as tables: log f on a uniform grid of log delta, and the compiled lookup.
+"""Force laws as tables: log f on a uniform grid of log delta, and the lookup (the compiled
+core's, which the multibody engine calls).
 
 A law f(delta) (a force, N, or a force per unit length, N/m; the table does not care) is
 tabulated as table_j = ln f(delta_j) at delta_j = exp(grid_log0 + j grid_step), j = 0..m-1.
@@ -12,28 +13,17 @@ tabulated instead of a silent number.
 
 import math
 
-import numba
 import numpy as np
 
+from pinbore.core.cpp import laws as _core
 
-@numba.njit(cache=True, _nrt=False)
-def table_force_slope(delta, grid_log0, grid_step, table):
-    """(f, df/d delta) at delta > 0 from `table` = ln f on the grid ln delta_j = grid_log0 +
-    j grid_step: log-log interpolation, the power law of the first segment below the grid,
-    NaN above it or where the table is NaN. On a segment f = f_i (delta/delta_i)^s with
-    s = (table_i+1 - table_i) / grid_step, so df/d delta = s f / delta."""
-    x = (math.log(delta) - grid_log0) / grid_step
-    if x > table.size - 1 or not math.isfinite(table[min(max(int(x) + 1, 0), table.size - 1)]):
-        return math.nan, math.nan
-    i = min(max(int(math.floor(x)), 0), table.size - 2)
-    f = math.exp(table[i] + (x - i) * (table[i + 1] - table[i]))
-    return f, (table[i + 1] - table[i]) / grid_step * f / delta
-
-
-@numba.njit(cache=True, _nrt=False)
-def table_force(delta, grid_log0, grid_step, table):
-    """f(delta) (units of the tabulated law) for delta > 0 (table_force_slope)."""
-    return table_force_slope(delta, grid_log0, grid_step, table)[0]
+# f(delta) and (f, df/d delta) at delta > 0 from `table` = ln f on the grid ln delta_j =
+# grid_log0 + j grid_step: log-log interpolation, the power law of the first segment below
+# the grid, NaN above it or where the table is NaN; on a segment f = f_i (delta/delta_i)^s,
+# s = (table_i+1 - table_i) / grid_step, so df/d delta = s f / delta (cpp/mechanism/laws.h:
+# the lookup the multibody engine makes)
+table_force = _core.table_force
+table_force_slope = _core.table_force_slope
 
 
 def log_grid(d_low: float, d_high: float, points: int):

@@ -159,19 +159,19 @@ def test_rooms_go_one_way():
 SCENE_SIDE = [f"{MECHANISM}.{name}" for name in ("scene", "kinds", "summary", "verdict", "layout")]
 
 
-def test_scene_side_of_the_mechanism_loads_no_numba():
-    """Validating a mechanism scene (and reading its summary) must not load numba: a scene
-    with a bad number is one line in well under a second of CPU."""
+def test_scene_side_of_the_mechanism_builds_no_model():
+    """Validating a mechanism scene (and reading its summary) loads neither the model's build
+    nor DOLFINx: a scene with a bad number is one line in well under a second of CPU."""
     code = ("import sys; " + "; ".join(f"import {m}" for m in SCENE_SIDE)
-            + "; assert 'numba' not in sys.modules, 'numba loaded'")
+            + f"; assert '{MECHANISM}.model' not in sys.modules and 'dolfinx' not in sys.modules, 'loaded'")
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
 
 
 @pytest.mark.parametrize("command", ["reduced", "dynamics"])
 def test_a_bad_mechanism_scene_costs_well_under_a_second(tmp_path, command):
-    """A scene with a negative mass: exit 2, one line naming the key, before numba or DOLFINx
-    load (the child's CPU time, import of the CLI included)."""
+    """A scene with a negative mass: exit 2, one line naming the key, before the model or
+    DOLFINx load (the child's CPU time, import of the CLI included)."""
     scene = (ROOT / "scenes/reduced/slider_crank_flores2004.toml").read_text()
     bad = tmp_path / "bad.toml"
     bad.write_text(scene.replace("mass = 0.30", "mass = -0.30"))
@@ -213,8 +213,8 @@ def test_no_branch_on_the_kind_of_mechanism(name):
 
 
 def test_the_scene_knows_every_damping_law():
-    """The scene lists the hysteresis laws by name (validating it loads no numba); they are
-    exactly those of pinbore.laws.dissipative."""
+    """The scene lists the hysteresis laws by name (validating it loads no law module); they
+    are exactly those of pinbore.laws.dissipative."""
     from pinbore.laws.dissipative import HYSTERESIS
     from pinbore.reduced.mechanism.scene import HYSTERESIS_LAWS
 
@@ -231,34 +231,6 @@ def test_every_package_folder_is_installed():
     mapped = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["scikit-build"]["wheel"]["packages"]
     assert mapped == {package.replace(".", "/"): folder for folder, (package, _) in FLOORS.items()}
     assert "DESTINATION pinbore/core" in (ROOT / "CMakeLists.txt").read_text()
-
-
-def test_cached_compiled_code_follows_the_files_it_calls():
-    """numba's on-disk cache checks only the file a function is defined in (core.compiled):
-    a module with cached compiled functions that imports a module with compiled code, or
-    the layout's constants, names that file to follow_compiled_in, and one that reaches the
-    bodies' hooks names both body kinds, which implement them. Otherwise an edit there alone
-    leaves stale machine code running (it did: bodies.dot1 kept the spatial vector_state of
-    before an edit)."""
-    found = modules()
-    compiled = {name for name, path in found.items() if name != "pinbore.core.compiled"
-                and any(mark in path.read_text() for mark in ("numba.njit(", "overload("))}
-    wrong = []
-    for name, path in found.items():
-        text = path.read_text()
-        if "cache=True" not in text:
-            continue
-        # what its compiled code can reach: the module-level imports (a function's own import
-        # serves its Python)
-        top = ast.Module(body=[node for node in ast.parse(text).body
-                               if isinstance(node, (ast.Import, ast.ImportFrom))], type_ignores=[])
-        reached = imports_of(top, path, name, set(found))
-        calls = {d for d in reached if d in compiled or d == f"{MECHANISM}.layout"}
-        if name == f"{MECHANISM}.bodies" or f"{MECHANISM}.bodies" in calls:
-            calls |= BACK_ENDS - {name}
-        wrong += [f"{name} does not follow {d}" for d in sorted(calls)
-                  if f'"{d.rpartition(".")[2]}"' not in text and f"{d.rpartition('.')[2]}.__file__" not in text]
-    assert not wrong, "\n".join(wrong)
 
 
 def test_no_root_folder_imports_as_part_of_the_package():

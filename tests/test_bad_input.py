@@ -259,7 +259,7 @@ def test_report_out_that_cannot_be_written_is_one_line(tmp_path):
 
 
 # every command answers bad input in well under a second of CPU: the scene models and the
-# seams validate before numba, DOLFINx, SciPy's solvers, Gmsh or matplotlib load. Measured
+# seams validate before DOLFINx, SciPy's solvers, Gmsh or matplotlib load. Measured
 # 0.3-0.8 s here (most of it Python, NumPy, pydantic and MPI starting); 1.2 s leaves room for
 # a slower machine's imports while a command that loaded any of those (1.5-3 s) fails.
 BAD = {

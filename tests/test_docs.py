@@ -4,8 +4,8 @@ every number of a scene has a unit, the README stays short and points at pages t
 the documentation builds without a warning (`make docs`: broken links and references, missing
 images and unresolved names count).
 
-Only the scene models are imported (pydantic; meshes.model and the impact scene load numba's
-module through the laws, nothing is compiled), not DOLFINx; the build is a subprocess."""
+Only the scene models are imported (pydantic; meshes.model and the impact scene reach the
+compiled core's laws), not DOLFINx; the build is a subprocess."""
 
 import json
 import re

@@ -411,7 +411,7 @@ def test_a_large_table_is_also_parquet_with_the_csvs_values(tmp_path, monkeypatc
     assert summary["parquet"] == "results.parquet"
 
 
-# ---- bad input: one line, exit 2, nothing written, before numba is loaded
+# ---- bad input: one line, exit 2, nothing written, before any model is built
 
 BAD = [
     ("unknown key", lambda t: t.replace("[sampling]", "colour = 3\n[sampling]"), "colour: unknown key"),
@@ -449,7 +449,7 @@ BAD = [
 
 
 @pytest.mark.parametrize("name, edit, message", BAD, ids=[b[0] for b in BAD])
-def test_a_bad_study_is_one_line_before_numba(tmp_path, name, edit, message):
+def test_a_bad_study_is_one_line_before_any_model(tmp_path, name, edit, message):
     study = tmp_path / "study.toml"
     study.write_text(edit(study_text(distribution='{ kind = "uniform", low = 9.45e-3, high = 9.6e-3 }',
                                      points=50)))
@@ -477,7 +477,7 @@ BAD_GRID = [
 
 
 @pytest.mark.parametrize("name, edit, message", BAD_GRID, ids=[b[0] for b in BAD_GRID])
-def test_a_bad_grid_is_one_line_before_numba(tmp_path, name, edit, message):
+def test_a_bad_grid_is_one_line_before_any_model(tmp_path, name, edit, message):
     study = tmp_path / "study.toml"
     study.write_text(edit(study_text([9.5e-3, 9.6e-3])))
     run = main_in_child("study", study, "--out", tmp_path / "out")
