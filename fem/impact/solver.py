@@ -171,7 +171,7 @@ from petsc4py import PETSc
 
 from pinbore.fem.elasticity import Elasticity, piecewise
 from pinbore.fem.post import angle_from, half_angle
-from pinbore.fem.solver import contact_solve, jacobian_matrix, newton_solver
+from pinbore.fem.solver import KeptLU, contact_solve, jacobian_matrix, newton_solver
 from pinbore.meshes.model import HOUSING, PIN
 
 
@@ -267,6 +267,7 @@ class ImpactRun:
     energy_rejections: int = 0   # steps repeated smaller because the contact lost too much
     momentum: np.ndarray | None = None   # kg m/s per m, the pin's momentum at the end
     steps_in_contact: int = 0
+    factorizations: int = 0      # LU factorisations of the Jacobian (the others kept ones)
     wall_time: float = 0.0
 
 
@@ -325,13 +326,17 @@ class ImpactStepper:
         self.step_loss = None if step_loss is None else step_loss * self.impact_energy
         self.mask = self._q_mask()
         self.A, self.A_dt, self.A_elastic = None, None, True
+        self._A_version, self._A_in_J, self._displaced = 0, -1, None
         self.cM, self.Kt_q = None, None
         # the unused hub rows are empty after the reduction: their diagonal is kept for the
         # identity rows of the prescribed dofs
         unused = np.stack([slaves, slaves], axis=1)
         self.J = jacobian_matrix(self._effective(dt), np.concatenate([couplings, unused]))
+        self.A_J = self.J.duplicate()
+        self.lu = KeptLU(elasticity.mesh.comm)
+        self.factored_h = None   # the step size of the kept factors
         self.snes = newton_solver(elasticity.mesh.comm, self.J, self._residual, self._jacobian,
-                                  self.x, newton_max_it, force_atol)
+                                  self.x, newton_max_it, force_atol, kept=self.lu)
         self.h = dt   # the step being solved
         self.full_steps_failed = False   # a plastic body's full Newton steps failed a step
 
@@ -365,6 +370,7 @@ class ImpactStepper:
                 K = self.Kt_q = tangent.PtAP(self.T, result=self.Kt_q)
             self.A.axpy(1.0, K, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
             self.A_dt, self.A_elastic = dt, elastic
+            self._A_version += 1
         return self.A
 
     def _acceleration(self, q: PETSc.Vec, out: PETSc.Vec) -> None:
@@ -376,9 +382,18 @@ class ImpactStepper:
         out.scale(1.0 / (b * h * h))
         out.axpy(-(0.5 / b - 1.0), self.a)
 
+    def _displace(self, q: PETSc.Vec) -> None:
+        """u = T q, unless u already holds it: Newton asks for the residual and then the
+        Jacobian at the same iterate, and the material's return map and the contact's
+        closest points, keyed on u's state, are then computed once."""
+        key = (q.handle, q.stateGet())
+        if key != self._displaced:
+            self.T.mult(q, self.u)
+            self._displaced = (q.handle, q.stateGet())
+
     def _forces(self, q: PETSc.Vec, F: PETSc.Vec) -> None:
         """u = T q; F = T^T (f_int(u) + f_c(u))."""
-        self.T.mult(q, self.u)
+        self._displace(q)
         self.material.internal_force(self.u, self.f)
         self.contact.add_residual(self.u, self.f)
         self.f.assemble()
@@ -396,12 +411,20 @@ class ImpactStepper:
         R.assemble()
 
     def _jacobian(self, snes, x, J, P):
-        J.zeroEntries()
-        self.T.mult(x, self.u)
-        J.axpy(1.0, self._effective(self.h), structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
-        self.contact.add_tangent(self.u, J)
+        self._displace(x)
+        A = self._effective(self.h)
+        if self._A_in_J != self._A_version:   # A in J's pattern, copied whole below
+            self.A_J.zeroEntries()
+            self.A_J.axpy(1.0, A, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+            self._A_in_J = self._A_version
+        self.A_J.copy(J, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        kind = self.contact.add_tangent(self.u, J)
         J.assemble()
         J.zeroRows(self.prescribed, diag=1.0)
+        # the factors of an earlier J serve GMRES while little changed (fem.solver.KeptLU);
+        # a new step size changes the mass term everywhere
+        if self.lu.refresh(J, snes.getKSP(), kind, stale=self.h != self.factored_h):
+            self.factored_h = self.h
 
     # --- state ---------------------------------------------------------------------------
 
@@ -420,7 +443,7 @@ class ImpactStepper:
         self.q.copy(self.q_last)
         self.q_last.axpy(-self.dt, self.v)
         self.h_last = self.dt
-        self.T.mult(self.q, self.u)
+        self._displace(self.q)
         self.contact_force(self.u, self.fc)
         self.t, self.contact_work, self.plastic_work, self.friction_work = 0.0, 0.0, 0.0, 0.0
 
@@ -487,7 +510,7 @@ class ImpactStepper:
         self.q.copy(self.q_last)
         self.h_last = h
         self.x.copy(self.q)
-        self.T.mult(self.q, self.u)
+        self._displace(self.q)
         self.contact_force(self.u, self.fc)
         self.contact.commit(state)
         self.plastic_work += self.material.commit(self.u)
@@ -525,7 +548,7 @@ class ImpactStepper:
 
     def record(self, t: float, newton: int, state) -> Record:
         """The time point t of the current state."""
-        self.T.mult(self.q, self.u)
+        self._displace(self.q)
         d, m = self.direction, self.master
         hub = self.q.getValues(m)
         self.M.mult(self.v, self.work)
@@ -601,6 +624,7 @@ class ImpactStepper:
                         f"(impact.max_contact_durations)" if touched else
                         f"the pin had not reached the bore by t = {self.t:.6g} s")
         run.momentum = self.momentum()
+        run.factorizations = self.lu.factorizations
         run.wall_time = time.perf_counter() - start
         return run
 
