@@ -161,6 +161,7 @@ bench: build/study/calibration_2d/summary.json $(MODES_RUNS) $(STAMP) ## run the
 	$(PY) bench/sweep.py --out bench
 	$(PY) bench/study.py --out bench
 	$(PY) bench/impact.py --out bench
+	$(PY) bench/newton.py --all --out bench
 	$(PY) bench/discretisation.py --out bench
 	$(PY) bench/modes.py --out bench
 	$(PY) bench/flexible.py --out bench

@@ -494,6 +494,7 @@ class PinBoreContact:
         self.active_set_updates = 0   # left in the current Newton solve (see start_solve)
         self.holding, self.held = False, None   # projection onto held patches (hold_patches)
         self.normal_set = None        # the nodes in contact, once kept (see start_solve)
+        self._kinematics_key, self._kinematics_last = None, None   # _kinematics' last
 
     def couplings(self, direction, half_angle: float, reach: int = 2) -> np.ndarray:
         """Global (row, column) dof pairs that the contact terms may couple and K may not:
@@ -556,10 +557,19 @@ class PinBoreContact:
         return values[:n_pin].reshape(-1, self.dim), values[n_pin:].reshape(-1, self.dim)
 
     def _kinematics(self, u: PETSc.Vec) -> Kinematics:
-        """Current pin positions, closest bore points and gaps. Collective (gathers u)."""
+        """Current pin positions, closest bore points and gaps. Collective (gathers u).
+        Newton asks for the residual and then the tangent at the same iterate: the second
+        call reuses the first (keyed on the vector and PETSc's count of its changes; not
+        while the patches are held, whose projection depends on the last one)."""
+        key = (u.handle, u.stateGet())
+        if not self.holding and key == self._kinematics_key:
+            self.bore.displacement = self._kinematics_last[1]
+            return self._kinematics_last[0]
         u_pin, self.bore.displacement = self._surface_displacements(u)
         if not self.holding:
-            return kinematics(self.pin_X + u_pin, self.bore)
+            kin = kinematics(self.pin_X + u_pin, self.bore)
+            self._kinematics_key, self._kinematics_last = key, (kin, self.bore.displacement.copy())
+            return kin
         kin = kinematics(self.pin_X + u_pin, self.bore, self.held, HELD_BAND)
         self.held = kin.projection.k
         return kin

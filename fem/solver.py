@@ -144,10 +144,6 @@ class LoadStepper:
         self.copies = 2 if elasticity.symmetric else 1  # a half model reports the whole pin
         self.x = elasticity.K.createVecRight()
         self.work = self.x.duplicate()
-        self.factorizations, self.factored = 0, None   # and the contact terms they factorised
-        self.spent = 0      # GMRES iterations on the present factors
-        self.changed = 0    # nodes whose terms differed from the factors' at the last solve
-        self.changes = np.zeros(2)  # changed nodes, GMRES iterations: sums over kept solves
         self.snes = self._make_snes(newton_max_it, force_atol, couplings)
         if self.material.plastic and contact.friction is None:
             # A point at the edge of the plastic zone, beside a node entering contact, can
@@ -174,29 +170,11 @@ class LoadStepper:
         kind = self.contact.add_tangent(x, J)
         J.assemble()
         J.zeroRows(self.prescribed, diag=1.0)  # contact terms on a plane of symmetry
-        # Keep the factors of an earlier Jacobian as GMRES's preconditioner while the GMRES
-        # iterations spent on them and expected of the next solve (per pin node whose
-        # contact terms differ from the factorised ones, as many as the kept solves took so
-        # far; or the last solve's) stay within a factorisation's worth; else refactor
-        # (module docstring). A plastic tangent changes wherever points flow, which the last
-        # solve's iterations tell. The decision is collective.
-        ksp = snes.getKSP()
-        changed = np.inf if self.factored is None else np.count_nonzero(kind != self.factored)
-        worth = max(self.lu.worth_iterations(), MIN_WORTH)
-        last = ksp.getIterationNumber()
-        if self.factored is not None:
-            self.spent += last
-            if self.changed > 0:
-                self.changes += (self.changed, last)
-        rate = max(1.0, self.changes[1] / self.changes[0]) if self.changes[0] else 1.0
-        expected = max(changed * rate, last)
-        refactor = (self.spent + expected > worth
-                    or ksp.getConvergedReason() < 0)   # e.g. the kept factors had failed
-        if self.el.mesh.comm.allreduce(refactor, op=MPI.LOR):
-            self.lu.factor(J)
-            self.factored, self.spent = kind, 0
-            self.factorizations += 1
-        self.changed = 0 if self.factored is kind else changed
+        self.lu.refresh(J, snes.getKSP(), kind)
+
+    @property
+    def factorizations(self) -> int:
+        return self.lu.factorizations
 
     def run(self, programme, progress=None, on_step=None) -> Run:
         """Solve for each load point of the programme in turn (see the module docstring; an
@@ -457,6 +435,7 @@ class KeptLU:
     factorisation and its applications (worth_iterations)."""
 
     def __init__(self, comm):
+        self.comm = comm
         self.ksp = PETSc.KSP().create(comm)
         self.ksp.setOptionsPrefix("pinbore_lu_")
         self.ksp.setType("preonly")
@@ -466,6 +445,39 @@ class KeptLU:
         self.ksp.setFromOptions()
         self.P = None
         self.factor_time, self.apply_time, self.applies = 0.0, 0.0, 0
+        self.factorizations, self.factored = 0, None   # and the contact terms they factorised
+        self.spent = 0      # GMRES iterations on the present factors
+        self.changed = 0    # nodes whose terms differed from the factors' at the last solve
+        self.changes = np.zeros(2)  # changed nodes, GMRES iterations: sums over kept solves
+
+    def refresh(self, J: PETSc.Mat, ksp: PETSc.KSP, kind: np.ndarray, stale: bool = False) -> bool:
+        """Called with each new Jacobian J (collective): keep the factors of an earlier one
+        as GMRES's preconditioner while the GMRES iterations spent on them and expected of
+        the next solve (per pin node whose contact terms, `kind` of
+        PinBoreContact.add_tangent, differ from the factorised ones, as many as the kept
+        solves took so far; or the last solve's) stay within a factorisation's worth; else
+        factorise J (module docstring). A plastic tangent changes wherever points flow,
+        which the last solve's iterations tell; `stale`: J changed everywhere (a time
+        integrator's new step size), factorise. Whether it factorised."""
+        changed = (np.inf if self.factored is None or stale
+                   else np.count_nonzero(kind != self.factored))
+        worth = max(self.worth_iterations(), MIN_WORTH)
+        last = ksp.getIterationNumber()
+        if self.factored is not None:
+            self.spent += last
+            if self.changed > 0:
+                self.changes += (self.changed, last)
+        rate = max(1.0, self.changes[1] / self.changes[0]) if self.changes[0] else 1.0
+        expected = max(changed * rate, last)
+        refactor = (self.spent + expected > worth
+                    or ksp.getConvergedReason() < 0)   # e.g. the kept factors had failed
+        refactor = self.comm.allreduce(refactor, op=MPI.LOR)
+        if refactor:
+            self.factor(J)
+            self.factored, self.spent = kind, 0
+            self.factorizations += 1
+        self.changed = 0 if self.factored is kind else changed
+        return refactor
 
     def worth_iterations(self) -> float:
         """Applications of the factors that cost as much as the last factorisation (0 before

@@ -117,6 +117,29 @@ def test_energy_and_momentum_books():
     assert 0 < s.restitution < 1
 
 
+def test_kept_factors_solve_the_impact_as_fresh_ones(monkeypatch):
+    """GMRES on kept LU factors (fem.solver.KeptLU) against a factorisation at every Newton
+    iteration, the direct solve: the same impact, the energy book closing alike, and fewer
+    factorisations than Newton iterations. The two converge to Newton's tolerance apart, which
+    can tip the energy control's choice of a step: e and the peak force agree to 2e-4 (the
+    study's steel point: 3e-5 between two such choices of steps), the steps to a few."""
+    from pinbore.fem.solver import KeptLU
+
+    kept = Impact(impact_scene())
+    refresh = KeptLU.refresh
+    monkeypatch.setattr(KeptLU, "refresh",
+                        lambda self, J, ksp, kind, stale=False: refresh(self, J, ksp, kind, True))
+    fresh = Impact(impact_scene())
+    k, f = kept.summary, fresh.summary
+    assert k.restitution == pytest.approx(f.restitution, rel=2e-4)
+    assert k.peak_force_N_per_m == pytest.approx(f.peak_force_N_per_m, rel=2e-4)
+    assert abs(k.steps - f.steps) <= 0.05 * f.steps
+    assert k.energy.max_relative_residual < 1e-3 and f.energy.max_relative_residual < 1e-3
+    fresh_jacobians = f.factorizations           # one per Newton iteration, failed solves too
+    assert fresh_jacobians >= f.newton_iterations
+    assert k.factorizations < 0.75 * fresh_jacobians
+
+
 @pytest.mark.slow   # about 35 s: `make test-slow`
 def test_frictional_impact_book_holds_the_friction_work():
     """An oblique impact (60 degrees below the horizontal) with Coulomb friction mu = 0.2:

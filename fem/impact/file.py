@@ -121,6 +121,7 @@ class ImpactSummary(Record):
     cutbacks: int
     energy_rejections: int = 0       # steps repeated smaller by the energy control
     newton_iterations: int
+    factorizations: int = 0          # LU factorisations of the Jacobian, redone steps included
     dofs: int
     mesh: dict
     contact: dict

@@ -167,6 +167,7 @@ def summarise(scene, scene_path, result, stepper, el, sizing, contact, wall):
         cutbacks=result.cutbacks, energy_rejections=result.energy_rejections,
         smallest_step_s=min(r.time_step for r in records[1:]) if len(records) > 1 else None,
         newton_iterations=sum(r.newton_iterations for r in records),
+        factorizations=result.factorizations,
         dofs=el.num_dofs,
         mesh={"contact_size_m": sizing.contact_size,
               "cells": el.mesh.topology.index_map(2).size_global,

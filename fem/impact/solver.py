@@ -45,7 +45,30 @@ spectral radius rho_inf at infinite frequency:
 F = T^T (f_int + f_c). Second order, unconditionally stable for the linear part; rho_inf = 1
 (the default) is Newmark's trapezoidal rule (beta = 1/4, gamma = 1/2), rho_inf < 1 damps the
 frequencies near 1/dt. Newton on q_{n+1} (PETSc SNES, MUMPS) with the Jacobian
-J = (1 - alpha_m)/(beta dt^2) M_q + K_q + K_c.
+J = (1 - alpha_m)/(beta dt^2) M_q + K_q + K_c, its linear solves GMRES on the MUMPS factors
+of an earlier J, kept by the load stepper's rule (fem.solver.KeptLU.refresh: while the GMRES
+iterations spent on them stay within a factorisation's worth) and taken afresh at a new
+step size (the mass term changes everywhere). Measured on the study's steel pin at 1 m/s:
+153 factorisations for 322 Jacobians, 9.0 s against 10.3 s with a factorisation each (a
+triangular solve costs 2-3.5 ms, a factorisation of the 13.9k dofs 20 ms, and GMRES takes
+about three solves to its 1e-8).
+
+The predictor
+-------------
+Newton starts each step from the secant through the last two converged states,
+q_{n+1} = q_n + h (q_n - q_{n-1}) / h_{n-1} (exact in free flight; the flight before t = 0 gives
+the first step its q_{-1}). The Taylor guess q_n + h v_n + h^2 a_n / 2 reads the scheme's
+velocity and acceleration, which at rho_inf = 1 are not damped at the highest frequencies
+and at the massless surface nodes (no inertia: v and a follow from q alone and alternate from
+step to step); that guess put the surface nodes off their contact, the first Newton step
+changed the set of nodes in contact, and Newton took 3-5 iterations a step in contact.
+Measured on the study's steel pin at 1 m/s (c = 10 um): 518 -> 267 Newton iterations over
+131 steps (median 4 -> 2 a step), 19.5 -> 10.3 s, e the same to 3e-5; into the elasto-plastic
+6061-O bore (c = 0.5 mm) at 1 m/s 885 -> 209 (median 9 -> 2), at 5 m/s 2243 -> 436 (median
+16 -> 4, and none of the 17 cutbacks: the nodes no longer leave and enter the contact between
+iterates), 239 -> 51 s. The quadratic through
+the last three states took 308 (its extrapolation amplifies that alternation), the secant at
+the surface nodes with the Taylor guess elsewhere 272.
 
 Energy book
 -----------
@@ -132,10 +155,9 @@ the last bit; once full steps have failed a step, the later steps start with the
 (measured on the 1 m/s impact into the 6061-O bore: before first flow, full steps failed 19
 steps in a row, 50 iterations each with the retry on held patches; leaving them out took
 the impact from 2078 to 1173 Newton iterations, 72 to 42 s, e the same to 1e-10). Once a
-point has yielded, full steps are no longer tried: measured on the 5 m/s impact
-into the 6061-O bore (steel pin, c = 0.5 mm), full steps solved all 10 steps before the
-first flow; after it the l2 search solved 105 steps first, and of the 62 it failed, full
-steps solved none and the backtracking search 17.
+point has yielded, full steps are no longer tried (with the secant predictor, below, they
+would solve as many steps: 445 against 447 Newton iterations on the 5 m/s impact into the
+6061-O bore, the same time).
 A step whose Newton (or Uzawa) iteration fails is halved, up to solver.max_cutbacks times in
 a row (the next steps grow back towards dt); if that fails too, the run stops, keeps every
 converged step and says where and why (an incomplete run).
@@ -154,7 +176,7 @@ from petsc4py import PETSc
 
 from pinbore.fem.elasticity import Elasticity, piecewise
 from pinbore.fem.post import angle_from, half_angle
-from pinbore.fem.solver import contact_solve, jacobian_matrix, newton_solver
+from pinbore.fem.solver import KeptLU, contact_solve, jacobian_matrix, newton_solver
 from pinbore.meshes.model import HOUSING, PIN
 
 
@@ -250,6 +272,7 @@ class ImpactRun:
     energy_rejections: int = 0   # steps repeated smaller because the contact lost too much
     momentum: np.ndarray | None = None   # kg m/s per m, the pin's momentum at the end
     steps_in_contact: int = 0
+    factorizations: int = 0      # LU factorisations of the Jacobian (the others kept ones)
     wall_time: float = 0.0
 
 
@@ -290,6 +313,8 @@ class ImpactStepper:
         vec = elasticity.K.createVecRight
         self.q, self.v, self.a = vec(), vec(), vec()            # state at t_n (reduced)
         self.q0, self.v0, self.a0 = vec(), vec(), vec()
+        self.q_last, self.q_last0 = vec(), vec()   # q_{n-1} (the predictor's secant), saved
+        self.h_last = self.h_last0 = dt            # the step from t_{n-1} to t_n
         self.x, self.u, self.f, self.work = vec(), vec(), vec(), vec()
         self.u.set(0.0)
         self.fc, self.fc0, self.u0, self.inertia = vec(), vec(), vec(), vec()
@@ -306,13 +331,17 @@ class ImpactStepper:
         self.step_loss = None if step_loss is None else step_loss * self.impact_energy
         self.mask = self._q_mask()
         self.A, self.A_dt, self.A_elastic = None, None, True
+        self._A_version, self._A_in_J, self._displaced = 0, -1, None
         self.cM, self.Kt_q = None, None
         # the unused hub rows are empty after the reduction: their diagonal is kept for the
         # identity rows of the prescribed dofs
         unused = np.stack([slaves, slaves], axis=1)
         self.J = jacobian_matrix(self._effective(dt), np.concatenate([couplings, unused]))
+        self.A_J = self.J.duplicate()
+        self.lu = KeptLU(elasticity.mesh.comm)
+        self.factored_h = None   # the step size of the kept factors
         self.snes = newton_solver(elasticity.mesh.comm, self.J, self._residual, self._jacobian,
-                                  self.x, newton_max_it, force_atol)
+                                  self.x, newton_max_it, force_atol, kept=self.lu)
         self.h = dt   # the step being solved
         self.full_steps_failed = False   # a plastic body's full Newton steps failed a step
 
@@ -346,6 +375,7 @@ class ImpactStepper:
                 K = self.Kt_q = tangent.PtAP(self.T, result=self.Kt_q)
             self.A.axpy(1.0, K, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
             self.A_dt, self.A_elastic = dt, elastic
+            self._A_version += 1
         return self.A
 
     def _acceleration(self, q: PETSc.Vec, out: PETSc.Vec) -> None:
@@ -357,9 +387,18 @@ class ImpactStepper:
         out.scale(1.0 / (b * h * h))
         out.axpy(-(0.5 / b - 1.0), self.a)
 
+    def _displace(self, q: PETSc.Vec) -> None:
+        """u = T q, unless u already holds it: Newton asks for the residual and then the
+        Jacobian at the same iterate, and the material's return map and the contact's
+        closest points, keyed on u's state, are then computed once."""
+        key = (q.handle, q.stateGet())
+        if key != self._displaced:
+            self.T.mult(q, self.u)
+            self._displaced = (q.handle, q.stateGet())
+
     def _forces(self, q: PETSc.Vec, F: PETSc.Vec) -> None:
         """u = T q; F = T^T (f_int(u) + f_c(u))."""
-        self.T.mult(q, self.u)
+        self._displace(q)
         self.material.internal_force(self.u, self.f)
         self.contact.add_residual(self.u, self.f)
         self.f.assemble()
@@ -377,12 +416,20 @@ class ImpactStepper:
         R.assemble()
 
     def _jacobian(self, snes, x, J, P):
-        J.zeroEntries()
-        self.T.mult(x, self.u)
-        J.axpy(1.0, self._effective(self.h), structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
-        self.contact.add_tangent(self.u, J)
+        self._displace(x)
+        A = self._effective(self.h)
+        if self._A_in_J != self._A_version:   # A in J's pattern, copied whole below
+            self.A_J.zeroEntries()
+            self.A_J.axpy(1.0, A, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+            self._A_in_J = self._A_version
+        self.A_J.copy(J, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        kind = self.contact.add_tangent(self.u, J)
         J.assemble()
         J.zeroRows(self.prescribed, diag=1.0)
+        # the factors of an earlier J serve GMRES while little changed (fem.solver.KeptLU);
+        # a new step size changes the mass term everywhere
+        if self.lu.refresh(J, snes.getKSP(), kind, stale=self.h != self.factored_h):
+            self.factored_h = self.h
 
     # --- state ---------------------------------------------------------------------------
 
@@ -397,7 +444,11 @@ class ImpactStepper:
         self.along_pin_q.copy(self.v)
         self.v.scale(self.speed)
         self.a.set(0.0)
-        self.T.mult(self.q, self.u)
+        # the flight before t = 0, for the first step's predictor (exact in free flight)
+        self.q.copy(self.q_last)
+        self.q_last.axpy(-self.dt, self.v)
+        self.h_last = self.dt
+        self._displace(self.q)
         self.contact_force(self.u, self.fc)
         self.t, self.contact_work, self.plastic_work, self.friction_work = 0.0, 0.0, 0.0, 0.0
 
@@ -423,14 +474,16 @@ class ImpactStepper:
 
     def _save(self):
         for a, b in ((self.q, self.q0), (self.v, self.v0), (self.a, self.a0),
-                     (self.fc, self.fc0)):
+                     (self.fc, self.fc0), (self.q_last, self.q_last0)):
             a.copy(b)
+        self.h_last0 = self.h_last
         return self.contact.snapshot(), self.material.snapshot()
 
     def _load(self, snapshot) -> None:
         for a, b in ((self.q0, self.q), (self.v0, self.v), (self.a0, self.a),
-                     (self.fc0, self.fc)):
+                     (self.fc0, self.fc), (self.q_last0, self.q_last)):
             a.copy(b)
+        self.h_last = self.h_last0
         contact, material = snapshot
         self.contact.restore(contact)
         self.material.restore(material)
@@ -443,10 +496,7 @@ class ImpactStepper:
         before = (snapshot, self.t, self.contact_work, self.plastic_work, self.friction_work)
         self.T.mult(self.q, self.u0)
         for search in self._line_searches():
-            # predictor: constant acceleration (exact in free flight)
-            self.q.copy(self.x)
-            self.x.axpy(h, self.v)
-            self.x.axpy(0.5 * h * h, self.a)
+            self.predict(h, self.x)
             self.snes.getLineSearch().setType(search)
             solved = contact_solve(self.snes, self.x, self.contact, self.augmented,
                                    self.uzawa_max_it, self.gap_tolerance)
@@ -462,8 +512,10 @@ class ImpactStepper:
         self.v.axpy(h * (1 - self.gamma), self.a)
         self.v.axpy(h * self.gamma, a_new)
         a_new.copy(self.a)
+        self.q.copy(self.q_last)
+        self.h_last = h
         self.x.copy(self.q)
-        self.T.mult(self.q, self.u)
+        self._displace(self.q)
         self.contact_force(self.u, self.fc)
         self.contact.commit(state)
         self.plastic_work += self.material.commit(self.u)
@@ -473,6 +525,13 @@ class ImpactStepper:
         self.contact_work += 0.5 * self._increment_dot()
         self._before = before
         return self.record(self.t, newton, state)
+
+    def predict(self, h: float, out: PETSc.Vec) -> None:
+        """Newton's starting guess for q_{n+1}: the secant through the last two converged
+        states, q_n + h (q_n - q_{n-1}) / h_{n-1} (module docstring, the predictor)."""
+        self.q.copy(out)
+        out.scale(1.0 + h / self.h_last)
+        out.axpy(-h / self.h_last, self.q_last)
 
     def _line_searches(self) -> tuple[str, ...]:
         """The line searches a step tries in turn (module docstring, steps and failures):
@@ -494,7 +553,7 @@ class ImpactStepper:
 
     def record(self, t: float, newton: int, state) -> Record:
         """The time point t of the current state."""
-        self.T.mult(self.q, self.u)
+        self._displace(self.q)
         d, m = self.direction, self.master
         hub = self.q.getValues(m)
         self.M.mult(self.v, self.work)
@@ -570,6 +629,7 @@ class ImpactStepper:
                         f"(impact.max_contact_durations)" if touched else
                         f"the pin had not reached the bore by t = {self.t:.6g} s")
         run.momentum = self.momentum()
+        run.factorizations = self.lu.factorizations
         run.wall_time = time.perf_counter() - start
         return run
 
