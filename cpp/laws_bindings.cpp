@@ -18,14 +18,21 @@ namespace
 {
 using Table = nb::ndarray<const double, nb::ndim<1>, nb::c_contig, nb::device::cpu>;
 
+/// A law's table: two points or more.
+const double* tabulated(const Table& table)
+{
+  if (table.shape(0) < 2)
+    throw std::invalid_argument("a tabulated law needs a table of two points or more");
+  return table.data();
+}
+
 Section section(double ax, double ay, double bx, double by, double clearance, bool planar,
                 double length, long slices, double log0, double step, const Table& table,
                 double relief_length, double relief_depth)
 {
-  if (not(length > 0.0) or slices < 1 or table.shape(0) < 2 or not(step != 0.0))
-    throw std::invalid_argument("sliced law: a positive length, at least one slice and a table "
-                                "of two points or more");
-  return {ax, ay, bx, by, clearance, planar, length, slices, log0, step, table.data(),
+  if (not(length > 0.0) or slices < 1 or not(step != 0.0))
+    throw std::invalid_argument("sliced law: a positive length and at least one slice");
+  return {ax, ay, bx, by, clearance, planar, length, slices, log0, step, tabulated(table),
           table.shape(0), relief_length, relief_depth};
 }
 
@@ -98,11 +105,7 @@ void bind_laws(nb::module_& parent)
   m.def(
       "table_force",
       [](double delta, double log0, double step, Table table)
-      {
-        if (table.shape(0) < 2)
-          throw std::invalid_argument("table_force: a table of two points or more");
-        return table_force(delta, log0, step, table.data(), table.shape(0));
-      },
+      { return table_force(delta, log0, step, tabulated(table), table.shape(0)); },
       arg("delta"), arg("grid_log0"), arg("grid_step"), arg("table"),
       "f(delta) of a law tabulated as ln f on the grid ln delta_j = grid_log0 + j grid_step "
       "(log-log interpolation; the first segment's power law below; NaN above or where NaN).");
@@ -110,9 +113,7 @@ void bind_laws(nb::module_& parent)
       "table_force_slope",
       [](double delta, double log0, double step, Table table)
       {
-        if (table.shape(0) < 2)
-          throw std::invalid_argument("table_force_slope: a table of two points or more");
-        const ForceSlope r = table_force_slope(delta, log0, step, table.data(), table.shape(0));
+        const ForceSlope r = table_force_slope(delta, log0, step, tabulated(table), table.shape(0));
         return nb::make_tuple(r.force, r.slope);
       },
       arg("delta"), arg("grid_log0"), arg("grid_step"), arg("table"),

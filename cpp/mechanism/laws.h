@@ -116,27 +116,11 @@ inline double hysteresis_force(double elastic, double rate, double impact_speed,
   return std::max(elastic * (1.0 + chi * rate / impact_speed), 0.0);
 }
 
-/// f(delta) of a law tabulated as ln f on the grid ln delta_j = log0 + j step (log-log
-/// interpolation; the first segment's power law below the grid; NaN above it or where the
-/// table is NaN).
-inline double table_force(double delta, double log0, double step, const double* table,
-                          std::size_t size)
-{
-  const double x = (std::log(delta) - log0) / step;
-  const long n = static_cast<long>(size);
-  const long probe = std::min(std::max(static_cast<long>(x) + 1, 0L), n - 1);
-  if (x > static_cast<double>(n - 1) or not std::isfinite(table[probe]))
-    return std::nan("");
-  const long i = std::min(std::max(static_cast<long>(std::floor(x)), 0L), n - 2);
-  return std::exp(table[i] + (x - static_cast<double>(i)) * (table[i + 1] - table[i]));
-}
 
-} // namespace pinbore::laws
-
-namespace pinbore::laws
-{
-
-/// (f, df/d delta) of a tabulated law at delta > 0 (table_force; NaN beyond the table).
+/// (f, df/d delta) of a law tabulated as ln f on the grid ln delta_j = log0 + j step at
+/// delta > 0: log-log interpolation, the first segment's power law below the grid, NaN above
+/// it or where the table is NaN; on a segment f = f_i (delta/delta_i)^s, s = (table_i+1 -
+/// table_i) / step, so df/d delta = s f / delta.
 struct ForceSlope
 {
   double force, slope;
@@ -153,6 +137,15 @@ inline ForceSlope table_force_slope(double delta, double log0, double step, cons
   const long i = std::min(std::max(static_cast<long>(std::floor(x)), 0L), n - 2);
   const double f = std::exp(table[i] + (x - static_cast<double>(i)) * (table[i + 1] - table[i]));
   return {f, (table[i + 1] - table[i]) / step * f / delta};
+}
+
+/// f(delta) of a law tabulated as ln f on the grid ln delta_j = log0 + j step (log-log
+/// interpolation; the first segment's power law below the grid; NaN above it or where the
+/// table is NaN): table_force_slope's force.
+inline double table_force(double delta, double log0, double step, const double* table,
+                          std::size_t size)
+{
+  return table_force_slope(delta, log0, step, table, size).force;
 }
 
 // ---- the edge relief of a bore (pinbore.laws.relief states the geometry): over `length`
