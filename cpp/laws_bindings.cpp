@@ -3,6 +3,7 @@
 // and the tests. Scalars in, scalars or tuples out; a tabulated law takes its table as a NumPy
 // array.
 #include "laws_bindings.h"
+#include "arrays.h"
 #include "mechanism/laws.h"
 
 #include <nanobind/ndarray.h>
@@ -11,6 +12,7 @@
 #include <vector>
 
 namespace nb = nanobind;
+using pinbore::owned;
 
 namespace pinbore::laws
 {
@@ -43,13 +45,6 @@ Section plane(double length, long slices, double log0, double step, const Table&
                  relief_length, relief_depth);
 }
 
-template <typename T>
-nb::ndarray<nb::numpy, T> owned(std::vector<T>&& data, std::initializer_list<std::size_t> shape)
-{
-  auto* heap = new std::vector<T>(std::move(data));
-  nb::capsule owner(heap, [](void* p) noexcept { delete static_cast<std::vector<T>*>(p); });
-  return nb::ndarray<nb::numpy, T>(heap->data(), shape, owner);
-}
 } // namespace
 
 void bind_laws(nb::module_& parent)
@@ -59,7 +54,7 @@ void bind_laws(nb::module_& parent)
               "tabulated elastic laws, the bore's edge relief and the sliced joint law");
   using nb::arg;
 
-  // ---- friction (pinbore.laws.friction gives the formulas and sources)
+  // ---- friction (cpp/mechanism/laws.h gives each law's formula and source)
   m.def("sgn", &sgn, arg("v"), "sgn v = 1 for v > 0, -1 otherwise.");
   m.def("coulomb", &coulomb, arg("v"), arg("normal"), arg("mu"),
         "Den Hartog 1931 [DenHartog1931] ([Cao2013] eq. 12): F = mu F_N sgn v.");

@@ -4,6 +4,7 @@
 // place (the impact speeds, latch flags and contact modes are updated in place, as the
 // integrator does) and releases the GIL while it computes.
 #include "bindings.h"
+#include "../arrays.h"
 #include "integrator.h"
 #include "planar.h"
 #include "spatial.h"
@@ -17,6 +18,7 @@
 #include <vector>
 
 namespace nb = nanobind;
+using pinbore::owned;
 
 namespace pinbore::mechanism
 {
@@ -59,6 +61,87 @@ Matrix<T> matrix(nb::handle bundle, const char* name, Held& held, int ndim = 2)
   for (int d = 1; d < ndim; ++d)
     cols *= static_cast<std::ptrdiff_t>(a.shape(d));
   return {a.data(), static_cast<std::ptrdiff_t>(a.shape(0)), cols};
+}
+
+/// v as an index in [low, high), or one line naming it.
+std::ptrdiff_t index_in(double v, std::ptrdiff_t low, std::ptrdiff_t high, const char* what)
+{
+  if (not std::isfinite(v) or v < static_cast<double>(low) or v >= static_cast<double>(high)
+      or v != std::floor(v))
+    throw std::invalid_argument(std::string("mechanism: ") + what + " must be an index in ["
+                                + std::to_string(low) + ", " + std::to_string(high) + ")");
+  return static_cast<std::ptrdiff_t>(v);
+}
+
+/// The rows' indices: bodies (-1: the ground), codes, tables, profile rows, states.
+void check_rows(const Args& args)
+{
+  const std::ptrdiff_t nb_ = args.bodies();
+  if (args.ncontacts() and args.tables.cols < 2)
+    throw std::invalid_argument("mechanism: a law's table needs two points or more");
+  for (std::ptrdiff_t k = 0; k < args.ncontacts(); ++k)
+  {
+    const Rows& c = args.contacts;
+    index_in(c(k, CONTACT_KIND), 0, 4, "a contact's kind");
+    index_in(c(k, CONTACT_BEARING_BODY), -1, nb_, "a contact's bearing body");
+    index_in(c(k, CONTACT_JOURNAL_BODY), -1, nb_, "a contact's journal body");
+    index_in(c(k, CONTACT_TABLE), 0, args.tables.rows, "a contact's table");
+    index_in(c(k, CONTACT_FRICTION_LAW), 0, IWAN + 1, "a contact's friction law");
+    index_in(c(k, CONTACT_IMPACT), 0, POISSON + 1, "a contact's impact model");
+    index_in(c(k, CONTACT_STATE), -1, 1L << 40, "a contact's first friction state");
+    if (static_cast<int>(c(k, CONTACT_KIND)) == SLICED)
+      index_in(c(k, CONTACT_SLICES), 1, 1L << 20, "a sliced contact's slices");
+  }
+  for (std::ptrdiff_t k = 0; k < args.primitives.rows; ++k)
+  {
+    const Rows& p = args.primitives;
+    index_in(p(k, PRIM_KIND), 0, ANGLE + 1, "a primitive's kind");
+    index_in(p(k, PRIM_BODY_I), -1, nb_, "a primitive's body i");
+    index_in(p(k, PRIM_BODY_J), -1, nb_, "a primitive's body j");
+    if (static_cast<int>(p(k, PRIM_KIND)) != ANGLE)
+      continue;
+    const int profile = static_cast<int>(index_in(p(k, PRIM_PROFILE), 0, HARMONIC + 1, "a drive's profile"));
+    if (profile == TABLE or profile == HARMONIC)
+    {
+      const std::ptrdiff_t first = index_in(p(k, PRIM_PROFILE_TIME), 0, args.profile.rows, "a drive's first profile row");
+      index_in(p(k, PRIM_PROFILE_ROWS), 1, args.profile.rows - first + 1, "a drive's profile rows");
+      if (args.profile.cols < (profile == TABLE ? PROFILE_COLUMNS : HARM_PHASE + 1))
+        throw std::invalid_argument("mechanism: a drive's profile rows are too short");
+    }
+  }
+  for (std::ptrdiff_t r = 0; r < args.torsion.rows; ++r)
+  {
+    index_in(args.torsion(r, TORSION_BODY_I), -1, nb_, "a torsion element's body i");
+    index_in(args.torsion(r, TORSION_BODY_J), -1, nb_, "a torsion element's body j");
+    index_in(args.torsion(r, TORSION_KIND), 0, LATCH + 1, "a torsion element's kind");
+  }
+  for (std::ptrdiff_t r = 0; r < args.springs.rows; ++r)
+  {
+    index_in(args.springs(r, SPRING_BODY_I), -1, nb_, "a spring's body i");
+    index_in(args.springs(r, SPRING_BODY_J), -1, nb_, "a spring's body j");
+  }
+  for (std::ptrdiff_t r = 0; r < args.loads.rows; ++r)
+    index_in(args.loads(r, LOAD_BODY), -1, nb_, "a load's body");
+}
+
+/// The friction states of every contact inside y (after q, q' and the energy integrals).
+template <class K>
+void check_states(const Args& args, std::size_t ny)
+{
+  const std::ptrdiff_t first = 2 * static_cast<std::ptrdiff_t>(args.nq) + ENERGY_STATES;
+  for (std::ptrdiff_t k = 0; k < args.ncontacts(); ++k)
+  {
+    const auto index = static_cast<std::ptrdiff_t>(args.contacts(k, CONTACT_STATE));
+    if (index < 0)
+      continue;
+    const int law = static_cast<int>(args.contacts(k, CONTACT_FRICTION_LAW));
+    const std::ptrdiff_t point = (law == IWAN ? 2 : 1) * (K::D == 2 ? 1 : 3);
+    const std::ptrdiff_t width
+        = point * (static_cast<int>(args.contacts(k, CONTACT_KIND)) == SLICED
+                       ? static_cast<std::ptrdiff_t>(args.contacts(k, CONTACT_SLICES)) : 1);
+    if (index < first or index + width > static_cast<std::ptrdiff_t>(ny))
+      throw std::invalid_argument("mechanism: a contact's friction states lie outside y");
+  }
 }
 
 Args args_of(nb::handle a, Held& held)
@@ -104,10 +187,9 @@ Args args_of(nb::handle a, Held& held)
     throw std::invalid_argument("mechanism: a row array has the wrong number of columns");
   for (std::ptrdiff_t k = 0; k < nc; ++k)
   {
-    const auto table = static_cast<std::ptrdiff_t>(args.contacts(k, CONTACT_TABLE));
-    if (table < 0 or table >= args.tables.rows)
-      throw std::invalid_argument("mechanism: a contact names a table it was not given");
+    index_in(args.contacts(k, CONTACT_TABLE), 0, args.tables.rows, "a contact's table");
   }
+  check_rows(args);
   return args;
 }
 
@@ -130,8 +212,8 @@ Work work_of(nb::handle w, Held& held)
   return work;
 }
 
-/// The body kind of a mechanism (its dimension, the length of Args.like), its bodies rigid;
-/// f<K>() called with it.
+/// The body kind of a mechanism (its dimension, the length of Args.like), its bodies rigid or
+/// flexible (their modes within the core's bound); f<K>() called with it.
 template <typename F>
 auto with_kind(nb::handle a, const Args& args, F&& f)
 {
@@ -172,18 +254,19 @@ void check_work(const Args& args, const Work& w, std::size_t ny)
       or w.mjac.cols != w.jac.cols or w.schur.rows != m or w.schur.cols != m
       or static_cast<std::ptrdiff_t>(w.rhs_c.size()) != m
       or static_cast<std::ptrdiff_t>(w.first.size()) != m
-      or static_cast<std::ptrdiff_t>(w.normal.size()) < args.ncontacts())
+      or static_cast<std::ptrdiff_t>(w.phi.size()) != m or static_cast<std::ptrdiff_t>(w.phi_t.size()) != m
+      or w.row_bodies.rows != m or w.row_bodies.cols != 2
+      or static_cast<std::ptrdiff_t>(w.force.size()) != args.offsets[args.bodies()]
+      or static_cast<std::ptrdiff_t>(w.normal.size()) < std::max<std::ptrdiff_t>(args.ncontacts(), 1)
+      or static_cast<std::ptrdiff_t>(w.friction.size()) < std::max<std::ptrdiff_t>(args.ncontacts(), 1))
     throw std::invalid_argument("mechanism: work is not this mechanism's workspace");
+  for (std::ptrdiff_t i = 0; i < m; ++i)
+    if (w.first[i] < 0 or w.first[i] > i or w.row_bodies(i, 0) < -1 or w.row_bodies(i, 0) >= args.bodies()
+        or w.row_bodies(i, 1) < -1 or w.row_bodies(i, 1) >= args.bodies())
+      throw std::invalid_argument("mechanism: work's constraint pattern is not this mechanism's");
   if (ny < static_cast<std::size_t>(2 * args.nq + ENERGY_STATES))
     throw std::invalid_argument("mechanism: y is shorter than the mechanism's state");
-}
-
-template <typename T>
-nb::ndarray<nb::numpy, T> owned(std::vector<T>&& data, std::initializer_list<std::size_t> shape)
-{
-  auto* heap = new std::vector<T>(std::move(data));
-  nb::capsule owner(heap, [](void* p) noexcept { delete static_cast<std::vector<T>*>(p); });
-  return nb::ndarray<nb::numpy, T>(heap->data(), shape, owner);
+  check_states<K>(args, ny);
 }
 
 std::span<const double> values(const Array<const double>& a) { return {a.data(), a.size()}; }
@@ -341,10 +424,16 @@ void bind_mechanism(nb::module_& parent)
         const Args args = args_of(a, held);
         if (y0.size() < static_cast<std::size_t>(2 * args.nq + ENERGY_STATES))
           throw std::invalid_argument("integrate: y0 is shorter than the mechanism's state");
-        if (method < DOPRI5 or method > ROSENBROCK23 or not(max_step > 0.0))
-          throw std::invalid_argument("integrate: unknown method or a step that is not positive");
+        if (method < DOPRI5 or method > ROSENBROCK23 or not(max_step > 0.0)
+            or not std::isfinite(max_step) or not std::isfinite(t_end) or t_end < 0.0
+            or not(rtol > 0.0) or not(atol > 0.0) or not std::isfinite(rtol)
+            or not std::isfinite(atol) or not(onset_tol >= 0.0) or not(speed_floor > 0.0)
+            or max_steps < 0)
+          throw std::invalid_argument("integrate: unknown method, or a duration, step, tolerance, "
+                                      "onset tolerance or speed floor that is not finite and positive");
         Integration out = with_kind(a, args, [&]<class K>()
         {
+          check_states<K>(args, y0.size());
           nb::gil_scoped_release release;
           Workspace<K> space(args);
           Integrator<K> integrator(args, space.work, static_cast<std::ptrdiff_t>(y0.size()));
@@ -415,8 +504,12 @@ void bind_mechanism(nb::module_& parent)
           const auto nc = static_cast<std::size_t>(args.ncontacts());
           const auto nt = static_cast<std::size_t>(args.torsion.rows);
           const auto ns = static_cast<std::size_t>(args.springs.rows);
-          const std::size_t kept = bodies.ndim() == 3 ? bodies.shape(2) : 0;
-          const std::size_t width = offsets.ndim() == 3 ? offsets.shape(2) : 0;
+          if (bodies.ndim() != 3 or offsets.ndim() != 3 or speeds.ndim() != 2 or modes.ndim() != 2
+              or latched.ndim() != 2 or states.ndim() != 2)
+            throw std::invalid_argument("observe_steps: states, speeds, modes and latched are "
+                                        "2-D, bodies and offsets 3-D");
+          const std::size_t kept = bodies.shape(2);
+          const std::size_t width = offsets.shape(2);
           auto rows = [n](const auto& x, std::size_t ndim, std::size_t columns)
           { return x.ndim() == ndim and x.shape(0) == n and (ndim == 1 or x.size() == n * columns); };
           auto wide = [n](const auto& x, std::size_t least)
@@ -588,7 +681,7 @@ void bind_mechanism(nb::module_& parent)
         const auto slices = static_cast<std::size_t>(args.contacts(k, CONTACT_SLICES));
         if (approaches.size() < slices or weights.size() < slices)
           throw std::invalid_argument("slice_approaches: approaches and weights need a value a slice");
-        with_kind(a, args, [&]<class K>() { return 0; });   // rigid bodies only
+        with_kind(a, args, [&]<class K>() { return 0; });   // the bodies fit the core's kinds
         E::refresh(args, values(y), work);
         const auto bore = E::bore_section(work.bodies, args.contacts, k);
         const auto fr = E::section_frame(bore.ub, bore.a0, bore.a1);
@@ -671,11 +764,22 @@ void bind_mechanism(nb::module_& parent)
         args.tables = {tables.data(), static_cast<std::ptrdiff_t>(tables.shape(0)),
                        static_cast<std::ptrdiff_t>(tables.shape(1))};
         args.grid_log0 = grid_log0, args.grid_step = grid_step;
-        const auto table = static_cast<std::ptrdiff_t>(args.contacts(k, CONTACT_TABLE));
-        if (table < 0 or table >= args.tables.rows
-            or static_cast<int>(args.contacts(k, CONTACT_KIND)) != SLICED
-            or args.contacts(k, CONTACT_STATE) >= 0)
+        const auto nbodies = static_cast<std::ptrdiff_t>(bodies.shape(0));
+        index_in(args.contacts(k, CONTACT_TABLE), 0, args.tables.rows, "the contact's table");
+        index_in(args.contacts(k, CONTACT_BEARING_BODY), -1, nbodies, "the contact's bearing body");
+        index_in(args.contacts(k, CONTACT_JOURNAL_BODY), -1, nbodies, "the contact's journal body");
+        index_in(args.contacts(k, CONTACT_FRICTION_LAW), 0, LINEAR + 1, "the contact's (static) friction law");
+        if (static_cast<int>(args.contacts(k, CONTACT_KIND)) != SLICED or args.contacts(k, CONTACT_STATE) >= 0
+            or args.tables.cols < 2)
           throw std::invalid_argument("sliced_forces: k must be a sliced contact without states");
+        index_in(args.contacts(k, CONTACT_SLICES), 1, 1L << 20, "the contact's slices");
+        for (std::ptrdiff_t b = 0; b <= nbodies; ++b)
+          if (offsets.data()[b] != Spatial::COLUMNS * b)
+            throw std::invalid_argument("sliced_forces: offsets must be those of rigid bodies");
+        for (std::ptrdiff_t b = 0; b < nbodies; ++b)
+          if (bodies.data()[b * Spatial::BODY_COLUMNS + Spatial::NMODES] != 0.0
+              or bodies.data()[b * Spatial::BODY_COLUMNS + Spatial::FIRST] != Spatial::COLUMNS * b)
+            throw std::invalid_argument("sliced_forces: the body rows must be rigid bodies'");
         std::vector<double> rows(bodies.data(), bodies.data() + bodies.size());
         std::vector<double> force(offsets.data()[bodies.shape(0)], 0.0);
         Work work;
@@ -703,8 +807,11 @@ void bind_mechanism(nb::module_& parent)
         args.tables = {tables.data(), static_cast<std::ptrdiff_t>(tables.shape(0)),
                        static_cast<std::ptrdiff_t>(tables.shape(1))};
         args.grid_log0 = grid_log0, args.grid_step = grid_step;
-        const auto table = static_cast<std::ptrdiff_t>(args.contacts(k, CONTACT_TABLE));
-        if (args.contacts(k, CONTACT_STIFFNESS) <= 0.0 and (table < 0 or table >= args.tables.rows))
+        const double named = args.contacts(k, CONTACT_TABLE);
+        const auto table = std::isfinite(named) ? static_cast<std::ptrdiff_t>(named) : -1;
+        if (not(args.contacts(k, CONTACT_STIFFNESS) > 0.0)
+            and (not std::isfinite(args.contacts(k, CONTACT_TABLE)) or table < 0 or table >= args.tables.rows
+                 or args.tables.cols < 2))
           throw std::invalid_argument("elastic_force: the contact names a table it was not given");
         return Engine<Planar>::elastic_force(args, k, delta);
       },
@@ -722,6 +829,7 @@ void bind_mechanism(nb::module_& parent)
         if (nb::len(nb::getattr(a, "like")) != 3 or k < 0 or k >= args.ncontacts()
             or static_cast<int>(args.contacts(k, CONTACT_KIND)) != SLICED)
           throw std::invalid_argument("bore_section: k must be a sliced contact of a spatial mechanism");
+        with_kind(a, args, [&]<class K>() { return 0; });   // the bodies fit the core's kinds
         check_work<Spatial>(args, work, y.size());
         Engine<Spatial>::refresh(args, values(y), work);
         const auto bore = Engine<Spatial>::bore_section(work.bodies, args.contacts, k);

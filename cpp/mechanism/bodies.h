@@ -1,6 +1,8 @@
-// What a body offers the joints, for every body kind K (pinbore.reduced.mechanism.bodies
-// states the interface): the state of a body point and of a body vector, and what the joints
-// build of them.
+// What a body offers the joints, for every body kind K (planar.h, spatial.h): the state of a
+// body point and of a body vector, and what the joints build of them. A body kind also gives
+// a point's Jacobian columns (put), a force pushed at a point (push, push_torque), its
+// relative rotations, its rows' rates, its body states, forces, mass-matrix solves, the
+// projection's steps and its kinetic energy: the engine calls nothing else of it.
 #pragma once
 
 #include "data.h"

@@ -130,11 +130,14 @@ inline ForceSlope table_force_slope(double delta, double log0, double step, cons
                                     std::size_t size)
 {
   const double x = (std::log(delta) - log0) / step;
+  if (std::isnan(x))
+    return {std::nan(""), std::nan("")};
   const long n = static_cast<long>(size);
-  const long probe = std::min(std::max(static_cast<long>(x) + 1, 0L), n - 1);
+  const double below = std::max(x, -1.0);   // every x <= -1 takes the first segment (no cast of -inf)
+  const long probe = std::min(std::max(static_cast<long>(std::min(below, static_cast<double>(n))) + 1, 0L), n - 1);
   if (x > static_cast<double>(n - 1) or not std::isfinite(table[probe]))
     return {std::nan(""), std::nan("")};
-  const long i = std::min(std::max(static_cast<long>(std::floor(x)), 0L), n - 2);
+  const long i = std::min(std::max(static_cast<long>(std::floor(below)), 0L), n - 2);
   const double f = std::exp(table[i] + (x - static_cast<double>(i)) * (table[i + 1] - table[i]));
   return {f, (table[i + 1] - table[i]) / step * f / delta};
 }

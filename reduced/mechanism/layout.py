@@ -167,23 +167,7 @@ Args = namedtuple("Args", [
 Work = namedtuple("Work", ["bodies", "velocities", "jac", "phi", "phi_t", "rhs_c", "schur",
                            "force", "normal", "friction", "mjac", "row_bodies", "first"])
 
-# A contact's deepest penetration (m) and its approach rate there (m/s).
-Depth = namedtuple("Depth", ["delta", "rate"])
-
-# An impulse: normal impulse on the journal (N s), energy dissipated (J), work of the
-# drive's impulse (J).
-Impulse = namedtuple("Impulse", ["impulse", "dissipated", "work_in"])
-
-# What the integrator tracks of the contacts between accepted steps: the penetration at the
-# last accepted state, whether a continuous contact is in contact (between an onset and the
-# next separation), and the normal force of a held contact and its peak.
-Contacts = namedtuple("Contacts", ["depth", "in_contact", "held_force", "held_peak"])
-
-# The accepted steps recorded by the integrator: time, state, impact speeds, contact modes,
-# latch flags.
-Record = namedtuple("Record", ["times", "states", "speeds", "modes", "latched"])
-
-# The integrator's status codes and methods (reduced.mechanism.integrator).
+# The integrator's status codes and methods (cpp/mechanism/integrator.h).
 OK, BLOWN_UP, TOO_MANY_STEPS, STEP_TOO_SMALL = 0, 1, 2, 3
 DOPRI5, DOPRI5_FIXED, ROSENBROCK23 = 0, 1, 2
 
