@@ -15,7 +15,6 @@ and 5 m/s); --all runs the study's twenty.
 """
 
 import argparse
-import csv
 import subprocess
 import sys
 import tempfile
