@@ -22,6 +22,7 @@ import json
 import multiprocessing
 import os
 import re
+import socket
 from pathlib import Path
 
 from tqdm import tqdm
@@ -29,6 +30,7 @@ from tqdm import tqdm
 from pinbore.core.errors import InputError
 
 SCHEDULER_TIMEOUT = 10   # s to connect to a Dask scheduler
+TCP = re.compile(r"(?:tcp://)?\[?([A-Za-z0-9_.:-]+?)\]?:([0-9]{1,5})/?")   # a TCP address: host, port
 ADDRESS = re.compile(r"[a-z][a-z0-9+.-]*://\S+|[A-Za-z0-9_.\[\]:-]+:[0-9]{1,5}")   # protocol://..., host:port
 WORKERS_PER_CORE = 4
 ENTRY = re.compile(r"\..*|.*\.json")   # a cache's files: entries (and hidden ones: entries being written, .gitignore)
@@ -162,6 +164,22 @@ def cached_map(task, items, names, cache: Path, workers: int, scheduler: str | N
     return [results[n] for n in names], [n not in done_before for n in names]
 
 
+def refused(scheduler: str) -> None:
+    """One InputError line at once when nothing listens at a TCP scheduler's address (the
+    connection is refused): Dask's client would retry until its timeout. Other protocols and
+    addresses that do not answer are left to the client."""
+    match = TCP.fullmatch(scheduler)
+    if match is None:
+        return
+    try:
+        socket.create_connection((match.group(1), int(match.group(2))), timeout=SCHEDULER_TIMEOUT).close()
+    except ConnectionRefusedError:
+        raise InputError(f"--scheduler {scheduler}: cannot reach the Dask scheduler: nothing listens "
+                         "there (connection refused)") from None
+    except OSError:
+        return   # unreachable or slow: the client's own timeout says so
+
+
 @contextlib.contextmanager
 def executor(workers: int, scheduler: str | None, pending: int | None = None):
     """An executor of local processes or of a Dask cluster for the block. A stop (Ctrl-C,
@@ -180,6 +198,7 @@ def executor(workers: int, scheduler: str | None, pending: int | None = None):
         pool.shutdown()
         return
     from distributed import Client   # noqa: PLC0415 (optional: check_scheduler checks it is there)
+    refused(scheduler)
     try:
         client = Client(scheduler, timeout=SCHEDULER_TIMEOUT)
     except (OSError, TimeoutError) as err:
