@@ -212,10 +212,9 @@ Work work_of(nb::handle w, Held& held)
   return work;
 }
 
-/// The body kind of a mechanism (its dimension, the length of Args.like), its bodies rigid or
-/// flexible (their modes within the core's bound); f<K>() called with it.
-template <typename F>
-auto with_kind(nb::handle a, const Args& args, F&& f)
+/// The dimension of a mechanism's body kind (the length of Args.like: 2 planar, 3 spatial),
+/// its bodies checked to fit it, rigid or flexible (their modes within the core's bound).
+std::size_t dimension_of(nb::handle a, const Args& args)
 {
   const std::size_t dimension = nb::len(nb::getattr(a, "like"));
   const int columns = dimension == 2 ? Planar::COLUMNS : Spatial::COLUMNS;
@@ -241,7 +240,14 @@ auto with_kind(nb::handle a, const Args& args, F&& f)
   if (args.nq != coordinates or args.gravity.size() != dimension or args.inertia.rows != args.bodies()
       or args.inertia.cols != 9 or args.inertia_inv.rows != args.bodies() or args.inertia_inv.cols != 9)
     throw std::invalid_argument("mechanism: nq, gravity or the inertia tensors do not fit the bodies");
-  return dimension == 2 ? f.template operator()<Planar>() : f.template operator()<Spatial>();
+  return dimension;
+}
+
+/// f<K>() called with the mechanism's body kind (dimension_of).
+template <typename F>
+auto with_kind(nb::handle a, const Args& args, F&& f)
+{
+  return dimension_of(a, args) == 2 ? f.template operator()<Planar>() : f.template operator()<Spatial>();
 }
 
 template <class K>
@@ -553,7 +559,7 @@ void bind_mechanism(nb::module_& parent)
                 offsets.data()[(k * nc + i) * width + c] = offset[i * width + c];
             }
             kinetic.data()[k] = K::kinetic_energy(args, y);
-            E::refresh(args, y, work);
+            // observe's right-hand side left y's body states in work
             for (std::size_t r = 0; r < nt; ++r)
               angles.data()[k * nt + r] = E::torsion_angle(work.bodies, args.torsion, r).first;
             for (std::size_t r = 0; r < ns; ++r)
@@ -671,7 +677,7 @@ void bind_mechanism(nb::module_& parent)
         Held held;
         const Args args = args_of(a, held);
         const Work work = work_of(w, held);
-        if (nb::len(nb::getattr(a, "like")) != 3)
+        if (dimension_of(a, args) != 3)
           throw std::invalid_argument("slice_approaches: a sliced contact is spatial");
         check_work<Spatial>(args, work, y.size());
         using E = Engine<Spatial>;
@@ -681,7 +687,6 @@ void bind_mechanism(nb::module_& parent)
         const auto slices = static_cast<std::size_t>(args.contacts(k, CONTACT_SLICES));
         if (approaches.size() < slices or weights.size() < slices)
           throw std::invalid_argument("slice_approaches: approaches and weights need a value a slice");
-        with_kind(a, args, [&]<class K>() { return 0; });   // the bodies fit the core's kinds
         E::refresh(args, values(y), work);
         const auto bore = E::bore_section(work.bodies, args.contacts, k);
         const auto fr = E::section_frame(bore.ub, bore.a0, bore.a1);
@@ -826,10 +831,9 @@ void bind_mechanism(nb::module_& parent)
         Held held;
         const Args args = args_of(a, held);
         const Work work = work_of(w, held);
-        if (nb::len(nb::getattr(a, "like")) != 3 or k < 0 or k >= args.ncontacts()
+        if (dimension_of(a, args) != 3 or k < 0 or k >= args.ncontacts()
             or static_cast<int>(args.contacts(k, CONTACT_KIND)) != SLICED)
           throw std::invalid_argument("bore_section: k must be a sliced contact of a spatial mechanism");
-        with_kind(a, args, [&]<class K>() { return 0; });   // the bodies fit the core's kinds
         check_work<Spatial>(args, work, y.size());
         Engine<Spatial>::refresh(args, values(y), work);
         const auto bore = Engine<Spatial>::bore_section(work.bodies, args.contacts, k);
