@@ -448,23 +448,32 @@ struct Planar
     return (v_phi - v_eta_dot_g) / s(b, SIGMA);
   }
 
-  static void mass_rows(const Args& args, const Work& work, std::ptrdiff_t i, std::ptrdiff_t b)
+  /// out = M^-1 in over body b's columns (indexed as the force vector): the rigid columns
+  /// divided by their masses, a flexible body's block [[J, g^T], [g, I]] in closed form.
+  /// in and out may be the same.
+  static void inverse_mass(const Args& args, const Work& work, std::ptrdiff_t b, const double* in,
+                           double* out)
   {
     for (std::ptrdiff_t c = args.offsets[b]; c < args.offsets[b + 1]; ++c)
-      work.mjac(i, c) = work.jac(i, c) * args.minv[c];
+      out[c] = in[c] * args.minv[c];
     const Matrix<double>& s = work.bodies;
-    if (s(b, NMODES) > 0)   // its block [[J, g^T], [g, I]] in closed form
+    if (s(b, NMODES) > 0)
     {
       const std::ptrdiff_t c = args.offsets[b];
       const auto n = static_cast<std::ptrdiff_t>(s(b, NMODES));
       double g = 0.0;
       for (std::ptrdiff_t j = 0; j < n; ++j)
-        g += s(b, GVEC + j) * work.jac(i, c + COLUMNS + j);
-      const double a = rotation_part(s, b, work.jac(i, c + 2), g);
-      work.mjac(i, c + 2) = a;
+        g += s(b, GVEC + j) * in[c + COLUMNS + j];
+      const double a = rotation_part(s, b, in[c + 2], g);
+      out[c + 2] = a;
       for (std::ptrdiff_t j = 0; j < n; ++j)
-        work.mjac(i, c + COLUMNS + j) = work.jac(i, c + COLUMNS + j) - s(b, GVEC + j) * a;
+        out[c + COLUMNS + j] = in[c + COLUMNS + j] - s(b, GVEC + j) * a;
     }
+  }
+
+  static void mass_rows(const Args& args, const Work& work, std::ptrdiff_t i, std::ptrdiff_t b)
+  {
+    inverse_mass(args, work, b, work.jac.row(i), work.mjac.row(i));
   }
 
   static void state_rates(const Args& args, std::span<const double> y, std::span<double> dy,
@@ -472,24 +481,9 @@ struct Planar
   {
     const std::ptrdiff_t nq = args.nq;
     for (std::ptrdiff_t j = 0; j < nq; ++j)
-    {
       dy[j] = y[nq + j];
-      dy[nq + j] = args.minv[j] * work.force[j];
-    }
-    const Matrix<double>& s = work.bodies;
-    for (std::ptrdiff_t b = 0; b < s.rows; ++b)
-      if (s(b, NMODES) > 0)
-      {
-        const auto c = static_cast<std::ptrdiff_t>(s(b, FIRST));
-        const auto n = static_cast<std::ptrdiff_t>(s(b, NMODES));
-        double g = 0.0;
-        for (std::ptrdiff_t j = 0; j < n; ++j)
-          g += s(b, GVEC + j) * work.force[c + COLUMNS + j];
-        const double a = rotation_part(s, b, work.force[c + 2], g);
-        dy[nq + c + 2] = a;
-        for (std::ptrdiff_t j = 0; j < n; ++j)
-          dy[nq + c + COLUMNS + j] = work.force[c + COLUMNS + j] - s(b, GVEC + j) * a;
-      }
+    for (std::ptrdiff_t b = 0; b < work.bodies.rows; ++b)
+      inverse_mass(args, work, b, work.force.data(), dy.data() + nq);
   }
 
   /// y[start:start + nq] -= scale M^-1 Phi_q^T x.

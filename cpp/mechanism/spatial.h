@@ -666,24 +666,33 @@ struct Spatial
     return power;
   }
 
-  static void mass_rows(const Args& args, const Work& w, std::ptrdiff_t i, std::ptrdiff_t b)
+  /// out = M^-1 in over body b's columns (indexed as the force vector): the translation
+  /// divided by the mass, the rotation and the modes coupled, a = sigma^-1 (v_w - B v_eta).
+  /// in and out may be the same.
+  static void inverse_mass(const Args& args, const Work& w, std::ptrdiff_t b, const double* in,
+                           double* out)
   {
     const Matrix<double>& s = w.bodies;
     const std::ptrdiff_t col = args.offsets[b];
-    V wv{w.jac(i, col + 3), w.jac(i, col + 4), w.jac(i, col + 5)};
-    if (s(b, NMODES) > 0)   // the rotation and the modes coupled: a = sigma^-1 (v_w - B v_eta)
-      wv = sub(wv, turned(s, b, modal_g(s, b, [&](std::ptrdiff_t m) { return w.jac(i, col + COLUMNS + m); })));
+    V wv{in[col + 3], in[col + 4], in[col + 5]};
+    if (s(b, NMODES) > 0)
+      wv = sub(wv, turned(s, b, modal_g(s, b, [&](std::ptrdiff_t m) { return in[col + COLUMNS + m]; })));
     const V a = block_times(s, b, BODY_JINV, wv);
     for (int c = 0; c < 3; ++c)
     {
-      w.mjac(i, col + c) = w.jac(i, col + c) / args.masses[b];
-      w.mjac(i, col + 3 + c) = a[c];
+      out[col + c] = in[col + c] / args.masses[b];
+      out[col + 3 + c] = a[c];
     }
     const V ab = unturned(s, b, a);
     for (std::ptrdiff_t j = 0; j < static_cast<std::ptrdiff_t>(s(b, NMODES)); ++j)
-      w.mjac(i, col + COLUMNS + j) = w.jac(i, col + COLUMNS + j)
-                                     - (s(b, GMAT + j) * ab[0] + s(b, GMAT + MODES + j) * ab[1]
-                                        + s(b, GMAT + 2 * MODES + j) * ab[2]);
+      out[col + COLUMNS + j] = in[col + COLUMNS + j]
+                               - (s(b, GMAT + j) * ab[0] + s(b, GMAT + MODES + j) * ab[1]
+                                  + s(b, GMAT + 2 * MODES + j) * ab[2]);
+  }
+
+  static void mass_rows(const Args& args, const Work& w, std::ptrdiff_t i, std::ptrdiff_t b)
+  {
+    inverse_mass(args, w, b, w.jac.row(i), w.mjac.row(i));
   }
 
   static void state_rates(const Args& args, std::span<const double> y, std::span<double> dy,
@@ -696,25 +705,20 @@ struct Spatial
     {
       const auto i = static_cast<std::ptrdiff_t>(s(b, COORD));
       const auto col = static_cast<std::ptrdiff_t>(s(b, FIRST));
+      inverse_mass(args, work, b, work.force.data(), work.force.data());   // accelerations
       for (int c = 0; c < 3; ++c)
       {
         dy[i + c] = y[nq + i + c];
-        dy[nq + i + c] = work.force[col + c] / args.masses[b];
+        dy[nq + i + c] = work.force[col + c];
       }
       for (int c = 0; c < 4; ++c)
         dy[i + 3 + c] = y[nq + i + 3 + c];
       const auto n = static_cast<std::ptrdiff_t>(s(b, NMODES));
-      V wf{work.force[col + 3], work.force[col + 4], work.force[col + 5]};
-      if (n > 0)
-        wf = sub(wf, turned(s, b, modal_g(s, b, [&](std::ptrdiff_t m) { return work.force[col + COLUMNS + m]; })));
-      const V wd = block_times(s, b, BODY_JINV, wf);   // w' (global)
-      const V ab = unturned(s, b, wd);
+      const V wd{work.force[col + 3], work.force[col + 4], work.force[col + 5]};   // w' (global)
       for (std::ptrdiff_t j = 0; j < n; ++j)   // eta'' = Q_eta - B^T w'
       {
         dy[i + COORDINATES + j] = y[nq + i + COORDINATES + j];
-        dy[nq + i + COORDINATES + j] = work.force[col + COLUMNS + j]
-                                       - (s(b, GMAT + j) * ab[0] + s(b, GMAT + MODES + j) * ab[1]
-                                          + s(b, GMAT + 2 * MODES + j) * ab[2]);
+        dy[nq + i + COORDINATES + j] = work.force[col + COLUMNS + j];
       }
       const P4 p = unit_parameters(y, i + 3);
       const P4 pd = four(y, nq + i + 3);
