@@ -119,40 +119,46 @@ def grid(values: list[list[float]]) -> np.ndarray:
 
 # ---- intervals
 
+def chi2_quantile(q: float, dof: int) -> float:
+    """The q-quantile of the chi-square law of dof degrees of freedom: 2 P^-1(dof / 2, q), P
+    the regularised lower incomplete gamma function."""
+    from scipy import special   # noqa: PLC0415 (loaded when used)
+
+    return 2.0 * float(special.gammaincinv(dof / 2, q))
+
+
 def mean_interval(y, confidence: float) -> tuple[float, float, float]:
     """The sample mean and its two-sided Student-t interval."""
-    from scipy import stats   # noqa: PLC0415 (loaded when used)
+    from scipy import special   # noqa: PLC0415 (loaded when used; scipy.stats costs 0.6 s more)
 
     y = np.asarray(y, dtype=float)
     n, mean = len(y), float(np.mean(y))
     if n < 2:
         return mean, math.nan, math.nan
-    half = stats.t.ppf(0.5 + confidence / 2, n - 1) * np.std(y, ddof=1) / math.sqrt(n)
+    half = special.stdtrit(n - 1, 0.5 + confidence / 2) * np.std(y, ddof=1) / math.sqrt(n)
     return mean, mean - half, mean + half
 
 
 def std_interval(y, confidence: float) -> tuple[float, float, float]:
     """The sample standard deviation and its chi-square interval (exact for normal data)."""
-    from scipy import stats   # noqa: PLC0415 (loaded when used)
-
     y = np.asarray(y, dtype=float)
     n = len(y)
     if n < 2:
         return math.nan, math.nan, math.nan
     s2, alpha = float(np.var(y, ddof=1)), 1 - confidence
-    low = (n - 1) * s2 / stats.chi2.ppf(1 - alpha / 2, n - 1)
-    high = (n - 1) * s2 / stats.chi2.ppf(alpha / 2, n - 1)
+    low = (n - 1) * s2 / chi2_quantile(1 - alpha / 2, n - 1)
+    high = (n - 1) * s2 / chi2_quantile(alpha / 2, n - 1)
     return math.sqrt(s2), math.sqrt(low), math.sqrt(high)
 
 
 def clopper_pearson(k: int, n: int, confidence: float, side: str = "two-sided") -> tuple[float, float]:
     """The exact binomial interval of a probability from k successes in n trials: two-sided,
     or one-sided "upper" ((0, high]) or "lower" ([low, 1))."""
-    from scipy import stats   # noqa: PLC0415 (loaded when used)
+    from scipy import special   # noqa: PLC0415 (loaded when used)
 
     alpha = 1 - confidence if side != "two-sided" else (1 - confidence) / 2
-    low = 0.0 if k == 0 or side == "upper" else float(stats.beta.ppf(alpha, k, n - k + 1))
-    high = 1.0 if k == n or side == "lower" else float(stats.beta.ppf(1 - alpha, k + 1, n - k))
+    low = 0.0 if k == 0 or side == "upper" else float(special.betaincinv(k, n - k + 1, alpha))
+    high = 1.0 if k == n or side == "lower" else float(special.betaincinv(k + 1, n - k, 1 - alpha))
     return low, high
 
 
@@ -160,15 +166,19 @@ def quantile_interval(y, p: float, confidence: float) -> tuple[float, float, flo
     """The p-quantile and its distribution-free interval between two order statistics:
     the number of samples below the true quantile is Binomial(n, p), so
     [Y_(l), Y_(u)] covers it with probability >= confidence (nan where n is too small)."""
-    from scipy import stats   # noqa: PLC0415 (loaded when used)
+    from scipy import special   # noqa: PLC0415 (loaded when used)
 
     y = np.sort(np.asarray(y, dtype=float))
     n = len(y)
     q = float(np.quantile(y, p))
-    binom = stats.binom(n, p)
+    cdf = special.bdtr(np.arange(n + 1), n, p)   # P(B <= k), B ~ Binomial(n, p)
     alpha = (1 - confidence) / 2
-    lo = int(binom.ppf(alpha))             # P(B <= lo - 1) <= alpha
-    hi = int(binom.ppf(1 - alpha)) + 1     # P(B >= hi) <= alpha
+
+    def ppf(level):   # the least k with P(B <= k) >= level
+        return int(np.searchsorted(cdf, level * (1 - 1e-12)))
+
+    lo = ppf(alpha)              # P(B <= lo - 1) <= alpha
+    hi = ppf(1 - alpha) + 1      # P(B >= hi) <= alpha
     low = y[lo - 1] if lo >= 1 else math.nan
     high = y[hi - 1] if hi <= n else math.nan
     return q, float(low), float(high)

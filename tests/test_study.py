@@ -120,6 +120,22 @@ def test_mean_and_spread_of_a_linear_model_of_gaussian_inputs():
         assert described[f"{key}_interval"][0] <= ref <= described[f"{key}_interval"][1]
 
 
+@pytest.mark.parametrize("n", [5, 20, 99, 1000, 4000])
+@pytest.mark.parametrize("p", [0.05, 0.5, 0.95])
+def test_the_quantile_and_spread_intervals_are_scipys_binomial_and_chi_square_quantiles(n, p):
+    """The order statistics of the distribution-free quantile interval are scipy.stats.binom's
+    quantiles (lower: ppf(alpha), upper: ppf(1 - alpha) + 1) and the spread interval's bounds
+    are chi2.ppf's: the intervals are computed from scipy.special alone."""
+    y = np.arange(1.0, n + 1)   # Y_(k) = k
+    alpha = 0.025
+    _, low, high = uq.quantile_interval(y, p, 0.95)
+    lo, hi = int(stats.binom.ppf(alpha, n, p)), int(stats.binom.ppf(1 - alpha, n, p)) + 1
+    assert (low if lo >= 1 else math.nan) == pytest.approx(lo if lo >= 1 else math.nan, nan_ok=True)
+    assert (high if hi <= n else math.nan) == pytest.approx(hi if hi <= n else math.nan, nan_ok=True)
+    for q in (1e-3, 0.025, 0.5, 0.975):
+        assert uq.chi2_quantile(q, n - 1) == pytest.approx(stats.chi2.ppf(q, n - 1), rel=1e-12)
+
+
 @pytest.mark.parametrize("k, n", [(0, 10), (1, 10), (7, 50), (50, 50), (3, 1000), (500, 1000)])
 @pytest.mark.parametrize("confidence", [0.9, 0.95, 0.99])
 def test_clopper_pearson_is_scipys_exact_binomial_interval(k, n, confidence):
@@ -621,6 +637,7 @@ def test_an_fe_study_scales_with_the_elastic_moduli(tmp_path):
 
 
 @pytest.mark.mpi
+@pytest.mark.slow   # 23 s: the ranks' FE itself is test_mpi's; this is the study's plumbing of --ranks
 def test_an_fe_study_on_two_ranks_a_point_gives_the_curves_of_one(tmp_path):
     """`--ranks 2`: each FE point runs as `mpiexec -n 2 pinbore fem`; every curve equals that
     of one process to 1e-8 of each column's largest value (the bound of tests/test_mpi.py:
@@ -734,10 +751,11 @@ def test_bad_study_options_are_one_line_writing_nothing(tmp_path, name, options,
     assert not (tmp_path / "out").exists() and sorted((ROOT / "scenes" / "reduced").iterdir()) == before
 
 
-@pytest.mark.parametrize("edit", [lambda e: e | {"result": e["result"] | {"status": "complete", "seconds": -1.0}},
-                                  lambda e: {}, lambda e: None, lambda e: e["result"]],
-                         ids=["edited", "empty", "null", "unsealed"])
-def test_a_cache_entry_that_is_not_what_was_written_is_computed_again(tmp_path, edit):
+EDITS = {"edited": lambda e: e | {"result": e["result"] | {"status": "complete", "seconds": -1.0}},
+         "empty": lambda e: {}, "null": lambda e: None, "unsealed": lambda e: e["result"]}
+
+
+def test_a_cache_entry_that_is_not_what_was_written_is_computed_again(tmp_path):
     """A cache entry carries the checksum of its result: one edited by hand (a value
     changed), emptied, null, or without its seal is computed again, never served, and the
     table is the one of a fresh run."""
@@ -746,10 +764,13 @@ def test_a_cache_entry_that_is_not_what_was_written_is_computed_again(tmp_path, 
     assert pinbore("study", study, "--out", tmp_path / "out").returncode == 0
     fresh = rows_of(tmp_path / "out")
     (entry,) = (tmp_path / "out-cache").glob("*.json")
-    entry.write_text(json.dumps(edit(json.loads(entry.read_text()))))
-    assert pinbore("study", study, "--out", tmp_path / "out").returncode == 0
-    again = rows_of(tmp_path / "out")
-    assert again[0]["ran"] in ("True", "1", "true") and again[0]["peak_force_N"] == fresh[0]["peak_force_N"]
+    written = json.loads(entry.read_text())
+    for name, edit in EDITS.items():
+        entry.write_text(json.dumps(edit(written)))
+        assert pinbore("study", study, "--out", tmp_path / "out").returncode == 0, name
+        again = rows_of(tmp_path / "out")
+        assert again[0]["ran"] in ("True", "1", "true"), name
+        assert again[0]["peak_force_N"] == fresh[0]["peak_force_N"], name
 
 
 @pytest.mark.parametrize("edit", [lambda t: t.replace("points = 50", "points = 10000000"),

@@ -29,7 +29,6 @@ import csv
 
 import numpy as np
 
-from pinbore.core.figures import plt, save_png
 from pinbore.reduced.mechanism import kernel, layout
 from pinbore.reduced.mechanism.layout import (
     CONTACT_COMPLIANCE, CONTACT_IMPACT, CONTACT_KIND, CONTACT_LENGTH, CONTACT_SLICES, CONTINUOUS,
@@ -334,6 +333,7 @@ def plots(folder, model, series, twin) -> None:
     circle; a slider, its corners'); with a drive and a slider on a prismatic joint, the
     slider's acceleration against the driven angle beside the ideal joints' (twin); without
     a drive, the first body's attitude rates against the ideal joints'."""
+    from pinbore.core.figures import plt, save_png   # noqa: PLC0415 (matplotlib only to draw)
     cols = series["steps"]
     back_end = model.kind.bodies()
     angle = back_end.drive_angle(model, cols)
@@ -372,6 +372,7 @@ def plots(folder, model, series, twin) -> None:
 def points_plot(folder, model, cols, x, x_label) -> None:
     """The output points' elastic displacement in their bodies' frames against the driven
     angle or time (points.png), when a flexible body has one."""
+    from pinbore.core.figures import plt, save_png   # noqa: PLC0415 (matplotlib only to draw)
     points = [p for p in model.scene.output.points if p.body in getattr(model.geometry, "flexible", {})]
     if not points:
         return
@@ -393,6 +394,7 @@ def joint_plot(folder, model, j, c, cols, x, x_label) -> None:
     """One clearance joint's picture: its forces against the driven angle or time; beside
     them a planar journal's centre inside its clearance circle, or a slider's offset across
     its guide and its tilt."""
+    from pinbore.core.figures import plt, save_png   # noqa: PLC0415 (matplotlib only to draw)
     orbit = f"{c.name}_ecc_x_m" in cols
     slider = f"{c.name}_offset_m" in cols
     panels = 3 if slider else 2 if orbit else 1
