@@ -277,3 +277,18 @@ def test_free_floating_deployment_conserves_momentum_and_energy(scene):
     assert np.max(np.abs(linear)) < 1e-7 * 3.0 * np.max(np.abs(cols["panel_vx_m_per_s"]))
     total = e["kinetic"] + e["potential"] + e["elastic"] + e["dissipated"]
     assert np.max(np.abs(total - total[0])) < 1e-6 * e["kinetic"].max()
+
+
+def test_a_run_that_draws_nothing_loads_no_plotting_library():
+    """A mechanism integrated and summarised without plots (what a study point does) never
+    imports matplotlib: its import is 0.5 s of every point's start."""
+    import subprocess   # noqa: PLC0415
+    import sys   # noqa: PLC0415
+
+    code = ("import sys; from pathlib import Path; from pinbore.reduced.mechanism import kinds, run; "
+            f"p = Path({str(ROOT / 'scenes/reduced/slider_crank_flores2004.toml')!r}); "
+            "s = kinds.load(p).model_copy(update={'duration': 0.002}); "
+            "r = run.summarised(s, str(p), p.parent)[3]; "
+            "print(r.status, 'matplotlib' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == ["complete", "False"], out.stdout + out.stderr
