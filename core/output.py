@@ -65,6 +65,24 @@ def _raise_if_stopped() -> None:
         _stop(_stopped.pop(), None)
 
 
+_abandoned: list[bool] = []   # native work left running by a stop (a Gmsh mesher)
+
+
+def abandon_native_work() -> None:
+    """A stop left native work running in a thread (meshes.model.generate): the process must
+    end without its native exit handlers (exit_now)."""
+    _abandoned.append(True)
+
+
+def exit_now(code: int) -> None:
+    """End the process at once with `code` if a stop left native work running (its outputs
+    are already removed); a process whose threads are all Python's returns."""
+    if _abandoned:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+
+
 def clear_stop_signal() -> None:
     """Forget a stop of an earlier command in this process."""
     _stopped.clear()

@@ -29,7 +29,7 @@ import numpy as np
 import pydantic
 
 from pinbore.core.scene import Strict
-from pinbore.meshes.model import MAX_CELLS
+from pinbore.meshes.model import MAX_CELLS, generate
 
 BODY = 1                      # the physical group of the body's cells
 SURFACE_TOLERANCE = 1e-6      # of the body's size: a facet on an interface's surface
@@ -157,7 +157,7 @@ def build(gmsh, body: BodyGeometry) -> None:
     gmsh.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 1)
     gmsh.option.setNumber("Mesh.Algorithm", 6)
     gmsh.option.setNumber("Mesh.Algorithm3D", 10)   # HXT: parallel, fast on thin plates
-    gmsh.model.mesh.generate(body.dim)
+    generate(gmsh, body.dim)
 
 
 def _bar(occ, body: BodyGeometry) -> list[int]:

@@ -2,18 +2,24 @@
 
 import contextlib
 import math
+import threading
 from typing import Literal
 
 import numpy as np
 import pydantic
 
+from pinbore.core.output import abandon_native_work
 from pinbore.core.scene import Strict
 from pinbore.laws.relief import Relief
 
+_meshing: list[threading.Event] = []   # per generate under way: set when its mesher is done
+
+
 @contextlib.contextmanager
 def gmsh_session():
-    """A quiet gmsh session (errors only), finalized however the block ends; yields the gmsh
-    module (imported here: a scene is validated without Gmsh)."""
+    """A quiet gmsh session (errors only), finalized however the block ends, unless a stop
+    left its mesher running (generate); yields the gmsh module (imported here: a scene is
+    validated without Gmsh)."""
     import gmsh   # noqa: PLC0415
 
     gmsh.initialize(interruptible=False)
@@ -21,7 +27,37 @@ def gmsh_session():
     try:
         yield gmsh
     finally:
-        gmsh.finalize()
+        if all(done.is_set() for done in _meshing):
+            gmsh.finalize()
+
+
+def generate(gmsh, dim: int) -> None:
+    """gmsh.model.mesh.generate(dim) in a thread of its own. Gmsh's mesher returns to Python
+    only when it is done (tens of seconds for a mesh near the cell cap), so a Ctrl-C or
+    SIGTERM would wait for it; here the main thread waits on it in short waits and takes the stop
+    at once. A stop leaves the mesher running: the session is not finalized under it, and the
+    process ends without the native exit handlers (core.output.abandon_native_work)."""
+    failures, done = [], threading.Event()
+
+    def mesh():
+        try:
+            gmsh.model.mesh.generate(dim)
+        except Exception as err:   # noqa: BLE001 (raised again in the caller's thread)
+            failures.append(err)
+        finally:
+            done.set()
+
+    _meshing.append(done)
+    threading.Thread(target=mesh, name="gmsh mesher", daemon=True).start()
+    try:   # not Thread.join: a stop raised inside it marks the thread ended (bpo-45274's fix)
+        while not done.wait(0.05):
+            pass
+    except BaseException:
+        abandon_native_work()
+        raise
+    _meshing.remove(done)
+    if failures:
+        raise failures[0]
 
 
 # Physical groups (cells of each body, facets of each boundary). Stages downstream use these.

@@ -26,7 +26,7 @@ import numpy as np
 
 from pinbore.meshes.model import (BORE_SURFACE, DEFAULT_LAYERS, HOUSING, HOUSING_EDGE,
                                   HOUSING_ENDS, HUB, PIN, PIN_ENDS, PIN_SURFACE, SYMMETRY,
-                                  MeshOptions, overhang_layers, uses_symmetry)
+                                  MeshOptions, generate, overhang_layers, uses_symmetry)
 from pinbore.meshes.sizing import Sizing, far_size, wall_size
 
 CANONICAL_DIRECTION_DEG = -90.0
@@ -115,7 +115,7 @@ def build(geometry, sizing: Sizing, direction_deg: float, mesh: MeshOptions = Me
     for option, value in (("Mesh.MeshSizeExtendFromBoundary", 0), ("Mesh.MeshSizeFromPoints", 0),
                           ("Mesh.MeshSizeFromCurvature", 0), ("Mesh.Algorithm", 6)):
         gmsh.option.setNumber(option, value)
-    gmsh.model.mesh.generate(geometry.dim)
+    generate(gmsh, geometry.dim)
     if geometry.tilt_deg:
         _tilt_pin(pin, geometry)
     _rotate_mesh(math.radians(direction_deg - CANONICAL_DIRECTION_DEG))

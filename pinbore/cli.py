@@ -14,7 +14,7 @@ from pathlib import Path
 
 from pinbore.core.errors import InputError
 from pinbore.core.output import (Terminated, check_output, clear_stop_signal, declared_command,
-                                 declared_inputs, stop_signal)
+                                 declared_inputs, exit_now, stop_signal)
 from pinbore.core.scene import referenced_files
 
 
@@ -367,6 +367,7 @@ def _stopped(command: str, signum: int) -> int:
     """One line for a run stopped by Ctrl-C or SIGTERM; the shell's exit code 128 + signal."""
     word = "interrupted" if signum == signal.SIGINT else "terminated"
     print(f"pinbore {command}: {word}; outputs under way removed", file=sys.stderr)
+    exit_now(128 + signum)   # a Gmsh mesher left running ends with the process
     return 128 + signum
 
 

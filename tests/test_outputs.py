@@ -185,3 +185,26 @@ def test_a_stopped_run_leaves_no_temporaries_and_one_line(home, sig, code, word)
     assert "Traceback" not in stderr
     assert not (home / "out").exists()
     assert [p.name for p in home.iterdir() if p.name.startswith(".")] == []
+
+
+def test_a_run_stopped_while_gmsh_meshes_ends_at_once(tmp_path):
+    """SIGTERM while Gmsh meshes a flexible body near the cell cap (seconds of meshing): the
+    command ends within a second (Gmsh's mesher does not return to Python until it is done;
+    it had run on for minutes), exit 143, one line, no temporary left, no crash at exit."""
+    text = (ROOT / "scenes/modes/link_steel_2d.toml").read_text()
+    (tmp_path / "scene.toml").write_text(text.replace("cell_size = 0.0015", "cell_size = 0.00017"))
+    run = subprocess.Popen([sys.executable, "-m", "pinbore.cli", "modes", "scene.toml", "--out", "out"],
+                           cwd=tmp_path, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not list(tmp_path.glob(".out.pinbore-*.tmp")) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(1.0)   # into the meshing (about 7 s)
+    assert run.poll() is None, "the run ended before it could be stopped"
+    run.send_signal(signal.SIGTERM)
+    stopped = time.monotonic()
+    stderr = run.communicate(timeout=60)[1]
+    assert time.monotonic() - stopped < 1.0
+    assert run.returncode == 143, stderr
+    assert stderr.strip().splitlines()[-1] == "pinbore modes: terminated; outputs under way removed"
+    assert not (tmp_path / "out").exists()
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
