@@ -18,10 +18,15 @@ _meshing: list[threading.Event] = []   # per generate under way: set when its me
 @contextlib.contextmanager
 def gmsh_session():
     """A quiet gmsh session (errors only), finalized however the block ends, unless a stop
-    left its mesher running (generate); yields the gmsh module (imported here: a scene is
-    validated without Gmsh)."""
+    left its mesher running (generate: then the next session waits for that mesher and
+    finalizes first); yields the gmsh module (imported here: a scene is validated without
+    Gmsh)."""
     import gmsh   # noqa: PLC0415
 
+    for done in list(_meshing):   # a mesher a stop left running (the API's caller went on)
+        done.wait()
+        _meshing.remove(done)
+        gmsh.finalize()
     gmsh.initialize(interruptible=False)
     gmsh.option.setNumber("General.Verbosity", 1)
     try:
