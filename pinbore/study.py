@@ -1078,12 +1078,27 @@ def section(build_dir: Path, bench_dir: Path) -> str:
                                [[r["name"], *(f"{float(r[q]):.5g}" for q in quantities), r["status"]]
                                 for r in results]))
             continue
-        rows = [[name, f"{q['mean']:.4g} [{q['mean_interval'][0]:.4g}, {q['mean_interval'][1]:.4g}]",
-                 f"{q['std']:.3g}", f"{q['q05']:.4g}", f"{q['q50']:.4g}",
-                 f"{q['q95']:.4g} [{q['q95_interval'][0]:.4g}, {q['q95_interval'][1]:.4g}]"]
+        untrusted = set()
+
+        def shown(name, value, spec):   # a statistic as the page shows it
+            if isinstance(value, (int, float)) and math.isfinite(value):
+                return format(value, spec)
+            untrusted.add(name)
+            return "not finite"
+
+        rows = [[name, f"{shown(name, q['mean'], '.4g')} [{shown(name, q['mean_interval'][0], '.4g')}, "
+                 f"{shown(name, q['mean_interval'][1], '.4g')}]",
+                 shown(name, q["std"], ".3g"), shown(name, q["q05"], ".4g"), shown(name, q["q50"], ".4g"),
+                 f"{shown(name, q['q95'], '.4g')} [{shown(name, q['q95_interval'][0], '.4g')}, "
+                 f"{shown(name, q['q95_interval'][1], '.4g')}]"]
                 for name, q in stats["quantities"].items()]
         parts.append(table(["quantity", f"mean [{stats['confidence']:.0%}]", "std", "5 %",
                             "median", f"95 % quantile [{stats['confidence']:.0%}]"], rows))
+        if untrusted:
+            parts.append(note(f"Not finite in statistics.json, so not shown as results: "
+                              f"{markup.escape(', '.join(sorted(untrusted)))} (an interval of "
+                              "too few points is not finite; otherwise the file was changed "
+                              "or a point's value is not a number)."))
         if "statistics_of" in stats:
             parts.append(f"<p>Statistics of {stats['statistics_of']}.</p>")
         sobol = [[quantity, name, f"{i['first']:.2f} [{i['first_interval'][0]:.2f}, {i['first_interval'][1]:.2f}]",

@@ -816,3 +816,23 @@ def test_a_points_cache_key_reads_every_source_file_of_its_floors():
         for path in (ROOT / floor).rglob("*.py"):
             assert f"pinbore.{floor}/{path.relative_to(ROOT / floor)}" in names
     assert "pinbore.core.cpp" in names
+
+
+def test_the_report_marks_a_statistic_that_is_not_finite(tmp_path):
+    """A study's statistic that is not a finite number (a one-point interval, or a
+    statistics.json changed by hand) is shown as 'not finite' with a note naming the
+    quantity, never as a number ('nan' had been printed as a result)."""
+    from pinbore import study as runner
+
+    folder = tmp_path / "study" / "s"
+    folder.mkdir(parents=True)
+    (folder / "summary.json").write_text(json.dumps({"complete": 2, "points": 2, "base": "b.toml"}))
+    good = {"mean": 1.0, "mean_interval": [0.9, 1.1], "std": 0.1, "q05": 0.8, "q50": 1.0,
+            "q95": 1.2, "q95_interval": [1.1, 1.3]}
+    (folder / "statistics.json").write_text(json.dumps(
+        {"method": "monte_carlo", "confidence": 0.95,
+         "quantities": {"peak_force_N": good | {"mean": float("nan")}, "clearance_m": good}}))
+    page = runner.section(tmp_path, tmp_path)
+    assert "nan" not in page.lower().replace("not finite", "")
+    assert "not finite" in page and "so not shown as results: peak_force_N" in page
+    assert "clearance_m" not in page.split("so not shown as results:")[1]
