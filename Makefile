@@ -38,10 +38,13 @@ DYNAMICS := $(addprefix build/dynamics/,poincare/summary.json bifurcation/summar
                                         spatial_poincare/summary.json spatial_bifurcation/summary.json \
                                         continuation/summary.json)
 STUDY_RUNS := $(patsubst studies/%.toml,build/study/%/summary.json,$(wildcard studies/*.toml))
+WEAR_SCENES := $(basename $(notdir $(wildcard scenes/wear/*.toml)))
+WEAR_RUNS := $(WEAR_SCENES:%=build/wear/%/summary.json)
 # the studies whose points' curves and impacts the calibration reads
 CALIBRATION_STUDIES := $(addprefix build/study/,$(addsuffix /summary.json,calibration_2d calibration_3d restitution))
 REDUCED_CODE := $(wildcard core/*.py laws/*.py fem/modes/file.py reduced/mechanism/*.py)
 DYNAMICS_CODE := $(wildcard pinbore/cli.py reduced/dynamics/*.py) $(REDUCED_CODE) $(STAMP)
+WEAR_CODE := $(wildcard pinbore/cli.py reduced/wear/*.py fem/curve.py) $(REDUCED_CODE)
 # the multibody engine is the compiled core's (built by make venv): every run may start at
 # once; only the runs whose scene reads the laws file wait for the calibration
 REDUCED_OF = $(patsubst scenes/reduced/%.toml,build/reduced/%/summary.json,$(shell grep -l $(1) scenes/reduced/*.toml))
@@ -49,7 +52,7 @@ LAWS_RUNS := $(call REDUCED_OF,'^laws_file')
 DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(DYNAMICS_CODE)
 SPATIAL_DYNAMICS_DEPS := $(SPATIAL_DYNAMICS_SCENE) $(DYNAMICS_CODE)
 
-.PHONY: all venv mesh fem impact modes calibration reduced dynamics study report bench stress test test-slow docs clean help
+.PHONY: all venv mesh fem impact modes calibration reduced dynamics study wear report bench stress test test-slow docs clean help
 .DELETE_ON_ERROR:
 
 all: report ## set up .venv, run the default scenes, build the report (the main job)
@@ -142,10 +145,17 @@ build/dynamics/continuation/summary.json: $(CONTINUATION_SCENE) $(DYNAMICS_CODE)
 	$(PINBORE) dynamics $< --analysis continuation --parameter frequency --range 10 30 --points 200 \
 	    --transient 30 --sweeps 41 --periods 5 --out build/dynamics/continuation
 
+wear: $(WEAR_RUNS) ## wear the clearance joints of scenes/wear/ by Archard's law on their FE pressure (build/wear/<scene>/)
+
+# a wear scene's FE run (its pressure_file's)
+build/wear/slider_crank_flores2004/summary.json: build/fem/flores_wear/curve.csv
+build/wear/%/summary.json: scenes/wear/%.toml $(wildcard scenes/reduced/*.toml) $(WEAR_CODE) $(STAMP)
+	$(PINBORE) wear $< --out build/wear/$*
+
 report: build/report/index.html ## build build/report/index.html from the results
 
-build/report/index.html: $(FEM_CURVES) $(MESHES) $(MODES_RUNS) build/calibration/laws.json $(REDUCED_RUNS) $(DYNAMICS) $(STUDY_RUNS) \
-                         $(wildcard bench/*.csv) $(STAGE_CODE) $(MODES_CODE) $(wildcard pinbore/*.py calibration/*.py reduced/*.py) $(REDUCED_CODE) $(STAMP)
+build/report/index.html: $(FEM_CURVES) $(MESHES) $(MODES_RUNS) build/calibration/laws.json $(REDUCED_RUNS) $(DYNAMICS) $(STUDY_RUNS) $(WEAR_RUNS) \
+                         $(wildcard bench/*.csv) $(STAGE_CODE) $(MODES_CODE) $(wildcard pinbore/*.py calibration/*.py reduced/*.py) $(REDUCED_CODE) $(WEAR_CODE) $(STAMP)
 	@# a report folder of a pinbore that wrote no output marker, holding its index.html alone
 	@if [ -d build/report ] && [ ! -e build/report/.pinbore-output ] && [ "$$(ls -A build/report)" = "index.html" ]; then rm -rf build/report; fi
 	$(PINBORE) report --build build --out build/report

@@ -74,6 +74,12 @@ def _reduced(args) -> int:
     return reduced_run.run(args.scene, args.out)
 
 
+def _wear(args) -> int:
+    from pinbore.reduced.wear import run as wear_run
+
+    return wear_run.run(args.scene, args.out)
+
+
 def _dynamics(args) -> int:
     """Validate the options of the chosen analysis (its model in the table of analyses),
     then run it with them."""
@@ -260,6 +266,13 @@ def parser() -> argparse.ArgumentParser:
                    "\"spatial\") mechanism with clearance joints; write DIR/timeseries.csv, "
                    "DIR/summary.json and plots.")
     _dynamics_command(sub)
+    _scene_command(sub, "wear", _wear,
+                   "Archard wear of a mechanism's clearance joint on its FE pressure: wear.csv",
+                   "Wear a planar mechanism's revolute clearance joint over `cycles` periods of "
+                   "its forcing by Archard's law, on the contact pressure of the joint's FE run "
+                   "under the joint's force over its last period (scene kind = \"wear\"); write "
+                   "DIR/wear.csv (the bore's and the pin's worn depth against angle), "
+                   "DIR/summary.json and DIR/wear.png.")
     e = sub.add_parser("export", help="the calibrated laws as tables for another multibody code",
                        description="Tabulate the calibrated contact laws of a laws file for one "
                                    "joint (the file's curves' joint, or a mechanism scene's "
@@ -309,6 +322,23 @@ def _scene_inputs(args) -> list:
     return [args.scene, *referenced_files(args.scene)]
 
 
+def _wear_inputs(args) -> list:
+    """A wear scene, the files it names, the result.json beside its FE curve and the files
+    its mechanism scene names."""
+    from pinbore.core.scene import named_files, read_toml
+
+    files = _scene_inputs(args)
+    try:
+        data = read_toml(args.scene)
+    except InputError:
+        return files   # reading it for the run says why
+    for key, path in (("curve_file", "result.json"), ("mechanism_file", None)):
+        if isinstance(data.get(key), str):
+            (named,) = named_files({key: data[key]}, Path(args.scene).parent)
+            files += [named.parent / path] if path else referenced_files(named)
+    return files
+
+
 def _study_inputs(path) -> list:
     """A study file, its base scene and every file that names."""
     from pinbore import study
@@ -324,6 +354,7 @@ INPUTS = {
     "calibrate": lambda args: [*args.curves, *args.impacts],
     "export": lambda args: [args.laws, *([args.scene, *referenced_files(args.scene)]
                                          if args.scene else [])],
+    "wear": _wear_inputs,
     "study": lambda args: _study_inputs(args.study),
     "report": lambda args: [args.build, "bench"],
 }

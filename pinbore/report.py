@@ -23,6 +23,7 @@ SECTIONS = [
     ("calibration", "pinbore.calibration.report", "section"),
     ("reduced models", "pinbore.reduced.report", "section"),
     ("nonlinear dynamics", "pinbore.reduced.report", "dynamics_section"),
+    ("wear", "pinbore.reduced.wear.report", "section"),
     ("studies", "pinbore.study", "section"),
 ]
 # the first screen's answers: (module, function) -> [(question, answer HTML)]

@@ -44,6 +44,7 @@ SCENES = (
     Scene("mechanism", ("pinbore.reduced.mechanism.scene:ReducedScene",
                         "pinbore.reduced.mechanism.scene:SpatialScene"),
           "reduced", "pinbore reduced, pinbore dynamics"),
+    Scene("wear", ("pinbore.reduced.wear.scene:WearScene",), "wear", "pinbore wear"),
 )
 UNITS_FILE = Path(__file__).with_name("units.toml")
 

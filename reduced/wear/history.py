@@ -1,0 +1,60 @@
+"""What a revolute clearance joint of a planar mechanism does over a cycle, as wear needs it:
+per recorded step its contact force, the contact's direction in the bore's frame and in the
+pin's, and the sliding speed at the contact."""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from pinbore.reduced.mechanism import kernel
+
+
+@dataclass(frozen=True)
+class JointHistory:
+    """Per recorded step: time (s), the contact's normal force (N), the direction of the
+    contact from the bore's centre in the bore's frame and in the pin's (rad), and the
+    tangential speed of the pin's surface over the bore's there (m/s)."""
+
+    time: np.ndarray
+    force: np.ndarray
+    bore_angle: np.ndarray
+    pin_angle: np.ndarray
+    sliding_speed: np.ndarray
+
+
+def of_run(model, trajectory, j: int, window: tuple[float, float]) -> JointHistory:
+    """The history of planar clearance joint j (a journal in a bore) over the recorded steps
+    of `trajectory` within `window` (s). The direction is the journal centre's offset e from
+    the bore's; the slip v_s = t . (v_pin - v_bore) + (w_pin - w_bore) R_pin at the contact,
+    t = k x e / |e|, the material velocities taken at the journal's centre."""
+    from pinbore.reduced.mechanism.outputs import observed_steps   # noqa: PLC0415
+
+    c = model.joints[j]
+    index = {name: i for i, name in enumerate(model.names)}
+    bearing, journal = index.get(c.bearing_body, -1), index.get(c.journal_body, -1)
+    keep = (trajectory.times >= window[0]) & (trajectory.times <= window[1])
+    seen = observed_steps(model, trajectory)
+    rows = list(model.contact_rows[j])
+    force = seen["normals"][:, rows].sum(axis=1)[keep]
+    args, work = seen["args"], seen["work"]
+    states = trajectory.states[keep]
+    offsets = np.empty((states.shape[0], 4))
+    for i, y in enumerate(states):
+        offsets[i] = kernel.relative_motion(y, args, work, bearing, list(c.bearing_point), journal,
+                                            list(c.journal_point), [1.0, 0.0], [0.0, 1.0])
+    bore_angle = np.arctan2(offsets[:, 1], offsets[:, 0])
+    phi_b, w_b = _rotation(model, states, bearing)
+    phi_j, w_j = _rotation(model, states, journal)
+    slip = (-np.sin(bore_angle) * offsets[:, 2] + np.cos(bore_angle) * offsets[:, 3]
+            + (w_j - w_b) * c.journal_radius)
+    return JointHistory(trajectory.times[keep], force, bore_angle,
+                        np.mod(bore_angle + phi_b - phi_j + math.pi, 2 * math.pi) - math.pi, slip)
+
+
+def _rotation(model, states, body: int) -> tuple[np.ndarray, np.ndarray]:
+    """A body's angle and angular velocity in each state (the ground's: 0)."""
+    if body < 0:
+        return np.zeros(states.shape[0]), np.zeros(states.shape[0])
+    column = int(model.base.offsets[body]) + 2   # a planar body's coordinates x, y, phi
+    return states[:, column], states[:, model.nq + column]

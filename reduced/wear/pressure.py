@@ -1,0 +1,86 @@
+"""The contact pressure of a joint under a load, from its FE run (`pinbore fem`, 2D, per unit
+length): the nodal pressure of each push step (pressure.csv) against the angle from the
+load about the bore's centre (the nodes of the bore's surface), under that step's load per
+unit length (curve.csv), on the angles of the run's nodes (zero beyond them, to -pi and pi)."""
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from pinbore.core.errors import InputError
+from pinbore.fem import curve as fe_curve
+
+@dataclass(frozen=True)
+class PressureTable:
+    """p(alpha; F'): the contact pressure (Pa) at the angle alpha from the load about the
+    bore's centre (rad, on `angles`, increasing from -pi to pi) under the load per unit length
+    F' (N/m, `forces`: 0 first, increasing)."""
+
+    forces: np.ndarray
+    angles: np.ndarray
+    pressure: np.ndarray          # (forces, angles)
+    pin_radius: float             # m, of the FE run
+    bore_radius: float            # m
+
+    def at(self, force: float) -> np.ndarray:
+        """The pressure on `angles` under F' = force (N/m): linear between the FE steps;
+        beyond the last one, its profile scaled by the force ratio (extrapolated: the run
+        reports how far, wear.run)."""
+        top = self.forces[-1]
+        if force >= top:
+            return self.pressure[-1] * (force / top)
+        i = int(np.searchsorted(self.forces, force, side="right")) - 1
+        a = (force - self.forces[i]) / (self.forces[i + 1] - self.forces[i])
+        return (1 - a) * self.pressure[i] + a * self.pressure[i + 1]
+
+    def resultant(self, k: int) -> float:
+        """The load per unit length the pressure of step k carries, the integral of
+        p cos(alpha) over the bore's surface (N/m): the FE step's own F' where the pressure is
+        resolved (a check of the table)."""
+        return float(np.trapezoid(self.pressure[k] * np.cos(self.angles), self.angles) * self.bore_radius)
+
+
+def read(pressure_file: Path, curve_file: Path, source: str) -> PressureTable:
+    """The table of a 2D FE run's push steps. One InputError line for a run that is not 2D,
+    has no push step, or whose files do not belong together."""
+    pressure, curve = fe_curve.read_pressure(pressure_file), fe_curve.read(curve_file)
+    if pressure.dim != 2 or curve.dim != 2:
+        raise InputError(f"{source}: pressure_file: a 2D FE run (per unit length) is needed, "
+                         "not a 3D one")
+    push = [int(s) for s, stage in zip(curve.step, curve.stage) if stage == "push"]
+    if not push:
+        raise InputError(f"{source}: curve_file: no push step (the load of the FE run)")
+    force = dict(zip(curve.step.tolist(), curve.force.tolist()))
+    nodes = np.unique(np.radians(pressure.angle))
+    grid = np.concatenate([[-math.pi], nodes[(nodes > -math.pi) & (nodes < math.pi)], [math.pi]])
+    rows, loads = [np.zeros(grid.size)], [0.0]
+    for step in push:
+        mine = pressure.step == step
+        if not mine.any():
+            raise InputError(f"{source}: pressure_file: no pressure of step {step} of curve_file "
+                             "(the two files are not of one FE run)")
+        order = np.argsort(pressure.angle[mine])
+        alpha = np.radians(pressure.angle[mine][order])
+        rows.append(np.interp(grid, alpha, pressure.pressure[mine][order], left=0.0, right=0.0))
+        loads.append(force[step])
+    loads = np.array(loads)
+    if np.any(np.diff(loads) <= 0):
+        raise InputError(f"{source}: curve_file: the push steps' loads do not increase")
+    geometry = _geometry(Path(curve_file), source)
+    return PressureTable(loads, grid, np.array(rows), *geometry)
+
+
+def _geometry(curve_file: Path, source: str) -> tuple[float, float]:
+    """(pin radius, bore radius) of the FE run, from the result.json beside its curve."""
+    from pinbore.core.scene import load_json   # noqa: PLC0415
+
+    data = load_json(curve_file.parent / "result.json", "fem",
+                     f"{source}: curve_file's result.json")
+    try:
+        g = data["scene"]["geometry"]
+        return float(g["pin_radius"]), float(g["bore_radius"])
+    except (KeyError, TypeError, ValueError):
+        raise InputError(f"{source}: curve_file's result.json: no scene geometry (run pinbore "
+                         "fem again)") from None

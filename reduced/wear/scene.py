@@ -1,0 +1,45 @@
+"""The scene of `pinbore wear`: a planar mechanism with a revolute clearance joint, that
+joint's FE run, the two surfaces' wear coefficients and how many cycles wear them. Read
+without the mechanism built or the FE files read.
+
+    kind = "wear"
+    mechanism_file = "..."   a planar mechanism scene (kind = "reduced") with a periodic forcing
+    joint = "rod_slider"     its revolute clearance joint
+    pressure_file = "..."    the joint's 2D FE run (pinbore fem): its pressure.csv
+    curve_file = "..."       and its curve.csv (result.json beside it)
+    length = 0.02            m, the pin's length in the bore
+    cycles = 1e5             forcing periods of use
+    [bore] / [pin]           wear_coefficient (m^2/N): Archard's K / H
+"""
+
+from typing import Literal
+
+import pydantic
+
+from pinbore.core.scene import Strict
+
+
+class Surface(Strict):
+    """One surface of the joint (the bore's or the pin's)."""
+
+    wear_coefficient: float = pydantic.Field(
+        ge=0, le=1e-9, description="m^2/N (m^3/(N m)): Archard's K / H, the volume worn per "
+        "unit load and distance slid; 0: a surface that does not wear")
+
+
+class WearScene(Strict):
+    """Archard wear of a planar mechanism's revolute clearance joint over `cycles` periods of
+    its forcing, on the pressure of the joint's FE run (reduced.wear.profile)."""
+
+    kind: Literal["wear"]
+    mechanism_file: str
+    joint: str
+    pressure_file: str
+    curve_file: str
+    length: float = pydantic.Field(gt=0, le=10.0, description="m, the pin's length in its bore: "
+                                   "the mechanism's force over it is the FE run's load per unit length")
+    cycles: float = pydantic.Field(gt=0, le=1e10, description="periods of the forcing worn through")
+    bore: Surface
+    pin: Surface
+    points: int = pydantic.Field(default=720, ge=36, le=100_000,
+                                 description="angles around each surface the depth is given at")

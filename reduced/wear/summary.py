@@ -1,0 +1,43 @@
+"""summary.json of `pinbore wear`: written and read back (the report) through one model, whose
+ranges a file changed by hand fails (one line naming the key)."""
+
+from pathlib import Path
+
+import pydantic
+
+from pinbore.core.scene import Strict, read_json
+
+SUMMARY = "summary.json"
+
+
+class SurfaceWear(Strict):
+    """What one surface lost."""
+
+    wear_coefficient_m2_per_N: float = pydantic.Field(ge=0)
+    volume_m3: float = pydantic.Field(ge=0)
+    max_depth_m: float = pydantic.Field(ge=0)
+    at_deg: float = pydantic.Field(ge=-180, le=180, description="where, in the surface's frame")
+
+
+class WearSummary(Strict):
+    scene_file: str
+    mechanism_file: str
+    joint: str
+    cycles: float = pydantic.Field(gt=0)
+    period_s: float = pydantic.Field(gt=0)
+    periods_averaged: int = pydantic.Field(ge=1, description="the run's periods a cycle is the mean of")
+    length_m: float = pydantic.Field(gt=0)
+    sliding_distance_in_contact_per_cycle_m: float = pydantic.Field(ge=0)
+    peak_force_per_length_N_per_m: float = pydantic.Field(ge=0)
+    fe_force_range_N_per_m: list[float] = pydantic.Field(min_length=2, max_length=2)
+    extrapolated: bool
+    bore: SurfaceWear
+    pin: SurfaceWear
+
+
+def write(path: Path, summary: WearSummary) -> None:
+    path.write_text(summary.model_dump_json(indent=2) + "\n")
+
+
+def read(path) -> WearSummary:
+    return read_json(WearSummary, path, "wear")

@@ -1,0 +1,171 @@
+"""Wear of a clearance joint (reduced.wear) against Archard's law integrated in closed form
+[Archard1953], and `pinbore wear` on the Flores slider-crank's joint.
+
+- A load whose direction stands still in the bore while the pin turns at a constant speed:
+  the bore wears the pressure profile times k v t, exactly; the pin, its contact going round
+  it, uniformly (k v t times the mean pressure round it).
+- A load turning uniformly round the bore: the bore wears uniformly.
+- The worn volume per unit length is k s times the integral of p R over the surface; with a
+  narrow contact arc that is Archard's V = k W s within the arc's cos(alpha) (W = F' L).
+- The FE pressure carries its step's load: the integral of p cos(alpha) R is the step's F'
+  within 0.5 % (the table is the run's).
+- The command: the volumes of both surfaces are k times the integral of the load and the
+  sliding speed over the cycle, times the cycles; bad input is one line.
+"""
+
+import math
+
+import numpy as np
+import pytest
+import tomli_w
+from conftest import ROOT, pinbore, with_clearance
+
+from pinbore.reduced.wear import pressure, profile
+from pinbore.reduced.wear.pressure import PressureTable
+
+R = 10e-3          # m, the bore (and, near enough, the pin)
+HALF = 0.1         # rad, the contact arc's half-angle
+K = 1e-14          # m^2/N
+F = 2e5            # N/m
+
+
+def elliptic_table() -> PressureTable:
+    """A Hertz-like profile p0 sqrt(1 - (alpha / HALF)^2) carrying F per unit length."""
+    grid = np.linspace(-math.pi, math.pi, 14401)
+    shape = np.sqrt(np.clip(1 - (grid / HALF) ** 2, 0, None))
+    p0 = F / (np.trapezoid(shape * np.cos(grid), grid) * R)
+    return PressureTable(np.array([0.0, F]), grid, np.array([0 * grid, p0 * shape]), R, R)
+
+
+def test_a_load_standing_in_the_bore_wears_its_pressure_profile():
+    table = elliptic_table()
+    omega, turns, theta0 = 50.0, 3, 0.7
+    t = np.linspace(0, turns * 2 * math.pi / omega, 12001)
+    v = omega * R
+    at = profile.angles(1440)
+    bore = profile.worn_depth(table, t, np.full(t.size, F), np.full(t.size, theta0), np.full(t.size, v), K, at, R)
+    expected = K * v * t[-1] * np.interp(np.mod(at - theta0 + math.pi, 2 * math.pi) - math.pi,
+                                         table.angles, table.pressure[1])
+    np.testing.assert_allclose(bore, expected, rtol=1e-12, atol=1e-12 * expected.max())
+    pin_angle = np.mod(theta0 - omega * t + math.pi, 2 * math.pi) - math.pi
+    pin = profile.worn_depth(table, t, np.full(t.size, F), pin_angle, np.full(t.size, v), K, at, R)
+    mean = K * v * t[-1] * np.trapezoid(table.pressure[1], table.angles) / (2 * math.pi)
+    assert np.abs(pin / mean - 1).max() < 1e-3   # the steps sample the arc 120 times
+
+
+def test_a_load_turning_round_the_bore_wears_it_uniformly_and_archards_volume():
+    table = elliptic_table()
+    omega = 40.0
+    t = np.linspace(0, 2 * 2 * math.pi / omega, 4001)
+    v = 0.3
+    at = profile.angles(720)
+    turning = np.mod(omega * t + math.pi, 2 * math.pi) - math.pi
+    bore = profile.worn_depth(table, t, np.full(t.size, F), turning, np.full(t.size, v), K, at, R)
+    assert bore.max() / bore.min() - 1 < 2e-3
+    slid = v * t[-1]
+    area = profile.volume_per_length(bore, R)
+    assert area == pytest.approx(K * slid * np.trapezoid(table.pressure[1], table.angles) * R, rel=1e-3)
+    # Archard: V / L = k F' s, within the arc's cos(alpha) (1 - HALF^2 / 8 on average)
+    assert area == pytest.approx(K * F * slid, rel=2e-3)
+
+
+@pytest.fixture(scope="module")
+def flores_fe(tmp_path_factory):
+    """The FE run of the Flores joint (pin 9.5 mm in a bore of 10 mm, plane strain), pushed
+    to 2e-5 m (past 9e5 N/m, the slider-crank's load per unit length over 20 mm after its
+    first impacts), coarse."""
+    folder = tmp_path_factory.mktemp("fe")
+    data = with_clearance(0.5e-3, 10e-3, load={"max_approach": 2e-5, "steps": 6})
+    (folder / "fe.toml").write_text(tomli_w.dumps(data))
+    done = pinbore("fem", folder / "fe.toml", "--out", folder / "run")
+    assert done.returncode == 0, done.stderr
+    return folder / "run"
+
+
+def test_the_fe_pressure_carries_its_steps_load(flores_fe):
+    table = pressure.read(flores_fe / "pressure.csv", flores_fe / "curve.csv", "test")
+    assert table.forces[0] == 0 and np.all(np.diff(table.forces) > 0)
+    for k in range(1, table.forces.size):
+        assert table.resultant(k) == pytest.approx(table.forces[k], rel=5e-3)
+
+
+def wear_scene(folder, fe, **changes) -> dict:
+    return {"kind": "wear", "mechanism_file": str(ROOT / "scenes/reduced/slider_crank_flores2004.toml"),
+            "joint": "rod_slider", "pressure_file": str(fe / "pressure.csv"),
+            "curve_file": str(fe / "curve.csv"), "length": 0.02, "cycles": 1000.0,
+            "bore": {"wear_coefficient": K}, "pin": {"wear_coefficient": 2 * K}} | changes
+
+
+def test_the_wear_command_wears_the_flores_joint(tmp_path, flores_fe):
+    """Both surfaces' volumes are k (cycles) times the integral of F |v_s| over the contact
+    (per revolution: the mean of the run's three after its first),
+    the pin's twice the bore's (its coefficient: the two lose the same area per unit k); the
+    files are written."""
+    import json
+
+    from pinbore.reduced.mechanism import kinds
+    from pinbore.reduced.mechanism.model import build
+    from pinbore.reduced.mechanism.run import simulate
+    from pinbore.reduced.wear import history
+
+    (tmp_path / "wear.toml").write_text(tomli_w.dumps(wear_scene(tmp_path, flores_fe)))
+    done = pinbore("wear", tmp_path / "wear.toml", "--out", tmp_path / "out")
+    assert done.returncode == 0, done.stderr
+    result = json.loads((tmp_path / "out" / "summary.json").read_text())
+    path = ROOT / "scenes/reduced/slider_crank_flores2004.toml"
+    model = build(kinds.load(path), str(path), path.parent)
+    run = simulate(model)
+    cycle = history.of_run(model, run, 0, (0.012, run.times[-1]))   # the 3 revolutions after the first
+    work = np.trapezoid(cycle.force * np.abs(cycle.sliding_speed), cycle.time) / 3   # N m per cycle
+    assert result["bore"]["volume_m3"] == pytest.approx(K * 1000 * work, rel=0.02)
+    assert result["pin"]["volume_m3"] == pytest.approx(2 * result["bore"]["volume_m3"], rel=0.02)
+    rows = (tmp_path / "out" / "wear.csv").read_text().splitlines()
+    assert rows[0] == "angle_deg,bore_depth_m,pin_depth_m" and len(rows) == 721
+    assert (tmp_path / "out" / "wear.png").stat().st_size > 0
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"joint": "crank_pin"}, "joint: 'crank_pin' is not a revolute clearance joint"),
+    ({"length": -1.0}, "length"),
+    ({"cycles": 0}, "cycles"),
+    ({"bore": {"wear_coefficient": 1.0}}, "wear_coefficient"),
+    ({"pin": {}}, "pin.wear_coefficient"),
+    ({"pressure_file": "/no/such/pressure.csv"}, "pressure.csv"),
+])
+def test_bad_wear_scenes_are_one_line(tmp_path, flores_fe, change, message):
+    (tmp_path / "wear.toml").write_text(tomli_w.dumps(wear_scene(tmp_path, flores_fe, **change)))
+    done = pinbore("wear", tmp_path / "wear.toml", "--out", tmp_path / "out")
+    assert done.returncode == 2 and message in done.stderr, done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_fe_run_of_another_joint_is_one_line(tmp_path):
+    """The FE run's radii must be the joint's."""
+    folder = tmp_path / "fe"
+    data = with_clearance(0.1e-3, 10e-3, load={"max_approach": 2e-6, "steps": 2})
+    (tmp_path / "fe.toml").write_text(tomli_w.dumps(data))
+    assert pinbore("fem", tmp_path / "fe.toml", "--out", folder).returncode == 0
+    (tmp_path / "wear.toml").write_text(tomli_w.dumps(wear_scene(tmp_path, folder)))
+    done = pinbore("wear", tmp_path / "wear.toml", "--out", tmp_path / "out")
+    assert done.returncode == 2 and "pin radius" in done.stderr and "rod_slider" in done.stderr, done.stderr
+
+
+def test_the_report_leaves_out_a_wear_summary_it_cannot_trust(tmp_path, flores_fe):
+    """A summary.json changed by hand (a volume NaN or negative) is not drawn: the section's
+    reader fails in one line naming the key (the report leaves the section out with it)."""
+    import json
+
+    from pinbore.core.errors import InputError
+    from pinbore.reduced.wear import report
+
+    (tmp_path / "wear.toml").write_text(tomli_w.dumps(wear_scene(tmp_path, flores_fe)))
+    assert pinbore("wear", tmp_path / "wear.toml", "--out", tmp_path / "build" / "wear" / "w").returncode == 0
+    assert "Wear of the clearance joints" in report.section(tmp_path / "build", tmp_path)
+    path = tmp_path / "build" / "wear" / "w" / "summary.json"
+    for bad in (float("nan"), -1.0):
+        data = json.loads(path.read_text())
+        data["bore"]["volume_m3"] = bad
+        path.write_text(json.dumps(data))
+        with pytest.raises(InputError, match="bore.volume_m3"):
+            report.section(tmp_path / "build", tmp_path)
