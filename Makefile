@@ -112,6 +112,9 @@ dynamics: $(DYNAMICS) ## Poincare maps, bifurcation diagrams and design map of t
 
 study: $(STUDY_RUNS) ## the studies of studies/: the calibration curves and impacts, Monte Carlo of the Flores slider-crank (exceedance, tolerance band), Sobol indices of the solar-panel deployment (build/study/)
 
+# (a wear study's points read their joint's FE run)
+build/study/wear_coefficient/summary.json: build/fem/flores_wear/curve.csv $(wildcard scenes/wear/*.toml) $(WEAR_CODE)
+
 # (a mechanism study's points run on the local cores)
 build/study/%/summary.json: studies/%.toml $(wildcard scenes/reduced/*.toml) $(REDUCED_CODE) pinbore/study.py $(STAMP)
 	$(PINBORE) study $< --out build/study/$* --cache build/study/cache

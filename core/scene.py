@@ -113,8 +113,9 @@ def named_files(data, base: Path) -> list[Path]:
 
 def absolute_files(data, base: Path):
     """A copy of scene data with the files it names made absolute against `base` (what a
-    scene file's names are against its folder)."""
-    return _map_files(data, lambda name: str(Path(base) / name))
+    scene file's names are against its folder; a relative base is taken from the working
+    directory)."""
+    return _map_files(data, lambda name: str((Path(base) / name).absolute()))
 
 
 def load(model: type[pydantic.BaseModel], path: str | Path) -> pydantic.BaseModel:

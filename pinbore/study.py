@@ -93,7 +93,8 @@ LabelText = Annotated[str, pydantic.Field(pattern=r"^[A-Za-z0-9_.+-]*$")]
 # module: a new plot reruns nothing). An edit of the multibody engine so reruns no FE point.
 FE_CODE = ("pinbore.core", "pinbore.laws", "pinbore.meshes", "pinbore.fem")
 CODE = {"fem": FE_CODE, "impact": FE_CODE,
-        "mechanism": FE_CODE + ("pinbore.calibration", "pinbore.reduced")}
+        "mechanism": FE_CODE + ("pinbore.calibration", "pinbore.reduced"),
+        "wear": FE_CODE + ("pinbore.calibration", "pinbore.reduced")}
 
 
 class Grid(Strict):
@@ -459,6 +460,9 @@ def scene_kind(data: dict, source: str):
     if kind == "impact":
         from pinbore.fem.impact.scene import ImpactScene   # noqa: PLC0415 (pydantic only)
         return "impact", ImpactScene
+    if kind == "wear":
+        from pinbore.reduced.wear.scene import WearScene   # noqa: PLC0415 (pydantic only)
+        return "wear", WearScene
     from pinbore.reduced.mechanism import kinds   # noqa: PLC0415 (pydantic only)
     return "mechanism", kinds.kind_of(data, source).scene
 
@@ -703,6 +707,12 @@ class Point:
         return self._in_folder(
             data, lambda path, out: impact_run.run(path, out, scenes.load(ImpactScene, path)),
             lambda out, code: json.loads((out / "impact.json").read_text()))
+
+    def wear(self, data):
+        from pinbore.reduced.wear import run as wear_run   # noqa: PLC0415
+
+        return self._in_folder(data, wear_run.run,
+                               lambda out, code: json.loads((out / "summary.json").read_text()))
 
     def _in_folder(self, data, command, read):
         """Run a command that writes files on the point's scene, written as TOML in a

@@ -679,7 +679,7 @@ def test_an_impact_study_is_the_impact_command_at_each_point(tmp_path):
 
     import tomli_w
 
-    scene = ROOT / "scenes/impact/study_steel_c10um_v1000mm_s.toml"
+    scene = ROOT / "scenes/impact/steel_c10um_v1.toml"
     study = tmp_path / "study.toml"
     study.write_text(f'base = "{scene}"\n[parameters."materials.pin.density"]\nvalues = [7850.0, 2700.0]\n'
                      '[[collect]]\nname = "restitution"\npath = "restitution"\n'

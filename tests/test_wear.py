@@ -169,3 +169,23 @@ def test_the_report_leaves_out_a_wear_summary_it_cannot_trust(tmp_path, flores_f
         path.write_text(json.dumps(data))
         with pytest.raises(InputError, match="bore.volume_m3"):
             report.section(tmp_path / "build", tmp_path)
+
+
+def test_a_study_of_the_wear_coefficient(tmp_path, flores_fe):
+    """`pinbore study` runs wear scenes (the base's files named relative to it): the bore's
+    worn volume is proportional to its coefficient (Archard: the same history), the pin's
+    unchanged."""
+    import csv
+
+    (tmp_path / "wear.toml").write_text(tomli_w.dumps(wear_scene(tmp_path, flores_fe)))
+    (tmp_path / "study.toml").write_text(
+        'base = "wear.toml"\n[parameters."bore.wear_coefficient"]\nvalues = [1e-14, 3e-14]\n'
+        '[sampling]\nmethod = "grid"\n'
+        '[[collect]]\nname = "bore"\npath = "bore.volume_m3"\n'
+        '[[collect]]\nname = "pin"\npath = "pin.volume_m3"\n')
+    done = pinbore("study", tmp_path / "study.toml", "--out", tmp_path / "out", "--workers", "2")
+    assert done.returncode == 0, done.stderr
+    rows = list(csv.DictReader((tmp_path / "out" / "results.csv").read_text().splitlines()))
+    assert [r["status"] for r in rows] == ["complete", "complete"]
+    assert float(rows[1]["bore"]) == pytest.approx(3 * float(rows[0]["bore"]), rel=1e-12)
+    assert float(rows[1]["pin"]) == pytest.approx(float(rows[0]["pin"]), rel=1e-12)
