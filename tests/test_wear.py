@@ -42,7 +42,7 @@ def test_a_load_standing_in_the_bore_wears_its_pressure_profile():
     omega, turns, theta0 = 50.0, 3, 0.7
     t = np.linspace(0, turns * 2 * math.pi / omega, 12001)
     v = omega * R
-    at = profile.angles(1440)
+    at = profile.angles(720)
     bore = profile.worn_depth(table, t, np.full(t.size, F), np.full(t.size, theta0), np.full(t.size, v), K, at, R)
     expected = K * v * t[-1] * np.interp(np.mod(at - theta0 + math.pi, 2 * math.pi) - math.pi,
                                          table.angles, table.pressure[1])
@@ -96,7 +96,17 @@ def wear_scene(folder, fe, **changes) -> dict:
             "bore": {"wear_coefficient": K}, "pin": {"wear_coefficient": 2 * K}} | changes
 
 
-def test_the_wear_command_wears_the_flores_joint(tmp_path, flores_fe):
+@pytest.fixture(scope="module")
+def worn(tmp_path_factory, flores_fe):
+    """`pinbore wear` of the Flores joint on its coarse FE run: its output folder."""
+    folder = tmp_path_factory.mktemp("worn")
+    (folder / "wear.toml").write_text(tomli_w.dumps(wear_scene(folder, flores_fe)))
+    done = pinbore("wear", folder / "wear.toml", "--out", folder / "build" / "wear" / "w")
+    assert done.returncode == 0, done.stderr
+    return folder / "build" / "wear" / "w"
+
+
+def test_the_wear_command_wears_the_flores_joint(worn):
     """Both surfaces' volumes are k (cycles) times the integral of F |v_s| over the contact
     (per revolution: the mean of the run's three after its first),
     the pin's twice the bore's (its coefficient: the two lose the same area per unit k); the
@@ -108,10 +118,7 @@ def test_the_wear_command_wears_the_flores_joint(tmp_path, flores_fe):
     from pinbore.reduced.mechanism.run import simulate
     from pinbore.reduced.wear import history
 
-    (tmp_path / "wear.toml").write_text(tomli_w.dumps(wear_scene(tmp_path, flores_fe)))
-    done = pinbore("wear", tmp_path / "wear.toml", "--out", tmp_path / "out")
-    assert done.returncode == 0, done.stderr
-    result = json.loads((tmp_path / "out" / "summary.json").read_text())
+    result = json.loads((worn / "summary.json").read_text())
     path = ROOT / "scenes/reduced/slider_crank_flores2004.toml"
     model = build(kinds.load(path), str(path), path.parent)
     run = simulate(model)
@@ -119,9 +126,9 @@ def test_the_wear_command_wears_the_flores_joint(tmp_path, flores_fe):
     work = np.trapezoid(cycle.force * np.abs(cycle.sliding_speed), cycle.time) / 3   # N m per cycle
     assert result["bore"]["volume_m3"] == pytest.approx(K * 1000 * work, rel=0.02)
     assert result["pin"]["volume_m3"] == pytest.approx(2 * result["bore"]["volume_m3"], rel=0.02)
-    rows = (tmp_path / "out" / "wear.csv").read_text().splitlines()
+    rows = (worn / "wear.csv").read_text().splitlines()
     assert rows[0] == "angle_deg,bore_depth_m,pin_depth_m" and len(rows) == 721
-    assert (tmp_path / "out" / "wear.png").stat().st_size > 0
+    assert (worn / "wear.png").stat().st_size > 0
 
 
 @pytest.mark.parametrize("change, message", [
@@ -140,18 +147,22 @@ def test_bad_wear_scenes_are_one_line(tmp_path, flores_fe, change, message):
     assert not (tmp_path / "out").exists()
 
 
-def test_an_fe_run_of_another_joint_is_one_line(tmp_path):
-    """The FE run's radii must be the joint's."""
-    folder = tmp_path / "fe"
-    data = with_clearance(0.1e-3, 10e-3, load={"max_approach": 2e-6, "steps": 2})
-    (tmp_path / "fe.toml").write_text(tomli_w.dumps(data))
-    assert pinbore("fem", tmp_path / "fe.toml", "--out", folder).returncode == 0
-    (tmp_path / "wear.toml").write_text(tomli_w.dumps(wear_scene(tmp_path, folder)))
+def test_an_fe_run_of_another_joint_is_one_line(tmp_path, flores_fe):
+    """The FE run's radii must be the joint's (its result.json says them)."""
+    import json
+    import shutil
+
+    other = tmp_path / "fe"
+    shutil.copytree(flores_fe, other)
+    data = json.loads((other / "result.json").read_text())
+    data["scene"]["geometry"]["pin_radius"] = 9.9e-3
+    (other / "result.json").write_text(json.dumps(data))
+    (tmp_path / "wear.toml").write_text(tomli_w.dumps(wear_scene(tmp_path, other)))
     done = pinbore("wear", tmp_path / "wear.toml", "--out", tmp_path / "out")
     assert done.returncode == 2 and "pin radius" in done.stderr and "rod_slider" in done.stderr, done.stderr
 
 
-def test_the_report_leaves_out_a_wear_summary_it_cannot_trust(tmp_path, flores_fe):
+def test_the_report_leaves_out_a_wear_summary_it_cannot_trust(tmp_path, worn):
     """A summary.json changed by hand (a volume NaN or negative) is not drawn: the section's
     reader fails in one line naming the key (the report leaves the section out with it)."""
     import json
@@ -159,8 +170,9 @@ def test_the_report_leaves_out_a_wear_summary_it_cannot_trust(tmp_path, flores_f
     from pinbore.core.errors import InputError
     from pinbore.reduced.wear import report
 
-    (tmp_path / "wear.toml").write_text(tomli_w.dumps(wear_scene(tmp_path, flores_fe)))
-    assert pinbore("wear", tmp_path / "wear.toml", "--out", tmp_path / "build" / "wear" / "w").returncode == 0
+    import shutil
+
+    shutil.copytree(worn, tmp_path / "build" / "wear" / "w")
     assert "Wear of the clearance joints" in report.section(tmp_path / "build", tmp_path)
     path = tmp_path / "build" / "wear" / "w" / "summary.json"
     for bad in (float("nan"), -1.0):
