@@ -2,7 +2,7 @@
 
 1. The impact oscillator's frequency response (scenes/reduced/impact_oscillator.toml), a
    200-point branch over 10-30 Hz through both grazings, its folds and branch points, run in
-   this process after the engine is compiled: at the first step 0.01 of the range (the steps
+   this process after a first branch has loaded the engine: at the first step 0.01 of the range (the steps
    adapt, up to 50 times it), and at 0.002 with steps up to 0.005 (a branch of up to 200
    orbits). Counts the maps (one forcing period integrated) the branch takes and where they
    go: the monodromy by central differences at each orbit (2 n + 2 maps, n = 6 coordinates),
@@ -260,7 +260,7 @@ def main() -> int:
     out = args.out
     out.mkdir(parents=True, exist_ok=True)
     rows = []
-    branch(100, STEP)   # compile the engine (cached on disk) before timing
+    branch(100, STEP)   # a first branch loads the engine and its imports before timing
     for factor, step, largest in ((100, STEP, None), (100, STEP / 5, STEP / 2), (10, STEP, None)):
         branches, calls, wall = branch(factor, step, largest)
         rows.append(row("impact_oscillator, frequency", factor, step, largest or 50 * step, branches, calls, wall))

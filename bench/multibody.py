@@ -56,7 +56,7 @@ def scene_with(path: Path, integrator: dict):
 
 def measure(path: Path, integrator: dict, repeats=3) -> dict:
     model = build(scene_with(path, integrator), str(path), path.parent)
-    simulate(model)   # compiles (or loads) the engine
+    simulate(model)   # a first run: imports and caches warm
     runs, cpu = [], []
     for _ in range(repeats):
         start = time.process_time()

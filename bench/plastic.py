@@ -5,7 +5,7 @@ The default scene (scenes/fem/steel_c10um.toml, 10 load steps to 10 um) with `un
 elastic, and with a plastic bore (Y = 40 MPa, linear hardening H = 2 GPa: the plastic zone
 under the contact grows to a few millimetres, the residual approach is about 0.3 of
 max_approach). Each case runs `pinbore fem` twice (the first run also compiles the
-quadrature forms and the return map into their caches); the second is timed. Writes
+quadrature forms into FFCx's cache); the second is timed. Writes
 OUT/plastic.csv and OUT/plastic.png:
 
 - wall time of the whole command and of its load stepping (result.json), Newton iterations;
