@@ -217,7 +217,7 @@ def test_the_scene_knows_every_damping_law():
     """The scene lists the hysteresis laws by name (validating it loads no law module); they
     are exactly those of pinbore.laws.dissipative."""
     from pinbore.laws.dissipative import HYSTERESIS
-    from pinbore.reduced.mechanism.scene import HYSTERESIS_LAWS
+    from pinbore.reduced.mechanism.joints.contact import HYSTERESIS_LAWS
 
     assert sorted(HYSTERESIS_LAWS) == sorted(HYSTERESIS)
 

@@ -35,7 +35,8 @@ from pinbore.reduced.mechanism.layout import (
     PRIM_S_J, PRIMITIVE_COLUMNS, REGULARISATION_V0, REGULARISATION_V1, SLICED, SPRING, STOP,
     STRIBECK, STRIBECK_MU_MIN, STRIBECK_MU_STATIC, STRIBECK_V_MIN, TORSION_BODY_I, TORSION_BODY_J,
     TORSION_COLUMNS, TORSION_DAMPING, TORSION_FREE_ANGLE, TORSION_KIND, TORSION_STIFFNESS, row)
-from pinbore.reduced.mechanism.scene import GROUND, MAX_STEPS, clearance_joints, unit_axis
+from pinbore.reduced.mechanism.scene import GROUND, MAX_STEPS, clearance_joints
+from pinbore.reduced.mechanism.vectors import unit_axis
 
 GRID_POINTS = 600
 GRID_LOW = 1e-12       # m, smallest tabulated penetration (power law below)

@@ -50,7 +50,8 @@ from pinbore.core.errors import InputError
 from pinbore.reduced.mechanism import kernel, layout
 from pinbore.reduced.mechanism.layout import ANGLE, DOT1, DOT2, POINT
 from pinbore.reduced.mechanism.flexible import FlexibleGeometry
-from pinbore.reduced.mechanism.scene import GROUND, rotation_matrix, unit_axis
+from pinbore.reduced.mechanism.scene import GROUND, rotation_matrix
+from pinbore.reduced.mechanism.vectors import unit_axis
 
 # a body's row in the core's Work.bodies (cpp/mechanism/spatial.h): position, rotation matrix
 # (row-major), velocity, angular velocity (global), global inverse inertia, then the core's own
