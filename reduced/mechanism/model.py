@@ -3,14 +3,14 @@
 the tables of the normal laws, the contacts of every clearance joint with their damping and
 friction, the torsion elements, the spring-dampers and harmonic loads, the friction states,
 the fixed step. What only a kind knows (its bodies' coordinates and mass, its ideal joints
-as primitive constraints, how a revolute, cylindrical or spherical clearance joint sits in
-its geometry, how a state is moved onto the constraints) comes from its body kind's module
-(reduced.mechanism.kinds: planar or spatial);
+as primitive constraints, how a state is moved onto the constraints) comes from its body
+kind's module (reduced.mechanism.kinds: planar or spatial); what only a clearance joint's
+type knows (the ideal joint that closes it, its contacts, its law's table) from its type's
+module (reduced.mechanism.joints);
 the translational clearance joint is written here once for both.
 """
 
 import math
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -18,10 +18,9 @@ import numpy as np
 
 from pinbore.core.errors import InputError
 from pinbore.laws import dissipative, elastic, lawsfile
-from pinbore.laws.lawsfile import per_length_force
-from pinbore.laws.sliced import sliced
-from pinbore.laws.tables import log_grid, split_compliance
-from pinbore.reduced.mechanism import kinds, layout
+from pinbore.laws.tables import log_grid
+from pinbore.reduced.mechanism import joints, kinds, layout
+from pinbore.reduced.mechanism.joints.base import BLOW_UP_FRACTION
 from pinbore.reduced.mechanism.layout import (
     CHI_POINTS, CONTACT_AT_CONTACT, CONTACT_BEARING_AXIS, CONTACT_BEARING_BODY,
     CONTACT_BEARING_POINT, CONTACT_CHI, CONTACT_CHI_LOG_SPEED, CONTACT_CHI_STEP, CONTACT_CHI_TABLE,
@@ -41,8 +40,6 @@ from pinbore.reduced.mechanism.vectors import unit_axis
 GRID_POINTS = 600
 GRID_LOW = 1e-12       # m, smallest tabulated penetration (power law below)
 SPEED_FLOOR = 1e-3     # m/s, smallest impact speed in chi delta'/v0 (grazing contacts)
-BLOW_UP_FRACTION = 0.1  # a penetration beyond this fraction of the journal radius (of a
-#                         slider's half-width) stops a run
 STEPS_PER_PERIOD = 300  # default dopri5_fixed step: this fraction of the shortest period
 IMPACT = {"continuous": CONTINUOUS, "newton": NEWTON, "poisson": POISSON}
 TORSION_KINDS = {"spring": SPRING, "stop": STOP, "latch": LATCH}
@@ -141,18 +138,18 @@ def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
     index = {name: i for i, name in enumerate(names)} | {GROUND: -1}
     check_connected(scene, names)
     geometry = body_kind.Geometry(scene, index, source, base)
-    joints = clearance_joints(scene)
-    closures = [closing(geometry, c) for c in joints] if ideal else []
+    clearances = clearance_joints(scene)
+    closures = [closing(geometry, c) for c in clearances] if ideal else []
     primitives, drive_row = geometry.primitives(closures)
     profile = drive_segments(scene.drive)
     laws_data = None if ideal else laws_file(scene, base, source)
     # penetrations up to a tenth of the journal radius are tabulated; beyond, the run has blown up
-    top = max((BLOW_UP_FRACTION * c.journal_radius for c in scene.clearance_joints), default=1.0)
+    top = max((joints.of(c).reach() for c in scene.clearance_joints), default=1.0)
     if scene.translational_joints:
         top = max([top] + [BLOW_UP_FRACTION * c.half_width for c in scene.translational_joints])
     grid_log0, grid_step, deltas = log_grid(GRID_LOW, top, GRID_POINTS)
     contacts, tables, rows = [], [], []
-    for j, c in enumerate([] if ideal else joints):
+    for j, c in enumerate([] if ideal else clearances):
         law = law_columns(c, laws_data, source)
         geometries, table = joint_contacts(geometry, c, deltas, laws_data, source)
         start = len(contacts)
@@ -176,9 +173,9 @@ def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
         latched=np.zeros(len(scene.torsion)), mode=np.zeros(contacts.shape[0], np.int64),
         profile=profile, flex=geometry.flex(), springs=spring_rows(geometry, scene),
         loads=load_rows(geometry, scene))
-    model = Model(scene, kind, names, args, [] if ideal else joints, rows, laws_data, drive_row, states,
-                  closures=closures, geometry=geometry)
-    model.y0 = geometry.place(model, [] if ideal else [(closing(geometry, c), c.start) for c in joints])
+    model = Model(scene, kind, names, args, [] if ideal else clearances, rows, laws_data, drive_row,
+                  states, closures=closures, geometry=geometry)
+    model.y0 = geometry.place(model, [] if ideal else [(closing(geometry, c), c.start) for c in clearances])
     if scene.integrator.method == "dopri5_fixed":
         fixed_step(model, source)   # refuses a default step that cannot finish, before any work
     elif scene.integrator.method == "dopri5":
@@ -234,7 +231,7 @@ def closing(geometry, c) -> list:
     """The primitive rows of the ideal joint that closes the clearance joint c."""
     if getattr(c, "type", None) == "translational":
         return translational_closing(geometry, c)
-    return geometry.closing(c)
+    return joints.of(c).closing(geometry)
 
 
 def joint_contacts(geometry, c, deltas, laws_data, source):
@@ -242,9 +239,10 @@ def joint_contacts(geometry, c, deltas, laws_data, source):
     holds at `deltas`: N, or N/m for a journal along its bore)."""
     if getattr(c, "type", None) == "translational":
         return translational_contacts(geometry, c), corner_force(c, deltas)
-    geometries, table = geometry.contacts(c, deltas, laws_data, source)
+    kind = joints.of(c)
+    geometries, table = kind.contacts(geometry, deltas, laws_data, source)
     table = np.array(table, float)
-    table[deltas > BLOW_UP_FRACTION * c.journal_radius] = np.nan
+    table[deltas > kind.reach()] = np.nan
     return geometries, table
 
 
@@ -327,89 +325,7 @@ def calibrated_restitution(c, laws_data, source) -> lawsfile.RestitutionLaw:
                                       f"{source}: clearance_joints.{c.name}.damping_law: 'calibrated'")
 
 
-# ---- the normal laws' tables
-def point_force(c, deltas, laws_data, source) -> np.ndarray:
-    """Elastic normal force (N) of a revolute clearance joint of a planar mechanism at the
-    penetrations `deltas`: the Hertz point law, a per-length law (published or calibrated:
-    the laws file's) times the joint's length, or a sliced:<group> law of a straight pin."""
-    joint = c.elastic_joint()
-    if c.normal_law == "hertz_point":
-        return elastic.hertz_point(deltas, joint)
-    if c.normal_law.startswith("calibrated:"):
-        return per_length_force(c.normal_law, laws_data, deltas, joint,
-                                f"{source}: clearance_joints.normal_law") * c.length
-    if c.normal_law.startswith("sliced:"):
-        # a straight pin (no tilt in the planar model): every slice at the same approach, so
-        # one slice of width L + 2 end_length gives the sliced sum (laws.sliced, theta = 0,
-        # no relief): F = scale (L + 2 e) f_loc(d - c_b F / L), tabulated on the grid of
-        # `deltas`
-        law, per_length = sliced_parts(c, deltas, laws_data, source)
-        grid_log0 = math.log(deltas[0])
-        grid_step = math.log(deltas[1] / deltas[0])
-        bulk = law.bulk_compliance_m2_per_N
-        local = split_compliance(grid_log0, grid_step, np.log(per_length), bulk)
-        return np.array([sliced(d, 0.0, c.length, 1, *local, 0.0, 0.0, law.end_length_m,
-                                law.scale, bulk)[0] for d in deltas])
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the range is enforced by the table (NaN beyond it)
-        return elastic.PUBLISHED[c.normal_law](deltas, joint) * c.length
-
-
-def per_length_table(c, deltas, laws_data, source):
-    """(scale a, end length e, bulk compliance c_b (m^2/N), the per-length force f (N/m) the
-    slices carry at deltas: a sliced law's local law f_loc, laws.sliced) of a journal along
-    its bore (a cylindrical clearance joint), or (1, 0, 0, F (N)) of a ball in its socket."""
-    joint = c.elastic_joint()
-    if c.type == "spherical":
-        return 1.0, 0.0, 0.0, elastic.hertz_point(deltas, joint)
-    if c.normal_law == "hertz_point":   # the point law spread evenly over the length
-        return 1.0, 0.0, 0.0, elastic.hertz_point(deltas, joint) / c.length
-    if c.normal_law.startswith("sliced:"):
-        law, per_length = sliced_parts(c, deltas, laws_data, source)
-        bulk = law.bulk_compliance_m2_per_N
-        if bulk > 0:   # the slices carry the local law; the engine moves the bore (laws.sliced)
-            grid_log0, grid_step = math.log(deltas[0]), math.log(deltas[1] / deltas[0])
-            local_log0, local_step, local_table = split_compliance(
-                grid_log0, grid_step, np.log(per_length), bulk)
-            per_length = np.exp(np.interp(   # on the model's grid: log-log, as the lookup
-                np.log(deltas), local_log0 + local_step * np.arange(local_table.size),
-                local_table, right=np.nan))
-        return law.scale, law.end_length_m, bulk, per_length
-    return 1.0, 0.0, 0.0, per_length_force(c.normal_law, laws_data, deltas, joint,
-                                           f"{source}: clearance_joints.normal_law")
-
-
-def sliced_parts(c, deltas, laws_data, source):
-    """(the law, its per-length law f (N/m) at deltas) of a clearance joint's
-    `sliced:<group>` law; one InputError line for an unknown group, a joint too short for
-    the end lengths, or radii other than those of a law on its section's FE curve. The
-    per-length law takes the materials and law length it was calibrated with (the scene's
-    radii: the clearance is the joint's own)."""
-    name = c.normal_law.split(":", 1)[1]
-    if name not in laws_data.sliced:
-        raise InputError(f"{source}: clearance_joints.normal_law: {c.normal_law!r} is not a "
-                         "3D law of the laws file; valid: "
-                         f"{', '.join('sliced:' + k for k in laws_data.sliced) or 'none (no 3D curves)'}")
-    law = laws_data.sliced[name]
-    if c.length + 2 * law.end_length_m <= 0:
-        raise InputError(f"{source}: clearance_joints.length: {c.length:g} m is too short for "
-                         f"{c.normal_law!r}, whose end lengths ({law.end_length_m:.3g} m each) "
-                         "leave no length to carry the load")
-    if law.section is None:
-        calibrated_joint = law.joint.joint(c.bearing_radius, c.journal_radius)
-        return law, per_length_force(law.per_length_law, laws_data, deltas, calibrated_joint,
-                                     f"{source}: laws file: sliced.{name}.per_length_law")
-    # the 2D FE curve of the calibrated section: valid for its own radii only
-    if not (math.isclose(c.bearing_radius, law.joint.r_bore, rel_tol=1e-9)
-            and math.isclose(c.journal_radius, law.joint.r_pin, rel_tol=1e-9)):
-        raise InputError(
-            f"{source}: clearance_joints.bearing_radius, journal_radius: {c.normal_law!r} is "
-            f"built on the FE curve of its own section (radii {law.joint.r_bore:g} m and "
-            f"{law.joint.r_pin:g} m); use those radii, or a sliced law calibrated with "
-            "--per-length calibrated:<law>")
-    return law, law.section.force(deltas)
-
-
+# ---- the laws file
 def laws_path(scene, base: Path) -> Path | None:
     """Where the scene's laws file is (relative to the scene's folder `base`), if it has one."""
     if scene.laws_file is None:

@@ -29,10 +29,10 @@ import csv
 
 import numpy as np
 
-from pinbore.reduced.mechanism import kernel, layout
+from pinbore.reduced.mechanism import joints, kernel, layout
 from pinbore.reduced.mechanism.layout import (
     CONTACT_COMPLIANCE, CONTACT_IMPACT, CONTACT_KIND, CONTACT_LENGTH, CONTACT_SLICES, CONTINUOUS,
-    DISSIPATED, LATCH, OK, LOG_IMPULSE, LOG_JOINT, LOG_RATE, PLANE, SLICED, SPRING, STOP, TORSION_KIND,
+    DISSIPATED, LATCH, OK, LOG_IMPULSE, LOG_JOINT, LOG_RATE, SLICED, SPRING, STOP, TORSION_KIND,
     TORSION_STIFFNESS, WORK_IN)
 from pinbore.reduced.mechanism.model import calibrated_restitution
 from pinbore.reduced.mechanism.summary import Summary
@@ -41,13 +41,13 @@ REFINE_POINTS = 201
 
 
 def roles(model, j) -> dict:
-    """The rows of clearance joint j's contacts by role: "main" (across the joint: a
-    journal, a ball, a slider's corners) and "axial" (a cylindrical joint's shoulders)."""
-    rows = list(model.contact_rows[j])
-    if getattr(model.joints[j], "type", None) == "translational":
-        return {"main": rows, "axial": []}
-    axial = [k for k in rows if int(model.contacts[k, CONTACT_KIND]) == PLANE]
-    return {"main": [k for k in rows if k not in axial], "axial": axial}
+    """The rows of clearance joint j's contacts by role (its type's): "main" (across the
+    joint: a journal, a ball, a slider's corners) and "axial" (a cylindrical joint's
+    shoulders)."""
+    c = model.joints[j]
+    if getattr(c, "type", None) == "translational":
+        return {"main": list(model.contact_rows[j]), "axial": []}
+    return joints.of(c).roles(model.contact_rows[j])
 
 
 def joint_force(r, normal):
@@ -84,23 +84,18 @@ def per_step(model, run):
     dimension = model.kind.dimension
     seen = observed_steps(model, run)
     args, work, rates, bodies = seen["args"], seen["work"], seen["rates"], seen["bodies"]
-    depths, normals, frictions, offsets = seen["depths"], seen["normals"], seen["frictions"], seen["offsets"]
+    depths, normals, frictions = seen["depths"], seen["normals"], seen["frictions"]
     drift, kinetic, angles, stretches = seen["drift"], seen["kinetic"], seen["angles"], seen["stretches"]
     elastic = elastic_energy(model, states, args, work, depths)
     cols = {"time_s": times} | model.kind.bodies().motion_columns(
         model, states[:, :nq], states[:, nq:2 * nq], rates[:, nq:2 * nq], bodies)
     for j, c in enumerate(model.joints):
         r = roles(model, j)
-        main, axial = r["main"], r["axial"]
-        mine = {}
-        if model.kind.eccentricity_columns and c.type != "translational":
-            mine["ecc_x_m"], mine["ecc_y_m"] = offsets[:, main[0], 0], offsets[:, main[0], 1]
-        mine["penetration_m"] = depths[:, main].max(axis=1)
-        mine["normal_force_N"] = normals[:, main].sum(axis=1)
-        if model.kind.axial_columns and c.type != "translational":
-            mine["axial_penetration_m"] = depths[:, axial].max(axis=1) if axial else np.full(n, -np.inf)
-            mine["axial_force_N"] = normals[:, axial].sum(axis=1)
-        mine["friction_force_N"] = frictions[:, main].sum(axis=1)
+        main = r["main"]
+        mine = {"penetration_m": depths[:, main].max(axis=1), "normal_force_N": normals[:, main].sum(axis=1),
+                "friction_force_N": frictions[:, main].sum(axis=1)}
+        if c.type != "translational":
+            mine = joints.of(c).columns(mine, r, seen)
         if c.type == "translational":
             mine["offset_m"], mine["tilt_rad"] = slider_pose(depths[:, main], c.half_length)
             for i, k in enumerate(main):

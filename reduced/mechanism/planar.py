@@ -54,8 +54,8 @@ PROJECT_FIRST = False   # an accepted step's events are read before its projecti
 class Geometry(FlexibleGeometry):
     """A planar scene's bodies and ideal joints as the model's arrays: the coordinates (a
     flexible body's modal coordinates after its x, y, phi), the mass, the primitive
-    constraints, a revolute clearance joint's contact, torsion elements, and the consistent
-    initial state."""
+    constraints, torsion elements, and the consistent initial state (a clearance joint's
+    closing and contacts are its type's, reduced.mechanism.joints)."""
 
     DIM, RIGID_COLUMNS, RIGID_COORDINATES, MODES, INTERFACES = 2, COLUMNS, COLUMNS, MODES, INTERFACES
 
@@ -129,27 +129,6 @@ class Geometry(FlexibleGeometry):
                               s_j=self.frame_point(scene.drive.body, scene.drive.point),
                               profile=scene.drive.profile_columns()))
         return rows, len(rows) - 1
-
-    def closing(self, c) -> list:
-        """A revolute clearance joint closed: the revolute of its bearing and journal centres."""
-        return [primitive(POINT, self.index[c.bearing_body], self.index[c.journal_body],
-                          s_i=c.bearing_point, s_j=c.journal_point)]
-
-    def contacts(self, c, deltas, laws_data, source):
-        """A revolute clearance joint: one RADIAL contact, its normal force and friction at
-        the contact point on both bodies; the force of its law (N) at `deltas`."""
-        from pinbore.reduced.mechanism.model import point_force   # noqa: PLC0415 (model imports us)
-
-        geometry = {layout.CONTACT_KIND: layout.RADIAL,
-                    layout.CONTACT_BEARING_BODY: self.index[c.bearing_body],
-                    layout.CONTACT_JOURNAL_BODY: self.index[c.journal_body],
-                    layout.CONTACT_BEARING_POINT: list(c.bearing_point),
-                    layout.CONTACT_JOURNAL_POINT: list(c.journal_point),
-                    layout.CONTACT_CLEARANCE: c.bearing_radius - c.journal_radius,
-                    layout.CONTACT_RADIUS: c.bearing_radius, layout.CONTACT_AT_CONTACT: 1.0}
-        if c.impact != "continuous":
-            return [geometry], np.full(deltas.size, np.nan)   # rigid: no law, never evaluated
-        return [geometry], point_force(c, deltas, laws_data, source)
 
     def torsion(self, t) -> dict:
         """The free angle relative to the bodies' initial relative angle (angles without

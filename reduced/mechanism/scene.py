@@ -21,9 +21,10 @@ import numpy as np
 import pydantic
 
 from pinbore.core.scene import Strict
-from pinbore.reduced.mechanism import layout
-from pinbore.reduced.mechanism.joints.contact import (FILE_LAWS, ContactLaw, JointMaterials,
-                                                      check_normal_law)
+from pinbore.reduced.mechanism import joints, layout
+from pinbore.reduced.mechanism.joints.contact import FILE_LAWS, ContactLaw
+from pinbore.reduced.mechanism.joints.journal import SpatialClearanceJoint
+from pinbore.reduced.mechanism.joints.revolute import ClearanceJoint
 from pinbore.reduced.mechanism.vectors import Matrix3, Quaternion, Vector, Vector3, unit_axis
 
 GROUND = "ground"
@@ -434,31 +435,6 @@ class Drive(DriveProfile):
     point: Vector | None = None
 
 
-class ClearanceJoint(JointMaterials, ContactLaw):
-    """A revolute joint with radial clearance: the journal (on journal_body) moves freely
-    inside the bearing (on bearing_body) and meets its wall through the contact laws."""
-
-    name: str
-    type: Literal["revolute"] = "revolute"
-    bearing_body: str
-    bearing_point: Vector
-    journal_body: str
-    journal_point: Vector
-    # ideal: centred, moving with the ideal joint; free: centred, velocities as given;
-    # placed: where the bodies' positions put it, velocities as given
-    start: Literal["ideal", "free", "placed"] = "ideal"
-
-    @pydantic.model_validator(mode="after")
-    def _normal_law(self):
-        if self.impact != "continuous":
-            return self
-        check_normal_law(self.normal_law)
-        if self.normal_law != "hertz_point" and self.length is None:
-            raise ValueError(f"length is required by normal_law {self.normal_law!r} (a force per "
-                             "unit length)")
-        return self
-
-
 class TorsionSpring(Strict):
     """A torque between two bodies on their relative angle phi = phi_j - phi_i (deg from the
     initial configuration): spring  T = -k (phi - free_angle) - c phi'  on body j (and -T on
@@ -660,59 +636,6 @@ class SpatialDrive(DriveProfile):
     joint: str
 
 
-class SpatialClearanceJoint(JointMaterials, ContactLaw):
-    """cylindrical: a journal (axis journal_axis through journal_point) in a bore of `length`
-    (axis bearing_axis through its mid-plane centre bearing_point), sliced into `slices`, with
-    optional shoulders (axial_clearance, axial_stiffness); spherical: a ball (centre
-    journal_point) in a socket (centre bearing_point). The normal law: a per-length law of
-    pinbore.laws.elastic, hertz_point (cylindrical: spread evenly over the length), or
-    calibrated:/sliced: from the laws file; or rigid impacts (a cylindrical journal's two
-    ends, and its shoulders). Radii, length, E, nu, bearing_E, bearing_nu: as in the planar
-    joint (JointMaterials). It starts closed (journal centred and aligned, ball centred:
-    "ideal", moving with the ideal joint, or "free", velocities as given) or where the bodies
-    put it ("placed")."""
-
-    name: str
-    type: Literal["cylindrical", "spherical"]
-    bearing_body: str
-    bearing_point: Vector3
-    bearing_axis: Vector3 | None = None
-    journal_body: str
-    journal_point: Vector3
-    journal_axis: Vector3 | None = None
-    slices: int = pydantic.Field(default=8, ge=1, le=256)
-    axial_clearance: float | None = pydantic.Field(default=None, gt=0, description="m")
-    axial_stiffness: float | None = pydantic.Field(default=None, gt=0, description="N/m")
-    start: Literal["ideal", "free", "placed"] = "ideal"
-
-    @pydantic.model_validator(mode="after")
-    def _geometry(self):
-        if self.type == "cylindrical":
-            if self.bearing_axis is None or self.journal_axis is None or self.length is None:
-                raise ValueError("bearing_axis, journal_axis and length are required by a "
-                                 "cylindrical clearance joint")
-            unit_axis(self.bearing_axis, "bearing_axis")
-            unit_axis(self.journal_axis, "journal_axis")
-            if (self.axial_clearance is None) != (self.axial_stiffness is None):
-                raise ValueError("axial_clearance and axial_stiffness go together (shoulders)")
-        else:
-            if self.bearing_axis is not None or self.journal_axis is not None or \
-                    self.length is not None or self.axial_clearance is not None:
-                raise ValueError("a spherical clearance joint takes no axes, length or shoulders")
-            if self.impact == "continuous" and self.normal_law != "hertz_point":
-                raise ValueError("normal_law: a spherical joint takes 'hertz_point' (a point law)")
-        if self.impact != "continuous":
-            return self
-        check_normal_law(self.normal_law)
-        if self.damping_law == "calibrated" and self.type == "spherical":
-            # the laws file's e(v0) comes from plane-strain impacts of a pin in a bore (a line
-            # contact per unit length); a ball's point contact is another impact
-            raise ValueError("damping_law 'calibrated' is for cylindrical joints: the laws file's "
-                             "e(v0) is fitted on line-contact impacts of a pin in a bore, not of "
-                             "a ball in a socket")
-        return self
-
-
 class Torsion(Strict):
     """A torque about axis_i (body i's frame) on the relative angle of body j about it,
     measured from the initial configuration: spring, stop or latch as in the planar scene
@@ -755,27 +678,16 @@ class SpatialScene(MechanismScene):
 
     @pydantic.model_validator(mode="after")
     def _journals_fit(self):
-        """A journal whose axis is tilted against its bore's at the start (a misaligned joint;
-        it starts centred) fits only if its ends stay inside the clearance there:
-        (L / 2) sin(tilt) < c."""
+        """Every clearance joint that starts closed fits where its bodies' initial orientations
+        put it (its type's `fits`: a journal tilted against its bore must fit its clearance)."""
         bodies = {b.name: b for b in self.bodies}
         for k, c in enumerate(self.clearance_joints):
-            if c.type != "cylindrical" or c.start == "placed" or \
-                    c.bearing_body not in bodies | {GROUND: None} or \
+            if c.start == "placed" or c.bearing_body not in bodies | {GROUND: None} or \
                     c.journal_body not in bodies | {GROUND: None}:
                 continue   # unknown bodies: _names says so
-            axes = []
-            for name, axis in ((c.bearing_body, c.bearing_axis), (c.journal_body, c.journal_axis)):
-                rot = np.eye(3) if name == GROUND else rotation_matrix(bodies[name].parameters())
-                axes.append(rot @ unit_axis(axis, "axis"))
-            sine = float(np.linalg.norm(np.cross(*axes)))
-            clearance = c.bearing_radius - c.journal_radius
-            if 0.5 * c.length * sine >= clearance:
-                raise ValueError(
-                    f"clearance_joints.{k} ({c.name}): the journal, tilted by "
-                    f"{math.degrees(math.asin(min(sine, 1.0))):.3g} deg against its bore, does not "
-                    f"fit: centred, its ends lie (L/2) sin(tilt) = {0.5 * c.length * sine:.4g} m "
-                    f"off the bore's axis, beyond the radial clearance {clearance:.4g} m")
+            rotations = {name: np.eye(3) if name == GROUND else rotation_matrix(bodies[name].parameters())
+                         for name in (c.bearing_body, c.journal_body)}
+            joints.of(c).fits(f"clearance_joints.{k}", rotations)
         return self
 
     @pydantic.model_validator(mode="after")
