@@ -35,7 +35,7 @@ from pinbore.reduced.dynamics.continuation import Continuation
 from pinbore.reduced.mechanism import joints, kernel, outputs
 from pinbore.reduced.mechanism.layout import (CONSTANT_SPEED, DISSIPATED, OK, PRIM_ANGLE0, PRIM_BODY_I, PRIM_BODY_J,
                                               PRIM_PROFILE, PRIM_SPEED, WORK_IN)
-from pinbore.reduced.mechanism.model import Model, translational_frames
+from pinbore.reduced.mechanism.model import Model
 from pinbore.reduced.mechanism.run import STATUS, simulate
 
 MAX_PERIOD = 16
@@ -117,7 +117,7 @@ class MechanismFlow:
         frame's x and y)."""
         c, model = self.model.joints[0], self.model
         index = model.geometry.index
-        f, g = translational_frames(None, c)[0] if c.type == "translational" else joints.of(c).across()
+        f, g = joints.of(c).across()
         return (index[c.bearing_body], tuple(map(float, c.bearing_point)), index[c.journal_body],
                 tuple(map(float, c.journal_point)), tuple(map(float, f)), tuple(map(float, g)))
 

@@ -6,8 +6,7 @@ the fixed step. What only a kind knows (its bodies' coordinates and mass, its id
 as primitive constraints, how a state is moved onto the constraints) comes from its body
 kind's module (reduced.mechanism.kinds: planar or spatial); what only a clearance joint's
 type knows (the ideal joint that closes it, its contacts, its law's table) from its type's
-module (reduced.mechanism.joints);
-the translational clearance joint is written here once for both.
+module (reduced.mechanism.joints).
 """
 
 import math
@@ -17,25 +16,21 @@ from pathlib import Path
 import numpy as np
 
 from pinbore.core.errors import InputError
-from pinbore.laws import dissipative, elastic, lawsfile
+from pinbore.laws import dissipative, lawsfile
 from pinbore.laws.tables import log_grid
 from pinbore.reduced.mechanism import joints, kinds, layout
-from pinbore.reduced.mechanism.joints.base import BLOW_UP_FRACTION
 from pinbore.reduced.mechanism.layout import (
-    CHI_POINTS, CONTACT_AT_CONTACT, CONTACT_BEARING_AXIS, CONTACT_BEARING_BODY,
-    CONTACT_BEARING_POINT, CONTACT_CHI, CONTACT_CHI_LOG_SPEED, CONTACT_CHI_STEP, CONTACT_CHI_TABLE,
-    CONTACT_CLEARANCE, CONTACT_COLUMNS, CONTACT_FRICTION_LAW, CONTACT_FRICTION_ON, CONTACT_IMPACT,
-    CONTACT_JOINT, CONTACT_JOURNAL_BODY, CONTACT_JOURNAL_POINT, CONTACT_KIND, CONTACT_REST_SPEED,
-    CONTACT_RESTITUTION, CONTACT_SIDE, CONTACT_SLICES, CONTACT_STATE, CONTACT_TABLE, CONTINUOUS,
-    COULOMB, COULOMB_MU, DAHL, DAHL_MU, DAHL_SIGMA, DOT1, DOT2, ENERGY_STATES, IWAN, IWAN_K1, IWAN_K2,
-    IWAN_MU, LATCH, LINEAR, LINEAR_ALPHA, LINEAR_MU_STATIC, LUGRE, LUGRE_MU_COULOMB,
-    LUGRE_MU_STATIC, LUGRE_SIGMA0, LUGRE_SIGMA1, LUGRE_SIGMA2, LUGRE_STRIBECK_SPEED, NEWTON,
-    NO_FRICTION, PLANE, POISSON, PRIM_A_I, PRIM_B_J, PRIM_BODY_I, PRIM_BODY_J, PRIM_KIND, PRIM_S_I,
-    PRIM_S_J, PRIMITIVE_COLUMNS, REGULARISATION_V0, REGULARISATION_V1, SLICED, SPRING, STOP,
-    STRIBECK, STRIBECK_MU_MIN, STRIBECK_MU_STATIC, STRIBECK_V_MIN, TORSION_BODY_I, TORSION_BODY_J,
-    TORSION_COLUMNS, TORSION_DAMPING, TORSION_FREE_ANGLE, TORSION_KIND, TORSION_STIFFNESS, row)
+    CHI_POINTS, CONTACT_BEARING_BODY, CONTACT_CHI, CONTACT_CHI_LOG_SPEED, CONTACT_CHI_STEP,
+    CONTACT_CHI_TABLE, CONTACT_CLEARANCE, CONTACT_COLUMNS, CONTACT_FRICTION_LAW, CONTACT_FRICTION_ON,
+    CONTACT_IMPACT, CONTACT_JOINT, CONTACT_JOURNAL_BODY, CONTACT_KIND, CONTACT_REST_SPEED,
+    CONTACT_RESTITUTION, CONTACT_SLICES, CONTACT_STATE, CONTACT_TABLE, CONTINUOUS, COULOMB,
+    COULOMB_MU, DAHL, DAHL_MU, DAHL_SIGMA, ENERGY_STATES, IWAN, IWAN_K1, IWAN_K2, IWAN_MU, LATCH,
+    LINEAR, LINEAR_ALPHA, LINEAR_MU_STATIC, LUGRE, LUGRE_MU_COULOMB, LUGRE_MU_STATIC, LUGRE_SIGMA0,
+    LUGRE_SIGMA1, LUGRE_SIGMA2, LUGRE_STRIBECK_SPEED, NEWTON, NO_FRICTION, POISSON, PRIMITIVE_COLUMNS,
+    REGULARISATION_V0, REGULARISATION_V1, SLICED, SPRING, STOP, STRIBECK, STRIBECK_MU_MIN,
+    STRIBECK_MU_STATIC, STRIBECK_V_MIN, TORSION_BODY_I, TORSION_BODY_J, TORSION_COLUMNS,
+    TORSION_DAMPING, TORSION_FREE_ANGLE, TORSION_KIND, TORSION_STIFFNESS, row)
 from pinbore.reduced.mechanism.scene import GROUND, MAX_STEPS, clearance_joints
-from pinbore.reduced.mechanism.vectors import unit_axis
 
 GRID_POINTS = 600
 GRID_LOW = 1e-12       # m, smallest tabulated penetration (power law below)
@@ -43,9 +38,6 @@ SPEED_FLOOR = 1e-3     # m/s, smallest impact speed in chi delta'/v0 (grazing co
 STEPS_PER_PERIOD = 300  # default dopri5_fixed step: this fraction of the shortest period
 IMPACT = {"continuous": CONTINUOUS, "newton": NEWTON, "poisson": POISSON}
 TORSION_KINDS = {"spring": SPRING, "stop": STOP, "latch": LATCH}
-# a translational joint's corners: (end along the slider's axis, side across it), in the order
-# of its contacts and of their outputs corner1..corner4
-CORNERS = ((-1.0, 1.0), (1.0, 1.0), (-1.0, -1.0), (1.0, -1.0))
 
 
 @dataclass
@@ -146,7 +138,7 @@ def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
     # penetrations up to a tenth of the journal radius are tabulated; beyond, the run has blown up
     top = max((joints.of(c).reach() for c in scene.clearance_joints), default=1.0)
     if scene.translational_joints:
-        top = max([top] + [BLOW_UP_FRACTION * c.half_width for c in scene.translational_joints])
+        top = max([top] + [joints.of(c).reach() for c in scene.translational_joints])
     grid_log0, grid_step, deltas = log_grid(GRID_LOW, top, GRID_POINTS)
     contacts, tables, rows = [], [], []
     for j, c in enumerate([] if ideal else clearances):
@@ -229,16 +221,12 @@ def drive_segments(drive) -> np.ndarray:
 
 def closing(geometry, c) -> list:
     """The primitive rows of the ideal joint that closes the clearance joint c."""
-    if getattr(c, "type", None) == "translational":
-        return translational_closing(geometry, c)
     return joints.of(c).closing(geometry)
 
 
 def joint_contacts(geometry, c, deltas, laws_data, source):
     """(the geometry columns of each contact of the clearance joint c, the force its table
     holds at `deltas`: N, or N/m for a journal along its bore)."""
-    if getattr(c, "type", None) == "translational":
-        return translational_contacts(geometry, c), corner_force(c, deltas)
     kind = joints.of(c)
     geometries, table = kind.contacts(geometry, deltas, laws_data, source)
     table = np.array(table, float)
@@ -337,66 +325,6 @@ def laws_file(scene, base: Path, source: str) -> lawsfile.LawsFile | None:
     """The scene's laws file, validated."""
     path = laws_path(scene, base)
     return None if path is None else lawsfile.read(path, f"{source}: laws_file: {path}")
-
-
-# ---- the translational clearance joint (a slider in its guide), for both kinds
-def translational_frames(geometry, c):
-    """The guide's axis u and face normal n (guide frame) and the slider's axis and normal
-    (slider frame), unit; in the plane each normal is its axis turned a quarter turn."""
-    frames = []
-    for axis, normal in ((c.bearing_axis, getattr(c, "bearing_normal", None)),
-                         (c.journal_axis, getattr(c, "journal_normal", None))):
-        u = np.array(unit_axis(axis, "axis"))
-        n = np.array([-u[1], u[0]]) if normal is None else np.array(unit_axis(normal, "normal"))
-        frames.append((u, n))
-    return frames
-
-
-def translational_contacts(geometry, c) -> list[dict]:
-    """The four corners of a slider, each a PLANE contact against the guide's face on its
-    side: the corner s0 + e a u_s + s b n_s (slider frame) at delta = s n_g.(X - P_g) - (b + c)."""
-    (_, n_g), (u_s, n_s) = translational_frames(geometry, c)
-    s0 = np.array(c.journal_point, float)
-    out = []
-    for end, side in CORNERS:
-        corner = s0 + end * c.half_length * u_s + side * c.half_width * n_s
-        out.append({CONTACT_KIND: PLANE, CONTACT_BEARING_BODY: geometry.index[c.bearing_body],
-                    CONTACT_JOURNAL_BODY: geometry.index[c.journal_body],
-                    CONTACT_BEARING_POINT: list(c.bearing_point), CONTACT_BEARING_AXIS: list(n_g),
-                    CONTACT_JOURNAL_POINT: list(corner), CONTACT_SIDE: side,
-                    CONTACT_CLEARANCE: c.half_width + c.clearance, CONTACT_AT_CONTACT: 1.0})
-    return out
-
-
-def translational_closing(geometry, c) -> list:
-    """The ideal guide that closes a translational joint: the slider's centre on the guide's
-    axis (a dot-2 on the face normal) and its axis along the guide's (a dot-1: the slider's
-    axis normal to the face normal); the rest of its motion is left to the other joints."""
-    (_, n_g), (u_s, _) = translational_frames(geometry, c)
-    bi, bj = geometry.index[c.bearing_body], geometry.index[c.journal_body]
-    pad = [0.0] * (3 - len(n_g))
-    return [row(PRIMITIVE_COLUMNS, {PRIM_KIND: DOT2, PRIM_BODY_I: bi, PRIM_BODY_J: bj,
-                                    PRIM_S_I: list(c.bearing_point) + pad, PRIM_A_I: list(n_g) + pad,
-                                    PRIM_S_J: list(c.journal_point) + pad}),
-            row(PRIMITIVE_COLUMNS, {PRIM_KIND: DOT1, PRIM_BODY_I: bi, PRIM_BODY_J: bj,
-                                    PRIM_A_I: list(n_g) + pad, PRIM_B_J: list(u_s) + pad})]
-
-
-def corner_force(c, deltas) -> np.ndarray:
-    """The elastic force (N) of a slider's corner on its guide's face at the penetrations
-    `deltas`: "hertz_point", a sphere of the corner's radius r on a flat,
-    F = (4/3) E* sqrt(r) delta^1.5 ([Johnson1985] sec. 4.2, the point law's limit of an
-    infinite bearing radius), or "power", F = stiffness delta^exponent; NaN beyond a tenth
-    of the slider's half-width (the run has blown up there). Rigid impacts: no law."""
-    if c.impact != "continuous":
-        return np.full(deltas.size, np.nan)
-    if c.normal_law == "hertz_point":
-        force = elastic.hertz_flat(deltas, c.corner_radius, c.effective_modulus())
-    else:
-        force = c.stiffness * deltas ** c.exponent
-    force = np.array(force, float)
-    force[deltas > BLOW_UP_FRACTION * c.half_width] = np.nan
-    return force
 
 
 # ---- torsion, connectivity, the fixed step

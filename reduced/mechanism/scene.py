@@ -1,11 +1,12 @@
 """Mechanism scenes, SI units: `kind = "reduced"`, a planar mechanism (vectors [x, y], bodies
 of mass and inertia, angles in degrees), and `kind = "spatial"`, a spatial one (vectors
 [x, y, z], 3 x 3 inertia tensors, orientations as Euler parameters or rotation matrices).
-What the two share is written once here: the translational clearance joint, torsion
-springs, stops and latches, linear spring-dampers, harmonic loads and a shaken drive, the
-integrator, the outputs, and the rules across a scene (names, run size, a periodic forcing);
-the contact laws of a clearance joint and its materials, the friction laws, once in
-reduced.mechanism.joints.contact.
+What the two share is written once here: torsion springs, stops and latches, linear
+spring-dampers, harmonic loads and a shaken drive, the integrator, the outputs, and the rules
+across a scene (names, run size, a periodic forcing). A clearance joint's table is its type's
+(reduced.mechanism.joints: the revolute joint, the spatial table of the cylindrical and
+spherical ones, the translational joint of both kinds), on the contact laws and materials
+they share (reduced.mechanism.joints.contact).
 
 Body positions, angles and velocities are initial guesses for the centres of mass; pinbore
 makes them consistent with the joints before integrating (a clearance joint starts closed
@@ -22,9 +23,10 @@ import pydantic
 
 from pinbore.core.scene import Strict
 from pinbore.reduced.mechanism import joints, layout
-from pinbore.reduced.mechanism.joints.contact import FILE_LAWS, ContactLaw
+from pinbore.reduced.mechanism.joints.contact import FILE_LAWS
 from pinbore.reduced.mechanism.joints.journal import SpatialClearanceJoint
 from pinbore.reduced.mechanism.joints.revolute import ClearanceJoint
+from pinbore.reduced.mechanism.joints.translational import translational_joint
 from pinbore.reduced.mechanism.vectors import Matrix3, Quaternion, Vector, Vector3, unit_axis
 
 GROUND = "ground"
@@ -33,7 +35,6 @@ GROUND = "ground"
 # fit in memory (every sample is a row of timeseries.csv).
 MAX_STEPS = 5_000_000
 MAX_SAMPLES = 2_000_000
-CORNER_LAWS = ["hertz_point", "power"]   # a slider's corner on its guide's face
 UNIT = 1e-9   # how far from unit length (or orthonormal) rotation data may be
 
 
@@ -46,82 +47,6 @@ def rotation_matrix(p) -> np.ndarray:
                   [e1 * e2 + e0 * e3, e0 * e0 + e2 * e2 - 0.5, e2 * e3 - e0 * e1],
                   [e1 * e3 - e0 * e2, e2 * e3 + e0 * e1, e0 * e0 + e3 * e3 - 0.5]])
     return a * 2.0
-
-
-def translational_joint(vector):
-    """The translational clearance joint of a planar (`vector` of 2) or spatial (3) scene."""
-    space = vector is Vector3
-
-    class TranslationalJoint(ContactLaw):
-        """A slider (on journal_body) in a guide (on bearing_body) with clearance: a rectangle
-        of half-length a along its axis and half-width b across it, between the guide's two
-        faces at b + c on either side of the guide's axis (through bearing_point, along
-        bearing_axis; in space the faces are normal to bearing_normal). Its four corners
-        meet the face on their side through the contact laws, each a contact of its own:
-        normal_law "hertz_point" (a corner rounded to corner_radius on a flat face:
-        F = (4/3) E* sqrt(r) delta^1.5, E* of the slider's and the guide's E and nu) or
-        "power" (F = stiffness delta^exponent), or rigid impacts. The slider's centre
-        (journal_point) and its axis (journal_axis; in space journal_normal across it) are
-        in its own frame. It starts centred and aligned (start "ideal": moving with the ideal
-        prismatic joint; "free": velocities as given) or where the bodies put it ("placed")."""
-
-        name: str
-        type: Literal["translational"] = "translational"
-        bearing_body: str
-        bearing_point: vector
-        bearing_axis: vector
-        journal_body: str
-        journal_point: vector = [0.0] * (3 if space else 2)
-        journal_axis: vector
-        if space:
-            bearing_normal: Vector3
-            journal_normal: Vector3
-        half_length: float = pydantic.Field(gt=0, description="m, a")
-        half_width: float = pydantic.Field(gt=0, description="m, b")
-        clearance: float = pydantic.Field(gt=0, description="m, c: the gap on each side, centred")
-        E: float | None = pydantic.Field(default=None, gt=0, description="Pa, the slider's (hertz_point)")
-        nu: float | None = pydantic.Field(default=None, gt=-1, lt=0.5)
-        bearing_E: float | None = pydantic.Field(default=None, gt=0, description="Pa; default E")
-        bearing_nu: float | None = pydantic.Field(default=None, gt=-1, lt=0.5)
-        corner_radius: float | None = pydantic.Field(default=None, gt=0, description="m (hertz_point)")
-        stiffness: float | None = pydantic.Field(default=None, gt=0, description="N/m^exponent (power)")
-        exponent: float = pydantic.Field(default=1.5, ge=1, le=3)
-        start: Literal["ideal", "free", "placed"] = "ideal"
-
-        @pydantic.model_validator(mode="after")
-        def _geometry(self):
-            unit_axis(self.bearing_axis, "bearing_axis")
-            unit_axis(self.journal_axis, "journal_axis")
-            if space:
-                for axis, normal in (("bearing_axis", "bearing_normal"), ("journal_axis", "journal_normal")):
-                    u, n = unit_axis(getattr(self, axis), axis), unit_axis(getattr(self, normal), normal)
-                    if abs(np.dot(u, n)) > 1e-9:
-                        raise ValueError(f"{normal}: must be normal to {axis}")
-            if self.impact != "continuous":
-                return self
-            if self.normal_law not in CORNER_LAWS:
-                raise ValueError(f"normal_law {self.normal_law!r} is not a law of a corner on a "
-                                 f"face; valid: {', '.join(CORNER_LAWS)}")
-            if self.damping_law == "calibrated":
-                raise ValueError("damping_law 'calibrated' is the laws file's e(v0) of a pin in a "
-                                 "bore, not of a slider's corner on a face")
-            needs = {"hertz_point": ("corner_radius", "E", "nu"), "power": ("stiffness",)}[self.normal_law]
-            missing = [key for key in needs if getattr(self, key) is None]
-            if missing:
-                raise ValueError(f"{', '.join(missing)} required by normal_law {self.normal_law!r}")
-            return self
-
-        def gap(self) -> float:
-            """The clearance c on each side (m)."""
-            return self.clearance
-
-        def effective_modulus(self) -> float:
-            """E* of the slider's and the guide's materials (Pa)."""
-            e_b = self.E if self.bearing_E is None else self.bearing_E
-            nu_b = self.nu if self.bearing_nu is None else self.bearing_nu
-            return 1.0 / ((1 - self.nu ** 2) / self.E + (1 - nu_b ** 2) / e_b)
-
-    return TranslationalJoint
 
 
 def spring(vector):

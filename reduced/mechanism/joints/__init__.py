@@ -10,12 +10,13 @@ What the types share: contact.py (the contact laws and materials of a scene tabl
 (a pin in its bore). A new type is its module and one line below.
 """
 
-from pinbore.reduced.mechanism.joints import cylindrical, revolute, spherical
+from pinbore.reduced.mechanism.joints import cylindrical, revolute, spherical, translational
 
 TYPES = {
     "revolute": revolute.RevoluteClearance,
     "cylindrical": cylindrical.CylindricalClearance,
     "spherical": spherical.SphericalClearance,
+    "translational": translational.TranslationalClearance,
 }
 
 
