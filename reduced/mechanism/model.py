@@ -364,10 +364,7 @@ def check_connected(scene, names) -> None:
     """Every body must be linked to the others (through joints, clearance joints, torsion
     elements, the drive, the ground)."""
     links = {name: set() for name in names + [GROUND]}
-    pairs = []
-    for j in scene.joints:
-        pairs.append((j.body, GROUND) if getattr(j, "type", None) == "prismatic" and hasattr(j, "body")
-                     else (j.body_i, j.body_j))
+    pairs = [j.linked for j in scene.joints]
     pairs += [(c.bearing_body, c.journal_body) for c in clearance_joints(scene)]
     pairs += [(t.body_i, t.body_j) for t in scene.torsion]
     pairs += [(e.body_i, e.body_j) for e in scene.springs]

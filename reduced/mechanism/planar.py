@@ -69,10 +69,10 @@ class Geometry(FlexibleGeometry):
         body."""
         scene, found = self.scene, []
         for j in scene.joints:
-            if j.type == "revolute":
-                found += [(j.body_i, j.point_i, "joints.point_i"), (j.body_j, j.point_j, "joints.point_j")]
-            else:
+            if j.guides_a_slider:
                 found.append((j.body, j.point, "joints.point"))
+            else:
+                found += [(j.body_i, j.point_i, "joints.point_i"), (j.body_j, j.point_j, "joints.point_j")]
         for table in ("clearance_joints", "translational_joints"):
             for c in getattr(scene, table):
                 found += [(c.bearing_body, c.bearing_point, f"{table}.bearing_point"),
@@ -112,10 +112,10 @@ class Geometry(FlexibleGeometry):
         body's angle = angle0 + omega t): (rows, the drive's row or None)."""
         index, scene = self.index, self.scene
         rows = [primitive(POINT, index[j.body_i], index[j.body_j], s_i=j.point_i, s_j=j.point_j)
-                for j in scene.joints if j.type == "revolute"]
+                for j in scene.joints if not j.guides_a_slider]
         rows += [r for closure in closures for r in closure]
         for j in scene.joints:
-            if j.type == "prismatic":
+            if j.guides_a_slider:
                 axis = math.radians(j.axis_deg)
                 b = index[j.body]
                 rows.append(primitive(DOT2, -1, b, s_i=j.axis_point, s_j=j.point,
@@ -271,7 +271,7 @@ def drive_angle(model, cols):
 def slider_acceleration(model, cols):
     """The acceleration (m/s^2) of the first prismatic joint's body along its axis, None
     without one."""
-    slider = next((j for j in model.scene.joints if j.type == "prismatic"), None)
+    slider = next((j for j in model.scene.joints if j.guides_a_slider), None)
     if slider is None:
         return None
     a = math.radians(slider.axis_deg)

@@ -16,7 +16,7 @@ core nor DOLFINx: a bad scene costs a fraction of a second.
 """
 
 import math
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
 import pydantic
@@ -279,6 +279,13 @@ class Revolute(Strict):
     body_j: str
     point_j: Vector
 
+    guides_a_slider: ClassVar[bool] = False   # a pin, not a slider's guide
+
+    @property
+    def linked(self) -> tuple[str, str]:
+        """The two bodies the joint links."""
+        return self.body_i, self.body_j
+
 
 class Prismatic(Strict):
     """The body slides along a fixed line through axis_point with direction axis_deg,
@@ -289,6 +296,13 @@ class Prismatic(Strict):
     point: Vector = [0.0, 0.0]
     axis_point: Vector = [0.0, 0.0]
     axis_deg: float = 0.0
+
+    guides_a_slider: ClassVar[bool] = True   # the body slides along its line
+
+    @property
+    def linked(self) -> tuple[str, str]:
+        """The two bodies the joint links: the slider and the ground, its guide."""
+        return self.body, GROUND
 
 
 class DriveProfile(Strict):
@@ -447,9 +461,10 @@ class ReducedScene(MechanismScene):
 
     @pydantic.model_validator(mode="after")
     def _names(self):
-        used = [(j.body_i, "joints.body_i") for j in self.joints if j.type == "revolute"]
-        used += [(j.body_j, "joints.body_j") for j in self.joints if j.type == "revolute"]
-        used += [(j.body, "joints.body") for j in self.joints if j.type == "prismatic"]
+        pins = [j for j in self.joints if not j.guides_a_slider]
+        used = [(j.body_i, "joints.body_i") for j in pins]
+        used += [(j.body_j, "joints.body_j") for j in pins]
+        used += [(j.body, "joints.body") for j in self.joints if j.guides_a_slider]
         used += body_references(self)
         if self.drive:
             used.append((self.drive.body, "drive.body"))
@@ -553,6 +568,21 @@ class Joint(Strict):
             unit_axis(self.axis_j, "axis_j")
         return self
 
+    @property
+    def guides_a_slider(self) -> bool:
+        """A prismatic joint: body_j slides along body_i's axis."""
+        return self.type == "prismatic"
+
+    @property
+    def turns(self) -> bool:
+        """A revolute or cylindrical joint: a drive may turn its bodies about its axis."""
+        return self.type in ("revolute", "cylindrical")
+
+    @property
+    def linked(self) -> tuple[str, str]:
+        """The two bodies the joint links."""
+        return self.body_i, self.body_j
+
 
 class SpatialDrive(DriveProfile):
     """The relative angle of a revolute or cylindrical joint's bodies about its axis driven
@@ -626,7 +656,7 @@ class SpatialScene(MechanismScene):
             if self.drive.joint not in driven:
                 raise ValueError(f"drive.joint: unknown joint {self.drive.joint!r}; named joints: "
                                  f"{', '.join(sorted(driven)) or 'none'}")
-            if driven[self.drive.joint].type not in ("revolute", "cylindrical"):
+            if not driven[self.drive.joint].turns:
                 raise ValueError("drive.joint: must be a revolute or cylindrical joint (it turns "
                                  "about the joint's axis)")
         return self

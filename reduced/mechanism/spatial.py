@@ -326,7 +326,7 @@ def drive_angle(model, cols):
 def slider_acceleration(model, cols):
     """The acceleration (m/s^2) of the first prismatic joint's slider along the guide's axis
     at the start (exact for a guide on the ground), None without one."""
-    guide = next((j for j in model.scene.joints if j.type == "prismatic"), None)
+    guide = next((j for j in model.scene.joints if j.guides_a_slider), None)
     if guide is None:
         return None
     body_i = {b.name: b for b in model.scene.bodies}.get(guide.body_i)
