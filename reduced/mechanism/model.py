@@ -131,19 +131,16 @@ def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
     check_connected(scene, names)
     geometry = body_kind.Geometry(scene, index, source, base)
     clearances = clearance_joints(scene)
-    closures = [closing(geometry, c) for c in clearances] if ideal else []
+    types = [joints.of(c) for c in clearances]
+    closures = [t.closing(geometry) for t in types] if ideal else []
     primitives, drive_row = geometry.primitives(closures)
     profile = drive_segments(scene.drive)
     laws_data = None if ideal else laws_file(scene, base, source)
-    # penetrations up to a tenth of the journal radius are tabulated; beyond, the run has blown up
-    top = max((joints.of(c).reach() for c in scene.clearance_joints), default=1.0)
-    if scene.translational_joints:
-        top = max([top] + [joints.of(c).reach() for c in scene.translational_joints])
-    grid_log0, grid_step, deltas = log_grid(GRID_LOW, top, GRID_POINTS)
+    grid_log0, grid_step, deltas = log_grid(GRID_LOW, table_reach(scene), GRID_POINTS)
     contacts, tables, rows = [], [], []
-    for j, c in enumerate([] if ideal else clearances):
+    for j, (c, t) in enumerate([] if ideal else zip(clearances, types)):
         law = law_columns(c, laws_data, source)
-        geometries, table = joint_contacts(geometry, c, deltas, laws_data, source)
+        geometries, table = joint_contacts(geometry, t, deltas, laws_data, source)
         start = len(contacts)
         for g in geometries:
             contacts.append(row(CONTACT_COLUMNS, law | g | {CONTACT_JOINT: j, CONTACT_TABLE: len(tables)}))
@@ -167,7 +164,8 @@ def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
         loads=load_rows(geometry, scene))
     model = Model(scene, kind, names, args, [] if ideal else clearances, rows, laws_data, drive_row,
                   states, closures=closures, geometry=geometry)
-    model.y0 = geometry.place(model, [] if ideal else [(closing(geometry, c), c.start) for c in clearances])
+    model.y0 = geometry.place(model, [] if ideal else [(t.closing(geometry), c.start)
+                                                       for c, t in zip(clearances, types)])
     if scene.integrator.method == "dopri5_fixed":
         fixed_step(model, source)   # refuses a default step that cannot finish, before any work
     elif scene.integrator.method == "dopri5":
@@ -219,18 +217,20 @@ def drive_segments(drive) -> np.ndarray:
     return np.vstack([segments, [end, float(spline(end)), float(spline(end, 1)), 0.0, 0.0]])
 
 
-def closing(geometry, c) -> list:
-    """The primitive rows of the ideal joint that closes the clearance joint c."""
-    return joints.of(c).closing(geometry)
+def table_reach(scene) -> float:
+    """How deep the laws' tables reach (m; one grid for all): the deepest reach of the
+    scene's journals and balls (1 m without any), or of its sliders if deeper."""
+    top = max((joints.of(c).reach() for c in scene.clearance_joints), default=1.0)
+    return max([top] + [joints.of(c).reach() for c in scene.translational_joints])
 
 
-def joint_contacts(geometry, c, deltas, laws_data, source):
-    """(the geometry columns of each contact of the clearance joint c, the force its table
-    holds at `deltas`: N, or N/m for a journal along its bore)."""
-    kind = joints.of(c)
-    geometries, table = kind.contacts(geometry, deltas, laws_data, source)
+def joint_contacts(geometry, joint, deltas, laws_data, source):
+    """(the geometry columns of each contact of a clearance joint (its type's
+    base.Clearance), the force its table holds at `deltas`: N, or N/m for a journal along its
+    bore; NaN beyond the joint's reach, where the run has blown up)."""
+    geometries, table = joint.contacts(geometry, deltas, laws_data, source)
     table = np.array(table, float)
-    table[deltas > kind.reach()] = np.nan
+    table[deltas > joint.reach()] = np.nan
     return geometries, table
 
 
