@@ -39,7 +39,7 @@ from pinbore.reduced.mechanism import layout
 from pinbore.reduced.mechanism.kernel import constraint_values
 from pinbore.reduced.mechanism.layout import ANGLE, DOT2, POINT
 from pinbore.reduced.mechanism.flexible import FlexibleGeometry
-from pinbore.reduced.mechanism.scene import GROUND
+from pinbore.reduced.mechanism.scene import GROUND, clearance_points
 
 RIGID_COLUMNS = 8     # what a run's record keeps of a body's row: x, y, phi, cos, sin, x', y', w
 MODES = 24            # at most, a flexible body (scene.FLEXIBLE_MODES)
@@ -73,10 +73,7 @@ class Geometry(FlexibleGeometry):
                 found.append((j.body, j.point, "joints.point"))
             else:
                 found += [(j.body_i, j.point_i, "joints.point_i"), (j.body_j, j.point_j, "joints.point_j")]
-        for table in ("clearance_joints", "translational_joints"):
-            for c in getattr(scene, table):
-                found += [(c.bearing_body, c.bearing_point, f"{table}.bearing_point"),
-                          (c.journal_body, c.journal_point, f"{table}.journal_point")]
+        found += clearance_points(scene)
         if scene.drive is not None:
             found.append((scene.drive.body, self.frame_point(scene.drive.body, scene.drive.point),
                           "drive.point"))

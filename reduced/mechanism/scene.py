@@ -35,6 +35,9 @@ GROUND = "ground"
 # fit in memory (every sample is a row of timeseries.csv).
 MAX_STEPS = 5_000_000
 MAX_SAMPLES = 2_000_000
+# a scene's tables of clearance joints (each a list of its types' scene models), in the order
+# of their contacts
+CLEARANCE_TABLES = ("clearance_joints", "translational_joints")
 UNIT = 1e-9   # how far from unit length (or orthonormal) rotation data may be
 
 
@@ -192,15 +195,23 @@ def check_names(scene, used) -> None:
 
 
 def clearance_joints(scene) -> list:
-    """The scene's clearance joints: revolute, cylindrical, spherical, then translational."""
-    return list(scene.clearance_joints) + list(scene.translational_joints)
+    """The scene's clearance joints, table by table (CLEARANCE_TABLES): revolute, cylindrical,
+    spherical, then translational."""
+    return [c for table in CLEARANCE_TABLES for c in getattr(scene, table)]
+
+
+def clearance_points(scene) -> list[tuple]:
+    """(body, point, key) of the bearing's and the journal's point of every clearance joint."""
+    return [found for table in CLEARANCE_TABLES for c in getattr(scene, table)
+            for found in ((c.bearing_body, c.bearing_point, f"{table}.bearing_point"),
+                          (c.journal_body, c.journal_point, f"{table}.journal_point"))]
 
 
 def body_references(scene) -> list[tuple[str, str]]:
     """(body name, key) of every body the clearance joints and torsion elements name."""
-    used = [(c.bearing_body, f"{table}.bearing_body") for table in ("clearance_joints", "translational_joints")
+    used = [(c.bearing_body, f"{table}.bearing_body") for table in CLEARANCE_TABLES
             for c in getattr(scene, table)]
-    used += [(c.journal_body, f"{table}.journal_body") for table in ("clearance_joints", "translational_joints")
+    used += [(c.journal_body, f"{table}.journal_body") for table in CLEARANCE_TABLES
              for c in getattr(scene, table)]
     used += [(t.body_i, "torsion.body_i") for t in scene.torsion]
     used += [(t.body_j, "torsion.body_j") for t in scene.torsion]

@@ -50,7 +50,7 @@ from pinbore.core.errors import InputError
 from pinbore.reduced.mechanism import kernel, layout
 from pinbore.reduced.mechanism.layout import ANGLE, DOT1, DOT2, POINT
 from pinbore.reduced.mechanism.flexible import FlexibleGeometry
-from pinbore.reduced.mechanism.scene import GROUND, rotation_matrix
+from pinbore.reduced.mechanism.scene import GROUND, clearance_points, rotation_matrix
 from pinbore.reduced.mechanism.vectors import unit_axis
 
 # a body's row in the core's Work.bodies (cpp/mechanism/spatial.h): position, rotation matrix
@@ -113,10 +113,7 @@ class Geometry(FlexibleGeometry):
         scene, found = self.scene, []
         for j in scene.joints:
             found += [(j.body_i, j.point_i, "joints.point_i"), (j.body_j, j.point_j, "joints.point_j")]
-        for table in ("clearance_joints", "translational_joints"):
-            for c in getattr(scene, table):
-                found += [(c.bearing_body, c.bearing_point, f"{table}.bearing_point"),
-                          (c.journal_body, c.journal_point, f"{table}.journal_point")]
+        found += clearance_points(scene)
         for t in scene.torsion:
             found += [(t.body_i, self.frame_point(t.body_i, t.point_i), "torsion.point_i"),
                       (t.body_j, self.frame_point(t.body_j, t.point_j), "torsion.point_j")]
