@@ -40,7 +40,7 @@ DYNAMICS := $(addprefix build/dynamics/,poincare/summary.json bifurcation/summar
 STUDY_RUNS := $(patsubst studies/%.toml,build/study/%/summary.json,$(wildcard studies/*.toml))
 # the studies whose points' curves and impacts the calibration reads
 CALIBRATION_STUDIES := $(addprefix build/study/,$(addsuffix /summary.json,calibration_2d calibration_3d restitution))
-REDUCED_CODE := $(wildcard core/*.py laws/*.py fem/modes/file.py reduced/mechanism/*.py)
+REDUCED_CODE := $(wildcard core/*.py laws/*.py fem/modes/file.py reduced/mechanism/*.py reduced/mechanism/joints/*.py)
 DYNAMICS_CODE := $(wildcard pinbore/cli.py reduced/dynamics/*.py) $(REDUCED_CODE) $(STAMP)
 # the multibody engine is the compiled core's (built by make venv): every run may start at
 # once; only the runs whose scene reads the laws file wait for the calibration
