@@ -1,7 +1,7 @@
 """A pin in its bore, what the revolute (planar), cylindrical and spherical (spatial) clearance
 joints share: how deep their laws reach, the columns of a contact between a journal (a ball)
-and its bore, the axial columns of a journal in space, and a `sliced:<group>` law of the
-laws file.
+and its bore, a per-length normal law, the axial columns of a journal in space, and a
+`sliced:<group>` law of the laws file.
 """
 
 import math
@@ -9,7 +9,6 @@ import math
 import numpy as np
 
 from pinbore.core.errors import InputError
-from pinbore.laws.lawsfile import per_length_force
 from pinbore.reduced.mechanism.joints.base import BLOW_UP_FRACTION, Clearance
 from pinbore.reduced.mechanism.layout import (
     CONTACT_BEARING_BODY, CONTACT_BEARING_POINT, CONTACT_CLEARANCE, CONTACT_JOURNAL_BODY,
@@ -34,6 +33,16 @@ class Bore(Clearance):
                 CONTACT_JOURNAL_POINT: list(c.journal_point),
                 CONTACT_CLEARANCE: c.bearing_radius - c.journal_radius,
                 CONTACT_RADIUS: c.bearing_radius}
+
+    def per_length_law(self, deltas, laws_data, source) -> np.ndarray:
+        """The force per length (N/m) of the joint's per-length normal law at `deltas`: a law
+        of pinbore.laws.elastic or the laws file's calibrated:<law>
+        (lawsfile.per_length_force)."""
+        from pinbore.laws.lawsfile import per_length_force   # noqa: PLC0415 (a scene validates without it)
+
+        c = self.c
+        return per_length_force(c.normal_law, laws_data, deltas, c.elastic_joint(),
+                                f"{source}: clearance_joints.normal_law")
 
 
 class SpatialBore(Bore):
@@ -67,6 +76,8 @@ def sliced_parts(c, deltas, laws_data, source):
                          f"{c.normal_law!r}, whose end lengths ({law.end_length_m:.3g} m each) "
                          "leave no length to carry the load")
     if law.section is None:
+        from pinbore.laws.lawsfile import per_length_force   # noqa: PLC0415 (a scene validates without it)
+
         calibrated_joint = law.joint.joint(c.bearing_radius, c.journal_radius)
         return law, per_length_force(law.per_length_law, laws_data, deltas, calibrated_joint,
                                      f"{source}: laws file: sliced.{name}.per_length_law")

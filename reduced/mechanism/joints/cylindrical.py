@@ -10,7 +10,6 @@ import math
 import numpy as np
 
 from pinbore.laws import elastic
-from pinbore.laws.lawsfile import per_length_force
 from pinbore.reduced.mechanism.joints.bore import SpatialBore, sliced_parts
 from pinbore.reduced.mechanism.layout import (
     AXIS_RADIAL, CONTACT_BEARING_AXIS, CONTACT_CLEARANCE, CONTACT_COMPLIANCE, CONTACT_END_LENGTH,
@@ -93,9 +92,8 @@ class CylindricalClearance(SpatialBore):
         """(scale a, end length e, bulk compliance c_b (m^2/N), the per-length force f (N/m)
         the slices carry at deltas: a sliced law's local law f_loc, laws.sliced)."""
         c = self.c
-        joint = c.elastic_joint()
         if c.normal_law == "hertz_point":   # the point law spread evenly over the length
-            return 1.0, 0.0, 0.0, elastic.hertz_point(deltas, joint) / c.length
+            return 1.0, 0.0, 0.0, elastic.hertz_point(deltas, c.elastic_joint()) / c.length
         if c.normal_law.startswith("sliced:"):
             from pinbore.laws.tables import split_compliance   # noqa: PLC0415 (compiled: a scene validates without it)
 
@@ -109,8 +107,7 @@ class CylindricalClearance(SpatialBore):
                     np.log(deltas), local_log0 + local_step * np.arange(local_table.size),
                     local_table, right=np.nan))
             return law.scale, law.end_length_m, bulk, per_length
-        return 1.0, 0.0, 0.0, per_length_force(c.normal_law, laws_data, deltas, joint,
-                                               f"{source}: clearance_joints.normal_law")
+        return 1.0, 0.0, 0.0, self.per_length_law(deltas, laws_data, source)
 
     def roles(self, rows) -> dict:
         """The journal across its bore (its slices, or its two ends), and its shoulders

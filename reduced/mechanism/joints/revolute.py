@@ -11,7 +11,6 @@ import numpy as np
 import pydantic
 
 from pinbore.laws import elastic
-from pinbore.laws.lawsfile import per_length_force
 from pinbore.reduced.mechanism.joints.bore import Bore, sliced_parts
 from pinbore.reduced.mechanism.joints.contact import ContactLaw, JointMaterials, check_normal_law
 from pinbore.reduced.mechanism.layout import (
@@ -57,12 +56,12 @@ class RevoluteClearance(Bore):
 
     def contacts(self, geometry, deltas, laws_data, source):
         """One RADIAL contact, its normal force and friction at the contact point on both
-        bodies; the force of its law (N, point_force) at `deltas`."""
+        bodies; the force of its law (N, `force`) at `deltas`."""
         c = self.c
         radial = self.radial(geometry) | {CONTACT_KIND: RADIAL, CONTACT_AT_CONTACT: 1.0}
         if c.impact != "continuous":
             return [radial], np.full(deltas.size, np.nan)   # rigid: no law, never evaluated
-        return [radial], point_force(c, deltas, laws_data, source)
+        return [radial], self.force(deltas, laws_data, source)
 
     def columns(self, across: dict, roles: dict, seen: dict) -> dict:
         """The journal's offset from the bearing's centre (ecc_x, ecc_y, m), then the columns
@@ -70,32 +69,31 @@ class RevoluteClearance(Bore):
         offset = seen["offsets"][:, roles["main"][0]]
         return {"ecc_x_m": offset[:, 0], "ecc_y_m": offset[:, 1]} | across
 
+    def force(self, deltas, laws_data, source) -> np.ndarray:
+        """The elastic normal force (N) of the journal in its bore at the penetrations
+        `deltas`: the Hertz point law, a per-length law (published or calibrated: the laws
+        file's) times the joint's length, or a sliced:<group> law of a straight pin."""
+        c = self.c
+        joint = c.elastic_joint()
+        if c.normal_law == "hertz_point":
+            return elastic.hertz_point(deltas, joint)
+        if c.normal_law.startswith("calibrated:"):
+            return self.per_length_law(deltas, laws_data, source) * c.length
+        if c.normal_law.startswith("sliced:"):
+            # a straight pin (no tilt in the planar model): every slice at the same approach, so
+            # one slice of width L + 2 end_length gives the sliced sum (laws.sliced, theta = 0,
+            # no relief): F = scale (L + 2 e) f_loc(d - c_b F / L), tabulated on the grid of
+            # `deltas`
+            from pinbore.laws.sliced import sliced   # noqa: PLC0415 (compiled: a scene validates without it)
+            from pinbore.laws.tables import split_compliance   # noqa: PLC0415
 
-def point_force(c, deltas, laws_data, source) -> np.ndarray:
-    """Elastic normal force (N) of a revolute clearance joint of a planar mechanism at the
-    penetrations `deltas`: the Hertz point law, a per-length law (published or calibrated:
-    the laws file's) times the joint's length, or a sliced:<group> law of a straight pin."""
-    joint = c.elastic_joint()
-    if c.normal_law == "hertz_point":
-        return elastic.hertz_point(deltas, joint)
-    if c.normal_law.startswith("calibrated:"):
-        return per_length_force(c.normal_law, laws_data, deltas, joint,
-                                f"{source}: clearance_joints.normal_law") * c.length
-    if c.normal_law.startswith("sliced:"):
-        # a straight pin (no tilt in the planar model): every slice at the same approach, so
-        # one slice of width L + 2 end_length gives the sliced sum (laws.sliced, theta = 0,
-        # no relief): F = scale (L + 2 e) f_loc(d - c_b F / L), tabulated on the grid of
-        # `deltas`
-        from pinbore.laws.sliced import sliced   # noqa: PLC0415 (compiled: a scene validates without it)
-        from pinbore.laws.tables import split_compliance   # noqa: PLC0415
-
-        law, per_length = sliced_parts(c, deltas, laws_data, source)
-        grid_log0 = math.log(deltas[0])
-        grid_step = math.log(deltas[1] / deltas[0])
-        bulk = law.bulk_compliance_m2_per_N
-        local = split_compliance(grid_log0, grid_step, np.log(per_length), bulk)
-        return np.array([sliced(d, 0.0, c.length, 1, *local, 0.0, 0.0, law.end_length_m,
-                                law.scale, bulk)[0] for d in deltas])
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the range is enforced by the table (NaN beyond it)
-        return elastic.PUBLISHED[c.normal_law](deltas, joint) * c.length
+            law, per_length = sliced_parts(c, deltas, laws_data, source)
+            grid_log0 = math.log(deltas[0])
+            grid_step = math.log(deltas[1] / deltas[0])
+            bulk = law.bulk_compliance_m2_per_N
+            local = split_compliance(grid_log0, grid_step, np.log(per_length), bulk)
+            return np.array([sliced(d, 0.0, c.length, 1, *local, 0.0, 0.0, law.end_length_m,
+                                    law.scale, bulk)[0] for d in deltas])
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the range is enforced by the table (NaN beyond it)
+            return elastic.PUBLISHED[c.normal_law](deltas, joint) * c.length
