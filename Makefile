@@ -42,7 +42,7 @@ WEAR_SCENES := $(basename $(notdir $(wildcard scenes/wear/*.toml)))
 WEAR_RUNS := $(WEAR_SCENES:%=build/wear/%/summary.json)
 # the studies whose points' curves and impacts the calibration reads
 CALIBRATION_STUDIES := $(addprefix build/study/,$(addsuffix /summary.json,calibration_2d calibration_3d restitution))
-REDUCED_CODE := $(wildcard core/*.py laws/*.py fem/modes/file.py reduced/mechanism/*.py)
+REDUCED_CODE := $(wildcard core/*.py laws/*.py fem/modes/file.py reduced/mechanism/*.py reduced/mechanism/joints/*.py)
 DYNAMICS_CODE := $(wildcard pinbore/cli.py reduced/dynamics/*.py) $(REDUCED_CODE) $(STAMP)
 WEAR_CODE := $(wildcard pinbore/cli.py reduced/wear/*.py fem/curve.py) $(REDUCED_CODE)
 # the multibody engine is the compiled core's (built by make venv): every run may start at

@@ -73,7 +73,7 @@ def hertz_point(d, joint: Joint):
 def hertz_flat(d, radius: float, e_star: float):
     """Hertz, a sphere of radius R on a flat ([Johnson1985] sec. 4.2), F = (4/3) E* sqrt(R)
     d^1.5 (N): the point law of hertz_point with the bearing's radius infinite (R* = R). A
-    slider's rounded corner on its guide's face (reduced.mechanism.model.corner_force)."""
+    slider's rounded corner on its guide's face (reduced.mechanism.joints.translational.corner_force)."""
     return 4.0 / 3.0 * e_star * math.sqrt(radius) * np.asarray(d, float) ** 1.5
 
 

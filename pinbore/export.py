@@ -87,7 +87,8 @@ def force_table(law) -> np.ndarray:
     """Rows (approach d (m), elastic force F (N)) of a ContactLaw on the multibody model's
     grid, up to the last finite force (a law without a solution beyond)."""
     from pinbore.laws.tables import log_grid   # noqa: PLC0415 (compiled: after the checks)
-    from pinbore.reduced.mechanism.model import BLOW_UP_FRACTION, GRID_LOW, GRID_POINTS  # noqa: PLC0415
+    from pinbore.reduced.mechanism.joints.base import BLOW_UP_FRACTION  # noqa: PLC0415
+    from pinbore.reduced.mechanism.model import GRID_LOW, GRID_POINTS  # noqa: PLC0415
 
     _, _, deltas = log_grid(GRID_LOW, BLOW_UP_FRACTION * law.joint.r_pin, GRID_POINTS)
     with warnings.catch_warnings():

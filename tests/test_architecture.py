@@ -217,7 +217,7 @@ def test_the_scene_knows_every_damping_law():
     """The scene lists the hysteresis laws by name (validating it loads no law module); they
     are exactly those of pinbore.laws.dissipative."""
     from pinbore.laws.dissipative import HYSTERESIS
-    from pinbore.reduced.mechanism.scene import HYSTERESIS_LAWS
+    from pinbore.reduced.mechanism.joints.contact import HYSTERESIS_LAWS
 
     assert sorted(HYSTERESIS_LAWS) == sorted(HYSTERESIS)
 
@@ -243,3 +243,38 @@ def test_no_root_folder_imports_as_part_of_the_package():
     for folder in ("bench", "tests", "docs"):
         with pytest.raises(ImportError):
             importlib.import_module(f"pinbore.{folder}")
+
+
+# the ideal joints' own models and primitives, whose types share names with clearance joints'
+# (a spatial ideal joint may be revolute, cylindrical or spherical): (file, top-level name)
+IDEAL_JOINTS = {("reduced/mechanism/scene.py", "Joint"), ("reduced/mechanism/spatial.py", "joint_primitives")}
+
+
+def named_types(node, names) -> list[str]:
+    """The names among `names` that a comparison's sides hold as constants (alone or in a
+    tuple, list or set)."""
+    found = []
+    for side in [node.left, *node.comparators]:
+        items = side.elts if isinstance(side, (ast.Tuple, ast.List, ast.Set)) else [side]
+        found += [item.value for item in items if isinstance(item, ast.Constant) and item.value in names]
+    return found
+
+
+def test_no_branch_on_a_clearance_joint_type():
+    """A clearance joint's type is named in its own module (reduced.mechanism.joints) and the
+    registry that maps it there: no comparison with a type's name anywhere else in the
+    package or the benchmarks (the ideal joints' own model and primitives aside), so a new
+    type is one module and one registry line."""
+    from pinbore.reduced.mechanism.joints import TYPES
+
+    files = [path for path in modules().values() if ROOT / "reduced/mechanism/joints" not in path.parents]
+    wrong = []
+    for path in files + sorted((ROOT / "bench").glob("*.py")):
+        name = str(path.relative_to(ROOT))
+        for top in ast.parse(path.read_text()).body:
+            if (name, getattr(top, "name", None)) in IDEAL_JOINTS:
+                continue
+            wrong += [f"{name} line {node.lineno}: compares with {', '.join(map(repr, types))}"
+                      for node in ast.walk(top) if isinstance(node, ast.Compare)
+                      for types in [named_types(node, TYPES)] if types]
+    assert not wrong, "\n".join(wrong)

@@ -58,6 +58,20 @@ def models(scene: Scene) -> list:
     return [model(path) for path in scene.models]
 
 
+def model_files(scene: Scene) -> list[str]:
+    """The files of the modules a scene kind's models may be made of: each model's module and
+    every module loaded below its package (a mechanism scene's clearance joints are in
+    pinbore.reduced.mechanism.joints), what a change of its page follows."""
+    found = set()
+    for path in scene.models:
+        name = path.split(":")[0]
+        importlib.import_module(name)
+        package = name.rpartition(".")[0]
+        found |= {m.__file__ for key, m in list(sys.modules.items())
+                  if (key == name or key.startswith(package + ".")) and getattr(m, "__file__", None)}
+    return sorted(found)
+
+
 def scene_model(scene: Scene, data: dict):
     """The model that reads `data`, a parsed scene of `scene`'s folder (by its `kind` key when
     the folder holds more than one kind, as `pinbore reduced` does)."""
@@ -367,9 +381,8 @@ def setup(app):
             if scene is None:
                 raise self.error(f"scene-reference: no scene kind {self.arguments[0]!r}")
             env.note_dependency(str(UNITS_FILE))
-            for path in scene.models:
-                module = importlib.import_module(path.split(":")[0])
-                env.note_dependency(module.__file__)
+            for path in model_files(scene):
+                env.note_dependency(path)
             found, missing, _ = tables(scene)
             for entry in missing:
                 logger.warning(f"scene-reference: {entry} is a number without a unit: state it "

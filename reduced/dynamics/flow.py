@@ -32,10 +32,10 @@ import numpy as np
 from tqdm import tqdm
 
 from pinbore.reduced.dynamics.continuation import Continuation
-from pinbore.reduced.mechanism import kernel, outputs
+from pinbore.reduced.mechanism import joints, kernel, outputs
 from pinbore.reduced.mechanism.layout import (CONSTANT_SPEED, DISSIPATED, OK, PRIM_ANGLE0, PRIM_BODY_I, PRIM_BODY_J,
                                               PRIM_PROFILE, PRIM_SPEED, WORK_IN)
-from pinbore.reduced.mechanism.model import Model, translational_frames
+from pinbore.reduced.mechanism.model import Model
 from pinbore.reduced.mechanism.run import STATUS, simulate
 
 MAX_PERIOD = 16
@@ -112,21 +112,12 @@ class MechanismFlow:
 
     def _observed_joint(self):
         """The first clearance joint's bodies, points and the two vectors of the bearing body
-        (its frame) the observed point is measured along: a guide's axis and face normal; a
-        journal's two directions across its bore's axis (the body's x axis made normal to the
-        axis, or y if the axis lies near x); otherwise the frame's x and y."""
+        (its frame) the observed point is measured along (its type's `across`: a guide's axis
+        and face normal, a journal's two directions across its bore's axis, otherwise the
+        frame's x and y)."""
         c, model = self.model.joints[0], self.model
         index = model.geometry.index
-        dimension = model.kind.dimension
-        f, g = np.eye(dimension)[0], np.eye(dimension)[1]
-        if c.type == "translational":
-            f, g = translational_frames(None, c)[0]
-        elif c.type == "cylindrical":
-            u = np.asarray(c.bearing_axis, float) / np.linalg.norm(c.bearing_axis)
-            helper = np.eye(3)[0] if abs(u[0]) < 0.9 else np.eye(3)[1]
-            f = helper - (helper @ u) * u
-            f /= np.linalg.norm(f)
-            g = np.cross(u, f)
+        f, g = joints.of(c).across()
         return (index[c.bearing_body], tuple(map(float, c.bearing_point)), index[c.journal_body],
                 tuple(map(float, c.journal_point)), tuple(map(float, f)), tuple(map(float, g)))
 

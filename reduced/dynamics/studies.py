@@ -331,7 +331,7 @@ def check_scene(scene, target: SceneFile, options: Analysis) -> None:
         if not options.range.low <= value <= options.range.high:
             raise InputError(f"--range: the branch starts at the scene's {options.parameter} "
                              f"{value:g}, outside {options.range.low:g} {options.range.high:g}")
-    if isinstance(options, DesignOptions) and not any(j.type == "prismatic" for j in scene.joints):
+    if isinstance(options, DesignOptions) and not any(j.guides_a_slider for j in scene.joints):
         raise InputError(f"{target.source}: joints: the design study measures a prismatic body's "
                          "acceleration; the scene has no prismatic joint")
 

@@ -26,8 +26,6 @@ class Kind:
     module: str                # its body kind's module
     coordinates: str           # its state's coordinates per body, for summary.json
     dimension: int
-    eccentricity_columns: bool   # a revolute joint's journal offset (ecc_x, ecc_y) in the outputs
-    axial_columns: bool          # a journal's shoulders (axial penetration and force) in the outputs
     description: str           # what the report says of its runs
     joint_caption: str         # what a clearance joint's figure shows
 
@@ -41,7 +39,7 @@ KINDS = {
     "reduced": Kind(
         "planar", "reduced", ReducedScene, "pinbore.reduced.mechanism.planar",
         "x, y (m), phi (rad) of each body's centre of mass (a flexible body's mean-axis frame), "
-        "then a flexible body's modal coordinates eta (m sqrt(kg))", 2, True, False,
+        "then a flexible body's modal coordinates eta (m sqrt(kg))", 2,
         "rigid and flexible bodies in the plane (a flexible body: its FE modes in a floating "
         "frame); revolute clearance joints (a journal in its bore) and translational ones (a "
         "slider in its guide, four corner contacts)",
@@ -50,7 +48,7 @@ KINDS = {
     "spatial": Kind(
         "spatial", "spatial", SpatialScene, "pinbore.reduced.mechanism.spatial",
         "x, y, z (m) of each body's centre of mass (a flexible body's mean-axis frame), Euler "
-        "parameters e0..e3, then a flexible body's modal coordinates eta (m sqrt(kg))", 3, False, True,
+        "parameters e0..e3, then a flexible body's modal coordinates eta (m sqrt(kg))", 3,
         "rigid and flexible bodies in 3D on Euler parameters (a flexible body: its FE modes in a "
         "floating frame), the same ideal joints, drive, torsion springs "
         "and latches; cylindrical clearance joints cut into slices along the bore (a tilted "

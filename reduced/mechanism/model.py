@@ -3,51 +3,41 @@
 the tables of the normal laws, the contacts of every clearance joint with their damping and
 friction, the torsion elements, the spring-dampers and harmonic loads, the friction states,
 the fixed step. What only a kind knows (its bodies' coordinates and mass, its ideal joints
-as primitive constraints, how a revolute, cylindrical or spherical clearance joint sits in
-its geometry, how a state is moved onto the constraints) comes from its body kind's module
-(reduced.mechanism.kinds: planar or spatial);
-the translational clearance joint is written here once for both.
+as primitive constraints, how a state is moved onto the constraints) comes from its body
+kind's module (reduced.mechanism.kinds: planar or spatial); what only a clearance joint's
+type knows (the ideal joint that closes it, its contacts, its law's table) from its type's
+module (reduced.mechanism.joints).
 """
 
 import math
-import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
 from pinbore.core.errors import InputError
-from pinbore.laws import dissipative, elastic, lawsfile
-from pinbore.laws.lawsfile import per_length_force
-from pinbore.laws.sliced import sliced
-from pinbore.laws.tables import log_grid, split_compliance
-from pinbore.reduced.mechanism import kinds, layout
+from pinbore.laws import dissipative, lawsfile
+from pinbore.laws.tables import log_grid
+from pinbore.reduced.mechanism import joints, kinds, layout
 from pinbore.reduced.mechanism.layout import (
-    CHI_POINTS, CONTACT_AT_CONTACT, CONTACT_BEARING_AXIS, CONTACT_BEARING_BODY,
-    CONTACT_BEARING_POINT, CONTACT_CHI, CONTACT_CHI_LOG_SPEED, CONTACT_CHI_STEP, CONTACT_CHI_TABLE,
-    CONTACT_CLEARANCE, CONTACT_COLUMNS, CONTACT_FRICTION_LAW, CONTACT_FRICTION_ON, CONTACT_IMPACT,
-    CONTACT_JOINT, CONTACT_JOURNAL_BODY, CONTACT_JOURNAL_POINT, CONTACT_KIND, CONTACT_REST_SPEED,
-    CONTACT_RESTITUTION, CONTACT_SIDE, CONTACT_SLICES, CONTACT_STATE, CONTACT_TABLE, CONTINUOUS,
-    COULOMB, COULOMB_MU, DAHL, DAHL_MU, DAHL_SIGMA, DOT1, DOT2, ENERGY_STATES, IWAN, IWAN_K1, IWAN_K2,
-    IWAN_MU, LATCH, LINEAR, LINEAR_ALPHA, LINEAR_MU_STATIC, LUGRE, LUGRE_MU_COULOMB,
-    LUGRE_MU_STATIC, LUGRE_SIGMA0, LUGRE_SIGMA1, LUGRE_SIGMA2, LUGRE_STRIBECK_SPEED, NEWTON,
-    NO_FRICTION, PLANE, POISSON, PRIM_A_I, PRIM_B_J, PRIM_BODY_I, PRIM_BODY_J, PRIM_KIND, PRIM_S_I,
-    PRIM_S_J, PRIMITIVE_COLUMNS, REGULARISATION_V0, REGULARISATION_V1, SLICED, SPRING, STOP,
-    STRIBECK, STRIBECK_MU_MIN, STRIBECK_MU_STATIC, STRIBECK_V_MIN, TORSION_BODY_I, TORSION_BODY_J,
-    TORSION_COLUMNS, TORSION_DAMPING, TORSION_FREE_ANGLE, TORSION_KIND, TORSION_STIFFNESS, row)
-from pinbore.reduced.mechanism.scene import GROUND, MAX_STEPS, clearance_joints, unit_axis
+    CHI_POINTS, CONTACT_BEARING_BODY, CONTACT_CHI, CONTACT_CHI_LOG_SPEED, CONTACT_CHI_STEP,
+    CONTACT_CHI_TABLE, CONTACT_CLEARANCE, CONTACT_COLUMNS, CONTACT_FRICTION_LAW, CONTACT_FRICTION_ON,
+    CONTACT_IMPACT, CONTACT_JOINT, CONTACT_JOURNAL_BODY, CONTACT_KIND, CONTACT_REST_SPEED,
+    CONTACT_RESTITUTION, CONTACT_SLICES, CONTACT_STATE, CONTACT_TABLE, CONTINUOUS, COULOMB,
+    COULOMB_MU, DAHL, DAHL_MU, DAHL_SIGMA, ENERGY_STATES, IWAN, IWAN_K1, IWAN_K2, IWAN_MU, LATCH,
+    LINEAR, LINEAR_ALPHA, LINEAR_MU_STATIC, LUGRE, LUGRE_MU_COULOMB, LUGRE_MU_STATIC, LUGRE_SIGMA0,
+    LUGRE_SIGMA1, LUGRE_SIGMA2, LUGRE_STRIBECK_SPEED, NEWTON, NO_FRICTION, POISSON, PRIMITIVE_COLUMNS,
+    REGULARISATION_V0, REGULARISATION_V1, SLICED, SPRING, STOP, STRIBECK, STRIBECK_MU_MIN,
+    STRIBECK_MU_STATIC, STRIBECK_V_MIN, TORSION_BODY_I, TORSION_BODY_J, TORSION_COLUMNS,
+    TORSION_DAMPING, TORSION_FREE_ANGLE, TORSION_KIND, TORSION_STIFFNESS, row)
+from pinbore.reduced.mechanism.scene import GROUND, MAX_STEPS, clearance_joints
 
 GRID_POINTS = 600
 GRID_LOW = 1e-12       # m, smallest tabulated penetration (power law below)
 SPEED_FLOOR = 1e-3     # m/s, smallest impact speed in chi delta'/v0 (grazing contacts)
-BLOW_UP_FRACTION = 0.1  # a penetration beyond this fraction of the journal radius (of a
-#                         slider's half-width) stops a run
 STEPS_PER_PERIOD = 300  # default dopri5_fixed step: this fraction of the shortest period
 IMPACT = {"continuous": CONTINUOUS, "newton": NEWTON, "poisson": POISSON}
 TORSION_KINDS = {"spring": SPRING, "stop": STOP, "latch": LATCH}
-# a translational joint's corners: (end along the slider's axis, side across it), in the order
-# of its contacts and of their outputs corner1..corner4
-CORNERS = ((-1.0, 1.0), (1.0, 1.0), (-1.0, -1.0), (1.0, -1.0))
 
 
 @dataclass
@@ -140,20 +130,17 @@ def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
     index = {name: i for i, name in enumerate(names)} | {GROUND: -1}
     check_connected(scene, names)
     geometry = body_kind.Geometry(scene, index, source, base)
-    joints = clearance_joints(scene)
-    closures = [closing(geometry, c) for c in joints] if ideal else []
+    clearances = clearance_joints(scene)
+    types = [joints.of(c) for c in clearances]
+    closures = [t.closing(geometry) for t in types] if ideal else []
     primitives, drive_row = geometry.primitives(closures)
     profile = drive_segments(scene.drive)
     laws_data = None if ideal else laws_file(scene, base, source)
-    # penetrations up to a tenth of the journal radius are tabulated; beyond, the run has blown up
-    top = max((BLOW_UP_FRACTION * c.journal_radius for c in scene.clearance_joints), default=1.0)
-    if scene.translational_joints:
-        top = max([top] + [BLOW_UP_FRACTION * c.half_width for c in scene.translational_joints])
-    grid_log0, grid_step, deltas = log_grid(GRID_LOW, top, GRID_POINTS)
+    grid_log0, grid_step, deltas = log_grid(GRID_LOW, table_reach(scene), GRID_POINTS)
     contacts, tables, rows = [], [], []
-    for j, c in enumerate([] if ideal else joints):
+    for j, (c, t) in enumerate([] if ideal else zip(clearances, types)):
         law = law_columns(c, laws_data, source)
-        geometries, table = joint_contacts(geometry, c, deltas, laws_data, source)
+        geometries, table = joint_contacts(geometry, t, deltas, laws_data, source)
         start = len(contacts)
         for g in geometries:
             contacts.append(row(CONTACT_COLUMNS, law | g | {CONTACT_JOINT: j, CONTACT_TABLE: len(tables)}))
@@ -175,9 +162,10 @@ def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
         latched=np.zeros(len(scene.torsion)), mode=np.zeros(contacts.shape[0], np.int64),
         profile=profile, flex=geometry.flex(), springs=spring_rows(geometry, scene),
         loads=load_rows(geometry, scene))
-    model = Model(scene, kind, names, args, [] if ideal else joints, rows, laws_data, drive_row, states,
-                  closures=closures, geometry=geometry)
-    model.y0 = geometry.place(model, [] if ideal else [(closing(geometry, c), c.start) for c in joints])
+    model = Model(scene, kind, names, args, [] if ideal else clearances, rows, laws_data, drive_row,
+                  states, closures=closures, geometry=geometry)
+    model.y0 = geometry.place(model, [] if ideal else [(t.closing(geometry), c.start)
+                                                       for c, t in zip(clearances, types)])
     if scene.integrator.method == "dopri5_fixed":
         fixed_step(model, source)   # refuses a default step that cannot finish, before any work
     elif scene.integrator.method == "dopri5":
@@ -229,21 +217,20 @@ def drive_segments(drive) -> np.ndarray:
     return np.vstack([segments, [end, float(spline(end)), float(spline(end, 1)), 0.0, 0.0]])
 
 
-def closing(geometry, c) -> list:
-    """The primitive rows of the ideal joint that closes the clearance joint c."""
-    if getattr(c, "type", None) == "translational":
-        return translational_closing(geometry, c)
-    return geometry.closing(c)
+def table_reach(scene) -> float:
+    """How deep the laws' tables reach (m; one grid for all): the deepest reach of the
+    scene's journals and balls (1 m without any), or of its sliders if deeper."""
+    top = max((joints.of(c).reach() for c in scene.clearance_joints), default=1.0)
+    return max([top] + [joints.of(c).reach() for c in scene.translational_joints])
 
 
-def joint_contacts(geometry, c, deltas, laws_data, source):
-    """(the geometry columns of each contact of the clearance joint c, the force its table
-    holds at `deltas`: N, or N/m for a journal along its bore)."""
-    if getattr(c, "type", None) == "translational":
-        return translational_contacts(geometry, c), corner_force(c, deltas)
-    geometries, table = geometry.contacts(c, deltas, laws_data, source)
+def joint_contacts(geometry, joint, deltas, laws_data, source):
+    """(the geometry columns of each contact of a clearance joint (its type's
+    base.Clearance), the force its table holds at `deltas`: N, or N/m for a journal along its
+    bore; NaN beyond the joint's reach, where the run has blown up)."""
+    geometries, table = joint.contacts(geometry, deltas, laws_data, source)
     table = np.array(table, float)
-    table[deltas > BLOW_UP_FRACTION * c.journal_radius] = np.nan
+    table[deltas > joint.reach()] = np.nan
     return geometries, table
 
 
@@ -326,89 +313,7 @@ def calibrated_restitution(c, laws_data, source) -> lawsfile.RestitutionLaw:
                                       f"{source}: clearance_joints.{c.name}.damping_law: 'calibrated'")
 
 
-# ---- the normal laws' tables
-def point_force(c, deltas, laws_data, source) -> np.ndarray:
-    """Elastic normal force (N) of a revolute clearance joint of a planar mechanism at the
-    penetrations `deltas`: the Hertz point law, a per-length law (published or calibrated:
-    the laws file's) times the joint's length, or a sliced:<group> law of a straight pin."""
-    joint = c.elastic_joint()
-    if c.normal_law == "hertz_point":
-        return elastic.hertz_point(deltas, joint)
-    if c.normal_law.startswith("calibrated:"):
-        return per_length_force(c.normal_law, laws_data, deltas, joint,
-                                f"{source}: clearance_joints.normal_law") * c.length
-    if c.normal_law.startswith("sliced:"):
-        # a straight pin (no tilt in the planar model): every slice at the same approach, so
-        # one slice of width L + 2 end_length gives the sliced sum (laws.sliced, theta = 0,
-        # no relief): F = scale (L + 2 e) f_loc(d - c_b F / L), tabulated on the grid of
-        # `deltas`
-        law, per_length = sliced_parts(c, deltas, laws_data, source)
-        grid_log0 = math.log(deltas[0])
-        grid_step = math.log(deltas[1] / deltas[0])
-        bulk = law.bulk_compliance_m2_per_N
-        local = split_compliance(grid_log0, grid_step, np.log(per_length), bulk)
-        return np.array([sliced(d, 0.0, c.length, 1, *local, 0.0, 0.0, law.end_length_m,
-                                law.scale, bulk)[0] for d in deltas])
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the range is enforced by the table (NaN beyond it)
-        return elastic.PUBLISHED[c.normal_law](deltas, joint) * c.length
-
-
-def per_length_table(c, deltas, laws_data, source):
-    """(scale a, end length e, bulk compliance c_b (m^2/N), the per-length force f (N/m) the
-    slices carry at deltas: a sliced law's local law f_loc, laws.sliced) of a journal along
-    its bore (a cylindrical clearance joint), or (1, 0, 0, F (N)) of a ball in its socket."""
-    joint = c.elastic_joint()
-    if c.type == "spherical":
-        return 1.0, 0.0, 0.0, elastic.hertz_point(deltas, joint)
-    if c.normal_law == "hertz_point":   # the point law spread evenly over the length
-        return 1.0, 0.0, 0.0, elastic.hertz_point(deltas, joint) / c.length
-    if c.normal_law.startswith("sliced:"):
-        law, per_length = sliced_parts(c, deltas, laws_data, source)
-        bulk = law.bulk_compliance_m2_per_N
-        if bulk > 0:   # the slices carry the local law; the engine moves the bore (laws.sliced)
-            grid_log0, grid_step = math.log(deltas[0]), math.log(deltas[1] / deltas[0])
-            local_log0, local_step, local_table = split_compliance(
-                grid_log0, grid_step, np.log(per_length), bulk)
-            per_length = np.exp(np.interp(   # on the model's grid: log-log, as the lookup
-                np.log(deltas), local_log0 + local_step * np.arange(local_table.size),
-                local_table, right=np.nan))
-        return law.scale, law.end_length_m, bulk, per_length
-    return 1.0, 0.0, 0.0, per_length_force(c.normal_law, laws_data, deltas, joint,
-                                           f"{source}: clearance_joints.normal_law")
-
-
-def sliced_parts(c, deltas, laws_data, source):
-    """(the law, its per-length law f (N/m) at deltas) of a clearance joint's
-    `sliced:<group>` law; one InputError line for an unknown group, a joint too short for
-    the end lengths, or radii other than those of a law on its section's FE curve. The
-    per-length law takes the materials and law length it was calibrated with (the scene's
-    radii: the clearance is the joint's own)."""
-    name = c.normal_law.split(":", 1)[1]
-    if name not in laws_data.sliced:
-        raise InputError(f"{source}: clearance_joints.normal_law: {c.normal_law!r} is not a "
-                         "3D law of the laws file; valid: "
-                         f"{', '.join('sliced:' + k for k in laws_data.sliced) or 'none (no 3D curves)'}")
-    law = laws_data.sliced[name]
-    if c.length + 2 * law.end_length_m <= 0:
-        raise InputError(f"{source}: clearance_joints.length: {c.length:g} m is too short for "
-                         f"{c.normal_law!r}, whose end lengths ({law.end_length_m:.3g} m each) "
-                         "leave no length to carry the load")
-    if law.section is None:
-        calibrated_joint = law.joint.joint(c.bearing_radius, c.journal_radius)
-        return law, per_length_force(law.per_length_law, laws_data, deltas, calibrated_joint,
-                                     f"{source}: laws file: sliced.{name}.per_length_law")
-    # the 2D FE curve of the calibrated section: valid for its own radii only
-    if not (math.isclose(c.bearing_radius, law.joint.r_bore, rel_tol=1e-9)
-            and math.isclose(c.journal_radius, law.joint.r_pin, rel_tol=1e-9)):
-        raise InputError(
-            f"{source}: clearance_joints.bearing_radius, journal_radius: {c.normal_law!r} is "
-            f"built on the FE curve of its own section (radii {law.joint.r_bore:g} m and "
-            f"{law.joint.r_pin:g} m); use those radii, or a sliced law calibrated with "
-            "--per-length calibrated:<law>")
-    return law, law.section.force(deltas)
-
-
+# ---- the laws file
 def laws_path(scene, base: Path) -> Path | None:
     """Where the scene's laws file is (relative to the scene's folder `base`), if it has one."""
     if scene.laws_file is None:
@@ -420,66 +325,6 @@ def laws_file(scene, base: Path, source: str) -> lawsfile.LawsFile | None:
     """The scene's laws file, validated."""
     path = laws_path(scene, base)
     return None if path is None else lawsfile.read(path, f"{source}: laws_file: {path}")
-
-
-# ---- the translational clearance joint (a slider in its guide), for both kinds
-def translational_frames(geometry, c):
-    """The guide's axis u and face normal n (guide frame) and the slider's axis and normal
-    (slider frame), unit; in the plane each normal is its axis turned a quarter turn."""
-    frames = []
-    for axis, normal in ((c.bearing_axis, getattr(c, "bearing_normal", None)),
-                         (c.journal_axis, getattr(c, "journal_normal", None))):
-        u = np.array(unit_axis(axis, "axis"))
-        n = np.array([-u[1], u[0]]) if normal is None else np.array(unit_axis(normal, "normal"))
-        frames.append((u, n))
-    return frames
-
-
-def translational_contacts(geometry, c) -> list[dict]:
-    """The four corners of a slider, each a PLANE contact against the guide's face on its
-    side: the corner s0 + e a u_s + s b n_s (slider frame) at delta = s n_g.(X - P_g) - (b + c)."""
-    (_, n_g), (u_s, n_s) = translational_frames(geometry, c)
-    s0 = np.array(c.journal_point, float)
-    out = []
-    for end, side in CORNERS:
-        corner = s0 + end * c.half_length * u_s + side * c.half_width * n_s
-        out.append({CONTACT_KIND: PLANE, CONTACT_BEARING_BODY: geometry.index[c.bearing_body],
-                    CONTACT_JOURNAL_BODY: geometry.index[c.journal_body],
-                    CONTACT_BEARING_POINT: list(c.bearing_point), CONTACT_BEARING_AXIS: list(n_g),
-                    CONTACT_JOURNAL_POINT: list(corner), CONTACT_SIDE: side,
-                    CONTACT_CLEARANCE: c.half_width + c.clearance, CONTACT_AT_CONTACT: 1.0})
-    return out
-
-
-def translational_closing(geometry, c) -> list:
-    """The ideal guide that closes a translational joint: the slider's centre on the guide's
-    axis (a dot-2 on the face normal) and its axis along the guide's (a dot-1: the slider's
-    axis normal to the face normal); the rest of its motion is left to the other joints."""
-    (_, n_g), (u_s, _) = translational_frames(geometry, c)
-    bi, bj = geometry.index[c.bearing_body], geometry.index[c.journal_body]
-    pad = [0.0] * (3 - len(n_g))
-    return [row(PRIMITIVE_COLUMNS, {PRIM_KIND: DOT2, PRIM_BODY_I: bi, PRIM_BODY_J: bj,
-                                    PRIM_S_I: list(c.bearing_point) + pad, PRIM_A_I: list(n_g) + pad,
-                                    PRIM_S_J: list(c.journal_point) + pad}),
-            row(PRIMITIVE_COLUMNS, {PRIM_KIND: DOT1, PRIM_BODY_I: bi, PRIM_BODY_J: bj,
-                                    PRIM_A_I: list(n_g) + pad, PRIM_B_J: list(u_s) + pad})]
-
-
-def corner_force(c, deltas) -> np.ndarray:
-    """The elastic force (N) of a slider's corner on its guide's face at the penetrations
-    `deltas`: "hertz_point", a sphere of the corner's radius r on a flat,
-    F = (4/3) E* sqrt(r) delta^1.5 ([Johnson1985] sec. 4.2, the point law's limit of an
-    infinite bearing radius), or "power", F = stiffness delta^exponent; NaN beyond a tenth
-    of the slider's half-width (the run has blown up there). Rigid impacts: no law."""
-    if c.impact != "continuous":
-        return np.full(deltas.size, np.nan)
-    if c.normal_law == "hertz_point":
-        force = elastic.hertz_flat(deltas, c.corner_radius, c.effective_modulus())
-    else:
-        force = c.stiffness * deltas ** c.exponent
-    force = np.array(force, float)
-    force[deltas > BLOW_UP_FRACTION * c.half_width] = np.nan
-    return force
 
 
 # ---- torsion, connectivity, the fixed step
@@ -519,10 +364,7 @@ def check_connected(scene, names) -> None:
     """Every body must be linked to the others (through joints, clearance joints, torsion
     elements, the drive, the ground)."""
     links = {name: set() for name in names + [GROUND]}
-    pairs = []
-    for j in scene.joints:
-        pairs.append((j.body, GROUND) if getattr(j, "type", None) == "prismatic" and hasattr(j, "body")
-                     else (j.body_i, j.body_j))
+    pairs = [j.linked for j in scene.joints]
     pairs += [(c.bearing_body, c.journal_body) for c in clearance_joints(scene)]
     pairs += [(t.body_i, t.body_j) for t in scene.torsion]
     pairs += [(e.body_i, e.body_j) for e in scene.springs]

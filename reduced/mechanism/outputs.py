@@ -5,10 +5,11 @@ between the steps, timeseries.csv, summary.json and the plots.
 A clearance joint's columns come from its contacts (reduced.mechanism.model): its deepest
 penetration and the normal and friction forces summed over its contacts across the joint (a
 journal's or ball's one contact, a cylindrical journal's two ends with rigid impacts, a
-slider's four corners); a cylindrical joint's shoulders are its axial contacts (in space every
-revolute-type joint has the two axial columns, -inf and 0 without shoulders); in the plane a
-revolute joint also gives its journal's offset from the bearing's centre; a slider gives each
-corner's penetration and forces too. The body columns are the body kind's
+slider's four corners), and its type's own (reduced.mechanism.joints, `columns`): a
+cylindrical joint's shoulders are its axial contacts (in space every revolute-type joint has
+the two axial columns, -inf and 0 without shoulders); in the plane a revolute joint also
+gives its journal's offset from the bearing's centre; a slider gives its offset, its tilt
+and each corner's penetration and forces too. The body columns are the body kind's
 (reduced.mechanism.planar or .spatial `motion_columns`).
 
 The energy book: kinetic (the body kind's), potential of gravity, of the torsion springs,
@@ -29,10 +30,10 @@ import csv
 
 import numpy as np
 
-from pinbore.reduced.mechanism import kernel, layout
+from pinbore.reduced.mechanism import joints, kernel, layout
 from pinbore.reduced.mechanism.layout import (
     CONTACT_COMPLIANCE, CONTACT_IMPACT, CONTACT_KIND, CONTACT_LENGTH, CONTACT_SLICES, CONTINUOUS,
-    DISSIPATED, LATCH, OK, LOG_IMPULSE, LOG_JOINT, LOG_RATE, PLANE, SLICED, SPRING, STOP, TORSION_KIND,
+    DISSIPATED, LATCH, OK, LOG_IMPULSE, LOG_JOINT, LOG_RATE, SLICED, SPRING, STOP, TORSION_KIND,
     TORSION_STIFFNESS, WORK_IN)
 from pinbore.reduced.mechanism.model import calibrated_restitution
 from pinbore.reduced.mechanism.summary import Summary
@@ -41,13 +42,10 @@ REFINE_POINTS = 201
 
 
 def roles(model, j) -> dict:
-    """The rows of clearance joint j's contacts by role: "main" (across the joint: a
-    journal, a ball, a slider's corners) and "axial" (a cylindrical joint's shoulders)."""
-    rows = list(model.contact_rows[j])
-    if getattr(model.joints[j], "type", None) == "translational":
-        return {"main": rows, "axial": []}
-    axial = [k for k in rows if int(model.contacts[k, CONTACT_KIND]) == PLANE]
-    return {"main": [k for k in rows if k not in axial], "axial": axial}
+    """The rows of clearance joint j's contacts by role (its type's): "main" (across the
+    joint: a journal, a ball, a slider's corners) and "axial" (a cylindrical joint's
+    shoulders)."""
+    return joints.of(model.joints[j]).roles(model.contact_rows[j])
 
 
 def joint_force(r, normal):
@@ -84,29 +82,17 @@ def per_step(model, run):
     dimension = model.kind.dimension
     seen = observed_steps(model, run)
     args, work, rates, bodies = seen["args"], seen["work"], seen["rates"], seen["bodies"]
-    depths, normals, frictions, offsets = seen["depths"], seen["normals"], seen["frictions"], seen["offsets"]
+    depths, normals, frictions = seen["depths"], seen["normals"], seen["frictions"]
     drift, kinetic, angles, stretches = seen["drift"], seen["kinetic"], seen["angles"], seen["stretches"]
     elastic = elastic_energy(model, states, args, work, depths)
     cols = {"time_s": times} | model.kind.bodies().motion_columns(
         model, states[:, :nq], states[:, nq:2 * nq], rates[:, nq:2 * nq], bodies)
     for j, c in enumerate(model.joints):
         r = roles(model, j)
-        main, axial = r["main"], r["axial"]
-        mine = {}
-        if model.kind.eccentricity_columns and c.type != "translational":
-            mine["ecc_x_m"], mine["ecc_y_m"] = offsets[:, main[0], 0], offsets[:, main[0], 1]
-        mine["penetration_m"] = depths[:, main].max(axis=1)
-        mine["normal_force_N"] = normals[:, main].sum(axis=1)
-        if model.kind.axial_columns and c.type != "translational":
-            mine["axial_penetration_m"] = depths[:, axial].max(axis=1) if axial else np.full(n, -np.inf)
-            mine["axial_force_N"] = normals[:, axial].sum(axis=1)
-        mine["friction_force_N"] = frictions[:, main].sum(axis=1)
-        if c.type == "translational":
-            mine["offset_m"], mine["tilt_rad"] = slider_pose(depths[:, main], c.half_length)
-            for i, k in enumerate(main):
-                mine[f"corner{i + 1}_penetration_m"] = depths[:, k]
-                mine[f"corner{i + 1}_normal_force_N"] = normals[:, k]
-                mine[f"corner{i + 1}_friction_force_N"] = frictions[:, k]
+        main = r["main"]
+        mine = {"penetration_m": depths[:, main].max(axis=1), "normal_force_N": normals[:, main].sum(axis=1),
+                "friction_force_N": frictions[:, main].sum(axis=1)}
+        mine = joints.of(c).columns(mine, r, seen)
         cols |= {f"{c.name}_{key}": v for key, v in mine.items()}
     potential = np.zeros(n)
     for b in range(len(model.names)):
@@ -121,16 +107,6 @@ def per_step(model, run):
     energy = {"kinetic": kinetic, "potential": potential, "elastic": elastic,
               "dissipated": states[:, 2 * nq + DISSIPATED], "work_in": states[:, 2 * nq + WORK_IN]}
     return cols, energy, drift
-
-
-def slider_pose(depth, half_length):
-    """A slider's offset across its guide (m, along the guide's face normal n) and its tilt
-    (rad, its axis against the guide's), exactly from its corners' penetrations (columns in
-    the order of model.CORNERS): a corner (end e, side s) at C + e a u_s + s b n_s has
-    delta = s (n.(C - P)) + e s a (u_s.n) + b (n_s.n) - (b + c), so the offset n.(C - P) is
-    (d1 + d2 - d3 - d4)/4 and sin(tilt) = u_s.n = (d2 - d1 + d3 - d4)/(4a)."""
-    d1, d2, d3, d4 = depth.T
-    return (d1 + d2 - d3 - d4) / 4, np.arcsin(np.clip((d2 - d1 + d3 - d4) / (4 * half_length), -1, 1))
 
 
 def elastic_energy(model, states, args, work, depths) -> np.ndarray:

@@ -39,7 +39,7 @@ from pinbore.reduced.mechanism import layout
 from pinbore.reduced.mechanism.kernel import constraint_values
 from pinbore.reduced.mechanism.layout import ANGLE, DOT2, POINT
 from pinbore.reduced.mechanism.flexible import FlexibleGeometry
-from pinbore.reduced.mechanism.scene import GROUND
+from pinbore.reduced.mechanism.scene import GROUND, clearance_points
 
 RIGID_COLUMNS = 8     # what a run's record keeps of a body's row: x, y, phi, cos, sin, x', y', w
 MODES = 24            # at most, a flexible body (scene.FLEXIBLE_MODES)
@@ -54,8 +54,8 @@ PROJECT_FIRST = False   # an accepted step's events are read before its projecti
 class Geometry(FlexibleGeometry):
     """A planar scene's bodies and ideal joints as the model's arrays: the coordinates (a
     flexible body's modal coordinates after its x, y, phi), the mass, the primitive
-    constraints, a revolute clearance joint's contact, torsion elements, and the consistent
-    initial state."""
+    constraints, torsion elements, and the consistent initial state (a clearance joint's
+    closing and contacts are its type's, reduced.mechanism.joints)."""
 
     DIM, RIGID_COLUMNS, RIGID_COORDINATES, MODES, INTERFACES = 2, COLUMNS, COLUMNS, MODES, INTERFACES
 
@@ -69,14 +69,11 @@ class Geometry(FlexibleGeometry):
         body."""
         scene, found = self.scene, []
         for j in scene.joints:
-            if j.type == "revolute":
-                found += [(j.body_i, j.point_i, "joints.point_i"), (j.body_j, j.point_j, "joints.point_j")]
-            else:
+            if j.guides_a_slider:
                 found.append((j.body, j.point, "joints.point"))
-        for table in ("clearance_joints", "translational_joints"):
-            for c in getattr(scene, table):
-                found += [(c.bearing_body, c.bearing_point, f"{table}.bearing_point"),
-                          (c.journal_body, c.journal_point, f"{table}.journal_point")]
+            else:
+                found += [(j.body_i, j.point_i, "joints.point_i"), (j.body_j, j.point_j, "joints.point_j")]
+        found += clearance_points(scene)
         if scene.drive is not None:
             found.append((scene.drive.body, self.frame_point(scene.drive.body, scene.drive.point),
                           "drive.point"))
@@ -112,10 +109,10 @@ class Geometry(FlexibleGeometry):
         body's angle = angle0 + omega t): (rows, the drive's row or None)."""
         index, scene = self.index, self.scene
         rows = [primitive(POINT, index[j.body_i], index[j.body_j], s_i=j.point_i, s_j=j.point_j)
-                for j in scene.joints if j.type == "revolute"]
+                for j in scene.joints if not j.guides_a_slider]
         rows += [r for closure in closures for r in closure]
         for j in scene.joints:
-            if j.type == "prismatic":
+            if j.guides_a_slider:
                 axis = math.radians(j.axis_deg)
                 b = index[j.body]
                 rows.append(primitive(DOT2, -1, b, s_i=j.axis_point, s_j=j.point,
@@ -129,27 +126,6 @@ class Geometry(FlexibleGeometry):
                               s_j=self.frame_point(scene.drive.body, scene.drive.point),
                               profile=scene.drive.profile_columns()))
         return rows, len(rows) - 1
-
-    def closing(self, c) -> list:
-        """A revolute clearance joint closed: the revolute of its bearing and journal centres."""
-        return [primitive(POINT, self.index[c.bearing_body], self.index[c.journal_body],
-                          s_i=c.bearing_point, s_j=c.journal_point)]
-
-    def contacts(self, c, deltas, laws_data, source):
-        """A revolute clearance joint: one RADIAL contact, its normal force and friction at
-        the contact point on both bodies; the force of its law (N) at `deltas`."""
-        from pinbore.reduced.mechanism.model import point_force   # noqa: PLC0415 (model imports us)
-
-        geometry = {layout.CONTACT_KIND: layout.RADIAL,
-                    layout.CONTACT_BEARING_BODY: self.index[c.bearing_body],
-                    layout.CONTACT_JOURNAL_BODY: self.index[c.journal_body],
-                    layout.CONTACT_BEARING_POINT: list(c.bearing_point),
-                    layout.CONTACT_JOURNAL_POINT: list(c.journal_point),
-                    layout.CONTACT_CLEARANCE: c.bearing_radius - c.journal_radius,
-                    layout.CONTACT_RADIUS: c.bearing_radius, layout.CONTACT_AT_CONTACT: 1.0}
-        if c.impact != "continuous":
-            return [geometry], np.full(deltas.size, np.nan)   # rigid: no law, never evaluated
-        return [geometry], point_force(c, deltas, laws_data, source)
 
     def torsion(self, t) -> dict:
         """The free angle relative to the bodies' initial relative angle (angles without
@@ -292,7 +268,7 @@ def drive_angle(model, cols):
 def slider_acceleration(model, cols):
     """The acceleration (m/s^2) of the first prismatic joint's body along its axis, None
     without one."""
-    slider = next((j for j in model.scene.joints if j.type == "prismatic"), None)
+    slider = next((j for j in model.scene.joints if j.guides_a_slider), None)
     if slider is None:
         return None
     a = math.radians(slider.axis_deg)

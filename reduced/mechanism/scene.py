@@ -1,10 +1,12 @@
 """Mechanism scenes, SI units: `kind = "reduced"`, a planar mechanism (vectors [x, y], bodies
 of mass and inertia, angles in degrees), and `kind = "spatial"`, a spatial one (vectors
 [x, y, z], 3 x 3 inertia tensors, orientations as Euler parameters or rotation matrices).
-What the two share is written once here: the contact laws of a clearance joint and its
-materials, the friction laws, the translational clearance joint, torsion springs, stops and
-latches, linear spring-dampers, harmonic loads and a shaken drive, the integrator, the
-outputs, and the rules across a scene (names, run size, a periodic forcing).
+What the two share is written once here: torsion springs, stops and latches, linear
+spring-dampers, harmonic loads and a shaken drive, the integrator, the outputs, and the rules
+across a scene (names, run size, a periodic forcing). A clearance joint's table is its type's
+(reduced.mechanism.joints: the revolute joint, the spatial table of the cylindrical and
+spherical ones, the translational joint of both kinds), on the contact laws and materials
+they share (reduced.mechanism.joints.contact).
 
 Body positions, angles and velocities are initial guesses for the centres of mass; pinbore
 makes them consistent with the joints before integrating (a clearance joint starts closed
@@ -14,15 +16,18 @@ core nor DOLFINx: a bad scene costs a fraction of a second.
 """
 
 import math
-from typing import Annotated, Literal
+from typing import Annotated, ClassVar, Literal
 
 import numpy as np
 import pydantic
 
 from pinbore.core.scene import Strict
-from pinbore.reduced.mechanism import layout
-from pinbore.laws import elastic
-from pinbore.laws.elastic import PUBLISHED
+from pinbore.reduced.mechanism import joints, layout
+from pinbore.reduced.mechanism.joints.contact import FILE_LAWS
+from pinbore.reduced.mechanism.joints.journal import SpatialClearanceJoint
+from pinbore.reduced.mechanism.joints.revolute import ClearanceJoint
+from pinbore.reduced.mechanism.joints.translational import translational_joint
+from pinbore.reduced.mechanism.vectors import Matrix3, Quaternion, Vector, Vector3, unit_axis
 
 GROUND = "ground"
 # What a run may ask for, refused at validation when exceeded: it could not finish (the
@@ -30,28 +35,10 @@ GROUND = "ground"
 # fit in memory (every sample is a row of timeseries.csv).
 MAX_STEPS = 5_000_000
 MAX_SAMPLES = 2_000_000
-ELASTIC_LAWS = ["hertz_point"] + sorted(PUBLISHED)
-# the hysteresis laws of pinbore.laws.dissipative.HYSTERESIS by name (a test holds the two
-# lists equal)
-HYSTERESIS_LAWS = ("flores", "gonthier", "herbert_mcwhannell", "hu_guo", "hunt_crossley",
-                   "lankarani_nikravesh", "lee_wang", "zhiying_qishao")
-DAMPING_LAWS = ["none", *HYSTERESIS_LAWS, "calibrated"]   # calibrated: laws file
-FILE_LAWS = ("calibrated:", "sliced:")   # normal laws read from the scene's laws file
-CORNER_LAWS = ["hertz_point", "power"]   # a slider's corner on its guide's face
+# a scene's tables of clearance joints (each a list of its types' scene models), in the order
+# of their contacts
+CLEARANCE_TABLES = ("clearance_joints", "translational_joints")
 UNIT = 1e-9   # how far from unit length (or orthonormal) rotation data may be
-
-Vector = Annotated[list[float], pydantic.Field(min_length=2, max_length=2)]
-Vector3 = Annotated[list[float], pydantic.Field(min_length=3, max_length=3)]
-Quaternion = Annotated[list[float], pydantic.Field(min_length=4, max_length=4)]
-Matrix3 = Annotated[list[Vector3], pydantic.Field(min_length=3, max_length=3)]
-
-
-def unit_axis(v, key):
-    """v (a nonzero axis) normalised; one rule line otherwise."""
-    n = math.sqrt(sum(c * c for c in v))
-    if n == 0:
-        raise ValueError(f"{key}: an axis must have nonzero length")
-    return [c / n for c in v]
 
 
 def rotation_matrix(p) -> np.ndarray:
@@ -63,233 +50,6 @@ def rotation_matrix(p) -> np.ndarray:
                   [e1 * e2 + e0 * e3, e0 * e0 + e2 * e2 - 0.5, e2 * e3 - e0 * e1],
                   [e1 * e3 - e0 * e2, e2 * e3 + e0 * e1, e0 * e0 + e3 * e3 - 0.5]])
     return a * 2.0
-
-
-# ---- friction laws, a clearance joint's contact laws and materials (both kinds)
-class Regularised(Strict):
-    """Below v0 the friction force vanishes, between v0 and v1 it grows linearly to its full
-    value [Ambrosio2003]: the static laws need it to be continuous at zero slip."""
-
-    v0: float = pydantic.Field(default=1e-4, gt=0, description="m/s")
-    v1: float = pydantic.Field(default=1e-3, gt=0, description="m/s")
-
-    @pydantic.model_validator(mode="after")
-    def _speeds(self):
-        if self.v1 <= self.v0:
-            raise ValueError("v1 must exceed v0")
-        return self
-
-
-class CoulombFriction(Regularised):
-    """F_t = mu c_d(|v|) F_n (Ambrosio's regularised Coulomb)."""
-
-    law: Literal["coulomb_ambrosio"]
-    mu: float = pydantic.Field(ge=0)
-
-
-class StribeckFriction(Regularised):
-    """Polynomial Stribeck ([ThomsenFidlin2003]; [Cao2013] eq. 14): mu_static at rest, mu_min at |v| = v_min."""
-
-    law: Literal["stribeck"]
-    mu_static: float = pydantic.Field(ge=0)
-    mu_min: float = pydantic.Field(ge=0)
-    v_min: float = pydantic.Field(gt=0, description="m/s")
-
-
-class LinearFriction(Regularised):
-    """mu = mu_static + alpha |v| ([Cao2013] eq. 15)."""
-
-    law: Literal["linear"]
-    mu_static: float = pydantic.Field(ge=0)
-    alpha: float = pydantic.Field(ge=0, description="s/m")
-
-
-class LuGreFriction(Strict):
-    """LuGre normalised by the normal force: F_t = F_n (sigma0 z + sigma1 z' + sigma2 v),
-    z' = v - sigma0 |v| z / g(v), g = mu_coulomb + (mu_static - mu_coulomb) exp(-(v/v_s)^2).
-    Both coefficients > 0 (g divides the bristle rate); a joint without friction has no
-    friction table. In space z is a vector along the contact's tangent plane."""
-
-    law: Literal["lugre"]
-    mu_coulomb: float = pydantic.Field(gt=0)
-    mu_static: float = pydantic.Field(gt=0)
-    stribeck_speed: float = pydantic.Field(gt=0, description="m/s")
-    sigma0: float = pydantic.Field(gt=0, description="1/m")
-    sigma1: float = pydantic.Field(default=0.0, ge=0, description="s/m")
-    sigma2: float = pydantic.Field(default=0.0, ge=0, description="s/m")
-
-
-class DahlFriction(Strict):
-    """Dahl ([Dahl1976]; [Cao2013] eq. 16, alpha = 1) normalised by the normal force: F_t = F_n m,
-    m' = sigma (1 - (m / mu) sgn v) v."""
-
-    law: Literal["dahl"]
-    mu: float = pydantic.Field(gt=0)
-    sigma: float = pydantic.Field(gt=0, description="1/m")
-
-
-class IwanFriction(Strict):
-    """Bilinear Iwan element ([Iwan1966]; [Cao2013] eq. 13) along the contact: a spring k1 in series with a
-    Coulomb slider of strength mu F_n, in parallel with a spring k2; it starts unloaded at
-    every new contact. For joints that oscillate rather than turn (k2 resists travel)."""
-
-    law: Literal["iwan_bilinear"]
-    mu: float = pydantic.Field(ge=0)
-    k1: float = pydantic.Field(gt=0, description="N/m")
-    k2: float = pydantic.Field(default=0.0, ge=0, description="N/m")
-
-
-Friction = Annotated[CoulombFriction | StribeckFriction | LinearFriction | LuGreFriction
-                     | DahlFriction | IwanFriction, pydantic.Field(discriminator="law")]
-
-
-class ContactLaw(Strict):
-    """How a clearance joint's contacts carry their load. `impact = "continuous"`: the normal
-    law (`normal_law`) and the damping law (`damping_law`, with the target `restitution`; or
-    "calibrated": the laws file's e(v0)) act while a contact penetrates, and friction
-    (`friction`) against its slip; "newton" / "poisson": rigid, frictionless impacts with
-    restitution `restitution`, and below `rest_speed` (approach rate x restitution) the
-    contact is held until it would pull (the three-state model)."""
-
-    normal_law: str | None = None
-    damping_law: str = "none"
-    restitution: float = pydantic.Field(default=1.0, ge=0, le=1)
-    friction: Friction | None = None
-    impact: Literal["continuous", "newton", "poisson"] = "continuous"
-    rest_speed: float = pydantic.Field(default=1e-3, gt=0, description="m/s")
-
-    @pydantic.model_validator(mode="after")
-    def _law(self):
-        if self.impact != "continuous":
-            if self.friction is not None or self.normal_law is not None or self.damping_law != "none":
-                raise ValueError(f"impact = {self.impact!r} is a rigid, frictionless impact model: "
-                                 "give no normal_law, damping_law or friction")
-            return self
-        if self.normal_law is None:
-            raise ValueError("normal_law is required by impact = 'continuous'")
-        if self.restitution == 0 and self.damping_law not in ("none", "calibrated"):
-            raise ValueError("restitution must be > 0 for a continuous damping law")
-        if self.damping_law not in DAMPING_LAWS:
-            raise ValueError(f"damping_law {self.damping_law!r} is unknown; valid: "
-                             f"{', '.join(DAMPING_LAWS)}")
-        return self
-
-
-class JointMaterials(Strict):
-    """The radii and elastic constants of a revolute, cylindrical or spherical clearance
-    joint: what its elastic law and its calibrated restitution (damping_law = "calibrated",
-    matched on these in the laws file) are chosen by."""
-
-    bearing_radius: float = pydantic.Field(gt=0)
-    journal_radius: float = pydantic.Field(gt=0)
-    length: float | None = pydantic.Field(default=None, gt=0,
-                                          description="axial length (m): per-length laws x L")
-    E: float = pydantic.Field(gt=0, description="Pa, the journal's (and the bearing's unless "
-                                               "bearing_E is given)")
-    nu: float = pydantic.Field(gt=-1, lt=0.5)
-    bearing_E: float | None = pydantic.Field(default=None, gt=0, description="Pa; default E")
-    bearing_nu: float | None = pydantic.Field(default=None, gt=-1, lt=0.5, description="default nu")
-
-    def gap(self) -> float:
-        """The radial clearance c = R_b - R_j (m)."""
-        return self.bearing_radius - self.journal_radius
-
-    def elastic_joint(self) -> elastic.Joint:
-        """The joint of the elastic laws: radii, the bearing's and the journal's E and nu."""
-        return elastic.Joint(self.bearing_radius, self.journal_radius,
-                             self.E if self.bearing_E is None else self.bearing_E,
-                             self.nu if self.bearing_nu is None else self.bearing_nu,
-                             self.E, self.nu, self.length)
-
-    @pydantic.model_validator(mode="after")
-    def _fits(self):
-        if self.journal_radius >= self.bearing_radius:
-            raise ValueError("journal_radius must be smaller than bearing_radius (the journal "
-                             "must fit its bore: clearance > 0)")
-        return self
-
-
-def check_normal_law(law: str) -> None:
-    """A normal law of the library or of the laws file."""
-    if not (law in ELASTIC_LAWS or law.startswith(FILE_LAWS)):
-        raise ValueError(f"normal_law {law!r} is unknown; valid: {', '.join(ELASTIC_LAWS)}, "
-                         "calibrated:<law in laws.json>, sliced:<3D law in laws.json>")
-
-
-def translational_joint(vector):
-    """The translational clearance joint of a planar (`vector` of 2) or spatial (3) scene."""
-    space = vector is Vector3
-
-    class TranslationalJoint(ContactLaw):
-        """A slider (on journal_body) in a guide (on bearing_body) with clearance: a rectangle
-        of half-length a along its axis and half-width b across it, between the guide's two
-        faces at b + c on either side of the guide's axis (through bearing_point, along
-        bearing_axis; in space the faces are normal to bearing_normal). Its four corners
-        meet the face on their side through the contact laws, each a contact of its own:
-        normal_law "hertz_point" (a corner rounded to corner_radius on a flat face:
-        F = (4/3) E* sqrt(r) delta^1.5, E* of the slider's and the guide's E and nu) or
-        "power" (F = stiffness delta^exponent), or rigid impacts. The slider's centre
-        (journal_point) and its axis (journal_axis; in space journal_normal across it) are
-        in its own frame. It starts centred and aligned (start "ideal": moving with the ideal
-        prismatic joint; "free": velocities as given) or where the bodies put it ("placed")."""
-
-        name: str
-        type: Literal["translational"] = "translational"
-        bearing_body: str
-        bearing_point: vector
-        bearing_axis: vector
-        journal_body: str
-        journal_point: vector = [0.0] * (3 if space else 2)
-        journal_axis: vector
-        if space:
-            bearing_normal: Vector3
-            journal_normal: Vector3
-        half_length: float = pydantic.Field(gt=0, description="m, a")
-        half_width: float = pydantic.Field(gt=0, description="m, b")
-        clearance: float = pydantic.Field(gt=0, description="m, c: the gap on each side, centred")
-        E: float | None = pydantic.Field(default=None, gt=0, description="Pa, the slider's (hertz_point)")
-        nu: float | None = pydantic.Field(default=None, gt=-1, lt=0.5)
-        bearing_E: float | None = pydantic.Field(default=None, gt=0, description="Pa; default E")
-        bearing_nu: float | None = pydantic.Field(default=None, gt=-1, lt=0.5)
-        corner_radius: float | None = pydantic.Field(default=None, gt=0, description="m (hertz_point)")
-        stiffness: float | None = pydantic.Field(default=None, gt=0, description="N/m^exponent (power)")
-        exponent: float = pydantic.Field(default=1.5, ge=1, le=3)
-        start: Literal["ideal", "free", "placed"] = "ideal"
-
-        @pydantic.model_validator(mode="after")
-        def _geometry(self):
-            unit_axis(self.bearing_axis, "bearing_axis")
-            unit_axis(self.journal_axis, "journal_axis")
-            if space:
-                for axis, normal in (("bearing_axis", "bearing_normal"), ("journal_axis", "journal_normal")):
-                    u, n = unit_axis(getattr(self, axis), axis), unit_axis(getattr(self, normal), normal)
-                    if abs(np.dot(u, n)) > 1e-9:
-                        raise ValueError(f"{normal}: must be normal to {axis}")
-            if self.impact != "continuous":
-                return self
-            if self.normal_law not in CORNER_LAWS:
-                raise ValueError(f"normal_law {self.normal_law!r} is not a law of a corner on a "
-                                 f"face; valid: {', '.join(CORNER_LAWS)}")
-            if self.damping_law == "calibrated":
-                raise ValueError("damping_law 'calibrated' is the laws file's e(v0) of a pin in a "
-                                 "bore, not of a slider's corner on a face")
-            needs = {"hertz_point": ("corner_radius", "E", "nu"), "power": ("stiffness",)}[self.normal_law]
-            missing = [key for key in needs if getattr(self, key) is None]
-            if missing:
-                raise ValueError(f"{', '.join(missing)} required by normal_law {self.normal_law!r}")
-            return self
-
-        def gap(self) -> float:
-            """The clearance c on each side (m)."""
-            return self.clearance
-
-        def effective_modulus(self) -> float:
-            """E* of the slider's and the guide's materials (Pa)."""
-            e_b = self.E if self.bearing_E is None else self.bearing_E
-            nu_b = self.nu if self.bearing_nu is None else self.bearing_nu
-            return 1.0 / ((1 - self.nu ** 2) / self.E + (1 - nu_b ** 2) / e_b)
-
-    return TranslationalJoint
 
 
 def spring(vector):
@@ -435,15 +195,23 @@ def check_names(scene, used) -> None:
 
 
 def clearance_joints(scene) -> list:
-    """The scene's clearance joints: revolute, cylindrical, spherical, then translational."""
-    return list(scene.clearance_joints) + list(scene.translational_joints)
+    """The scene's clearance joints, table by table (CLEARANCE_TABLES): revolute, cylindrical,
+    spherical, then translational."""
+    return [c for table in CLEARANCE_TABLES for c in getattr(scene, table)]
+
+
+def clearance_points(scene) -> list[tuple]:
+    """(body, point, key) of the bearing's and the journal's point of every clearance joint."""
+    return [found for table in CLEARANCE_TABLES for c in getattr(scene, table)
+            for found in ((c.bearing_body, c.bearing_point, f"{table}.bearing_point"),
+                          (c.journal_body, c.journal_point, f"{table}.journal_point"))]
 
 
 def body_references(scene) -> list[tuple[str, str]]:
     """(body name, key) of every body the clearance joints and torsion elements name."""
-    used = [(c.bearing_body, f"{table}.bearing_body") for table in ("clearance_joints", "translational_joints")
+    used = [(c.bearing_body, f"{table}.bearing_body") for table in CLEARANCE_TABLES
             for c in getattr(scene, table)]
-    used += [(c.journal_body, f"{table}.journal_body") for table in ("clearance_joints", "translational_joints")
+    used += [(c.journal_body, f"{table}.journal_body") for table in CLEARANCE_TABLES
              for c in getattr(scene, table)]
     used += [(t.body_i, "torsion.body_i") for t in scene.torsion]
     used += [(t.body_j, "torsion.body_j") for t in scene.torsion]
@@ -522,6 +290,13 @@ class Revolute(Strict):
     body_j: str
     point_j: Vector
 
+    guides_a_slider: ClassVar[bool] = False   # a pin, not a slider's guide
+
+    @property
+    def linked(self) -> tuple[str, str]:
+        """The two bodies the joint links."""
+        return self.body_i, self.body_j
+
 
 class Prismatic(Strict):
     """The body slides along a fixed line through axis_point with direction axis_deg,
@@ -532,6 +307,13 @@ class Prismatic(Strict):
     point: Vector = [0.0, 0.0]
     axis_point: Vector = [0.0, 0.0]
     axis_deg: float = 0.0
+
+    guides_a_slider: ClassVar[bool] = True   # the body slides along its line
+
+    @property
+    def linked(self) -> tuple[str, str]:
+        """The two bodies the joint links: the slider and the ground, its guide."""
+        return self.body, GROUND
 
 
 class DriveProfile(Strict):
@@ -601,31 +383,6 @@ class Drive(DriveProfile):
     body: str
     angle0_deg: float = 0.0
     point: Vector | None = None
-
-
-class ClearanceJoint(JointMaterials, ContactLaw):
-    """A revolute joint with radial clearance: the journal (on journal_body) moves freely
-    inside the bearing (on bearing_body) and meets its wall through the contact laws."""
-
-    name: str
-    type: Literal["revolute"] = "revolute"
-    bearing_body: str
-    bearing_point: Vector
-    journal_body: str
-    journal_point: Vector
-    # ideal: centred, moving with the ideal joint; free: centred, velocities as given;
-    # placed: where the bodies' positions put it, velocities as given
-    start: Literal["ideal", "free", "placed"] = "ideal"
-
-    @pydantic.model_validator(mode="after")
-    def _normal_law(self):
-        if self.impact != "continuous":
-            return self
-        check_normal_law(self.normal_law)
-        if self.normal_law != "hertz_point" and self.length is None:
-            raise ValueError(f"length is required by normal_law {self.normal_law!r} (a force per "
-                             "unit length)")
-        return self
 
 
 class TorsionSpring(Strict):
@@ -715,9 +472,10 @@ class ReducedScene(MechanismScene):
 
     @pydantic.model_validator(mode="after")
     def _names(self):
-        used = [(j.body_i, "joints.body_i") for j in self.joints if j.type == "revolute"]
-        used += [(j.body_j, "joints.body_j") for j in self.joints if j.type == "revolute"]
-        used += [(j.body, "joints.body") for j in self.joints if j.type == "prismatic"]
+        pins = [j for j in self.joints if not j.guides_a_slider]
+        used = [(j.body_i, "joints.body_i") for j in pins]
+        used += [(j.body_j, "joints.body_j") for j in pins]
+        used += [(j.body, "joints.body") for j in self.joints if j.guides_a_slider]
         used += body_references(self)
         if self.drive:
             used.append((self.drive.body, "drive.body"))
@@ -821,65 +579,27 @@ class Joint(Strict):
             unit_axis(self.axis_j, "axis_j")
         return self
 
+    @property
+    def guides_a_slider(self) -> bool:
+        """A prismatic joint: body_j slides along body_i's axis."""
+        return self.type == "prismatic"
+
+    @property
+    def turns(self) -> bool:
+        """A revolute or cylindrical joint: a drive may turn its bodies about its axis."""
+        return self.type in ("revolute", "cylindrical")
+
+    @property
+    def linked(self) -> tuple[str, str]:
+        """The two bodies the joint links."""
+        return self.body_i, self.body_j
+
 
 class SpatialDrive(DriveProfile):
     """The relative angle of a revolute or cylindrical joint's bodies about its axis driven
     from its initial value: angle = theta(t) (DriveProfile)."""
 
     joint: str
-
-
-class SpatialClearanceJoint(JointMaterials, ContactLaw):
-    """cylindrical: a journal (axis journal_axis through journal_point) in a bore of `length`
-    (axis bearing_axis through its mid-plane centre bearing_point), sliced into `slices`, with
-    optional shoulders (axial_clearance, axial_stiffness); spherical: a ball (centre
-    journal_point) in a socket (centre bearing_point). The normal law: a per-length law of
-    pinbore.laws.elastic, hertz_point (cylindrical: spread evenly over the length), or
-    calibrated:/sliced: from the laws file; or rigid impacts (a cylindrical journal's two
-    ends, and its shoulders). Radii, length, E, nu, bearing_E, bearing_nu: as in the planar
-    joint (JointMaterials). It starts closed (journal centred and aligned, ball centred:
-    "ideal", moving with the ideal joint, or "free", velocities as given) or where the bodies
-    put it ("placed")."""
-
-    name: str
-    type: Literal["cylindrical", "spherical"]
-    bearing_body: str
-    bearing_point: Vector3
-    bearing_axis: Vector3 | None = None
-    journal_body: str
-    journal_point: Vector3
-    journal_axis: Vector3 | None = None
-    slices: int = pydantic.Field(default=8, ge=1, le=256)
-    axial_clearance: float | None = pydantic.Field(default=None, gt=0, description="m")
-    axial_stiffness: float | None = pydantic.Field(default=None, gt=0, description="N/m")
-    start: Literal["ideal", "free", "placed"] = "ideal"
-
-    @pydantic.model_validator(mode="after")
-    def _geometry(self):
-        if self.type == "cylindrical":
-            if self.bearing_axis is None or self.journal_axis is None or self.length is None:
-                raise ValueError("bearing_axis, journal_axis and length are required by a "
-                                 "cylindrical clearance joint")
-            unit_axis(self.bearing_axis, "bearing_axis")
-            unit_axis(self.journal_axis, "journal_axis")
-            if (self.axial_clearance is None) != (self.axial_stiffness is None):
-                raise ValueError("axial_clearance and axial_stiffness go together (shoulders)")
-        else:
-            if self.bearing_axis is not None or self.journal_axis is not None or \
-                    self.length is not None or self.axial_clearance is not None:
-                raise ValueError("a spherical clearance joint takes no axes, length or shoulders")
-            if self.impact == "continuous" and self.normal_law != "hertz_point":
-                raise ValueError("normal_law: a spherical joint takes 'hertz_point' (a point law)")
-        if self.impact != "continuous":
-            return self
-        check_normal_law(self.normal_law)
-        if self.damping_law == "calibrated" and self.type == "spherical":
-            # the laws file's e(v0) comes from plane-strain impacts of a pin in a bore (a line
-            # contact per unit length); a ball's point contact is another impact
-            raise ValueError("damping_law 'calibrated' is for cylindrical joints: the laws file's "
-                             "e(v0) is fitted on line-contact impacts of a pin in a bore, not of "
-                             "a ball in a socket")
-        return self
 
 
 class Torsion(Strict):
@@ -924,27 +644,16 @@ class SpatialScene(MechanismScene):
 
     @pydantic.model_validator(mode="after")
     def _journals_fit(self):
-        """A journal whose axis is tilted against its bore's at the start (a misaligned joint;
-        it starts centred) fits only if its ends stay inside the clearance there:
-        (L / 2) sin(tilt) < c."""
+        """Every clearance joint that starts closed fits where its bodies' initial orientations
+        put it (its type's `fits`: a journal tilted against its bore must fit its clearance)."""
         bodies = {b.name: b for b in self.bodies}
         for k, c in enumerate(self.clearance_joints):
-            if c.type != "cylindrical" or c.start == "placed" or \
-                    c.bearing_body not in bodies | {GROUND: None} or \
+            if c.start == "placed" or c.bearing_body not in bodies | {GROUND: None} or \
                     c.journal_body not in bodies | {GROUND: None}:
                 continue   # unknown bodies: _names says so
-            axes = []
-            for name, axis in ((c.bearing_body, c.bearing_axis), (c.journal_body, c.journal_axis)):
-                rot = np.eye(3) if name == GROUND else rotation_matrix(bodies[name].parameters())
-                axes.append(rot @ unit_axis(axis, "axis"))
-            sine = float(np.linalg.norm(np.cross(*axes)))
-            clearance = c.bearing_radius - c.journal_radius
-            if 0.5 * c.length * sine >= clearance:
-                raise ValueError(
-                    f"clearance_joints.{k} ({c.name}): the journal, tilted by "
-                    f"{math.degrees(math.asin(min(sine, 1.0))):.3g} deg against its bore, does not "
-                    f"fit: centred, its ends lie (L/2) sin(tilt) = {0.5 * c.length * sine:.4g} m "
-                    f"off the bore's axis, beyond the radial clearance {clearance:.4g} m")
+            rotations = {name: np.eye(3) if name == GROUND else rotation_matrix(bodies[name].parameters())
+                         for name in (c.bearing_body, c.journal_body)}
+            joints.of(c).fits(f"clearance_joints.{k}", rotations)
         return self
 
     @pydantic.model_validator(mode="after")
@@ -958,7 +667,7 @@ class SpatialScene(MechanismScene):
             if self.drive.joint not in driven:
                 raise ValueError(f"drive.joint: unknown joint {self.drive.joint!r}; named joints: "
                                  f"{', '.join(sorted(driven)) or 'none'}")
-            if driven[self.drive.joint].type not in ("revolute", "cylindrical"):
+            if not driven[self.drive.joint].turns:
                 raise ValueError("drive.joint: must be a revolute or cylindrical joint (it turns "
                                  "about the joint's axis)")
         return self

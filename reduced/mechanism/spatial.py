@@ -50,7 +50,8 @@ from pinbore.core.errors import InputError
 from pinbore.reduced.mechanism import kernel, layout
 from pinbore.reduced.mechanism.layout import ANGLE, DOT1, DOT2, POINT
 from pinbore.reduced.mechanism.flexible import FlexibleGeometry
-from pinbore.reduced.mechanism.scene import GROUND, rotation_matrix, unit_axis
+from pinbore.reduced.mechanism.scene import GROUND, clearance_points, rotation_matrix
+from pinbore.reduced.mechanism.vectors import unit_axis
 
 # a body's row in the core's Work.bodies (cpp/mechanism/spatial.h): position, rotation matrix
 # (row-major), velocity, angular velocity (global), global inverse inertia, then the core's own
@@ -90,13 +91,13 @@ def constants(flexible) -> np.ndarray:
 # ---- a spatial scene as the model's arrays (reduced.mechanism.model.build asks these)
 RIGID_COLUMNS = BODY_OMEGA + 3   # what a run's record keeps of a body's row (its angular velocity)
 PROJECT_FIRST = True    # an accepted step is projected before its events are read (layout.Args)
-PARALLEL = 1e-9   # |1 - |u_b . u_j|| below which a journal's axis is aligned with its bore's
 
 
 class Geometry(FlexibleGeometry):
     """A spatial scene's bodies and ideal joints as the model's arrays: the coordinates, the
-    mass, the primitive constraints ([Nikravesh1988] ch. 7), the contacts of a cylindrical or
-    spherical clearance joint, torsion elements, and the consistent initial state."""
+    mass, the primitive constraints ([Nikravesh1988] ch. 7) of an ideal joint (`ideal`, which
+    the clearance joints' types close theirs with, reduced.mechanism.joints), torsion
+    elements, and the consistent initial state."""
 
     DIM, RIGID_COLUMNS, RIGID_COORDINATES, MODES, INTERFACES = 3, COLUMNS, COORDINATES, MODES, INTERFACES
 
@@ -112,10 +113,7 @@ class Geometry(FlexibleGeometry):
         scene, found = self.scene, []
         for j in scene.joints:
             found += [(j.body_i, j.point_i, "joints.point_i"), (j.body_j, j.point_j, "joints.point_j")]
-        for table in ("clearance_joints", "translational_joints"):
-            for c in getattr(scene, table):
-                found += [(c.bearing_body, c.bearing_point, f"{table}.bearing_point"),
-                          (c.journal_body, c.journal_point, f"{table}.journal_point")]
+        found += clearance_points(scene)
         for t in scene.torsion:
             found += [(t.body_i, self.frame_point(t.body_i, t.point_i), "torsion.point_i"),
                       (t.body_j, self.frame_point(t.body_j, t.point_j), "torsion.point_j")]
@@ -146,9 +144,8 @@ class Geometry(FlexibleGeometry):
         for j in self.scene.joints:
             u_i = unit_axis(j.axis_i, "axis_i") if j.axis_i else [0, 0, 1]
             u_j = unit_axis(j.axis_j, "axis_j") if j.axis_j else [0, 0, 1]
-            rows += joint_primitives(j.type, index[j.body_i], index[j.body_j], j.point_i, j.point_j,
-                                     np.array(u_i), np.array(u_j), rot[j.body_i], rot[j.body_j],
-                                     self.source)
+            rows += self.ideal(j.type, j.body_i, j.body_j, j.point_i, j.point_j, np.array(u_i),
+                               np.array(u_j), self.source)
             if j.name:
                 named[j.name] = (j, np.array(u_i))
         rows += [r for closure in closures for r in closure]
@@ -161,54 +158,12 @@ class Geometry(FlexibleGeometry):
                               speed=self.scene.drive.speed, profile=self.scene.drive.profile_columns()))
         return rows, len(rows) - 1
 
-    def closing(self, c) -> list:
-        """A clearance joint closed (ideal_kind): a revolute on the bore's axis, or a
-        spherical joint for a ball or a misaligned journal."""
-        u_b = np.array(unit_axis(c.bearing_axis, "bearing_axis")) if c.bearing_axis else np.zeros(3)
-        u_j = np.array(unit_axis(c.journal_axis, "journal_axis")) if c.journal_axis else np.zeros(3)
-        kind = ideal_kind(c, self.rot[c.bearing_body] @ u_b, self.rot[c.journal_body] @ u_j)
-        return joint_primitives(kind, self.index[c.bearing_body], self.index[c.journal_body],
-                                c.bearing_point, c.journal_point, u_b, u_j, self.rot[c.bearing_body],
-                                self.rot[c.journal_body], "clearance_joints")
-
-    def contacts(self, c, deltas, laws_data, source):
-        """A ball: one RADIAL contact (its normal force at the two centres, friction at the
-        contact point); a journal: the journal along its bore (SLICED; with rigid impacts its
-        two ends, AXIS_RADIAL) and its shoulders (PLANE, two-sided, frictionless): the
-        contacts' geometry and the force (N) or force per length (N/m) of its law at
-        `deltas`."""
-        from pinbore.reduced.mechanism.model import per_length_table   # noqa: PLC0415 (model imports us)
-
-        bb, bj = self.index[c.bearing_body], self.index[c.journal_body]
-        base = {layout.CONTACT_BEARING_BODY: bb, layout.CONTACT_JOURNAL_BODY: bj,
-                layout.CONTACT_BEARING_POINT: list(c.bearing_point),
-                layout.CONTACT_JOURNAL_POINT: list(c.journal_point),
-                layout.CONTACT_CLEARANCE: c.bearing_radius - c.journal_radius,
-                layout.CONTACT_RADIUS: c.bearing_radius}
-        table = np.full(deltas.size, np.nan)   # rigid: no law, never evaluated
-        scale = end = bulk = 0.0
-        if c.impact == "continuous":
-            scale, end, bulk, table = per_length_table(c, deltas, laws_data, source)
-        if c.type == "spherical":
-            return [base | {layout.CONTACT_KIND: layout.RADIAL}], table
-        u_b = unit_axis(c.bearing_axis, "bearing_axis")
-        u_j = unit_axis(c.journal_axis, "journal_axis")
-        if c.impact == "continuous":
-            out = [base | {layout.CONTACT_KIND: layout.SLICED, layout.CONTACT_BEARING_AXIS: u_b,
-                           layout.CONTACT_JOURNAL_AXIS: u_j, layout.CONTACT_LENGTH: c.length,
-                           layout.CONTACT_SLICES: c.slices, layout.CONTACT_END_LENGTH: end,
-                           layout.CONTACT_SCALE: scale, layout.CONTACT_COMPLIANCE: bulk}]
-        else:   # the journal's two ends against the bore's axis
-            out = [base | {layout.CONTACT_KIND: layout.AXIS_RADIAL, layout.CONTACT_BEARING_AXIS: u_b,
-                           layout.CONTACT_JOURNAL_POINT: list(np.asarray(c.journal_point)
-                                                              + side * 0.5 * c.length * np.asarray(u_j))}
-                   for side in (-1.0, 1.0)]
-        if c.axial_clearance is not None:
-            out.append(base | {layout.CONTACT_KIND: layout.PLANE, layout.CONTACT_BEARING_AXIS: u_b,
-                               layout.CONTACT_CLEARANCE: c.axial_clearance,
-                               layout.CONTACT_STIFFNESS: c.axial_stiffness if c.impact == "continuous" else 0.0,
-                               layout.CONTACT_SIDE: 0.0, layout.CONTACT_FRICTION_ON: 0.0})
-        return out, table
+    def ideal(self, kind, body_i, body_j, point_i, point_j, u_i, u_j, source) -> list:
+        """The primitive constraints of an ideal joint of `kind` (joint_primitives) between the
+        bodies named body_i and body_j, at their points point_i and point_j, u_i and u_j unit
+        axes in their frames (any for a spherical joint)."""
+        return joint_primitives(kind, self.index[body_i], self.index[body_j], point_i, point_j, u_i,
+                                u_j, self.rot[body_i], self.rot[body_j], source)
 
     def torsion(self, t) -> dict:
         """The relative angle about u_i = a_i x c_i (body i) from a_i to b_j (body j: a_i
@@ -272,17 +227,6 @@ class Geometry(FlexibleGeometry):
             parts[0].extend([q[7 * b:7 * b + 7], zeros])
             parts[1].extend([qd[7 * b:7 * b + 7], zeros])
         return np.concatenate(parts[0] + parts[1] + [rest])
-
-
-def ideal_kind(c, bore_axis, journal_axis) -> str:
-    """The ideal joint that closes a clearance joint: spherical for a ball; for a journal a
-    revolute on the bore's axis, or, when the journal's axis is tilted against the bore's at
-    the start (a misaligned joint, global axes given), a spherical joint at the bore's
-    centre: the journal centred, its tilt left to the other joints (a revolute could not
-    close)."""
-    if c.type == "spherical" or abs(abs(bore_axis @ journal_axis) - 1) > PARALLEL:
-        return "spherical"
-    return "revolute"
 
 
 def normals(u):
@@ -379,7 +323,7 @@ def drive_angle(model, cols):
 def slider_acceleration(model, cols):
     """The acceleration (m/s^2) of the first prismatic joint's slider along the guide's axis
     at the start (exact for a guide on the ground), None without one."""
-    guide = next((j for j in model.scene.joints if j.type == "prismatic"), None)
+    guide = next((j for j in model.scene.joints if j.guides_a_slider), None)
     if guide is None:
         return None
     body_i = {b.name: b for b in model.scene.bodies}.get(guide.body_i)
