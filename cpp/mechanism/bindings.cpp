@@ -169,6 +169,7 @@ Args args_of(nb::handle a, Held& held)
   args.flex = matrix<const double>(a, "flex", held);
   args.springs = matrix<const double>(a, "springs", held);
   args.loads = matrix<const double>(a, "loads", held);
+  args.wear = matrix<const double>(a, "wear", held);
   const std::ptrdiff_t nb_ = args.bodies(), nc = args.ncontacts();
   if (static_cast<std::ptrdiff_t>(args.offsets.size()) != nb_ + 1 or args.offsets[0] != 0
       or args.offsets[nb_] != static_cast<std::int64_t>(args.minv.size()))
@@ -188,6 +189,13 @@ Args args_of(nb::handle a, Held& held)
   for (std::ptrdiff_t k = 0; k < nc; ++k)
   {
     index_in(args.contacts(k, CONTACT_TABLE), 0, args.tables.rows, "a contact's table");
+    for (const int column : {CONTACT_BORE_WEAR, CONTACT_PIN_WEAR})
+      if (args.contacts(k, column) != 0.0)
+      {
+        index_in(args.contacts(k, column), 1, args.wear.rows + 1, "a contact's worn profile");
+        if (args.wear.cols < 3 or static_cast<int>(args.contacts(k, CONTACT_KIND)) != RADIAL)
+          throw std::invalid_argument("mechanism: a worn profile is a planar journal's, of 3 angles or more");
+      }
   }
   check_rows(args);
   return args;
@@ -290,7 +298,7 @@ double observe(double t, std::span<const double> y, std::span<double> dy, const 
   const Rows& contacts = args.contacts;
   for (std::ptrdiff_t k = 0; k < contacts.rows; ++k)
   {
-    depth[k] = E::contact_depth(work.bodies, contacts, k).delta;
+    depth[k] = E::contact_depth(args, work.bodies, k).delta;
     const auto e = sub(K::point_state(work.bodies, E::body(contacts, k, CONTACT_JOURNAL_BODY),
                                       contacts.cell<K::D>(k, CONTACT_JOURNAL_POINT)).position,
                        K::point_state(work.bodies, E::body(contacts, k, CONTACT_BEARING_BODY),
@@ -341,6 +349,7 @@ void bind_mechanism(nb::module_& parent)
   PINBORE_LAYOUT(CONTACT_AT_CONTACT) PINBORE_LAYOUT(CONTACT_STIFFNESS)
   PINBORE_LAYOUT(CONTACT_FRICTION_ON) PINBORE_LAYOUT(CONTACT_LENGTH) PINBORE_LAYOUT(CONTACT_SLICES)
   PINBORE_LAYOUT(CONTACT_END_LENGTH) PINBORE_LAYOUT(CONTACT_SCALE) PINBORE_LAYOUT(CONTACT_COMPLIANCE)
+  PINBORE_LAYOUT(CONTACT_BORE_WEAR) PINBORE_LAYOUT(CONTACT_PIN_WEAR) PINBORE_LAYOUT(CONTACT_WEAR_REACH)
   PINBORE_LAYOUT(CONTACT_COLUMNS) PINBORE_LAYOUT(RADIAL) PINBORE_LAYOUT(SLICED) PINBORE_LAYOUT(PLANE)
   PINBORE_LAYOUT(AXIS_RADIAL) PINBORE_LAYOUT(NO_FRICTION) PINBORE_LAYOUT(COULOMB)
   PINBORE_LAYOUT(STRIBECK) PINBORE_LAYOUT(LINEAR) PINBORE_LAYOUT(LUGRE) PINBORE_LAYOUT(DAHL)

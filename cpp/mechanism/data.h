@@ -28,7 +28,9 @@ inline constexpr int CONTACT_JOINT = CONTACT_KIND + 1, CONTACT_TABLE = CONTACT_K
                      CONTACT_STIFFNESS = CONTACT_KIND + 21, CONTACT_FRICTION_ON = CONTACT_KIND + 22,
                      CONTACT_LENGTH = CONTACT_KIND + 23, CONTACT_SLICES = CONTACT_KIND + 24,
                      CONTACT_END_LENGTH = CONTACT_KIND + 25, CONTACT_SCALE = CONTACT_KIND + 26,
-                     CONTACT_COMPLIANCE = CONTACT_KIND + 27, CONTACT_COLUMNS = CONTACT_KIND + 28;
+                     CONTACT_COMPLIANCE = CONTACT_KIND + 27, CONTACT_BORE_WEAR = CONTACT_KIND + 28,
+                     CONTACT_PIN_WEAR = CONTACT_KIND + 29, CONTACT_WEAR_REACH = CONTACT_KIND + 30,
+                     CONTACT_COLUMNS = CONTACT_KIND + 31;
 inline constexpr int RADIAL = 0, SLICED = 1, PLANE = 2, AXIS_RADIAL = 3;
 inline constexpr int NO_FRICTION = 0, COULOMB = 1, STRIBECK = 2, LINEAR = 3, LUGRE = 4, DAHL = 5,
                      IWAN = 6;
@@ -201,6 +203,7 @@ struct Args
   std::span<double> latched;
   std::span<std::int64_t> mode;
   Rows profile, flex, springs, loads;
+  Rows wear;   // worn profiles: a row per surface, its depth at angles evenly from -pi
   std::ptrdiff_t bodies() const { return static_cast<std::ptrdiff_t>(masses.size()); }
   std::ptrdiff_t ncontacts() const { return contacts.rows; }
 };

@@ -48,8 +48,10 @@
 #include "laws.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <vector>
 
 namespace pinbore::mechanism
@@ -296,6 +298,8 @@ struct Engine
     V at_journal, at_bearing;
     double along;
     V relative;
+    bool worn = false;   // a worn journal: the force at the centres with the torques below
+    double turn_bearing = 0.0, turn_journal = 0.0;   // d delta / d(angle) of each body's frame
   };
   struct Plane
   {
@@ -314,8 +318,92 @@ struct Engine
     return static_cast<std::int64_t>(contacts(k, column));
   }
 
-  static Radial radial_geometry(const Matrix<double>& s, const Rows& contacts, std::ptrdiff_t k)
+  /// A worn profile (row r of Args::wear: the depth at n angles of its body's frame evenly
+  /// from -pi, periodic) at the angle a: its depth, slope and curvature (Catmull-Rom
+  /// between the points: C1).
+  static std::array<double, 3> worn_depth(const Rows& wear, std::ptrdiff_t r, double a)
   {
+    const std::ptrdiff_t n = wear.cols;
+    const double step = 2.0 * std::numbers::pi / static_cast<double>(n);
+    double x = (a + std::numbers::pi) / step;
+    x -= static_cast<double>(n) * std::floor(x / static_cast<double>(n));
+    auto i = static_cast<std::ptrdiff_t>(x);
+    if (i >= n)
+      i = n - 1;
+    const double t = x - static_cast<double>(i);
+    auto at = [&](std::ptrdiff_t j) { return wear(r, ((j % n) + n) % n); };
+    const double p0 = at(i - 1), p1 = at(i), p2 = at(i + 1), p3 = at(i + 2);
+    const double c1 = -p0 + p2, c2 = 2 * p0 - 5 * p1 + 4 * p2 - p3, c3 = -p0 + 3 * p1 - 3 * p2 + p3;
+    return {0.5 * (2 * p1 + t * (c1 + t * (c2 + t * c3))),
+            0.5 * (c1 + t * (2 * c2 + 3 * t * c3)) / step,
+            0.5 * (2 * c2 + 6 * t * c3) / (step * step)};
+  }
+
+  /// A worn journal in its bore (the plane): the contact where they interfere most,
+  /// delta = max over phi of e . u(phi) - c - h_bore(phi - phi_b) - h_pin(phi - phi_j),
+  /// u(phi) the unit vector at phi, h the profiles in their frames (Args::wear); the normal
+  /// u(phi*), the rate u . e' + h_bore' w_b + h_pin' w_j and d delta / d phi_b = h_bore',
+  /// d delta / d phi_j = h_pin' (phi* maximises: the envelope theorem). The maximum is
+  /// searched on the profile's grid within the angles where e . u can still exceed its
+  /// value at e's direction less the two profiles' deepest (CONTACT_WEAR_REACH), then
+  /// refined by Newton's method on the smooth (C1) profiles.
+  static void worn_radial(const Args& args, const Matrix<double>& s, std::ptrdiff_t k, const V& e,
+                          const V& v, Radial& g)
+  {
+    if constexpr (D == 2)
+    {
+      const Rows& contacts = args.contacts;
+      const auto bore = static_cast<std::ptrdiff_t>(contacts(k, CONTACT_BORE_WEAR)) - 1;
+      const auto pin = static_cast<std::ptrdiff_t>(contacts(k, CONTACT_PIN_WEAR)) - 1;
+      const std::int64_t bb = body(contacts, k, CONTACT_BEARING_BODY),
+                         bj = body(contacts, k, CONTACT_JOURNAL_BODY);
+      const auto [phi_b, w_b] = K::frame_angle(s, bb, contacts.cell<D>(k, CONTACT_BEARING_POINT));
+      const auto [phi_j, w_j] = K::frame_angle(s, bj, contacts.cell<D>(k, CONTACT_JOURNAL_POINT));
+      auto profile = [&](std::ptrdiff_t r, double a) -> std::array<double, 3>
+      { return r < 0 ? std::array<double, 3>{0.0, 0.0, 0.0} : worn_depth(args.wear, r, a); };
+      auto f = [&](double phi, double& slope, double& curvature, double& hb, double& hp)
+      {
+        const auto b = profile(bore, phi - phi_b), j = profile(pin, phi - phi_j);
+        const double c = std::cos(phi), sn = std::sin(phi), eu = e[0] * c + e[1] * sn;
+        hb = b[1], hp = j[1];
+        slope = -e[0] * sn + e[1] * c - b[1] - j[1];
+        curvature = -eu - b[2] - j[2];
+        return eu - b[0] - j[0];
+      };
+      const double size = norm(e), reach = contacts(k, CONTACT_WEAR_REACH);
+      const double centre = size > 0.0 ? std::atan2(e[1], e[0]) : 0.0;
+      const double step = 2.0 * std::numbers::pi / static_cast<double>(args.wear.cols);
+      const double spread = reach >= 2.0 * size ? std::numbers::pi : std::acos(1.0 - reach / size);
+      const auto m = static_cast<std::ptrdiff_t>(std::ceil(spread / step)) + 1;
+      double best = -std::numeric_limits<double>::infinity(), phi = centre, sl, cu, hb, hp;
+      for (std::ptrdiff_t i = -m; i <= m; ++i)
+      {
+        const double a = centre + static_cast<double>(i) * step, value = f(a, sl, cu, hb, hp);
+        if (value > best)
+          best = value, phi = a;
+      }
+      for (int it = 0; it < 4; ++it)   // Newton on f' = 0, within a grid step of the best point
+      {
+        f(phi, sl, cu, hb, hp);
+        if (not (cu < 0.0))
+          break;
+        phi -= std::clamp(sl / cu, -step, step);
+      }
+      const double value = f(phi, sl, cu, hb, hp);
+      const V n{std::cos(phi), std::sin(phi)};
+      g.delta = value - contacts(k, CONTACT_CLEARANCE);
+      g.normal = n;
+      g.point = add(g.at_bearing, scaled(n, contacts(k, CONTACT_RADIUS)));
+      g.rate = dot(n, v) + hb * w_b + hp * w_j;
+      g.worn = true;
+      g.turn_bearing = hb;
+      g.turn_journal = hp;
+    }
+  }
+
+  static Radial radial_geometry(const Args& args, const Matrix<double>& s, std::ptrdiff_t k)
+  {
+    const Rows& contacts = args.contacts;
     const std::int64_t bb = body(contacts, k, CONTACT_BEARING_BODY),
                        bj = body(contacts, k, CONTACT_JOURNAL_BODY);
     V pb = K::point_state(s, bb, contacts.cell<D>(k, CONTACT_BEARING_POINT)).position;
@@ -333,6 +421,13 @@ struct Engine
     }
     const double size = norm(e);
     const double delta = size - contacts(k, CONTACT_CLEARANCE);
+    if (contacts(k, CONTACT_BORE_WEAR) != 0.0 or contacts(k, CONTACT_PIN_WEAR) != 0.0)
+    {   // the force between the centres: its velocities there
+      Radial g{delta, axis<D>(0), pb, 0.0, pj, pb, along,
+               sub(K::material_velocity(s, bj, pj), K::material_velocity(s, bb, pb))};
+      worn_radial(args, s, k, e, g.relative, g);
+      return g;
+    }
     if (size == 0.0)
       return {delta, axis<D>(0), pb, 0.0, pj, pb, along, zero<D>()};
     const V n = direction(e, size);
@@ -365,8 +460,9 @@ struct Engine
     return {delta, n, x, dot(n, v), side, v};
   }
 
-  static Depth contact_depth(const Matrix<double>& s, const Rows& contacts, std::ptrdiff_t k)
+  static Depth contact_depth(const Args& args, const Matrix<double>& s, std::ptrdiff_t k)
   {
+    const Rows& contacts = args.contacts;
     const int kind = static_cast<int>(contacts(k, CONTACT_KIND));
     if (kind == PLANE)
     {
@@ -380,7 +476,7 @@ struct Engine
       else
         return {-std::numeric_limits<double>::infinity(), 0.0};   // the plane has none
     }
-    const Radial g = radial_geometry(s, contacts, k);
+    const Radial g = radial_geometry(args, s, k);
     return {g.delta, g.rate};
   }
 
@@ -407,7 +503,7 @@ struct Engine
       w.rhs_c[row] = gamma;
       return;
     }
-    const Radial g = radial_geometry(s, contacts, k);
+    const Radial g = radial_geometry(args, s, k);
     const V s_j = contacts.cell<D>(k, CONTACT_JOURNAL_POINT);
     const auto pj = K::point_state(s, bj, s_j);
     const auto u = K::vector_state(s, bb, bp, baxis);
@@ -594,6 +690,52 @@ struct Engine
                              static_cast<std::size_t>(args.tables.cols));
   }
 
+  /// A worn journal's forces (worn_radial): the normal force along u(phi*) between the
+  /// centres with the torques -F d delta / d phi on the two bodies' frames (the force of the
+  /// potential of delta), friction at the bore's surface point along its tangent as on a
+  /// round bore; the dissipated power (NaN beyond the law's table; 0 when open).
+  static double worn_contact(const Args& args, const Work& w, std::span<const double> y,
+                             std::span<double> dy, std::ptrdiff_t k, double speed, const Radial& g)
+  {
+    if constexpr (D == 2)
+    {
+      const Rows& contacts = args.contacts;
+      const Matrix<double>& s = w.bodies;
+      const std::int64_t bb = body(contacts, k, CONTACT_BEARING_BODY),
+                         bj = body(contacts, k, CONTACT_JOURNAL_BODY);
+      if (g.delta <= 0.0)
+        return 0.0;
+      const double f_el = elastic_force(args, k, g.delta);
+      const double f_n = laws::hysteresis_force(f_el, g.rate, speed, contact_chi(contacts, k, speed));
+      if (not std::isfinite(f_n))
+        return NaN;
+      w.normal[k] = f_n;
+      K::push(w.force, s, bj, scaled(g.normal, -f_n), g.at_journal, args.offsets);
+      K::push(w.force, s, bb, scaled(g.normal, f_n), g.at_bearing, args.offsets);
+      K::push_torque(w.force, s, bj, contacts.cell<D>(k, CONTACT_JOURNAL_POINT), -f_n * g.turn_journal,
+                     args.offsets);
+      K::push_torque(w.force, s, bb, contacts.cell<D>(k, CONTACT_BEARING_POINT), -f_n * g.turn_bearing,
+                     args.offsets);
+      double power = (f_n - f_el) * g.rate;
+      if (contacts(k, CONTACT_FRICTION_ON) > 0.0
+          and static_cast<int>(contacts(k, CONTACT_FRICTION_LAW)) != NO_FRICTION)
+      {
+        const V c = g.point;
+        const V vc = sub(K::material_velocity(s, bj, c), K::material_velocity(s, bb, c));
+        const Friction r = contact_friction(args, w, k, f_n, g.normal, vc, y, dy,
+                                            static_cast<std::ptrdiff_t>(contacts(k, CONTACT_STATE)),
+                                            g.at_journal, g.delta);
+        w.friction[k] = r.size;
+        K::push(w.force, s, bj, r.force, c, args.offsets);
+        K::push(w.force, s, bb, negated(r.force), c, args.offsets);
+        power += r.power;
+      }
+      return power;
+    }
+    else
+      return 0.0;
+  }
+
   /// A continuous RADIAL, AXIS_RADIAL or PLANE contact's forces: its dissipated power (NaN
   /// beyond its law's table; 0 when open).
   static double point_contact(const Args& args, const Work& w, std::span<const double> y,
@@ -614,9 +756,11 @@ struct Engine
     }
     else
     {
-      const Radial g = radial_geometry(s, contacts, k);
+      const Radial g = radial_geometry(args, s, k);
       delta = g.delta, n = g.normal, rate = g.rate, c = g.point, v = g.relative;
       xj = g.at_journal, xb = g.at_bearing, at_contact = contacts(k, CONTACT_AT_CONTACT) > 0.0;
+      if (g.worn)
+        return worn_contact(args, w, y, dy, k, speed, g);
     }
     if (delta <= 0.0)
       return 0.0;
@@ -1251,7 +1395,7 @@ struct Engine
                                std::ptrdiff_t k, double target_restitution)
   {
     refresh(args, y, w);
-    const double rate = contact_depth(w.bodies, args.contacts, k).rate;
+    const double rate = contact_depth(args, w.bodies, k).rate;
     const double before = K::kinetic_energy(args, y);
     const std::int64_t held = args.mode[k];
     args.mode[k] = 1;

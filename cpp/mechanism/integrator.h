@@ -103,7 +103,7 @@ struct Hooks
     tracked.in_contact.assign(nc, 0);
     for (std::ptrdiff_t k = 0; k < nc; ++k)
     {
-      tracked.depth[k] = E::contact_depth(space.work.bodies, contacts, k).delta;
+      tracked.depth[k] = E::contact_depth(args, space.work.bodies, k).delta;
       tracked.in_contact[k] = tracked.depth[k] > -onset_tol
                               and static_cast<int>(contacts(k, CONTACT_IMPACT)) == CONTINUOUS;
     }
@@ -130,7 +130,7 @@ struct Hooks
     for (std::ptrdiff_t k = 0; k < args.contacts.rows; ++k)
       if (not tr.in_contact[k] and args.mode[k] == 0)
       {
-        const double d_new = E::contact_depth(s, args.contacts, k).delta;
+        const double d_new = E::contact_depth(args, s, k).delta;
         shorten = std::min(shorten, onset_shortening(tr.depth[k], d_new, onset_tol));
       }
     if (tr.impulse_contacts and h > event_dt)
@@ -173,7 +173,7 @@ struct Hooks
         if (tr.held_force[k] < 0.0)
         {
           E::refresh(args, y, w);
-          if (E::contact_depth(w.bodies, args.contacts, k).rate > 0.0)
+          if (E::contact_depth(args, w.bodies, k).rate > 0.0)
             E::impulse_energy(y, args.nq, E::apply_impulse(t, y, args, w, k, 0.0));
           args.mode[k] = 0;
           changed = true;
@@ -207,7 +207,7 @@ struct Hooks
         E::refresh(args, y, w);
         current = true;
       }
-      const auto d = E::contact_depth(w.bodies, contacts, k);
+      const auto d = E::contact_depth(args, w.bodies, k);
       const double delta = d.delta, rate = d.rate;
       tr.depth[k] = delta;
       bool onset = false;
@@ -283,7 +283,7 @@ struct Hooks
       }
       else
       {
-        const auto g = E::radial_geometry(w.bodies, contacts, k);
+        const auto g = E::radial_geometry(args, w.bodies, k);
         delta = g.delta, rate = g.rate, n = g.normal;
       }
       double f_n = 0.0;

@@ -14,6 +14,8 @@ constraint forces, then the friction states of the contacts.
 
 from collections import namedtuple
 
+import numpy as np
+
 # ---- contacts (Model.contacts): one row per contact of a clearance joint. A revolute
 # clearance joint of a planar mechanism and a spherical one have one contact (RADIAL); a
 # cylindrical one the journal along its bore (SLICED; with rigid impacts: its two ends,
@@ -57,7 +59,13 @@ CONTACT_SLICES = CONTACT_KIND + 24       # SLICED: slices n
 CONTACT_END_LENGTH = CONTACT_KIND + 25   # SLICED: end length e of a sliced law (m)
 CONTACT_SCALE = CONTACT_KIND + 26        # SLICED: stiffness factor a of a sliced law
 CONTACT_COMPLIANCE = CONTACT_KIND + 27   # SLICED: bulk compliance c_b (m^2/N; 0: none)
-CONTACT_COLUMNS = CONTACT_KIND + 28
+# a worn planar journal (RADIAL): its bore's and its pin's profile (their row in Args.wear plus
+# one; 0: not worn) and the deepest the two reach together (m): the contact is where they
+# interfere most (cpp/mechanism/engine.h, worn_radial)
+CONTACT_BORE_WEAR = CONTACT_KIND + 28
+CONTACT_PIN_WEAR = CONTACT_KIND + 29
+CONTACT_WEAR_REACH = CONTACT_KIND + 30
+CONTACT_COLUMNS = CONTACT_KIND + 31
 RADIAL, SLICED, PLANE, AXIS_RADIAL = 0, 1, 2, 3   # AXIS_RADIAL: a journal point from the bore's axis
 
 # friction laws (column CONTACT_FRICTION_LAW) and their parameter columns
@@ -150,13 +158,16 @@ LOG_COLUMNS = 4
 # m/s^2), offsets (per body its first velocity column; the last entry their number),
 # profile: the drive table's segments (SEG_*; none: an empty array), flex: per body the
 # constants of a flexible body's modes (the body kind's layout; a rigid body's row is zero),
-# springs and loads: the spring-dampers' and the harmonic loads' rows (SPRING_*, LOAD_*).
+# springs and loads: the spring-dampers' and the harmonic loads' rows (SPRING_*, LOAD_*);
+# wear: the worn profiles of journals and bores, a row each, the depth (m) at angles of its
+# body's frame evenly spaced from -pi (none: an empty array).
 # speeds: impact speed per contact; latched: a flag per torsion element; mode: per contact 1
 # while an impulse contact is held; all updated in place by the integrator.
 Args = namedtuple("Args", [
     "nq", "like", "project_first", "masses", "minv", "inertia", "inertia_inv", "gravity",
     "offsets", "primitives", "baumgarte", "contacts", "speeds", "grid_log0", "grid_step", "tables",
-    "torsion", "latched", "mode", "profile", "flex", "springs", "loads"])
+    "torsion", "latched", "mode", "profile", "flex", "springs", "loads", "wear"],
+    defaults=[np.zeros((0, 1))])
 
 # The buffers of the right-hand side: a row per body of its kinematic state (the body kind's
 # layout), the velocity of every Jacobian column, the constraint rows (Jacobian against the

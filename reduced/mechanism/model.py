@@ -137,12 +137,15 @@ def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
     profile = drive_segments(scene.drive)
     laws_data = None if ideal else laws_file(scene, base, source)
     grid_log0, grid_step, deltas = log_grid(GRID_LOW, table_reach(scene), GRID_POINTS)
-    contacts, tables, rows = [], [], []
+    contacts, tables, rows, wear = [], [], [], []
     for j, (c, t) in enumerate([] if ideal else zip(clearances, types)):
         law = law_columns(c, laws_data, source)
         geometries, table = joint_contacts(geometry, t, deltas, laws_data, source)
+        worn = t.worn(base, source)
         start = len(contacts)
-        for g in geometries:
+        for i, g in enumerate(geometries):
+            if i in worn:
+                g = g | worn_columns(wear, *worn[i])
             contacts.append(row(CONTACT_COLUMNS, law | g | {CONTACT_JOINT: j, CONTACT_TABLE: len(tables)}))
         tables.append(np.log(table))
         rows.append(range(start, len(contacts)))
@@ -161,7 +164,7 @@ def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
         torsion=torsion_rows(geometry, scene),
         latched=np.zeros(len(scene.torsion)), mode=np.zeros(contacts.shape[0], np.int64),
         profile=profile, flex=geometry.flex(), springs=spring_rows(geometry, scene),
-        loads=load_rows(geometry, scene))
+        loads=load_rows(geometry, scene), wear=worn_rows(wear))
     model = Model(scene, kind, names, args, [] if ideal else clearances, rows, laws_data, drive_row,
                   states, closures=closures, geometry=geometry)
     model.y0 = geometry.place(model, [] if ideal else [(t.closing(geometry), c.start)
@@ -171,6 +174,23 @@ def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
     elif scene.integrator.method == "dopri5":
         resolvable(model, source)
     return model
+
+
+def worn_columns(wear: list, bore, pin) -> dict:
+    """A worn contact's columns: its bore's and its pin's rows of Args.wear (appended to
+    `wear`; one plus their index) and the deepest they reach together (m)."""
+    wear += [np.asarray(bore, float), np.asarray(pin, float)]
+    return {layout.CONTACT_BORE_WEAR: len(wear) - 1, layout.CONTACT_PIN_WEAR: len(wear),
+            layout.CONTACT_WEAR_REACH: float(np.max(bore) + np.max(pin))}
+
+
+def worn_rows(wear: list) -> np.ndarray:
+    """Args.wear: the worn profiles, a row each (all of one length; none: an empty array)."""
+    if not wear:
+        return np.zeros((0, 1))
+    if len({w.size for w in wear}) != 1:
+        raise InputError("the worn joints' profiles must have the same number of angles")
+    return np.array(wear)
 
 
 STEPS_PER_PERIOD_LEAST = 2   # no method follows a vibration in fewer steps a period

@@ -17,6 +17,7 @@ import numpy as np
 from pinbore.core import scene as scenes
 from pinbore.core.errors import InputError
 from pinbore.core.output import atomic_directory
+from pinbore.laws import wearfile
 from pinbore.reduced.wear import history, pressure, profile
 from pinbore.reduced.wear import summary as wear_summary
 from pinbore.reduced.wear.scene import WearScene
@@ -91,7 +92,7 @@ def run(scene_path, out) -> int:
               "step's scaled (extrapolated)", file=sys.stderr)
     inputs = [mechanism_path, laws_path(mechanism, mechanism_path.parent)]
     with atomic_directory(out, inputs=[p for p in inputs if p is not None]) as tmp:
-        write_profiles(tmp / "wear.csv", worn)
+        wearfile.write(tmp / "wear.csv", wearfile.Profiles(np.degrees(worn["angles"]), worn["bore"], worn["pin"]))
         wear_summary.write(tmp / wear_summary.SUMMARY, result)
         picture(tmp / "wear.png", worn, joint, scene)
     return 0
@@ -137,14 +138,6 @@ def summary(scene, source, mechanism_path, table, cycle, worn, period,
         sliding_distance_in_contact_per_cycle_m=slid, peak_force_per_length_N_per_m=peak,
         fe_force_range_N_per_m=[0.0, float(table.forces[-1])],
         extrapolated=bool(peak > table.forces[-1]), **surfaces)
-
-
-def write_profiles(path: Path, worn: dict) -> None:
-    """wear.csv: per angle of a surface's frame (deg) the bore's and the pin's worn depth (m)."""
-    rows = ["angle_deg,bore_depth_m,pin_depth_m"]
-    rows += [f"{math.degrees(a):.4f},{b:.9e},{p:.9e}"
-             for a, b, p in zip(worn["angles"], worn["bore"], worn["pin"])]
-    path.write_text("\n".join(rows) + "\n")
 
 
 def picture(path: Path, worn: dict, joint, scene) -> None:

@@ -42,6 +42,12 @@ class Clearance:
         throughout with rigid impacts: no law, never evaluated)."""
         raise NotImplementedError
 
+    def worn(self, base, source: str) -> dict:
+        """The worn profiles its contacts run on: {contact (its index in `contacts`): (the
+        bore's depths, the pin's depths) (m, at angles evenly spaced from -pi in the bearing's
+        and the journal's frames)}; none by default (round surfaces)."""
+        return {}
+
     def roles(self, rows) -> dict:
         """Its contacts' rows (`rows`, in the order of `contacts`) by role: "main" across the
         joint, "axial" along it (a journal's shoulders); every row across it by default."""

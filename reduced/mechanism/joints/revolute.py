@@ -5,6 +5,7 @@ offset from the bearing's centre.
 
 import math
 import warnings
+from pathlib import Path
 from typing import Literal
 
 import numpy as np
@@ -32,10 +33,16 @@ class ClearanceJoint(JointMaterials, ContactLaw):
     # ideal: centred, moving with the ideal joint; free: centred, velocities as given;
     # placed: where the bodies' positions put it, velocities as given
     start: Literal["ideal", "free", "placed"] = "ideal"
+    wear_file: str | None = pydantic.Field(default=None, description=(
+        "a wear.csv (pinbore wear): the bore's and the pin's worn depth against angle in their "
+        "bodies' frames; the journal then meets its bore where the worn surfaces interfere most"))
 
     @pydantic.model_validator(mode="after")
     def _normal_law(self):
         if self.impact != "continuous":
+            if self.wear_file is not None:
+                raise ValueError("wear_file: a worn joint's contact is continuous (impact = "
+                                 "\"continuous\"), not a rigid impact")
             return self
         check_normal_law(self.normal_law)
         if self.normal_law != "hertz_point" and self.length is None:
@@ -62,6 +69,17 @@ class RevoluteClearance(Bore):
         if c.impact != "continuous":
             return [radial], np.full(deltas.size, np.nan)   # rigid: no law, never evaluated
         return [radial], self.force(deltas, laws_data, source)
+
+    def worn(self, base, source: str) -> dict:
+        """Its worn bore and pin (wear_file), if it has them."""
+        if self.c.wear_file is None:
+            return {}
+        from pinbore.laws import wearfile   # noqa: PLC0415
+
+        path = Path(self.c.wear_file)
+        profiles = wearfile.read(path if path.is_absolute() else Path(base) / path,
+                                 f"{source}: clearance joint {self.c.name}: wear_file")
+        return {0: (profiles.bore, profiles.pin)}
 
     def columns(self, across: dict, roles: dict, seen: dict) -> dict:
         """The journal's offset from the bearing's centre (ecc_x, ecc_y, m), then the columns
