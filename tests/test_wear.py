@@ -288,3 +288,44 @@ def test_a_bad_wear_file_is_one_line(tmp_path, text, message):
     done = pinbore("reduced", tmp_path / "scene.toml", "--out", tmp_path / "out")
     assert done.returncode == 2 and message in done.stderr and "wear_file" in done.stderr, done.stderr
     assert len(done.stderr.strip().splitlines()) == 1
+
+
+# ---- cycle jumping
+
+def test_cycle_jumping_follows_an_accelerating_wear_in_closed_form():
+    """dh/dN = a + b h (a wear that grows with the depth) from h = 0: h(N) = a (e^{bN} - 1) / b.
+    The jumps' error estimates stay within the tolerance, and the result is within it of
+    the closed form after 1e5 cycles (b N = 2); a tolerance 4 times smaller is about 4
+    times closer (the trapezoidal rule: second order), with more jumps."""
+    from pinbore.reduced.wear import jumping
+
+    a = np.array([1e-9, 2e-9, 0.5e-9])   # m per cycle at three angles
+    b, cycles = 2e-5, 1e5
+    exact = a * np.expm1(b * cycles) / b
+    errors, counts = [], []
+    for tolerance in (1e-6, 0.25e-6):
+        h, jumps = jumping.jump(lambda h: (a + b * h, None), np.zeros(3), cycles, tolerance, 1000.0)
+        assert max(jumps.errors) <= tolerance and jumps.cycles[-1] == pytest.approx(cycles)
+        errors.append(np.abs(h - exact).max())
+        counts.append(len(jumps.cycles))
+        assert errors[-1] < 0.01 * exact.max()
+    assert errors[1] < errors[0] / 3 and counts[1] > counts[0]
+
+
+def test_the_coupled_wear_runs_the_mechanism_on_its_worn_joint(tmp_path, flores_fe):
+    """[coupling]: the jumps cover the cycles, each within the tolerance, one run of the worn
+    mechanism each (the rate at the predictor stands for the next jump's start) besides the
+    first; the last jump's record is the written profile's deepest wear."""
+    import json
+
+    data = wear_scene(tmp_path, flores_fe, cycles=200.0,
+                      coupling={"tolerance": 1e-3, "first_jump": 100.0})
+    (tmp_path / "wear.toml").write_text(tomli_w.dumps(data))
+    done = pinbore("wear", tmp_path / "wear.toml", "--out", tmp_path / "out")
+    assert done.returncode == 0, done.stderr
+    result = json.loads((tmp_path / "out" / "summary.json").read_text())
+    jumps = result["jumps"]
+    assert result["coupled"] and [j["cycles"] for j in jumps] == [0.0, 100.0, 200.0]
+    assert result["mechanism_runs"] == 3 and result["refused_jumps"] == 0
+    assert all(j["error_m"] <= 1e-3 for j in jumps)
+    assert jumps[-1]["bore_max_depth_m"] == pytest.approx(result["bore"]["max_depth_m"], rel=1e-12)

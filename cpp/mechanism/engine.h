@@ -339,14 +339,48 @@ struct Engine
             0.5 * (2 * c2 + 6 * t * c3) / (step * step)};
   }
 
+  /// The maximum of f (a C1 function returning its value, slope and curvature) within a
+  /// step of a sample a that is no lower than its neighbours: f' = 0 by Newton's method
+  /// safeguarded by bisection while f' changes sign across [a - step, a + step] (to 1e-14
+  /// rad: converged whatever the sample it starts from, so the maximum found varies
+  /// continuously as the samples slide); a itself when f' does not change sign there.
+  template <class F>
+  static double local_maximum(F& f, double a, double step)
+  {
+    double sl, cu, hb, hp;
+    double lo = a - step, hi = a + step;
+    f(lo, sl, cu, hb, hp);
+    const double low_slope = sl;
+    f(hi, sl, cu, hb, hp);
+    if (not (low_slope > 0.0 and sl < 0.0))
+      return a;
+    double x = a, moved = hi - lo;
+    for (int it = 0; it < 60 and hi - lo > 1e-14; ++it)
+    {
+      f(x, sl, cu, hb, hp);
+      if (sl == 0.0)
+        break;
+      (sl > 0.0 ? lo : hi) = x;
+      const double newton = cu < 0.0 ? x - sl / cu : NaN;
+      const double next = (newton > lo and newton < hi and std::abs(newton - x) < 0.5 * moved)
+                              ? newton
+                              : 0.5 * (lo + hi);
+      moved = std::abs(next - x);
+      x = next;
+      if (moved < 1e-15)
+        break;
+    }
+    return x;
+  }
+
   /// A worn journal in its bore (the plane): the contact where they interfere most,
   /// delta = max over phi of e . u(phi) - c - h_bore(phi - phi_b) - h_pin(phi - phi_j),
   /// u(phi) the unit vector at phi, h the profiles in their frames (Args::wear); the normal
   /// u(phi*), the rate u . e' + h_bore' w_b + h_pin' w_j and d delta / d phi_b = h_bore',
   /// d delta / d phi_j = h_pin' (phi* maximises: the envelope theorem). The maximum is
-  /// searched on the profile's grid within the angles where e . u can still exceed its
-  /// value at e's direction less the two profiles' deepest (CONTACT_WEAR_REACH), then
-  /// refined by Newton's method on the smooth (C1) profiles.
+  /// searched at four samples a profile interval within the angles where e . u can still
+  /// exceed its value at e's direction less the two profiles' deepest (CONTACT_WEAR_REACH),
+  /// each local maximum of the samples refined (local_maximum) on the C1 profiles.
   static void worn_radial(const Args& args, const Matrix<double>& s, std::ptrdiff_t k, const V& e,
                           const V& v, Radial& g)
   {
@@ -372,22 +406,33 @@ struct Engine
       };
       const double size = norm(e), reach = contacts(k, CONTACT_WEAR_REACH);
       const double centre = size > 0.0 ? std::atan2(e[1], e[0]) : 0.0;
-      const double step = 2.0 * std::numbers::pi / static_cast<double>(args.wear.cols);
+      // four samples a profile interval: the worn surfaces' extrema, a few intervals apart,
+      // each bracketed alone by its samples
+      const double step = 0.5 * std::numbers::pi / static_cast<double>(args.wear.cols);
       const double spread = reach >= 2.0 * size ? std::numbers::pi : std::acos(1.0 - reach / size);
       const auto m = static_cast<std::ptrdiff_t>(std::ceil(spread / step)) + 1;
-      double best = -std::numeric_limits<double>::infinity(), phi = centre, sl, cu, hb, hp;
-      for (std::ptrdiff_t i = -m; i <= m; ++i)
+      // the profile's grid about e's direction, then each of its local maxima refined by
+      // Newton's method (within a grid step): the largest refined one is the contact, a
+      // maximum that varies continuously with the bodies' motion (the largest sample would
+      // jump between two lobes before their maxima cross)
+      const std::ptrdiff_t count = 2 * m + 1;
+      double previous = -std::numeric_limits<double>::infinity(), sl, cu, hb, hp;
+      double here = f(centre - static_cast<double>(m) * step, sl, cu, hb, hp);
+      double best = -std::numeric_limits<double>::infinity(), phi = centre;
+      for (std::ptrdiff_t i = 0; i < count; ++i)
       {
-        const double a = centre + static_cast<double>(i) * step, value = f(a, sl, cu, hb, hp);
-        if (value > best)
-          best = value, phi = a;
-      }
-      for (int it = 0; it < 4; ++it)   // Newton on f' = 0, within a grid step of the best point
-      {
-        f(phi, sl, cu, hb, hp);
-        if (not (cu < 0.0))
-          break;
-        phi -= std::clamp(sl / cu, -step, step);
+        const double a = centre + static_cast<double>(i - m) * step;
+        const double next = i + 1 < count ? f(a + step, sl, cu, hb, hp)
+                                          : -std::numeric_limits<double>::infinity();
+        if (here >= previous and here >= next)
+        {
+          const double x = local_maximum(f, a, step);
+          const double value = f(x, sl, cu, hb, hp);
+          if (value > best)
+            best = value, phi = x;
+        }
+        previous = here;
+        here = next;
       }
       const double value = f(phi, sl, cu, hb, hp);
       const V n{std::cos(phi), std::sin(phi)};

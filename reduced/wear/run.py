@@ -10,6 +10,7 @@ against the FE run's range) and DIR/wear.png.
 
 import math
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +19,7 @@ from pinbore.core import scene as scenes
 from pinbore.core.errors import InputError
 from pinbore.core.output import atomic_directory
 from pinbore.laws import wearfile
-from pinbore.reduced.wear import history, pressure, profile
+from pinbore.reduced.wear import history, jumping, pressure, profile
 from pinbore.reduced.wear import summary as wear_summary
 from pinbore.reduced.wear.scene import WearScene
 
@@ -71,21 +72,27 @@ def run(scene_path, out) -> int:
     mechanism, mechanism_path, joint, period = mechanism_of(scene, base, source)
     table = pressure.read(resolved(base, scene.pressure_file), resolved(base, scene.curve_file), source)
     check_radii(table, joint, source)
-    from pinbore.reduced.mechanism.model import build, laws_path   # noqa: PLC0415
-    from pinbore.reduced.mechanism.run import STATUS, simulate   # noqa: PLC0415
+    from pinbore.reduced.mechanism.model import laws_path   # noqa: PLC0415
 
-    model = build(mechanism, str(mechanism_path), mechanism_path.parent)
-    trajectory = simulate(model)
-    if trajectory.status != 0:
-        print(f"pinbore wear: {mechanism_path}: the mechanism stopped at t = {trajectory.t_end:.6g} s "
-              f"({STATUS[trajectory.status]}): no cycle to wear by; nothing written", file=sys.stderr)
+    at = profile.angles(scene.points)
+    try:
+        with tempfile.TemporaryDirectory(prefix="pinbore-wear-") as folder:
+            cycle = Cycle(scene, mechanism, mechanism_path, table, period, at, Path(folder))
+            if scene.coupling is None:
+                rates, last = cycle(None)
+                worn = {"angles": at, "bore": scene.cycles * rates["bore"], "pin": scene.cycles * rates["pin"]}
+                jumps = None
+            else:
+                depth, jumps = jumping.jump(
+                    lambda h: cycle(split(h)), np.zeros(2 * at.size), scene.cycles,
+                    scene.coupling.tolerance, scene.coupling.first_jump or scene.cycles / 20,
+                    record=lambda h, info: jump_record(split(h), info))
+                last = cycle.last
+                worn = {"angles": at} | split(depth)
+    except Stopped as err:
+        print(f"pinbore wear: {mechanism_path}: {err}: nothing written", file=sys.stderr)
         return 1
-    j = [c.name for c in model.joints].index(scene.joint)
-    end = trajectory.times[-1]
-    periods = averaged_periods(end, period)
-    cycle = history.of_run(model, trajectory, j, (end - periods * period, end))
-    worn = wear(scene, table, cycle, periods)
-    result = summary(scene, source, mechanism_path, table, cycle, worn, period, periods)
+    result = summary(scene, source, mechanism_path, table, last, worn, period, cycle.periods, jumps)
     if result.extrapolated:
         print(f"pinbore wear: {source}: the joint's load reaches {result.peak_force_per_length_N_per_m:.4g} N/m, "
               f"beyond the FE run's {table.forces[-1]:.4g} N/m: the pressure there is the last "
@@ -94,8 +101,67 @@ def run(scene_path, out) -> int:
     with atomic_directory(out, inputs=[p for p in inputs if p is not None]) as tmp:
         wearfile.write(tmp / "wear.csv", wearfile.Profiles(np.degrees(worn["angles"]), worn["bore"], worn["pin"]))
         wear_summary.write(tmp / wear_summary.SUMMARY, result)
-        picture(tmp / "wear.png", worn, joint, scene)
+        picture(tmp / "wear.png", worn, joint, scene, result)
     return 0
+
+
+class Stopped(Exception):
+    """The mechanism did not run to its end."""
+
+
+class Cycle:
+    """The wear of one cycle (m per cycle, bore and pin, on `at`) of the joint worn by given
+    profiles (None: new): the mechanism run on them (its joint's wear_file a wear.csv in
+    `folder`), its periods after the first averaged; `last` the last run's joint history."""
+
+    def __init__(self, scene, mechanism, mechanism_path, table, period, at, folder: Path):
+        self.scene, self.mechanism, self.path, self.table = scene, mechanism, mechanism_path, table
+        self.period, self.at, self.folder = period, at, folder
+        self.last, self.periods = None, 1
+
+    def __call__(self, worn: dict | None):
+        from pinbore.reduced.mechanism.model import build   # noqa: PLC0415
+        from pinbore.reduced.mechanism.run import STATUS, simulate   # noqa: PLC0415
+
+        mechanism = self.mechanism
+        if worn is not None:
+            path = self.folder / "wear.csv"
+            wearfile.write(path, wearfile.Profiles(np.degrees(self.at), worn["bore"], worn["pin"]))
+            joints = [c.model_copy(update={"wear_file": str(path)}) if c.name == self.scene.joint else c
+                      for c in mechanism.clearance_joints]
+            mechanism = mechanism.model_copy(update={"clearance_joints": joints})
+        model = build(mechanism, str(self.path), self.path.parent)
+        trajectory = simulate(model)
+        if trajectory.status != 0:
+            raise Stopped(f"the mechanism stopped at t = {trajectory.t_end:.6g} s "
+                          f"({STATUS[trajectory.status]})" + ("" if worn is None else
+                                                               " on the worn joint"))
+        j = [c.name for c in model.joints].index(self.scene.joint)
+        end = trajectory.times[-1]
+        self.periods = averaged_periods(end, self.period)
+        self.last = cycle = history.of_run(model, trajectory, j, (end - self.periods * self.period, end))
+        load = cycle.force / self.scene.length
+        rates = {name: profile.worn_depth(self.table, cycle.time, load, angle, cycle.sliding_speed,
+                                          getattr(self.scene, name).wear_coefficient, self.at, radius)
+                       / self.periods
+                 for name, angle, radius in (("bore", cycle.bore_angle, self.table.bore_radius),
+                                             ("pin", cycle.pin_angle, self.table.pin_radius))}
+        if worn is None:
+            return rates, cycle
+        return np.concatenate([rates["bore"], rates["pin"]]), cycle
+
+
+def split(h: np.ndarray) -> dict:
+    """The bore's and the pin's halves of a jump's depth vector."""
+    half = h.size // 2
+    return {"bore": h[:half], "pin": h[half:]}
+
+
+def jump_record(worn: dict, cycle) -> dict:
+    """What a kept jump records of the joint at its end: the deepest wear of each surface and
+    the peak contact force of the run on it."""
+    return {"bore_max_depth_m": float(np.max(worn["bore"])), "pin_max_depth_m": float(np.max(worn["pin"])),
+            "peak_force_N": float(np.max(cycle.force))}
 
 
 def averaged_periods(end: float, period: float) -> int:
@@ -104,25 +170,9 @@ def averaged_periods(end: float, period: float) -> int:
     return max(int(math.floor(end / period * (1 + 1e-12))) - 1, 1)
 
 
-def wear(scene: WearScene, table, cycle, periods: int) -> dict:
-    """The worn depth of the bore and of the pin after scene.cycles cycles (m), on the angles
-    of each surface's frame (rad): the history's wear (over `periods` periods) per period,
-    times the cycles."""
-    at = profile.angles(scene.points)
-    load = cycle.force / scene.length
-    times = scene.cycles / periods
-    return {"angles": at,
-            "bore": times * profile.worn_depth(table, cycle.time, load, cycle.bore_angle,
-                                                      cycle.sliding_speed, scene.bore.wear_coefficient,
-                                                      at, table.bore_radius),
-            "pin": times * profile.worn_depth(table, cycle.time, load, cycle.pin_angle,
-                                                     cycle.sliding_speed, scene.pin.wear_coefficient,
-                                                     at, table.pin_radius)}
-
-
-def summary(scene, source, mechanism_path, table, cycle, worn, period,
-            periods: int) -> wear_summary.WearSummary:
-    """What summary.json holds."""
+def summary(scene, source, mechanism_path, table, cycle, worn, period, periods: int,
+            jumps) -> wear_summary.WearSummary:
+    """What summary.json holds (the joint's history `cycle`: the last run's)."""
     peak = float(np.max(cycle.force)) / scene.length
     slid = float(np.trapezoid(np.abs(cycle.sliding_speed) * (cycle.force > 0), cycle.time)) / periods
     surfaces = {}
@@ -137,23 +187,31 @@ def summary(scene, source, mechanism_path, table, cycle, worn, period,
         cycles=scene.cycles, period_s=period, periods_averaged=periods, length_m=scene.length,
         sliding_distance_in_contact_per_cycle_m=slid, peak_force_per_length_N_per_m=peak,
         fe_force_range_N_per_m=[0.0, float(table.forces[-1])],
-        extrapolated=bool(peak > table.forces[-1]), **surfaces)
+        extrapolated=bool(peak > table.forces[-1]), **surfaces,
+        coupled=jumps is not None,
+        mechanism_runs=1 if jumps is None else jumps.runs,
+        refused_jumps=0 if jumps is None else jumps.refused,
+        jumps=[] if jumps is None else [
+            wear_summary.Jump(cycles=n, size=d, error_m=e, **r)
+            for n, d, e, r in zip(jumps.cycles, jumps.sizes, jumps.errors, jumps.records)])
 
 
-def picture(path: Path, worn: dict, joint, scene) -> None:
-    """The worn depths against angle, and the worn bore and pin drawn (depth exaggerated)."""
+def picture(path: Path, worn: dict, joint, scene, result) -> None:
+    """The worn depths against angle, the worn bore and pin drawn (depth exaggerated), and,
+    coupled, the deepest wear and the peak contact force against the cycles."""
     from pinbore.core.figures import plt, save_png   # noqa: PLC0415
 
-    fig = plt.figure(figsize=(11, 4.5))
-    ax = fig.add_subplot(1, 2, 1)
+    panels = 3 if result.coupled else 2
+    fig = plt.figure(figsize=(5.5 * panels, 4.5))
+    ax = fig.add_subplot(1, panels, 1)
     degrees = np.degrees(worn["angles"])
     ax.plot(degrees, worn["bore"] * 1e6, label="bore")
     ax.plot(degrees, worn["pin"] * 1e6, label="pin")
     ax.set_xlabel("angle in the surface's frame (deg)")
     ax.set_ylabel("worn depth (um)")
-    ax.set_title(f"{scene.joint}: after {scene.cycles:.3g} cycles")
+    ax.set_title(f"{scene.joint}: after {scene.cycles:.3g} cycles" + (" (coupled)" if result.coupled else ""))
     ax.legend()
-    px = fig.add_subplot(1, 2, 2, projection="polar")
+    px = fig.add_subplot(1, panels, 2, projection="polar")
     deepest = max(worn["bore"].max(), worn["pin"].max(), 1e-30)
     scale = 0.2 * joint.bearing_radius / deepest   # the deepest wear drawn at a fifth of the radius
     ring = np.append(worn["angles"], worn["angles"][0])
@@ -163,4 +221,17 @@ def picture(path: Path, worn: dict, joint, scene) -> None:
     px.plot(ring, (joint.journal_radius - scale * closed(worn["pin"])) * 1e3, label="worn pin (pin frame)")
     px.set_title(f"depth x {scale:.3g}", fontsize=9)
     px.legend(loc="lower left", fontsize=8, bbox_to_anchor=(-0.2, -0.15))
+    if result.coupled:
+        cx = fig.add_subplot(1, panels, 3)
+        n = [j.cycles for j in result.jumps]
+        cx.plot(n, [j.bore_max_depth_m * 1e6 for j in result.jumps], "o-", ms=3, label="bore, deepest (um)")
+        cx.plot(n, [j.pin_max_depth_m * 1e6 for j in result.jumps], "s-", ms=3, label="pin, deepest (um)")
+        cx.set_xlabel("cycles")
+        cx.set_ylabel("worn depth (um)")
+        fx = cx.twinx()
+        fx.plot(n, [j.peak_force_N / 1e3 for j in result.jumps], "k^--", ms=3, label="peak contact force (kN)")
+        fx.set_ylabel("peak contact force of a cycle (kN)")
+        cx.legend(loc="upper left", fontsize=8)
+        fx.legend(loc="lower right", fontsize=8)
+        cx.set_title(f"{len(result.jumps) - 1} jumps, {result.mechanism_runs} runs")
     save_png(fig, path, layout=True)

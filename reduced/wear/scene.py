@@ -10,6 +10,7 @@ without the mechanism built or the FE files read.
     length = 0.02            m, the pin's length in the bore
     cycles = 1e5             forcing periods of use
     [bore] / [pin]           wear_coefficient (m^2/N): Archard's K / H
+    [coupling]               tolerance (m), first_jump (cycles): the worn joint fed back
 """
 
 from typing import Literal
@@ -25,6 +26,17 @@ class Surface(Strict):
     wear_coefficient: float = pydantic.Field(
         ge=0, le=1e-9, description="m^2/N (m^3/(N m)): Archard's K / H, the volume worn per "
         "unit load and distance slid; 0: a surface that does not wear")
+
+
+class Coupling(Strict):
+    """The worn joint fed back: the mechanism runs on its worn bore and pin as they wear,
+    updated by cycle jumping (reduced.wear.jumping), each jump as long as its error estimate
+    stays within the tolerance."""
+
+    tolerance: float = pydantic.Field(gt=0, le=1e-3, description=(
+        "m: the error estimate of a jump's depth at any angle"))
+    first_jump: float | None = pydantic.Field(default=None, gt=0, description=(
+        "cycles of the first jump (default: a twentieth of the cycles)"))
 
 
 class WearScene(Strict):
@@ -43,3 +55,5 @@ class WearScene(Strict):
     pin: Surface
     points: int = pydantic.Field(default=720, ge=36, le=100_000,
                                  description="angles around each surface the depth is given at")
+    coupling: Coupling | None = pydantic.Field(default=None, description=(
+        "the worn joint fed back into the mechanism (default: one-way, the new joint's motion)"))

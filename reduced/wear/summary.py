@@ -19,6 +19,18 @@ class SurfaceWear(Strict):
     at_deg: float = pydantic.Field(ge=-180, le=180, description="where, in the surface's frame")
 
 
+class Jump(Strict):
+    """A kept jump of the coupled wear: the cycles reached, its size, its error estimate, and
+    the joint there (the deepest wear, the peak contact force of the run on it)."""
+
+    cycles: float = pydantic.Field(ge=0)
+    size: float = pydantic.Field(ge=0)
+    error_m: float = pydantic.Field(ge=0)
+    bore_max_depth_m: float = pydantic.Field(ge=0)
+    pin_max_depth_m: float = pydantic.Field(ge=0)
+    peak_force_N: float = pydantic.Field(ge=0)
+
+
 class WearSummary(Strict):
     scene_file: str
     mechanism_file: str
@@ -33,6 +45,10 @@ class WearSummary(Strict):
     extrapolated: bool
     bore: SurfaceWear
     pin: SurfaceWear
+    coupled: bool = pydantic.Field(description="the mechanism ran on its worn joint (cycle jumping)")
+    mechanism_runs: int = pydantic.Field(ge=1)
+    refused_jumps: int = pydantic.Field(ge=0)
+    jumps: list[Jump]
 
 
 def write(path: Path, summary: WearSummary) -> None:
