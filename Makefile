@@ -151,7 +151,7 @@ build/dynamics/continuation/summary.json: $(CONTINUATION_SCENE) $(DYNAMICS_CODE)
 wear: $(WEAR_RUNS) ## wear the clearance joints of scenes/wear/ by Archard's law on their FE pressure (build/wear/<scene>/)
 
 # a wear scene's FE run (its pressure_file's)
-build/wear/slider_crank_flores2004/summary.json: build/fem/flores_wear/curve.csv
+build/wear/slider_crank_flores2004/summary.json build/wear/slider_crank_flores2004_coupled/summary.json: build/fem/flores_wear/curve.csv
 build/wear/%/summary.json: scenes/wear/%.toml $(wildcard scenes/reduced/*.toml) $(WEAR_CODE) $(STAMP)
 	$(PINBORE) wear $< --out build/wear/$*
 

@@ -378,9 +378,9 @@ struct Engine
   /// u(phi) the unit vector at phi, h the profiles in their frames (Args::wear); the normal
   /// u(phi*), the rate u . e' + h_bore' w_b + h_pin' w_j and d delta / d phi_b = h_bore',
   /// d delta / d phi_j = h_pin' (phi* maximises: the envelope theorem). The maximum is
-  /// searched at four samples a profile interval within the angles where e . u can still
-  /// exceed its value at e's direction less the two profiles' deepest (CONTACT_WEAR_REACH),
-  /// each local maximum of the samples refined (local_maximum) on the C1 profiles.
+  /// searched at four samples a profile interval outward from e's direction while e . u
+  /// can still exceed the best sample, each local maximum of the samples refined
+  /// (local_maximum) on the C1 profiles.
   static void worn_radial(const Args& args, const Matrix<double>& s, std::ptrdiff_t k, const V& e,
                           const V& v, Radial& g)
   {
@@ -404,35 +404,48 @@ struct Engine
         curvature = -eu - b[2] - j[2];
         return eu - b[0] - j[0];
       };
-      const double size = norm(e), reach = contacts(k, CONTACT_WEAR_REACH);
-      const double centre = size > 0.0 ? std::atan2(e[1], e[0]) : 0.0;
+      const double size = norm(e), centre = size > 0.0 ? std::atan2(e[1], e[0]) : 0.0;
       // four samples a profile interval: the worn surfaces' extrema, a few intervals apart,
       // each bracketed alone by its samples
       const double step = 0.5 * std::numbers::pi / static_cast<double>(args.wear.cols);
-      const double spread = reach >= 2.0 * size ? std::numbers::pi : std::acos(1.0 - reach / size);
-      const auto m = static_cast<std::ptrdiff_t>(std::ceil(spread / step)) + 1;
-      // the profile's grid about e's direction, then each of its local maxima refined by
-      // Newton's method (within a grid step): the largest refined one is the contact, a
-      // maximum that varies continuously with the bodies' motion (the largest sample would
-      // jump between two lobes before their maxima cross)
-      const std::ptrdiff_t count = 2 * m + 1;
-      double previous = -std::numeric_limits<double>::infinity(), sl, cu, hb, hp;
-      double here = f(centre - static_cast<double>(m) * step, sl, cu, hb, hp);
-      double best = -std::numeric_limits<double>::infinity(), phi = centre;
-      for (std::ptrdiff_t i = 0; i < count; ++i)
+      const auto half = static_cast<std::ptrdiff_t>(std::ceil(std::numbers::pi / step));
+      // from e's direction outward, each side until e . u (the most f can be there, the
+      // depths being >= 0) falls below the best sample so far: nothing beyond can exceed it
+      thread_local std::vector<double> samples;
+      if (samples.size() < static_cast<std::size_t>(2 * half + 1))
+        samples.resize(2 * half + 1);   // read only where written below
+      double sl, cu, hb, hp;
+      double best = f(centre, sl, cu, hb, hp);
+      samples[half] = best;
+      std::ptrdiff_t low = 0, high = 0;
+      for (int side : {1, -1})
+        for (std::ptrdiff_t i = 1; i <= half; ++i)
+        {
+          const double da = static_cast<double>(i) * step;
+          if (size * std::cos(da) < best)
+            break;
+          const double value = f(centre + side * da, sl, cu, hb, hp);
+          samples[half + side * i] = value;
+          best = std::max(best, value);
+          (side > 0 ? high : low) = i;
+        }
+      // each local maximum of the samples refined (local_maximum): the largest is the
+      // contact, a maximum that varies continuously with the bodies' motion (the largest
+      // sample would jump between two lobes before their maxima cross)
+      double phi = centre;
+      best = -std::numeric_limits<double>::infinity();
+      for (std::ptrdiff_t i = -low; i <= high; ++i)
       {
-        const double a = centre + static_cast<double>(i - m) * step;
-        const double next = i + 1 < count ? f(a + step, sl, cu, hb, hp)
-                                          : -std::numeric_limits<double>::infinity();
+        const double here = samples[half + i];
+        const double previous = i > -low ? samples[half + i - 1] : -std::numeric_limits<double>::infinity();
+        const double next = i < high ? samples[half + i + 1] : -std::numeric_limits<double>::infinity();
         if (here >= previous and here >= next)
         {
-          const double x = local_maximum(f, a, step);
+          const double x = local_maximum(f, centre + static_cast<double>(i) * step, step);
           const double value = f(x, sl, cu, hb, hp);
           if (value > best)
             best = value, phi = x;
         }
-        previous = here;
-        here = next;
       }
       const double value = f(phi, sl, cu, hb, hp);
       const V n{std::cos(phi), std::sin(phi)};
