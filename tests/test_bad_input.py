@@ -272,6 +272,7 @@ BAD = {
     "calibrate": ("curve.csv", "approach_m\n1\n"),
     "export": ("laws.json", "{}"),
     "study": ("study.toml", 'base = "absent.toml"\n'),
+    "wear": ("bad.toml", 'kind = "wear"\nlength = -1.0\n'),
     "report": ("absent", None),
 }
 
