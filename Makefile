@@ -164,7 +164,7 @@ build/report/index.html: $(FEM_CURVES) $(MESHES) $(MODES_RUNS) build/calibration
 	$(PINBORE) report --build build --out build/report
 	@echo "report: $(abspath $@)"
 
-bench: build/study/calibration_2d/summary.json $(MODES_RUNS) $(STAMP) ## run the benchmarks: bench/*.csv and plots (a few minutes)
+bench: build/study/calibration_2d/summary.json $(MODES_RUNS) build/fem/flores_wear/curve.csv $(STAMP) ## run the benchmarks: bench/*.csv and plots (a few minutes)
 	$(PY) bench/fem2d.py --out bench
 	$(PY) bench/fem3d.py --out bench
 	$(PY) bench/plastic.py --out bench
@@ -179,6 +179,7 @@ bench: build/study/calibration_2d/summary.json $(MODES_RUNS) $(STAMP) ## run the
 	$(PY) bench/modes.py --out bench
 	$(PY) bench/flexible.py --out bench
 	$(PY) bench/continuation.py --out bench
+	$(PY) bench/wear.py --out bench
 
 stress: $(STAMP) ## the stress matrix: bench/stress_*.csv, bench/stress.png (about 7 min)
 	$(PY) bench/stress.py --out bench
