@@ -173,7 +173,8 @@ def averaged_periods(end: float, period: float) -> int:
 def summary(scene, source, mechanism_path, table, cycle, worn, period, periods: int,
             jumps) -> wear_summary.WearSummary:
     """What summary.json holds (the joint's history `cycle`: the last run's)."""
-    peak = float(np.max(cycle.force)) / scene.length
+    peaks = [float(np.max(cycle.force))] + ([] if jumps is None else [r["peak_force_N"] for r in jumps.records])
+    peak = max(peaks) / scene.length   # over every run of the worn joint
     slid = float(np.trapezoid(np.abs(cycle.sliding_speed) * (cycle.force > 0), cycle.time)) / periods
     surfaces = {}
     for name, radius in (("bore", table.bore_radius), ("pin", table.pin_radius)):
