@@ -63,7 +63,7 @@ def contact_angle(model, k: int, ex, ey, turn) -> np.ndarray:
     direction on a round joint; on a worn one (its profiles in Args.wear) where the worn
     surfaces interfere most, max over phi of e . u(phi) - h_bore(phi) - h_pin(phi + turn), as
     the core finds it (searched here at a quarter of the profiles' spacing within the reach of
-    their depths: within 0.06 deg of the core's refined angle)."""
+    their depths, the best sample's parabola's vertex)."""
     direction = np.arctan2(ey, ex)
     row = model.base.contacts[k]
     bore, pin = int(row[CONTACT_BORE_WEAR]) - 1, int(row[CONTACT_PIN_WEAR]) - 1
@@ -87,7 +87,13 @@ def contact_angle(model, k: int, ex, ey, turn) -> np.ndarray:
         phi = direction[block, None] + spread[block, None] * samples[None, :]
         f = (ex[block, None] * np.cos(phi) + ey[block, None] * np.sin(phi) - depth(bore, phi)
              - depth(pin, phi + turn[block, None]))
-        out[block] = phi[np.arange(phi.shape[0]), np.argmax(f, axis=1)]
+        i = np.clip(np.argmax(f, axis=1), 1, samples.size - 2)
+        rows = np.arange(phi.shape[0])
+        left, mid, right = f[rows, i - 1], f[rows, i], f[rows, i + 1]
+        curvature = left - 2 * mid + right
+        shift = np.where(curvature < 0, 0.5 * (left - right) / np.where(curvature < 0, curvature, 1.0), 0.0)
+        step = phi[rows, 1] - phi[rows, 0]
+        out[block] = phi[rows, i] + np.clip(shift, -0.5, 0.5) * step   # the parabola's vertex
     return out
 
 
