@@ -230,8 +230,8 @@ def test_a_worn_journal_meets_its_bore_where_they_interfere_most(tmp_path):
     """At every 50th recorded step of the worn slider-crank, the contact's penetration is
     max over phi of e . u(phi) - c - h_bore(phi - phi_bore) - h_pin(phi - phi_pin), found by
     brute force on 400,001 angles (linear between the profile's points, the core's being
-    C1: 1e-9 m apart on this profile); at every step the contact direction the wear's history
-    takes reaches the core's penetration within 5e-8 m (its sampling)."""
+    C1: 1e-9 m apart on this profile); at every step the contact direction the core reports
+    (the wear's history takes it) reaches the core's penetration within 5e-8 m."""
     from pinbore.reduced.mechanism import kinds
     from pinbore.reduced.mechanism.model import build
     from pinbore.reduced.mechanism.outputs import observed_steps
@@ -256,13 +256,12 @@ def test_a_worn_journal_meets_its_bore_where_they_interfere_most(tmp_path):
              - depth(bore, fine - run.states[k, column[c.bearing_body]])
              - depth(pin, fine - run.states[k, column[c.journal_body]]))
         assert seen["depths"][k, 0] == pytest.approx(f.max() - c.gap(), abs=2e-9)
-    # the direction the wear's history takes for the contact (the bearing is the slider, not
-    # turning: its frame is the global one) is where the interference is the core's
-    from pinbore.reduced.wear import history
-
+    # the contact's direction the core reports (what the wear's history takes; the bearing is
+    # the slider, not turning: its frame is the global one) is where the interference is its
+    # penetration, at every step
     turn = run.states[:, column[c.bearing_body]] - run.states[:, column[c.journal_body]]
-    e = seen["offsets"][:, 0]
-    angle = history.contact_angle(model, 0, e[:, 0], e[:, 1], turn)
+    e, n = seen["offsets"][:, 0], seen["directions"][:, 0]
+    angle = np.arctan2(n[:, 1], n[:, 0])
     reached = (e[:, 0] * np.cos(angle) + e[:, 1] * np.sin(angle) - depth(bore, angle)
                - depth(pin, angle + turn) - c.gap())
     assert np.abs(reached - seen["depths"][:, 0]).max() < 5e-8

@@ -286,19 +286,25 @@ void check_work(const Args& args, const Work& w, std::size_t ny)
 std::span<const double> values(const Array<const double>& a) { return {a.data(), a.size()}; }
 std::span<double> values(const Array<double>& a) { return {a.data(), a.size()}; }
 
-/// f(t, y) into dy; each contact's deepest penetration into depth and its journal point's
-/// offset from its bearing point into offset (rows of `width`); the ideal joints' largest
-/// gap |Phi| (no held rows).
+/// f(t, y) into dy; each contact's deepest penetration into depth, its journal point's
+/// offset from its bearing point into offset and, given `direction`, the contact's direction
+/// into it (rows of `width`: a worn journal's where the surfaces interfere most); the ideal
+/// joints' largest gap |Phi| (no held rows).
 template <class K>
 double observe(double t, std::span<const double> y, std::span<double> dy, const Args& args,
-               const Work& work, double* depth, double* offset, std::ptrdiff_t width)
+               const Work& work, double* depth, double* offset, std::ptrdiff_t width,
+               double* direction = nullptr)
 {
   using E = Engine<K>;
   E::rhs(t, y, dy, args, work);
   const Rows& contacts = args.contacts;
   for (std::ptrdiff_t k = 0; k < contacts.rows; ++k)
   {
-    depth[k] = E::contact_depth(args, work.bodies, k).delta;
+    const auto d = E::contact_depth(args, work.bodies, k);
+    depth[k] = d.delta;
+    if (direction)
+      for (int i = 0; i < K::D; ++i)
+        direction[k * width + i] = d.normal[i];
     const auto e = sub(K::point_state(work.bodies, E::body(contacts, k, CONTACT_JOURNAL_BODY),
                                       contacts.cell<K::D>(k, CONTACT_JOURNAL_POINT)).position,
                        K::point_state(work.bodies, E::body(contacts, k, CONTACT_BEARING_BODY),
@@ -504,8 +510,8 @@ void bind_mechanism(nb::module_& parent)
          Array<const double> latched, Array<const std::int64_t> modes, nb::handle a,
          nb::handle w, Array<double> rates, Array<double> bodies, Array<double> depths,
          Array<double> normals, Array<double> frictions, Array<double> offsets,
-         Array<double> drift, Array<double> kinetic, Array<double> angles,
-         Array<double> stretches)
+         Array<double> directions, Array<double> drift, Array<double> kinetic,
+         Array<double> angles, Array<double> stretches)
       {
         Held held;
         const Args args = args_of(a, held);
@@ -535,6 +541,8 @@ void bind_mechanism(nb::module_& parent)
               or kept > static_cast<std::size_t>(K::BODY_COLUMNS) or not rows(depths, 2, nc)
               or not rows(normals, 2, nc) or not rows(frictions, 2, nc) or offsets.shape(0) != n
               or (nc and (width < static_cast<std::size_t>(K::D) or offsets.shape(1) != nc))
+              or directions.ndim() != 3 or directions.shape(0) != n
+              or (nc and (directions.shape(1) != nc or directions.shape(2) != width))
               or not rows(drift, 1, 1) or not rows(kinetic, 1, 1) or not rows(angles, 2, nt)
               or not rows(stretches, 2, ns))
             throw std::invalid_argument("observe_steps: the arrays must have a row a step of "
@@ -542,7 +550,8 @@ void bind_mechanism(nb::module_& parent)
           nb::gil_scoped_release release;
           const std::size_t sw = speeds.shape(1), mw = modes.shape(1), lw = latched.shape(1);
           std::vector<double> depth(std::max<std::size_t>(nc, 1)),
-              offset(std::max<std::size_t>(nc, 1) * std::max<std::size_t>(width, 1));
+              offset(std::max<std::size_t>(nc, 1) * std::max<std::size_t>(width, 1)),
+              direction(offset.size());
           for (std::size_t k = 0; k < n; ++k)
           {
             for (std::size_t i = 0; i < nc; ++i)
@@ -555,7 +564,8 @@ void bind_mechanism(nb::module_& parent)
             std::span<const double> y(states.data() + k * ny, ny);
             std::span<double> dy(rates.data() + k * ny, ny);
             drift.data()[k] = observe<K>(times.data()[k], y, dy, args, work, depth.data(),
-                                         offset.data(), static_cast<std::ptrdiff_t>(width));
+                                         offset.data(), static_cast<std::ptrdiff_t>(width),
+                                         direction.data());
             for (std::ptrdiff_t b = 0; b < args.bodies(); ++b)
               for (std::size_t c = 0; c < kept; ++c)
                 bodies.data()[(k * args.bodies() + b) * kept + c] = work.bodies(b, c);
@@ -565,7 +575,10 @@ void bind_mechanism(nb::module_& parent)
               normals.data()[k * nc + i] = work.normal[i];
               frictions.data()[k * nc + i] = work.friction[i];
               for (std::size_t c = 0; c < width; ++c)
+              {
                 offsets.data()[(k * nc + i) * width + c] = offset[i * width + c];
+                directions.data()[(k * nc + i) * width + c] = direction[i * width + c];
+              }
             }
             kinetic.data()[k] = K::kinetic_energy(args, y);
             // observe's right-hand side left y's body states in work
@@ -580,8 +593,9 @@ void bind_mechanism(nb::module_& parent)
       nb::arg("times"), nb::arg("states"), nb::arg("speeds"), nb::arg("latched"),
       nb::arg("modes"), nb::arg("args"), nb::arg("work"), nb::arg("rates"), nb::arg("bodies"),
       nb::arg("depths"), nb::arg("normals"), nb::arg("frictions"), nb::arg("offsets"),
-      nb::arg("drift"), nb::arg("kinetic"), nb::arg("angles"), nb::arg("stretches"),
-      "observe, the kinetic energy, the torsion angles and the springs' stretches at every "
+      nb::arg("directions"), nb::arg("drift"), nb::arg("kinetic"), nb::arg("angles"), nb::arg("stretches"),
+      "observe (with each contact's direction), the kinetic energy, the torsion angles and the "
+      "springs' stretches at every "
       "recorded step (each with the impact speeds, latches and modes it was taken with, put "
       "into args in place), into the rows of the output arrays.");
 

@@ -311,6 +311,7 @@ struct Engine
   struct Depth
   {
     double delta, rate;
+    V normal{};   // the contact's direction, from the bearing into the journal's side
   };
 
   static std::int64_t body(const Rows& contacts, std::ptrdiff_t k, int column)
@@ -525,7 +526,7 @@ struct Engine
     if (kind == PLANE)
     {
       const Plane g = plane_geometry(s, contacts, k);
-      return {g.delta, g.rate};
+      return {g.delta, g.rate, g.normal};
     }
     if (kind == SLICED)
     {
@@ -535,7 +536,7 @@ struct Engine
         return {-std::numeric_limits<double>::infinity(), 0.0};   // the plane has none
     }
     const Radial g = radial_geometry(args, s, k);
-    return {g.delta, g.rate};
+    return {g.delta, g.rate, g.normal};
   }
 
   /// The held contact's row delta = 0 (its multiplier is the normal force).
@@ -1108,7 +1109,7 @@ struct Engine
     const double size = std::sqrt(dot(plus, plus));
     const V n = size > 0.0 ? scaled(plus, 1.0 / size) : axis<D>(0);
     const V x = add(bore.pj, scaled(bore.uj, zz));
-    return {size - contacts(k, CONTACT_CLEARANCE), slice_rate(s, contacts, k, n, x, sub(x, plus))};
+    return {size - contacts(k, CONTACT_CLEARANCE), slice_rate(s, contacts, k, n, x, sub(x, plus)), n};
   }
 
   static laws::Section section(const Args& args, std::ptrdiff_t k, const Frame& fr)

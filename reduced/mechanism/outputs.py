@@ -58,8 +58,9 @@ def joint_force(r, normal):
 def observed_steps(model, run) -> dict:
     """kernel.observe at every accepted step of a Trajectory, each with the law memory (impact
     speeds, latches, contact modes) it was taken with: per-step arrays by name (rates,
-    bodies, depths, normals, frictions, offsets, drift, kinetic, angles, stretches), and the
-    args and work it used."""
+    bodies, depths, normals, frictions, offsets, directions: each contact's, a worn journal's
+    where its surfaces interfere most; drift, kinetic, angles, stretches), and the args and
+    work it used."""
     times, states = run.times, run.states
     n, nc, nt = times.size, model.contacts.shape[0], model.torsion.shape[0]
     args = model.args()
@@ -67,7 +68,8 @@ def observed_steps(model, run) -> dict:
     kept = model.kind.bodies().RIGID_COLUMNS   # of a body's row: its rigid motion
     seen = {"rates": np.empty((n, states.shape[1])), "bodies": np.empty((n, work.bodies.shape[0], kept)),
             "depths": np.empty((n, nc)), "normals": np.empty((n, nc)), "frictions": np.empty((n, nc)),
-            "offsets": np.zeros((n, nc, model.kind.dimension)), "drift": np.empty(n),
+            "offsets": np.zeros((n, nc, model.kind.dimension)),
+            "directions": np.zeros((n, nc, model.kind.dimension)), "drift": np.empty(n),
             "kinetic": np.empty(n), "angles": np.empty((n, nt)),
             "stretches": np.empty((n, args.springs.shape[0]))}
     kernel.observe_steps(times, states, run.speeds, run.latched, run.modes, args, work, *seen.values())
