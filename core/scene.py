@@ -104,11 +104,17 @@ def _map_files(node, f):
     return node
 
 
+def named_file(name, base) -> Path:
+    """A file a scene names: relative to the scene's folder `base` unless absolute."""
+    path = Path(name)
+    return path if path.is_absolute() else Path(base) / path
+
+
 def named_files(data, base: Path) -> list[Path]:
     """The files scene data names (_map_files), relative to `base` unless absolute."""
     found = []
     _map_files(data, lambda name: found.append(name) or name)
-    return [Path(f) if Path(f).is_absolute() else Path(base) / f for f in found]
+    return [named_file(f, base) for f in found]
 
 
 def absolute_files(data, base: Path):

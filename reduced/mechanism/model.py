@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from pinbore.core.errors import InputError
+from pinbore.core.scene import named_file
 from pinbore.laws import dissipative, lawsfile
 from pinbore.laws.tables import log_grid
 from pinbore.reduced.mechanism import joints, kinds, layout
@@ -338,7 +339,7 @@ def laws_path(scene, base: Path) -> Path | None:
     """Where the scene's laws file is (relative to the scene's folder `base`), if it has one."""
     if scene.laws_file is None:
         return None
-    return (base / scene.laws_file) if not Path(scene.laws_file).is_absolute() else Path(scene.laws_file)
+    return named_file(scene.laws_file, base)
 
 
 def laws_file(scene, base: Path, source: str) -> lawsfile.LawsFile | None:

@@ -26,17 +26,12 @@ from pinbore.reduced.wear.scene import WearScene
 RADIUS_MATCH = 1e-6   # relative: the FE run's radii are the joint's
 
 
-def resolved(base: Path, name: str) -> Path:
-    path = Path(name)
-    return path if path.is_absolute() else base / path
-
-
 def mechanism_of(scene: WearScene, base: Path, source: str):
     """(the mechanism scene, its path, the joint, its forcing period), checked: a planar
     mechanism whose joint `joint` is a revolute clearance joint, run over at least a period."""
     from pinbore.reduced.mechanism import kinds   # noqa: PLC0415
 
-    path = resolved(base, scene.mechanism_file)
+    path = scenes.named_file(scene.mechanism_file, base)
     mechanism = kinds.load(path)
     if kinds.of_scene(mechanism).name != "planar":
         raise InputError(f"{source}: mechanism_file: a planar mechanism (kind = \"reduced\") is "
@@ -70,7 +65,8 @@ def run(scene_path, out) -> int:
     scene = scenes.load(WearScene, scene_path)
     base = scene_path.parent
     mechanism, mechanism_path, joint, period = mechanism_of(scene, base, source)
-    table = pressure.read(resolved(base, scene.pressure_file), resolved(base, scene.curve_file), source)
+    table = pressure.read(scenes.named_file(scene.pressure_file, base), scenes.named_file(scene.curve_file, base),
+                          source)
     check_radii(table, joint, source)
     from pinbore.reduced.mechanism.model import laws_path   # noqa: PLC0415
 
@@ -84,7 +80,7 @@ def run(scene_path, out) -> int:
                 jumps = None
             else:
                 depth, jumps = jumping.jump(
-                    lambda h: cycle(split(h)), np.zeros(2 * at.size), scene.cycles,
+                    lambda h: joined(*cycle(split(h))), np.zeros(2 * at.size), scene.cycles,
                     scene.coupling.tolerance, scene.coupling.first_jump or scene.cycles / 20,
                     record=lambda h, info: jump_record(split(h), info))
                 last = cycle.last
@@ -146,9 +142,12 @@ class Cycle:
                        / self.periods
                  for name, angle, radius in (("bore", cycle.bore_angle, self.table.bore_radius),
                                              ("pin", cycle.pin_angle, self.table.pin_radius))}
-        if worn is None:
-            return rates, cycle
-        return np.concatenate([rates["bore"], rates["pin"]]), cycle
+        return rates, cycle
+
+
+def joined(rates: dict, cycle) -> tuple:
+    """A cycle's rates as one vector, bore then pin (split's inverse), and its history."""
+    return np.concatenate([rates["bore"], rates["pin"]]), cycle
 
 
 def split(h: np.ndarray) -> dict:

@@ -5,7 +5,6 @@ offset from the bearing's centre.
 
 import math
 import warnings
-from pathlib import Path
 from typing import Literal
 
 import numpy as np
@@ -74,10 +73,10 @@ class RevoluteClearance(Bore):
         """Its worn bore and pin (wear_file), if it has them."""
         if self.c.wear_file is None:
             return {}
+        from pinbore.core.scene import named_file   # noqa: PLC0415
         from pinbore.laws import wearfile   # noqa: PLC0415
 
-        path = Path(self.c.wear_file)
-        profiles = wearfile.read(path if path.is_absolute() else Path(base) / path,
+        profiles = wearfile.read(named_file(self.c.wear_file, base),
                                  f"{source}: clearance joint {self.c.name}: wear_file")
         return {0: (profiles.bore, profiles.pin)}
 
