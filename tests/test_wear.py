@@ -205,9 +205,11 @@ def test_a_study_of_the_wear_coefficient(tmp_path, flores_fe):
 
 # ---- the worn joint: a journal meeting its bore where the worn surfaces interfere most
 
-def worn_flores(tmp_path, rtol=None, restitution=None) -> tuple:
+def worn_flores(tmp_path, rtol=None, restitution=None, rough=0.0) -> tuple:
     """The Flores slider-crank on a smooth worn bore (30 um (1 + cos 2 theta)) and pin
-    (20 um (1 + sin theta)), and those profiles."""
+    (20 um (1 + sin theta)), each roughened by uniform noise of `rough` m at its points if
+    asked (several extrema between two points: the profiles a coupled run grows), and those
+    profiles."""
     import copy
     import tomllib
 
@@ -215,6 +217,8 @@ def worn_flores(tmp_path, rtol=None, restitution=None) -> tuple:
 
     theta = np.radians(wearfile.angles(720))
     bore, pin = 30e-6 * (1 + np.cos(2 * theta)), 20e-6 * (1 + np.sin(theta))
+    noise = np.random.default_rng(3).uniform(0.0, rough, (2, theta.size))
+    bore, pin = bore + noise[0], pin + noise[1]
     wearfile.write(tmp_path / "wear.csv", wearfile.Profiles(np.degrees(theta), bore, pin))
     data = tomllib.loads((ROOT / "scenes/reduced/slider_crank_flores2004.toml").read_text())
     data = copy.deepcopy(data)
@@ -226,44 +230,55 @@ def worn_flores(tmp_path, rtol=None, restitution=None) -> tuple:
     return data, theta, bore, pin
 
 
-def test_a_worn_journal_meets_its_bore_where_they_interfere_most(tmp_path):
-    """At every 50th recorded step of the worn slider-crank, the contact's penetration is
+def catmull_rom(profile: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """A periodic profile (its points evenly from -pi) at the angles a, by the uniform
+    Catmull-Rom spline through its points (the C1 interpolation the core takes)."""
+    n = profile.size
+    x = np.mod(a + math.pi, 2 * math.pi) / (2 * math.pi / n)
+    i = np.minimum(np.floor(x).astype(int), n - 1)
+    t = x - i
+    p0, p1, p2, p3 = (profile[(i + j) % n] for j in (-1, 0, 1, 2))
+    return 0.5 * (2 * p1 + t * (p2 - p0) + t**2 * (2 * p0 - 5 * p1 + 4 * p2 - p3)
+                  + t**3 * (3 * p1 - p0 - 3 * p2 + p3))
+
+
+@pytest.mark.parametrize("rough", [0.0, 2e-6], ids=["smooth", "rough"])
+def test_a_worn_journal_meets_its_bore_where_they_interfere_most(tmp_path, rough):
+    """At 40 recorded steps of the worn slider-crank, the contact's penetration is
     max over phi of e . u(phi) - c - h_bore(phi - phi_bore) - h_pin(phi - phi_pin), found by
-    brute force on 400,001 angles (linear between the profile's points, the core's being
-    C1: 1e-9 m apart on this profile); at every step the contact direction the core reports
-    (the wear's history takes it) reaches the core's penetration within 5e-8 m."""
+    brute force on 400,001 angles (the profiles by the Catmull-Rom spline through their
+    points, written here again; within 1e-12 m of the maximum); at every step the contact direction the core reports (the
+    wear's history takes it) reaches the core's penetration within 5e-8 m. The rough
+    profiles' extrema lie closer than the core's samples: the run completes and each
+    maximum is found."""
     from pinbore.reduced.mechanism import kinds
     from pinbore.reduced.mechanism.model import build
     from pinbore.reduced.mechanism.outputs import observed_steps
-    from pinbore.reduced.mechanism.run import simulate
+    from pinbore.reduced.mechanism.run import OK, STATUS, simulate
 
-    data, theta, bore, pin = worn_flores(tmp_path)
+    data, theta, bore, pin = worn_flores(tmp_path, rough=rough)
     path = ROOT / "scenes/reduced/slider_crank_flores2004.toml"
     model = build(kinds.validate(data, str(path)), str(path), path.parent)
     run = simulate(model)
+    assert run.status == OK, STATUS[run.status]
     seen = observed_steps(model, run)
     c = model.joints[0]
     column = {name: int(model.base.offsets[i]) + 2 for i, name in enumerate(model.names)}
     fine = np.linspace(-math.pi, math.pi, 400001)
-    ring = np.append(theta, math.pi)
-
-    def depth(profile, a):
-        return np.interp(np.mod(a + math.pi, 2 * math.pi) - math.pi, ring, np.append(profile, profile[0]))
-
-    for k in range(0, run.times.size, 50):
+    for k in np.linspace(0, run.times.size - 1, 40).astype(int):
         e = seen["offsets"][k, 0]
         f = (e[0] * np.cos(fine) + e[1] * np.sin(fine)
-             - depth(bore, fine - run.states[k, column[c.bearing_body]])
-             - depth(pin, fine - run.states[k, column[c.journal_body]]))
-        assert seen["depths"][k, 0] == pytest.approx(f.max() - c.gap(), abs=2e-9)
+             - catmull_rom(bore, fine - run.states[k, column[c.bearing_body]])
+             - catmull_rom(pin, fine - run.states[k, column[c.journal_body]]))
+        assert seen["depths"][k, 0] == pytest.approx(f.max() - c.gap(), abs=2e-11)
     # the contact's direction the core reports (what the wear's history takes; the bearing is
     # the slider, not turning: its frame is the global one) is where the interference is its
     # penetration, at every step
     turn = run.states[:, column[c.bearing_body]] - run.states[:, column[c.journal_body]]
     e, n = seen["offsets"][:, 0], seen["directions"][:, 0]
     angle = np.arctan2(n[:, 1], n[:, 0])
-    reached = (e[:, 0] * np.cos(angle) + e[:, 1] * np.sin(angle) - depth(bore, angle)
-               - depth(pin, angle + turn) - c.gap())
+    reached = (e[:, 0] * np.cos(angle) + e[:, 1] * np.sin(angle) - catmull_rom(bore, angle)
+               - catmull_rom(pin, angle + turn) - c.gap())
     assert np.abs(reached - seen["depths"][:, 0]).max() < 5e-8
 
 

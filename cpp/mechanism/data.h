@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <span>
 #include <type_traits>
+#include <vector>
 
 namespace pinbore::mechanism
 {
@@ -183,6 +184,13 @@ struct Matrix
 };
 using Rows = Matrix<const double>;
 
+/// A worn profile's bounds (worn.h): the largest |h''| of its spline and a depth it never
+/// falls below.
+struct WornBound
+{
+  double curvature = 0.0, lowest = 0.0;
+};
+
 /// The mechanism (pinbore.reduced.mechanism.layout.Args): constants, but for the impact
 /// speeds, latch flags and contact modes, which the integrator updates in place.
 struct Args
@@ -204,6 +212,7 @@ struct Args
   std::span<std::int64_t> mode;
   Rows profile, flex, springs, loads;
   Rows wear;   // worn profiles: a row per surface, its depth at angles evenly from -pi
+  std::vector<WornBound> wear_bounds;   // per profile (worn.h: worn_bounds)
   std::ptrdiff_t bodies() const { return static_cast<std::ptrdiff_t>(masses.size()); }
   std::ptrdiff_t ncontacts() const { return contacts.rows; }
 };

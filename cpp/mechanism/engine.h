@@ -46,6 +46,7 @@
 #include "bodies.h"
 #include "data.h"
 #include "laws.h"
+#include "worn.h"
 
 #include <algorithm>
 #include <array>
@@ -319,69 +320,12 @@ struct Engine
     return static_cast<std::int64_t>(contacts(k, column));
   }
 
-  /// A worn profile (row r of Args::wear: the depth at n angles of its body's frame evenly
-  /// from -pi, periodic) at the angle a: its depth, slope and curvature (Catmull-Rom
-  /// between the points: C1).
-  static std::array<double, 3> worn_depth(const Rows& wear, std::ptrdiff_t r, double a)
-  {
-    const std::ptrdiff_t n = wear.cols;
-    const double step = 2.0 * std::numbers::pi / static_cast<double>(n);
-    double x = (a + std::numbers::pi) / step;
-    x -= static_cast<double>(n) * std::floor(x / static_cast<double>(n));
-    auto i = static_cast<std::ptrdiff_t>(x);
-    if (i >= n)
-      i = n - 1;
-    const double t = x - static_cast<double>(i);
-    auto at = [&](std::ptrdiff_t j) { return wear(r, ((j % n) + n) % n); };
-    const double p0 = at(i - 1), p1 = at(i), p2 = at(i + 1), p3 = at(i + 2);
-    const double c1 = -p0 + p2, c2 = 2 * p0 - 5 * p1 + 4 * p2 - p3, c3 = -p0 + 3 * p1 - 3 * p2 + p3;
-    return {0.5 * (2 * p1 + t * (c1 + t * (c2 + t * c3))),
-            0.5 * (c1 + t * (2 * c2 + 3 * t * c3)) / step,
-            0.5 * (2 * c2 + 6 * t * c3) / (step * step)};
-  }
-
-  /// The maximum of f (a C1 function returning its value, slope and curvature) within a
-  /// step of a sample a that is no lower than its neighbours: f' = 0 by Newton's method
-  /// safeguarded by bisection while f' changes sign across [a - step, a + step] (to 1e-14
-  /// rad: converged whatever the sample it starts from, so the maximum found varies
-  /// continuously as the samples slide); a itself when f' does not change sign there.
-  template <class F>
-  static double local_maximum(F& f, double a, double step)
-  {
-    double sl, cu, hb, hp;
-    double lo = a - step, hi = a + step;
-    f(lo, sl, cu, hb, hp);
-    const double low_slope = sl;
-    f(hi, sl, cu, hb, hp);
-    if (not (low_slope > 0.0 and sl < 0.0))
-      return a;
-    double x = a, moved = hi - lo;
-    for (int it = 0; it < 60 and hi - lo > 1e-14; ++it)
-    {
-      f(x, sl, cu, hb, hp);
-      if (sl == 0.0)
-        break;
-      (sl > 0.0 ? lo : hi) = x;
-      const double newton = cu < 0.0 ? x - sl / cu : NaN;
-      const double next = (newton > lo and newton < hi and std::abs(newton - x) < 0.5 * moved)
-                              ? newton
-                              : 0.5 * (lo + hi);
-      moved = std::abs(next - x);
-      x = next;
-      if (moved < 1e-15)
-        break;
-    }
-    return x;
-  }
-
   /// A worn journal in its bore (the plane): the contact where they interfere most,
   /// delta = max over phi of e . u(phi) - c - h_bore(phi - phi_b) - h_pin(phi - phi_j),
   /// u(phi) the unit vector at phi, h the profiles in their frames (Args::wear); the normal
   /// u(phi*), the rate u . e' + h_bore' w_b + h_pin' w_j and d delta / d phi_b = h_bore',
   /// d delta / d phi_j = h_pin' (phi* maximises: the envelope theorem). The maximum is
-  /// searched at four samples a profile interval outward from e's direction while e . u
-  /// can still exceed the best sample, each local maximum of the samples refined
-  /// (local_maximum) on the C1 profiles.
+  /// the branch and bound of worn.h (worn_maximum), to 1e-9 of the clearance.
   static void worn_radial(const Args& args, const Matrix<double>& s, std::ptrdiff_t k, const V& e,
                           const V& v, Radial& g)
   {
@@ -396,7 +340,7 @@ struct Engine
       const auto [phi_j, w_j] = K::frame_angle(s, bj, contacts.cell<D>(k, CONTACT_JOURNAL_POINT));
       auto profile = [&](std::ptrdiff_t r, double a) -> std::array<double, 3>
       { return r < 0 ? std::array<double, 3>{0.0, 0.0, 0.0} : worn_depth(args.wear, r, a); };
-      auto f = [&](double phi, double& slope, double& curvature, double& hb, double& hp)
+      auto both = [&](double phi, double& slope, double& curvature, double& hb, double& hp)
       {
         const auto b = profile(bore, phi - phi_b), j = profile(pin, phi - phi_j);
         const double c = std::cos(phi), sn = std::sin(phi), eu = e[0] * c + e[1] * sn;
@@ -405,50 +349,22 @@ struct Engine
         curvature = -eu - b[2] - j[2];
         return eu - b[0] - j[0];
       };
-      const double size = norm(e), centre = size > 0.0 ? std::atan2(e[1], e[0]) : 0.0;
-      // four samples a profile interval: the worn surfaces' extrema, a few intervals apart,
-      // each bracketed alone by its samples
-      const double step = 0.5 * std::numbers::pi / static_cast<double>(args.wear.cols);
-      const auto half = static_cast<std::ptrdiff_t>(std::ceil(std::numbers::pi / step));
-      // from e's direction outward, each side until e . u (the most f can be there, the
-      // depths being >= 0) falls below the best sample so far: nothing beyond can exceed it
-      thread_local std::vector<double> samples;
-      if (samples.size() < static_cast<std::size_t>(2 * half + 1))
-        samples.resize(2 * half + 1);   // read only where written below
-      double sl, cu, hb, hp;
-      double best = f(centre, sl, cu, hb, hp);
-      samples[half] = best;
-      std::ptrdiff_t low = 0, high = 0;
-      for (int side : {1, -1})
-        for (std::ptrdiff_t i = 1; i <= half; ++i)
-        {
-          const double da = static_cast<double>(i) * step;
-          if (size * std::cos(da) < best)
-            break;
-          const double value = f(centre + side * da, sl, cu, hb, hp);
-          samples[half + side * i] = value;
-          best = std::max(best, value);
-          (side > 0 ? high : low) = i;
-        }
-      // each local maximum of the samples refined (local_maximum): the largest is the
-      // contact, a maximum that varies continuously with the bodies' motion (the largest
-      // sample would jump between two lobes before their maxima cross)
-      double phi = centre;
-      best = -std::numeric_limits<double>::infinity();
-      for (std::ptrdiff_t i = -low; i <= high; ++i)
+      auto f = [&](double phi, double& slope, double& curvature)
       {
-        const double here = samples[half + i];
-        const double previous = i > -low ? samples[half + i - 1] : -std::numeric_limits<double>::infinity();
-        const double next = i < high ? samples[half + i + 1] : -std::numeric_limits<double>::infinity();
-        if (here >= previous and here >= next)
-        {
-          const double x = local_maximum(f, centre + static_cast<double>(i) * step, step);
-          const double value = f(x, sl, cu, hb, hp);
-          if (value > best)
-            best = value, phi = x;
-        }
-      }
-      const double value = f(phi, sl, cu, hb, hp);
+        double hb, hp;
+        return both(phi, slope, curvature, hb, hp);
+      };
+      auto bound = [&](std::ptrdiff_t r)
+      { return r < 0 ? WornBound{} : args.wear_bounds[static_cast<std::size_t>(r)]; };
+      const double size = norm(e), centre = size > 0.0 ? std::atan2(e[1], e[0]) : 0.0;
+      // a sample every four profile intervals (the bisection resolves what lies between:
+      // 80 evaluations on smooth profiles, 180 on rough ones); to 1e-9 of the clearance
+      const double step = 8.0 * std::numbers::pi / static_cast<double>(args.wear.cols);
+      const double phi = worn_maximum(f, centre, size, bound(bore).lowest + bound(pin).lowest,
+                                      size + bound(bore).curvature + bound(pin).curvature, step,
+                                      1e-9 * contacts(k, CONTACT_CLEARANCE));
+      double sl, cu, hb, hp;
+      const double value = both(phi, sl, cu, hb, hp);
       const V n{std::cos(phi), std::sin(phi)};
       g.delta = value - contacts(k, CONTACT_CLEARANCE);
       g.normal = n;
