@@ -1,4 +1,4 @@
-"""Shared helpers: scenes as dicts, in-process FE solves, the CLI as a subprocess."""
+"""Shared helpers: scenes as dicts, in-process FE solves, the CLI (in process or in its own)."""
 
 import copy
 import math
@@ -75,10 +75,39 @@ class Solved:
                 for s in self.run.steps]
 
 
-def pinbore(*args, cwd=None) -> subprocess.CompletedProcess:
-    """Run the pinbore command (as installed in this interpreter's environment)."""
-    return subprocess.run([sys.executable, "-m", "pinbore.cli", *map(str, args)],
-                          capture_output=True, text=True, cwd=cwd)
+def pinbore(*args, cwd=None, process=False) -> subprocess.CompletedProcess:
+    """Run the pinbore command: `pinbore.cli.main` in this process (its imports shared by the
+    worker's tests), its stdout, stderr and warnings captured as a fresh process would print
+    them; in a process of its own (as installed in this interpreter's environment) if
+    `process`, for what only a process shows (signals, exit, the modules it loads)."""
+    argv = [str(a) for a in args]
+    if process:
+        return subprocess.run([sys.executable, "-m", "pinbore.cli", *argv],
+                              capture_output=True, text=True, cwd=cwd)
+    import contextlib
+    import io
+    import os
+    import warnings
+
+    from pinbore.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    here = os.getcwd()
+    try:
+        if cwd is not None:
+            os.chdir(cwd)
+        with (contextlib.redirect_stdout(out), contextlib.redirect_stderr(err),
+              warnings.catch_warnings(record=True) as caught):
+            warnings.simplefilter("default")   # a fresh process's: each warning once a place
+            try:
+                code = main(argv)
+            except SystemExit as stop:   # argparse's usage errors
+                code = stop.code if isinstance(stop.code, int) else int(stop.code is not None)
+            for w in caught:
+                err.write(warnings.formatwarning(w.message, w.category, w.filename, w.lineno, w.line))
+    finally:
+        os.chdir(here)
+    return subprocess.CompletedProcess(["pinbore", *argv], code, out.getvalue(), err.getvalue())
 
 
 def main_in_child(*argv) -> subprocess.CompletedProcess:
