@@ -53,7 +53,7 @@ include build/deps.mk
 endif
 # (+: written under make -n too, whose dry run needs the rules it sets)
 build/deps.mk: core/codedeps.py pyproject.toml $(wildcard scenes/reduced/*.toml)
-	+@mkdir -p $(@D) && $(DEPS_PYTHON) -I core/codedeps.py . > $@.tmp && mv $@.tmp $@
+	+@mkdir -p $(@D) && { $(DEPS_PYTHON) -I core/codedeps.py . > $@.tmp && mv $@.tmp $@; } || { rm -f $@.tmp; exit 1; }
 
 DYNAMICS_CODE := $(CODE_dynamics) $(STAMP)
 # the multibody engine is the compiled core's (built by make venv): every run may start at
