@@ -79,7 +79,7 @@ def modules(folders: dict[str, list[Path]]) -> dict[str, Path | None]:
 
 # ---- what a module imports
 
-def _known(name: str, known) -> str | None:
+def project_module(name: str, known) -> str | None:
     """`name` if it is a module of the project, else its longest prefix that is (`from
     pinbore.fem.curve import Curve` imports pinbore.fem.curve); None outside the project."""
     parts = name.split(".")
@@ -97,14 +97,14 @@ def imported(nodes, name: str, is_package: bool, known, strings: bool = True) ->
     out = set()
     for node in nodes:
         if isinstance(node, ast.Import):
-            out |= {_known(alias.name, known) for alias in node.names}
+            out |= {project_module(alias.name, known) for alias in node.names}
         elif isinstance(node, ast.ImportFrom):
             base = node.module or ""
             if node.level:
                 up = package.split(".")[:len(package.split(".")) - node.level + 1]
                 base = ".".join(up + ([base] if base else []))
-            out |= {_known(f"{base}.{alias.name}", known) if f"{base}.{alias.name}" in known
-                    else _known(base, known) for alias in node.names}
+            out |= {project_module(f"{base}.{alias.name}", known) if f"{base}.{alias.name}" in known
+                    else project_module(base, known) for alias in node.names}
         elif strings and isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value in known:
             out.add(node.value)
     out.discard(None)
@@ -295,13 +295,11 @@ def laws_scenes(root: Path) -> list[str]:
 def make_deps(root: Path) -> str:
     """The text of the make dependency file of the repository at `root` (paths relative to it)."""
     graph = Graph(repository_folders(root))
-    lines = [f"# build/deps.mk: written by core/codedeps.py from the source (do not edit): the",
+    lines = ["# build/deps.mk: written by core/codedeps.py from the source (do not edit): the",
              "# source files each `pinbore` command runs (the import closure of its function in",
              "# pinbore/cli.py), and the mechanism scenes that read the calibration's laws file"]
-    read = set()
     for command, function in commands(graph).items():
         files = [path.relative_to(root).as_posix() for path in graph.sources(f"{CLI}:{function}")]
-        read |= set(files)
         lines.append(f"CODE_{command} := {' '.join(files)}")
     lines.append(f"LAWS_SCENES := {' '.join(laws_scenes(root))}")
     # read again when any source file changes (a new file counts once a module imports it,

@@ -102,7 +102,7 @@ def test_a_stage_reruns_when_any_module_it_imports_is_edited(tree, targets):
 
 
 def test_editing_what_the_modal_reduction_imports_reruns_modes(tree, targets):
-    """The drift that issue 48 found: fem/modes/reduction.py imports fem/elasticity.py,
+    """The drift the hand lists had: fem/modes/reduction.py imports fem/elasticity.py,
     meshes/model.py and laws/relief.py, which the hand list of the modes rule had missed; and
     every module that pinbore modes loads (imported in a fresh interpreter) is in its closure."""
     files = closure_files("modes")
@@ -117,7 +117,7 @@ def test_editing_what_the_modal_reduction_imports_reruns_modes(tree, targets):
          "print(' '.join(m for m in sys.modules if m.startswith('pinbore')))"],
         capture_output=True, text=True, check=True).stdout.split()
     closure = graph().closure(f"{codedeps.CLI}:_modes")
-    assert {codedeps._known(m, graph().files) for m in loaded} - {None} - closure == set()
+    assert {codedeps.project_module(m, graph().files) for m in loaded} - {None} - closure == set()
 
 
 def test_an_edit_outside_a_stage_reruns_nothing_of_it(tree, targets):

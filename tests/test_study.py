@@ -250,7 +250,7 @@ def test_an_fe_point_is_keyed_on_every_module_its_run_loads():
     graph = codedeps.installed_graph()
     # a compiled module's submodules are its own (pinbore.core.cpp.laws); a namespace
     # package has no code
-    loaded = {codedeps._known(m, graph.files) for m in loaded} - {None}
+    loaded = {codedeps.project_module(m, graph.files) for m in loaded} - {None}
     both = graph.closure(study.CODE["fem"], study.CODE["impact"])
     assert loaded - both == set()
     for kind in ("fem", "impact"):
