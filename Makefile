@@ -10,6 +10,7 @@ NP ?= 1
 # parallel jobs by default, one per core (JOBS=1 for one job at a time, in order)
 JOBS ?= $(shell nproc 2>/dev/null || echo 1)
 MAKEFLAGS += --jobs=$(JOBS)
+.DEFAULT_GOAL := all
 
 # Python 3.12 (DOLFINx wheels need >= 3.12): the first candidate that runs and is 3.12
 # (a pyenv shim on PATH may not run), from PATH, then the pyenv installs, newest first.
@@ -26,10 +27,8 @@ IMPACT_SCENES := $(basename $(notdir $(wildcard scenes/impact/*.toml)))
 IMPACT_RUNS := $(IMPACT_SCENES:%=build/impact/%/impact.json)
 MODES_SCENES := $(basename $(notdir $(wildcard scenes/modes/*.toml)))
 MODES_RUNS := $(MODES_SCENES:%=build/modes/%/body.npz)
-MODES_CODE := $(wildcard pinbore/cli.py core/*.py meshes/body.py fem/modes/*.py)
 REDUCED_SCENES := $(basename $(notdir $(wildcard scenes/reduced/*.toml)))
 REDUCED_RUNS := $(REDUCED_SCENES:%=build/reduced/%/summary.json)
-STAGE_CODE := $(wildcard pinbore/cli.py core/*.py laws/*.py meshes/*.py fem/*.py fem/impact/*.py)
 MPIEXEC := $(if $(filter-out 1,$(NP)),$(VENV)/bin/mpiexec -n $(NP))
 DYNAMICS_SCENE := scenes/reduced/slider_crank_flores2004.toml
 SPATIAL_DYNAMICS_SCENE := scenes/reduced/spatial_slider_crank_flores_misaligned.toml
@@ -42,13 +41,24 @@ WEAR_SCENES := $(basename $(notdir $(wildcard scenes/wear/*.toml)))
 WEAR_RUNS := $(WEAR_SCENES:%=build/wear/%/summary.json)
 # the studies whose points' curves and impacts the calibration reads
 CALIBRATION_STUDIES := $(addprefix build/study/,$(addsuffix /summary.json,calibration_2d calibration_3d restitution))
-REDUCED_CODE := $(wildcard core/*.py laws/*.py fem/modes/file.py reduced/mechanism/*.py reduced/mechanism/joints/*.py)
-DYNAMICS_CODE := $(wildcard pinbore/cli.py reduced/dynamics/*.py) $(REDUCED_CODE) $(STAMP)
-WEAR_CODE := $(wildcard pinbore/cli.py reduced/wear/*.py fem/curve.py) $(REDUCED_CODE)
+
+# The code each command runs, read from the code: build/deps.mk (written by core/codedeps.py,
+# plain Python, so before .venv exists; again whenever a source file changes) sets
+# CODE_<command>, the source files of the import closure of the command's function in
+# pinbore/cli.py (lazy imports included), and LAWS_SCENES, the mechanism scenes whose TOML
+# names a laws_file. Read by every goal but clean and help (the rules below need it).
+DEPS_PYTHON = $(if $(wildcard $(PY)),$(PY),$(or $(PYTHON312),python3))
+ifneq ($(if $(MAKECMDGOALS),$(filter-out clean help,$(MAKECMDGOALS)),all),)
+include build/deps.mk
+endif
+# (+: written under make -n too, whose dry run needs the rules it sets)
+build/deps.mk: core/codedeps.py pyproject.toml $(wildcard scenes/reduced/*.toml)
+	+@mkdir -p $(@D) && { $(DEPS_PYTHON) -I core/codedeps.py . > $@.tmp && mv $@.tmp $@; } || { rm -f $@.tmp; exit 1; }
+
+DYNAMICS_CODE := $(CODE_dynamics) $(STAMP)
 # the multibody engine is the compiled core's (built by make venv): every run may start at
 # once; only the runs whose scene reads the laws file wait for the calibration
-REDUCED_OF = $(patsubst scenes/reduced/%.toml,build/reduced/%/summary.json,$(shell grep -l $(1) scenes/reduced/*.toml))
-LAWS_RUNS := $(call REDUCED_OF,'^laws_file')
+LAWS_RUNS := $(LAWS_SCENES:%=build/reduced/%/summary.json)
 DYNAMICS_DEPS := $(DYNAMICS_SCENE) $(DYNAMICS_CODE)
 SPATIAL_DYNAMICS_DEPS := $(SPATIAL_DYNAMICS_SCENE) $(DYNAMICS_CODE)
 
@@ -73,39 +83,39 @@ $(STAMP): requirements.lock pyproject.toml CMakeLists.txt $(wildcard cpp/*.cpp c
 
 mesh: $(MESHES) ## build the meshes of the showcase FE scenes (build/mesh/<scene>/)
 
-build/mesh/%/mesh.msh: scenes/fem/%.toml $(STAGE_CODE) $(STAMP)
+build/mesh/%/mesh.msh: scenes/fem/%.toml $(CODE_mesh) $(STAMP)
 	$(PINBORE) mesh $< --out build/mesh/$*
 
 fem: $(FEM_CURVES) ## solve the default FE scenes (build/fem/<scene>/)
 
-build/fem/%/curve.csv: scenes/fem/%.toml $(STAGE_CODE) $(STAMP)
+build/fem/%/curve.csv: scenes/fem/%.toml $(CODE_fem) $(STAMP)
 	$(MPIEXEC) $(PINBORE) fem $< --out build/fem/$*
 
 impact: $(IMPACT_RUNS) ## run the dynamic impacts of scenes/impact/ (build/impact/<scene>/)
 
-build/impact/%/impact.json: scenes/impact/%.toml $(STAGE_CODE) $(STAMP)
+build/impact/%/impact.json: scenes/impact/%.toml $(CODE_impact) $(STAMP)
 	$(PINBORE) impact $< --out build/impact/$*
 
 modes: $(MODES_RUNS) ## reduce the flexible bodies of scenes/modes/ to their modes (build/modes/<scene>/)
 
-build/modes/%/body.npz: scenes/modes/%.toml $(MODES_CODE) $(STAMP)
+build/modes/%/body.npz: scenes/modes/%.toml $(CODE_modes) $(STAMP)
 	$(PINBORE) modes $< --out build/modes/$*
 
 calibration: build/calibration/laws.json ## fit and rank the contact laws on the calibration studies' curves (2D and 3D), the restitution on their impacts
 
-build/calibration/laws.json: $(CALIBRATION_STUDIES) fem/scene.py fem/curve.py fem/impact/file.py $(wildcard core/*.py laws/*.py meshes/*.py calibration/*.py) $(STAMP)
+build/calibration/laws.json: $(CALIBRATION_STUDIES) $(CODE_calibrate) $(STAMP)
 	$(PINBORE) calibrate build/study/calibration_2d/points/*/curve.csv build/study/calibration_3d/points/*/curve.csv \
 	    --impacts build/study/restitution/points/*/impact.json --out build/calibration
 
 # the calibration studies: FE and impact points (their curves, impact.json and history.csv
 # kept under build/study/<study>/points/<point>/)
-$(CALIBRATION_STUDIES): build/study/%/summary.json: studies/%.toml studies/bases/%.toml $(STAGE_CODE) pinbore/study.py $(STAMP)
+$(CALIBRATION_STUDIES): build/study/%/summary.json: studies/%.toml studies/bases/%.toml $(CODE_study) $(STAMP)
 	$(PINBORE) study $< --out build/study/$* --cache build/study/cache
 
 reduced: $(REDUCED_RUNS) ## run the mechanisms with clearance joints (build/reduced/<scene>/)
 
 $(LAWS_RUNS): build/calibration/laws.json
-build/reduced/%/summary.json: scenes/reduced/%.toml $(MODES_RUNS) $(REDUCED_CODE) $(STAMP)
+build/reduced/%/summary.json: scenes/reduced/%.toml $(MODES_RUNS) $(CODE_reduced) $(STAMP)
 	$(PINBORE) reduced $< --out build/reduced/$*
 
 dynamics: $(DYNAMICS) ## Poincare maps, bifurcation diagrams and design map of the slider-crank (planar, misaligned spatial); the impact oscillator's continued frequency response (build/dynamics/)
@@ -113,10 +123,10 @@ dynamics: $(DYNAMICS) ## Poincare maps, bifurcation diagrams and design map of t
 study: $(STUDY_RUNS) ## the studies of studies/: the calibration curves and impacts, Monte Carlo of the Flores slider-crank (exceedance, tolerance band), Sobol indices of the solar-panel deployment (build/study/)
 
 # (a wear study's points read their joint's FE run)
-build/study/wear_coefficient/summary.json: build/fem/flores_wear/curve.csv $(wildcard scenes/wear/*.toml) $(WEAR_CODE)
+build/study/wear_coefficient/summary.json: build/fem/flores_wear/curve.csv $(wildcard scenes/wear/*.toml)
 
 # (a mechanism study's points run on the local cores)
-build/study/%/summary.json: studies/%.toml $(wildcard scenes/reduced/*.toml) $(REDUCED_CODE) pinbore/study.py $(STAMP)
+build/study/%/summary.json: studies/%.toml $(wildcard scenes/reduced/*.toml) $(CODE_study) $(STAMP)
 	$(PINBORE) study $< --out build/study/$* --cache build/study/cache
 
 # (the sweeps run their points on the local cores; their per-point caches make a rerun resume)
@@ -152,13 +162,13 @@ wear: $(WEAR_RUNS) ## wear the clearance joints of scenes/wear/ by Archard's law
 
 # a wear scene's FE run (its pressure_file's)
 build/wear/slider_crank_flores2004/summary.json build/wear/slider_crank_flores2004_coupled/summary.json: build/fem/flores_wear/curve.csv
-build/wear/%/summary.json: scenes/wear/%.toml $(wildcard scenes/reduced/*.toml) $(WEAR_CODE) $(STAMP)
+build/wear/%/summary.json: scenes/wear/%.toml $(wildcard scenes/reduced/*.toml) $(CODE_wear) $(STAMP)
 	$(PINBORE) wear $< --out build/wear/$*
 
 report: build/report/index.html ## build build/report/index.html from the results
 
 build/report/index.html: $(FEM_CURVES) $(MESHES) $(MODES_RUNS) build/calibration/laws.json $(REDUCED_RUNS) $(DYNAMICS) $(STUDY_RUNS) $(WEAR_RUNS) \
-                         $(wildcard bench/*.csv) $(STAGE_CODE) $(MODES_CODE) $(wildcard pinbore/*.py calibration/*.py reduced/*.py) $(REDUCED_CODE) $(WEAR_CODE) $(STAMP)
+                         $(wildcard bench/*.csv) $(CODE_report) $(STAMP)
 	@# a report folder of a pinbore that wrote no output marker, holding its index.html alone
 	@if [ -d build/report ] && [ ! -e build/report/.pinbore-output ] && [ "$$(ls -A build/report)" = "index.html" ]; then rm -rf build/report; fi
 	$(PINBORE) report --build build --out build/report

@@ -102,36 +102,6 @@ def unsealed(text: str):
     return entry["result"]
 
 
-COMPILED = ("pinbore.core.cpp",)   # the compiled core (cpp/): part of the floor it lies in
-
-
-def source_hash(*packages: str) -> str:
-    """SHA-256 of the code of the named packages (every .py file below each package's folder,
-    by relative path and content, and the binary of each compiled module among them), found
-    without importing them: a cache keyed on it never serves a result of other code."""
-    digest = hashlib.sha256()
-    for name, path in hashed_files(*packages):
-        digest.update(f"{name}\0".encode())
-        digest.update(path.read_bytes())
-    return digest.hexdigest()
-
-
-def hashed_files(*packages: str) -> list[tuple[str, Path]]:
-    """What source_hash reads, by name: the .py files below every folder of each package
-    (an editable install gives a package more than one: its source, and the installed tree
-    that holds a compiled module), and each compiled module among them."""
-    files = []
-    for package in packages:
-        spec = importlib.util.find_spec(package)
-        folders = dict.fromkeys(Path(p).resolve() for p in spec.submodule_search_locations)
-        found = {f"{package}/{path.relative_to(folder)}": path
-                 for folder in folders for path in folder.rglob("*.py")}
-        files += sorted(found.items())
-        files += [(module, Path(importlib.util.find_spec(module).origin)) for module in COMPILED
-                  if module.rpartition(".")[0] == package]
-    return files
-
-
 def cached_map(task, items, names, cache: Path, workers: int, scheduler: str | None,
                desc: str = "sweep") -> tuple[list, list[bool]]:
     """task(item) for every item, in parallel, each result cached as `cache/<name>.json`

@@ -42,8 +42,8 @@ Every point's scene is validated before any run (a point that breaks a rule is o
 naming the point, the key and the rule; exit 2, nothing written). The points run in parallel
 through the one runner of the package (pinbore.core.parallel: long-lived local processes or a
 Dask cluster), cached by content: the name of a point's cache file is the SHA-256 of its kind,
-its whole scene, the files the scene names and the source of the code that runs it (every
-floor below the roof, and the class Point here), so a
+its whole scene, the files the scene names and the source of the code that runs it (the
+modules its run imports, read by pinbore.core.codedeps, and the class Point here), so a
 rerun runs only new or changed points, and a killed study resumes. A failed point is marked
 in results.csv with its reason; the command then exits 1 and keeps the others.
 
@@ -75,8 +75,8 @@ from pinbore.core import scene as scenes
 from pinbore.core import uq
 from pinbore.core.errors import InputError
 from pinbore.core.output import atomic_directory
-from pinbore.core.parallel import (cached_map, check_cache, check_scheduler, check_workers,
-                                   default_workers, source_hash)
+from pinbore.core.codedeps import code_hash
+from pinbore.core.parallel import cached_map, check_cache, check_scheduler, check_workers, default_workers
 from pinbore.core.scene import Strict
 
 SPEC_KEYS = ("values", "grid", "distribution")
@@ -86,15 +86,11 @@ KEPT_SUFFIXES = (".csv", ".json")
 PARQUET_ROWS = 1000
 # a label of a case or a value: a part of a point's name, and so of a folder's
 LabelText = Annotated[str, pydantic.Field(pattern=r"^[A-Za-z0-9_.+-]*$")]
-# the packages whose source may decide a point's result, by the point's kind: the floors up
-# to its own (an FE or impact point runs fem/ on meshes/, laws/ and core/, which import
-# nothing above them; a mechanism also reads a laws file through calibration/ and a flexible
-# body through fem/modes/), and the class that runs a point (Point; not the rest of this
-# module: a new plot reruns nothing). An edit of the multibody engine so reruns no FE point.
-FE_CODE = ("pinbore.core", "pinbore.laws", "pinbore.meshes", "pinbore.fem")
-CODE = {"fem": FE_CODE, "impact": FE_CODE,
-        "mechanism": FE_CODE + ("pinbore.calibration", "pinbore.reduced"),
-        "wear": FE_CODE + ("pinbore.calibration", "pinbore.reduced")}
+# the code that may decide a point's result, by the point's kind: the method of Point that
+# runs it, read with what it imports (core.codedeps: its import closure, lazy imports and the
+# compiled core included), and the class Point (not the rest of this module: a new plot
+# reruns nothing). An edit of the multibody engine so reruns no FE point.
+CODE = {kind: f"pinbore.study:Point.{kind}" for kind in ("fem", "impact", "mechanism", "wear")}
 
 
 class Grid(Strict):
@@ -566,7 +562,7 @@ class Plan:
                         for c in study.collect if c.column is not None]
         files = digest_files([*scenes.referenced_files(self.base_path),
                               *named_files(self.scenes, self.base_path.parent)])
-        code = source_hash(*CODE[self.kind]) + hashlib.sha256(inspect.getsource(Point).encode()).hexdigest()
+        code = code_hash(CODE[self.kind]) + hashlib.sha256(inspect.getsource(Point).encode()).hexdigest()
         self.keys = [hashlib.sha256(json.dumps([self.kind, d, files, code, self.columns],
                                                sort_keys=True).encode()).hexdigest()
                      for d in self.scenes]

@@ -11,6 +11,8 @@ from pathlib import Path
 import pytest
 from conftest import ROOT, main_in_child
 
+from pinbore.core import codedeps
+
 # folder -> (package, floor); the roof is pinbore/ itself
 FLOORS = {"core": ("pinbore.core", 0), "laws": ("pinbore.laws", 1), "meshes": ("pinbore.meshes", 2),
           "fem": ("pinbore.fem", 3), "calibration": ("pinbore.calibration", 4),
@@ -19,15 +21,9 @@ FLOORS = {"core": ("pinbore.core", 0), "laws": ("pinbore.laws", 1), "meshes": ("
 
 def modules() -> dict[str, Path]:
     """Dotted name -> file of every module of the package (rooms, the subfolders of a floor,
-    included)."""
-    found = {}
-    for folder, (package, _) in FLOORS.items():
-        for path in sorted((ROOT / folder).rglob("*.py")):
-            if folder == "pinbore" and path.parent != ROOT / folder:
-                continue
-            parts = [package, *path.relative_to(ROOT / folder).with_suffix("").parts]
-            found[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
-    return found
+    included), as pinbore.core.codedeps reads them for make and the caches."""
+    return {name: path for name, path in codedeps.modules(codedeps.repository_folders(ROOT)).items()
+            if path is not None}
 
 
 def floor(name: str) -> int:
@@ -38,30 +34,12 @@ def floor(name: str) -> int:
 
 
 def imports(path: Path, name: str, known: set[str]) -> set[str]:
-    """The package's modules that `path` imports (`from pinbore.x import y` counts y when y is
-    a module, else pinbore.x)."""
-    return imports_of(ast.parse(path.read_text(), str(path)), path, name, known)
-
-
-def imports_of(tree: ast.AST, path: Path, name: str, known: set[str]) -> set[str]:
-    """The package's modules that the statements of `tree` (of the module `name` at `path`)
-    import."""
-    out = set()
-    package = name if path.stem == "__init__" else name.rpartition(".")[0]
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Import):
-            targets = [alias.name for alias in node.names]
-        elif isinstance(node, ast.ImportFrom):
-            base = node.module or ""
-            if node.level:
-                base = ".".join(package.split(".")[:len(package.split(".")) - node.level + 1]
-                                + ([base] if base else []))
-            targets = [f"{base}.{alias.name}" if f"{base}.{alias.name}" in known else base
-                       for alias in node.names]
-        else:
-            continue
-        out |= {t for t in targets if t in known and t != name}
-    return out
+    """The package's modules that `path` imports, at module level or in a function
+    (`from pinbore.x import y` counts y when y is a module, else pinbore.x): those of
+    codedeps, which make's dependencies follow, without the modules a registry names in
+    strings (it loads them by name, not by import)."""
+    return codedeps.imported(ast.walk(ast.parse(path.read_text(), str(path))), name,
+                             path.stem == "__init__", known, strings=False)
 
 
 def graph() -> dict[str, set[str]]:

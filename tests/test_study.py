@@ -233,23 +233,31 @@ def test_a_study_reruns_only_what_changed(tmp_path):
     assert len(list(cache.glob("*.json"))) == 5
 
 
-def test_an_fe_point_is_keyed_on_every_package_its_run_loads():
-    """An FE or impact point's cache key covers the source of the packages study.CODE names
-    for it. Every pinbore module its run loads (pinbore.fem.run and pinbore.fem.impact.run
-    imported in a fresh interpreter) lies in one of them, so no edit its result could see
-    leaves its cached result standing; the multibody engine and the calibration are not among
-    them, so their edits rerun no FE point (a mechanism's key covers them)."""
+def test_an_fe_point_is_keyed_on_every_module_its_run_loads():
+    """An FE or impact point's cache key covers the code of its run: the import closure of
+    the method of Point that runs it (study.CODE, read by core.codedeps). Every pinbore
+    module its run loads (pinbore.fem.run and pinbore.fem.impact.run imported in a fresh
+    interpreter) lies in it, so no edit its result could see leaves its cached result
+    standing; the multibody engine and the calibration are not, so their edits rerun no FE
+    point (a mechanism's key covers them)."""
     from pinbore import study
+    from pinbore.core import codedeps
 
     loaded = subprocess.run(
         [sys.executable, "-c", "import sys, pinbore.fem.run, pinbore.fem.impact.run; "
          "print(' '.join(m for m in sys.modules if m.startswith('pinbore.')))"],
         capture_output=True, text=True, check=True).stdout.split()
+    graph = codedeps.installed_graph()
+    # a compiled module's submodules are its own (pinbore.core.cpp.laws); a namespace
+    # package has no code
+    loaded = {codedeps.project_module(m, graph.files) for m in loaded} - {None}
+    both = graph.closure(study.CODE["fem"], study.CODE["impact"])
+    assert loaded - both == set()
     for kind in ("fem", "impact"):
-        code = study.CODE[kind]
-        assert [m for m in loaded if not any(m == p or m.startswith(p + ".") for p in code)] == []
-        assert "pinbore.reduced" not in code and "pinbore.calibration" not in code
-    assert {"pinbore.fem", "pinbore.calibration", "pinbore.reduced"} <= set(study.CODE["mechanism"])
+        code = graph.closure(study.CODE[kind])
+        assert not any(m.startswith(("pinbore.reduced.", "pinbore.calibration")) for m in code)
+    assert {"pinbore.fem.modes.file", "pinbore.laws.lawsfile", "pinbore.reduced.mechanism.model",
+            "pinbore.core.cpp"} <= graph.closure(study.CODE["mechanism"])
 
 
 def test_a_killed_study_resumes_without_losing_or_repeating_a_point(tmp_path):
@@ -804,18 +812,21 @@ def test_a_study_varies_an_integer_key(tmp_path):
     assert all(type(p["clearance_joints"][0]["slices"]) is int for p in plan.scenes)
 
 
-def test_a_points_cache_key_reads_every_source_file_of_its_floors():
-    """The code an FE point's key hashes: every .py file of core, laws, meshes and fem in the
-    repository, and the compiled core's binary (an editable install gives pinbore.core two
-    folders: its source, and the installed tree of the compiled module, which holds no .py)."""
-    from pinbore.core.parallel import hashed_files
-    from pinbore.study import FE_CODE
+def test_a_points_cache_key_reads_the_source_of_every_module_of_its_run():
+    """The code an FE point's key hashes: the source of every module of its closure as the
+    running pinbore finds it (an editable install gives pinbore.core two folders: its
+    source, and the installed tree of the compiled module, which holds no .py), the compiled
+    core's binary, and of pinbore.study the method that runs the point alone (a new plot
+    reruns nothing; the class Point is hashed beside it)."""
+    from pinbore.core.codedeps import hashed
+    from pinbore.study import CODE
 
-    names = {name for name, _ in hashed_files(*FE_CODE)}
-    for floor in ("core", "laws", "meshes", "fem"):
-        for path in (ROOT / floor).rglob("*.py"):
-            assert f"pinbore.{floor}/{path.relative_to(ROOT / floor)}" in names
-    assert "pinbore.core.cpp" in names
+    read = dict(hashed(CODE["fem"]))
+    for name in ("pinbore.fem.run", "pinbore.fem.elasticity", "pinbore.meshes.model", "pinbore.laws.relief"):
+        path = ROOT / name.split(".")[1] / (name.split(".", 2)[2].replace(".", "/") + ".py")
+        assert read[name] == path.read_bytes()
+    assert read["pinbore.core.cpp"][:4] == b"\x7fELF" or len(read["pinbore.core.cpp"]) > 10000
+    assert read["pinbore.study"].startswith(b"def fem(self, data):")
 
 
 def test_the_report_marks_a_statistic_that_is_not_finite(tmp_path):

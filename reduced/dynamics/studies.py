@@ -27,7 +27,8 @@ from tqdm import tqdm
 from pinbore.core import scene as scenes
 from pinbore.core.errors import InputError
 from pinbore.core.output import atomic_directory
-from pinbore.core.parallel import cached_map, source_hash
+from pinbore.core.codedeps import code_hash
+from pinbore.core.parallel import cached_map
 from pinbore.reduced.dynamics.analyses import (PARAMETERS, Analysis, BifurcationOptions, ContinuationOptions,
                                                DesignOptions, LyapunovOptions, PoincareOptions, Sampled,
                                                ShootingOptions)
@@ -210,9 +211,10 @@ def sweep(task, values, cache: Path, workers: int, scheduler: str | None, key: s
 
 
 def sweep_key(data: dict, analysis: str, parameter: str, transient: int, periods: int) -> str:
-    """Cache key: the scene, the settings that change a point's result, and the code of the
-    model (a changed model never reads old points)."""
-    code = source_hash("pinbore.laws", "pinbore.reduced")
+    """Cache key: the scene, the settings that change a point's result, and the code that
+    runs a point (core.codedeps: this module's import closure, the compiled core's
+    binary included; a changed model never reads old points)."""
+    code = code_hash(__name__)
     text = json.dumps([data, analysis, parameter, transient, periods, code], sort_keys=True)
     return f"{analysis}_{parameter}_{hashlib.sha256(text.encode()).hexdigest()[:12]}"
 
