@@ -131,8 +131,37 @@ def test_the_wear_command_wears_the_flores_joint(worn):
     assert (worn / "wear.png").stat().st_size > 0
 
 
+def test_a_wear_run_over_more_periods_averages_them(tmp_path, flores_fe):
+    """`periods = 6`: the mechanism runs six crank revolutions whatever its scene's duration,
+    and the wear of a cycle is the mean of the five after the first: the bore's volume is k
+    (cycles) times the integral of F |v_s| over them, from a run of the mechanism 6 periods
+    long made here."""
+    import copy
+    import json
+    import tomllib
+
+    from pinbore.reduced.mechanism import kinds
+    from pinbore.reduced.mechanism.model import build
+    from pinbore.reduced.mechanism.run import simulate
+    from pinbore.reduced.wear import history
+
+    (tmp_path / "wear.toml").write_text(tomli_w.dumps(wear_scene(tmp_path, flores_fe, periods=6)))
+    done = pinbore("wear", tmp_path / "wear.toml", "--out", tmp_path / "out")
+    assert done.returncode == 0, done.stderr
+    result = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert result["periods_averaged"] == 5
+    path = ROOT / "scenes/reduced/slider_crank_flores2004.toml"
+    data = copy.deepcopy(tomllib.loads(path.read_text())) | {"duration": 6 * 0.012}
+    model = build(kinds.validate(data, str(path)), str(path), path.parent)
+    run = simulate(model)
+    cycle = history.of_run(model, run, 0, (0.012, run.times[-1]))
+    work = np.trapezoid(cycle.force * np.abs(cycle.sliding_speed), cycle.time) / 5
+    assert result["bore"]["volume_m3"] == pytest.approx(K * 1000 * work, rel=0.02)
+
+
 @pytest.mark.parametrize("change, message", [
     ({"joint": "crank_pin"}, "joint: 'crank_pin' is not a revolute clearance joint"),
+    ({"periods": 1}, "periods"),
     ({"length": -1.0}, "length"),
     ({"cycles": 0}, "cycles"),
     ({"bore": {"wear_coefficient": 1.0}}, "wear_coefficient"),

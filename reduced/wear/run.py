@@ -28,7 +28,8 @@ RADIUS_MATCH = 1e-6   # relative: the FE run's radii are the joint's
 
 def mechanism_of(scene: WearScene, base: Path, source: str):
     """(the mechanism scene, its path, the joint, its forcing period), checked: a planar
-    mechanism whose joint `joint` is a revolute clearance joint, run over at least a period."""
+    mechanism whose joint `joint` is a revolute clearance joint, run over at least a period
+    (over `periods` of them if the scene says so)."""
     from pinbore.reduced.mechanism import kinds   # noqa: PLC0415
 
     path = scenes.named_file(scene.mechanism_file, base)
@@ -44,6 +45,12 @@ def mechanism_of(scene: WearScene, base: Path, source: str):
         period = mechanism.forcing_period()
     except ValueError as err:
         raise InputError(f"{source}: mechanism_file: {err}") from None
+    if scene.periods is not None:   # the mechanism run over that many periods
+        data = scenes.read_toml(path) | {"duration": scene.periods * period}
+        try:
+            mechanism = kinds.validate(data, str(path))
+        except InputError as err:
+            raise InputError(f"{source}: periods: {scene.periods} periods of {period:g} s: {err}") from None
     if mechanism.duration < period * (1 - 1e-12):
         raise InputError(f"{source}: mechanism_file: duration {mechanism.duration:g} s is shorter "
                          f"than one forcing period ({period:g} s), the cycle worn")

@@ -53,6 +53,10 @@ class WearScene(Strict):
     cycles: float = pydantic.Field(gt=0, le=1e10, description="periods of the forcing worn through")
     bore: Surface
     pin: Surface
+    periods: int | None = pydantic.Field(default=None, ge=2, le=1000, description=(
+        "forcing periods each mechanism run lasts: the first is dropped (its transient) and "
+        "the rest averaged into the wear of a cycle (default: the mechanism scene's duration). "
+        "More periods give a rate of wear less scattered by the motion's irregularity."))
     points: int = pydantic.Field(default=720, ge=36, le=100_000,
                                  description="angles around each surface the depth is given at")
     coupling: Coupling | None = pydantic.Field(default=None, description=(
