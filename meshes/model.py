@@ -53,8 +53,9 @@ def generate(gmsh, dim: int) -> None:
             done.set()
 
     _meshing.append(done)
-    threading.Thread(target=mesh, name="gmsh mesher", daemon=True).start()
-    try:   # not Thread.join: a stop raised inside it marks the thread ended (bpo-45274's fix)
+    try:   # a stop while the thread starts (start waits for it) leaves it meshing too;
+        # not Thread.join: a stop raised inside it marks the thread ended (bpo-45274's fix)
+        threading.Thread(target=mesh, name="gmsh mesher", daemon=True).start()
         while not done.wait(0.05):
             pass
     except BaseException:
