@@ -96,7 +96,7 @@ double worn_maximum(F& f, double centre, double size, double lowest, double m, d
 {
   struct Point
   {
-    double x, value, slope;
+    double x, value;
   };
   thread_local std::vector<Point> samples;
   thread_local std::vector<std::array<Point, 2>> pending;
@@ -105,8 +105,8 @@ double worn_maximum(F& f, double centre, double size, double lowest, double m, d
   if (not (std::isfinite(size) and std::isfinite(m)))
     return centre;   // a state not finite (an integrator's trial): its value is NaN
   double slope, curvature;
-  double best = f(centre, slope, curvature);
-  samples.push_back({centre, best, slope});
+  Point top{centre, f(centre, slope, curvature)};   // the best point so far
+  samples.push_back(top);
   const auto half = static_cast<std::ptrdiff_t>(std::ceil(std::numbers::pi / step));
   // one side then the other; the last sample of each side bounds the rest below the best
   std::ptrdiff_t right = 0;
@@ -116,10 +116,10 @@ double worn_maximum(F& f, double centre, double size, double lowest, double m, d
     {
       const double da = static_cast<double>(i) * step;
       const double x = centre + side * da;
-      const double value = f(x, slope, curvature);
-      samples.push_back({x, value, slope});
-      best = std::max(best, value);
-      if (size * std::cos(std::min(da, std::numbers::pi)) - lowest < best)
+      samples.push_back({x, f(x, slope, curvature)});
+      if (samples.back().value > top.value)
+        top = samples.back();
+      if (size * std::cos(std::min(da, std::numbers::pi)) - lowest < top.value)
         break;
     }
     if (side > 0)
@@ -137,11 +137,7 @@ double worn_maximum(F& f, double centre, double size, double lowest, double m, d
     pending.push_back({samples[right], samples[0]});
     between(right, static_cast<std::ptrdiff_t>(samples.size()));
   }
-  Point top{centre, -std::numeric_limits<double>::infinity(), 0.0};
-  for (const Point& p : samples)
-    if (p.value > top.value)
-      top = p;
-  double width = step;   // the last interval that raised the best or bounded it
+  double width = step;   // the spacing about the best point when it became the best
   while (not pending.empty())
   {
     auto [a, b] = pending.back();
@@ -150,9 +146,8 @@ double worn_maximum(F& f, double centre, double size, double lowest, double m, d
     if (chord_bound(a.value, b.value, w, m) <= top.value + tol or w < 1e-13)
       continue;
     const double x = 0.5 * (a.x + b.x);
-    const double value = f(x, slope, curvature);
-    const Point mid{x, value, slope};
-    if (value > top.value)
+    const Point mid{x, f(x, slope, curvature)};
+    if (mid.value > top.value)
       top = mid, width = 0.5 * w;
     pending.push_back({a, mid});
     pending.push_back({mid, b});
@@ -164,10 +159,10 @@ double worn_maximum(F& f, double centre, double size, double lowest, double m, d
   f(hi, slope, curvature);
   if (not (rises and slope < 0.0))
     return top.x;
-  double x = top.x, moved = hi - lo, value = top.value;
+  double x = top.x, moved = hi - lo;
   for (int it = 0; it < 60 and hi - lo > 1e-14; ++it)
   {
-    value = f(x, slope, curvature);
+    f(x, slope, curvature);
     if (slope == 0.0)
       break;
     (slope > 0.0 ? lo : hi) = x;
@@ -180,8 +175,7 @@ double worn_maximum(F& f, double centre, double size, double lowest, double m, d
     if (moved < 1e-15)
       break;
   }
-  value = f(x, slope, curvature);
-  return value >= top.value - tol ? x : top.x;
+  return f(x, slope, curvature) >= top.value - tol ? x : top.x;
 }
 
 } // namespace pinbore::mechanism

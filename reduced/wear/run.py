@@ -33,7 +33,8 @@ def mechanism_of(scene: WearScene, base: Path, source: str):
     from pinbore.reduced.mechanism import kinds   # noqa: PLC0415
 
     path = scenes.named_file(scene.mechanism_file, base)
-    mechanism = kinds.load(path)
+    data = scenes.read_toml(path)
+    mechanism = kinds.validate(data, str(path))
     if kinds.of_scene(mechanism).name != "planar":
         raise InputError(f"{source}: mechanism_file: a planar mechanism (kind = \"reduced\") is "
                          "needed: the wear of a spatial joint is not modelled")
@@ -46,9 +47,8 @@ def mechanism_of(scene: WearScene, base: Path, source: str):
     except ValueError as err:
         raise InputError(f"{source}: mechanism_file: {err}") from None
     if scene.periods is not None:   # the mechanism run over that many periods
-        data = scenes.read_toml(path) | {"duration": scene.periods * period}
         try:
-            mechanism = kinds.validate(data, str(path))
+            mechanism = kinds.validate(data | {"duration": scene.periods * period}, str(path))
         except InputError as err:
             raise InputError(f"{source}: periods: {scene.periods} periods of {period:g} s: {err}") from None
     if mechanism.duration < period * (1 - 1e-12):
