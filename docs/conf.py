@@ -61,10 +61,21 @@ autodoc_default_options = {"members": True, "show-inheritance": False}
 # plain text unless a code block names its language (the docstrings, the scene tables' docstrings)
 highlight_language = "text"
 
-html_theme = "alabaster"
+# The PyData theme (pydata-sphinx-theme, in the docs extra and requirements.lock), as NumPy,
+# SciPy and the FEniCS demos use: its tables scroll inside themselves, so the benchmark tables
+# fit the page at any width. Its assets are in the package: nothing is fetched at build time
+# or when a page is opened.
+html_theme = "pydata_sphinx_theme"
 html_title = "pinbore"
 html_static_path = []
-html_theme_options = {"description": "FE contact study of pin-in-bore clearance joints",
-                      "fixed_sidebar": False}
+html_theme_options = {
+    "navbar_end": ["theme-switcher"],         # no icon links (they point outside)
+    "secondary_sidebar_items": ["page-toc"],  # the page's sections, no "edit" or "source" links
+    "show_toc_level": 2,
+    "navigation_depth": 3,
+    "footer_start": ["copyright"],
+    "footer_end": [],
+}
 html_last_updated_fmt = None
 html_copy_source = False
+html_show_sourcelink = False
