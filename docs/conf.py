@@ -26,6 +26,7 @@ extensions = [
     "sphinx.ext.autodoc",
     "scene_reference",     # docs/_ext: the scene keys from the pydantic models
     "package_modules",     # docs/_ext: the API pages list the modules they find
+    "bench_table",         # docs/_ext: chosen columns of a bench/*.csv
 ]
 
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
@@ -73,6 +74,7 @@ html_theme_options = {
     "secondary_sidebar_items": ["page-toc"],  # the page's sections, no "edit" or "source" links
     "show_toc_level": 2,
     "navigation_depth": 3,
+    "sidebar_includehidden": False,           # no empty "Section Navigation" beside a page without subpages
     "footer_start": ["copyright"],
     "footer_end": [],
 }
