@@ -62,10 +62,9 @@ autodoc_default_options = {"members": True, "show-inheritance": False}
 # plain text unless a code block names its language (the docstrings, the scene tables' docstrings)
 highlight_language = "text"
 
-# The PyData theme (pydata-sphinx-theme, in the docs extra and requirements.lock), as NumPy,
-# SciPy and the FEniCS demos use: its tables scroll inside themselves, so the benchmark tables
-# fit the page at any width. Its assets are in the package: nothing is fetched at build time
-# or when a page is opened.
+# The PyData theme (pydata-sphinx-theme, in the docs extra and requirements.lock), as NumPy and
+# SciPy use: its tables scroll inside themselves, so the benchmark tables fit the page at any
+# width. Its assets are in the package: nothing is fetched at build time or when a page opens.
 html_theme = "pydata_sphinx_theme"
 html_title = "pinbore"
 html_static_path = []
