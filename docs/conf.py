@@ -26,6 +26,7 @@ extensions = [
     "sphinx.ext.autodoc",
     "scene_reference",     # docs/_ext: the scene keys from the pydantic models
     "package_modules",     # docs/_ext: the API pages list the modules they find
+    "bench_table",         # docs/_ext: chosen columns of a bench/*.csv
 ]
 
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
@@ -61,10 +62,21 @@ autodoc_default_options = {"members": True, "show-inheritance": False}
 # plain text unless a code block names its language (the docstrings, the scene tables' docstrings)
 highlight_language = "text"
 
-html_theme = "alabaster"
+# The PyData theme (pydata-sphinx-theme, in the docs extra and requirements.lock), as NumPy and
+# SciPy use: its tables scroll inside themselves, so the benchmark tables fit the page at any
+# width. Its assets are in the package: nothing is fetched at build time or when a page opens.
+html_theme = "pydata_sphinx_theme"
 html_title = "pinbore"
 html_static_path = []
-html_theme_options = {"description": "FE contact study of pin-in-bore clearance joints",
-                      "fixed_sidebar": False}
+html_theme_options = {
+    "navbar_end": ["theme-switcher"],         # no icon links (they point outside)
+    "secondary_sidebar_items": ["page-toc"],  # the page's sections, no "edit" or "source" links
+    "show_toc_level": 2,
+    "navigation_depth": 3,
+    "sidebar_includehidden": False,           # no empty "Section Navigation" beside a page without subpages
+    "footer_start": ["copyright"],
+    "footer_end": [],
+}
 html_last_updated_fmt = None
 html_copy_source = False
+html_show_sourcelink = False

@@ -98,3 +98,29 @@ def test_the_docs_extra_admits_the_locked_versions():
         version = locked.get(req.name.lower())
         assert version is not None, f"{req.name} is not in requirements.lock"
         assert req.specifier.contains(version), f"{req.name}=={version} is outside {req.specifier}"
+
+
+def bench_tables() -> list[tuple[str, dict]]:
+    """(CSV path, options) of each `bench-table` of docs/benchmarks.md."""
+    text = (ROOT / "docs" / "benchmarks.md").read_text(encoding="utf-8")
+    blocks = re.findall(r"```\{bench-table\} (\S+)\n((?::[\w-]+:.*\n)*)```", text)
+    return [(path, dict(re.findall(r"^:([\w-]+): (.*)$", options, re.MULTILINE)))
+            for path, options in blocks]
+
+
+def test_every_benchmark_table_is_on_the_benchmarks_page():
+    """Each bench/*.csv is shown by a bench-table, and each bench-table names columns its CSV
+    has (docs/_ext/bench_table.py; the build fails on a missing one, this says which at once)."""
+    import csv
+
+    import bench_table
+
+    tables = bench_tables()
+    shown = {(ROOT / "docs" / path).resolve() for path, _ in tables}
+    assert set((ROOT / "bench").glob("*.csv")) <= shown, "bench/*.csv not on docs/benchmarks.md"
+    for path, options in tables:
+        with open(ROOT / "docs" / path, newline="", encoding="utf-8") as f:
+            header = next(csv.reader(f))
+        named = [name for name, _, _ in bench_table.column_specs(options["columns"])]
+        named += [name for name, _, _ in bench_table.conditions(options.get("where", ""))]
+        assert set(named) <= set(header), f"{path}: no column {set(named) - set(header)}"
