@@ -5,8 +5,8 @@ A demo is a Python script in the percent format that Jupytext, VS Code and Spyde
 cells: a line `# %% [markdown]` opens a text cell, whose lines are Markdown behind `# `; a
 line `# %%` opens a code cell. The page is the text cells as Markdown (MyST, as every page of
 these docs) and the code cells as Python code blocks, in the script's order; lines before the
-first cell marker are code. Each line of the page keeps the line number it has in the script,
-so a warning points at the script's line.
+first cell marker are code. The page's lines keep the numbers they have in the script (a code
+cell's closing fence may push the next cell down a line), so a warning points at the script.
 
 A text cell links other demos and the docs' pages as files, relative to demos/ (as a reader
 of the repository follows them): `[the calibration](demo_calibration.py)`,
