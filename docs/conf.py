@@ -27,11 +27,13 @@ extensions = [
     "scene_reference",     # docs/_ext: the scene keys from the pydantic models
     "package_modules",     # docs/_ext: the API pages list the modules they find
     "bench_table",         # docs/_ext: chosen columns of a bench/*.csv
+    "demo_pages",          # docs/_ext: each script of demos/ (docs/demos links there) a page
 ]
 
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
 root_doc = "index"
-exclude_patterns = ["_build", "schemas"]
+# (.py is a demo's suffix, demo_pages: this file and the extensions are no pages)
+exclude_patterns = ["_build", "schemas", "conf.py", "_ext"]
 templates_path = []
 
 # MyST: Markdown links to pages and files are checked like Sphinx references (a broken one

@@ -1,4 +1,9 @@
-"""Stage 2: DOLFINx contact between the pin and the bore (penalty or augmented Lagrangian)."""
+"""DOLFINx finite elements of the pin in its bore. The quasi-static contact (`pinbore fem`):
+the scene, elasticity, elasto-plasticity, the contact with Coulomb friction (penalty or
+augmented Lagrangian), the load stepper, the quantities read off a state and the curve files
+(curve.csv, pressure.csv); the room `impact/`: the dynamic impact of the pin in its bore
+(`pinbore impact`); the room `modes/`: a body's modal reduction to a flexible body with
+SLEPc (`pinbore modes`)."""
 
 import os
 

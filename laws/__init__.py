@@ -1,11 +1,14 @@
-"""Contact laws for revolute clearance joints: elastic (force against approach),
-dissipative (hysteresis), friction, and the sliced law of a finite pin (force and tilting
-moment, `sliced`) with its pieces: laws as log-log tables (`tables`) and the bore's edge
-relief (`relief`). Pure functions in SI units, the formula and its source in each
-docstring. This package imports nothing from the stages, so every stage may use it.
+"""Contact laws for clearance joints: elastic (force against approach, `elastic`),
+dissipative (hysteresis and restitution, `dissipative`), friction, sliding wear (Archard's,
+`wear`), and the sliced law of a finite pin (force and tilting moment, `sliced`) with its
+pieces: laws as log-log tables (`tables`) and the bore's edge relief (`relief`). Pure
+functions in SI units, the formula and its source in each docstring. This package imports
+nothing from the stages, so every stage may use it.
 
-The laws file of `pinbore calibrate` is defined here too (`lawsfile`), and read as callables
-by `load` (pinbore.laws.contact.load): `pinbore.laws.load("laws.json")["liu"](d, rate, v0)`.
+Two files between stages are defined here, for every floor that reads them: the laws file of
+`pinbore calibrate` (`lawsfile`), read as callables by `load` (pinbore.laws.contact.load:
+`pinbore.laws.load("laws.json")["liu"](d, rate, v0)`), and the worn profiles of `pinbore
+wear` (`wearfile`).
 """
 
 if __name__ != "pinbore.laws":   # one module, one name: never a second copy as `laws`

@@ -4,13 +4,17 @@ One import package whose floors keep their folders at the top of the repository 
 package mapping in pyproject.toml; the compiled core, pinbore.core.cpp, is cpp/). Data flows one way, and a floor imports only
 from the floors below it:
 
-    pinbore.core         core/          errors, scene files, atomic outputs, figures, report pieces
-    pinbore.laws         laws/          the contact, damping and friction laws
-    pinbore.meshes       meshes/        Gmsh models of the pin in its bore
-    pinbore.fem          fem/           DOLFINx contact: load-approach curves, pressures
+    pinbore.core         core/          errors, scene files, atomic outputs, figures, report
+                                        pieces, the parallel runner, statistics; the compiled
+                                        core (cpp/)
+    pinbore.laws         laws/          the contact, damping, friction and wear laws; laws.json
+    pinbore.meshes       meshes/        Gmsh models of the pin in its bore and of flexible bodies
+    pinbore.fem          fem/           DOLFINx: contact curves and pressures, impacts, modes
     pinbore.calibration  calibration/   law fits and ranking on the FE curves: laws.json
-    pinbore.reduced      reduced/       multibody models with clearance joints, nonlinear dynamics
-    pinbore.cli, pinbore.report  pinbore/   the roof: the `pinbore` command and the HTML report
+    pinbore.reduced      reduced/       mechanisms with clearance joints, their nonlinear
+                                        dynamics, the wear of a joint
+    pinbore (the roof)   pinbore/       the `pinbore` command, the Python API (`pinbore.run`),
+                                        studies, the report, the laws' export
 """
 
 # An editable install (scikit-build-core's redirect) also lists the repository's root among

@@ -4,7 +4,7 @@ back as a typed object (the model of the file the stage wrote, that the next sta
     import pinbore
     curve = pinbore.run("fem", "scenes/fem/steel_c100um.toml", out="build/api/fem")   # Curve
     laws = pinbore.calibrate(["build/api/fem/curve.csv"], out="build/api/cal")        # LawsFile
-    summary = pinbore.run("reduced", {"kind": "reduced", ...}, out="build/api/run")   # Summary
+    summary = pinbore.run("reduced", {"kind": "planar", ...}, out="build/api/run")    # Summary
     pinbore.laws.load("build/api/cal/laws.json")["liu"](2e-6)                         # N
 
 A stage is the command's own function (what `pinbore <command>` runs): the same checks, the
@@ -67,14 +67,14 @@ def _scene_file(scene, base):
 
 
 def scene(source, base=None):
-    """The validated scene model of a file or a dict, by its `kind` (fem, impact, reduced,
+    """The validated scene model of a file or a dict, by its `kind` (fem, impact, planar,
     spatial; a modes scene has none, but a [body] table)."""
     with _scene_file(source, base) as path:
         data = scenes.read_toml(path)
         kind = data.get("kind", "modes" if "body" in data else None)
-        if kind in ("reduced", "spatial"):
-            from pinbore.reduced.mechanism import kinds   # noqa: PLC0415
+        from pinbore.reduced.mechanism import kinds   # noqa: PLC0415 (pydantic only)
 
+        if kind in kinds.KINDS or kind in kinds.RENAMED_KINDS:
             return kinds.load(path)
         if kind == "fem":
             from pinbore.fem.scene import FemScene as model   # noqa: PLC0415
@@ -84,7 +84,7 @@ def scene(source, base=None):
             from pinbore.fem.modes.scene import ModesScene as model   # noqa: PLC0415
         else:
             raise InputError(f"{'scene' if isinstance(source, dict) else source}: kind: {kind!r} is "
-                             "unknown; valid: fem, impact, reduced, spatial (a modes scene: a "
+                             "unknown; valid: fem, impact, planar, spatial (a modes scene: a "
                              "[body] table)")
         return scenes.load(model, path)
 

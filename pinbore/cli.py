@@ -262,7 +262,7 @@ def parser() -> argparse.ArgumentParser:
     c.set_defaults(func=_calibrate)
     _scene_command(sub, "reduced", _reduced,
                    "integrate a mechanism with clearance joints: timeseries.csv, summary.json",
-                   "Integrate a planar (scene kind = \"reduced\") or spatial (kind = "
+                   "Integrate a planar (scene kind = \"planar\") or spatial (kind = "
                    "\"spatial\") mechanism with clearance joints; write DIR/timeseries.csv, "
                    "DIR/summary.json and plots.")
     _dynamics_command(sub)

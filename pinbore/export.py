@@ -61,7 +61,7 @@ def selected(laws_data, laws_path: str, scene_path: str | None, joint_name: str 
         return [(name, joint, None, None) for name in ([law_name] if law_name else fitted)]
     scene = kinds.load(scene_path)
     if kinds.of_scene(scene).dimension != 2:
-        raise InputError(f"{scene_path}: --scene: a planar mechanism (kind = \"reduced\"): the "
+        raise InputError(f"{scene_path}: --scene: a planar mechanism (kind = \"planar\"): the "
                          "tables are a revolute joint's force F = L P(d), a pin without tilt")
     joints = {c.name: c for c in clearance_joints(scene) if hasattr(c, "elastic_joint")}
     if joint_name is None and len(joints) == 1:

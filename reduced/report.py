@@ -80,7 +80,7 @@ def section(build_dir: Path, bench_dir: Path) -> str:
                                 f"Scene {folder.name}: angular velocity of the first body (a "
                                 "free-floating bus's attitude rates; an unactuated crank's speed), "
                                 "with the ideal joints (dashed)."))
-        parts += joint_figures(folder, s, kinds.BY_NAME[s.model].joint_caption)
+        parts += joint_figures(folder, s, kinds.KINDS[s.model].joint_caption)
         if (folder / "points.png").exists():
             parts.append(figure(png_data(folder / "points.png"),
                                 f"Scene {folder.name}: the output points' elastic displacement "

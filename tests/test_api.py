@@ -33,7 +33,7 @@ def test_a_mechanism_from_a_dict(tmp_path):
     summary = pb.run("reduced", data, tmp_path / "run")
     assert summary.status == "complete"
     assert summary.time_reached_s == pytest.approx(0.0012)
-    assert type(pb.scene(data)).__name__ == "ReducedScene"
+    assert type(pb.scene(data)).__name__ == "PlanarScene"
     assert math.isfinite(summary.clearance_joints["rod_slider"].peak_normal_force_N)
 
 
@@ -41,7 +41,7 @@ def test_a_bad_scene_dict_is_one_input_error(tmp_path):
     with pytest.raises(InputError, match="kind: 'gearbox' is unknown"):
         pb.scene({"kind": "gearbox"})
     with pytest.raises(InputError, match="mass"):
-        pb.scene({"kind": "reduced", "duration": 1.0, "bodies": [{"name": "a", "mass": -1.0}]})
+        pb.scene({"kind": "planar", "duration": 1.0, "bodies": [{"name": "a", "mass": -1.0}]})
     with pytest.raises(ValueError, match="stage: 'mesh' is unknown"):
         pb.run("mesh", scene_dict(), tmp_path / "x")
 

@@ -186,7 +186,7 @@ def test_no_branch_on_the_kind_of_mechanism(name):
                 if isinstance(side, ast.Constant) and (side.value in ("planar", "spatial") or about_kind
                                                        and side.value == "reduced"):
                     wrong.append(f"line {node.lineno}: compares with {side.value!r}")
-        if isinstance(node, ast.Name) and node.id in ("ReducedScene", "SpatialScene"):
+        if isinstance(node, ast.Name) and node.id in ("PlanarScene", "SpatialScene"):
             wrong.append(f"line {node.lineno}: names {node.id}")
     assert not wrong, "\n".join(wrong)
 

@@ -18,7 +18,7 @@ from pinbore.laws.elastic import Joint
 from pinbore.laws.lawsfile import law_force
 from pinbore.reduced.mechanism.layout import CONTACT_TABLE
 from pinbore.reduced.mechanism.model import build
-from pinbore.reduced.mechanism.scene import ReducedScene
+from pinbore.reduced.mechanism.scene import PlanarScene
 
 JOINT = Joint(10e-3, 9.95e-3, 210e9, 0.3, 210e9, 0.3, 0.02)
 APPROACH = np.linspace(1e-6, 1e-5, 10)
@@ -196,7 +196,7 @@ def joint_table(model, j=0):
 
 def test_multibody_model_applies_the_law_the_calibration_fitted(tmp_path):
     """The joint's tabulated force is F = P L, P the calibrated law: here the synthetic truth."""
-    model = build(ReducedScene.model_validate(calibrated_scene(synthetic_laws_file(tmp_path))),
+    model = build(PlanarScene.model_validate(calibrated_scene(synthetic_laws_file(tmp_path))),
                   "test", tmp_path)
     table = joint_table(model)
     d = np.exp(model.base.grid_log0 + model.base.grid_step * np.arange(table.size))

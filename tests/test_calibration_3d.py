@@ -110,7 +110,7 @@ def test_the_planar_model_takes_the_straight_pin_force_of_a_3d_law(tmp_path):
     from pinbore.laws import sliced as sliced_law
     from pinbore.laws import tables
     from pinbore.reduced.mechanism.model import build
-    from pinbore.reduced.mechanism.scene import ReducedScene
+    from pinbore.reduced.mechanism.scene import PlanarScene
     import test_calibration
 
     laws = sliced.calibrate([synthetic("short", 0.01, 0.9, 1.5e-3, 0.4),
@@ -121,7 +121,7 @@ def test_the_planar_model_takes_the_straight_pin_force_of_a_3d_law(tmp_path):
     scene = test_calibration.calibrated_scene(tmp_path / "laws.json")
     joint = scene["clearance_joints"][0]
     joint["normal_law"] = "sliced:flush_steel"
-    model = build(ReducedScene.model_validate(scene), "test", tmp_path)
+    model = build(PlanarScene.model_validate(scene), "test", tmp_path)
     modelled = test_calibration.joint_table(model)
     d = np.exp(model.base.grid_log0 + model.base.grid_step * np.arange(modelled.size))
     pick = np.flatnonzero(np.isfinite(modelled))[::60]
@@ -178,7 +178,7 @@ def test_a_law_on_its_sections_fe_curve_holds_for_that_section_only(tmp_path):
     from pinbore.calibration.run import evaluate, laws_json
     from pinbore.core.errors import InputError
     from pinbore.reduced.mechanism.model import build
-    from pinbore.reduced.mechanism.scene import ReducedScene
+    from pinbore.reduced.mechanism.scene import PlanarScene
     import test_calibration
 
     points = np.geomspace(1e-6, 6e-5, 12)
@@ -198,9 +198,9 @@ def test_a_law_on_its_sections_fe_curve_holds_for_that_section_only(tmp_path):
     joint = scene["clearance_joints"][0]
     joint |= {"normal_law": "sliced:flush_steel", "bearing_radius": JOINT.r_bore,
               "journal_radius": JOINT.r_pin}
-    model = build(ReducedScene.model_validate(scene), "test", tmp_path)
+    model = build(PlanarScene.model_validate(scene), "test", tmp_path)
     assert np.isfinite(test_calibration.joint_table(model)).sum() > 100
     joint["journal_radius"] = JOINT.r_pin - 1e-5
     with pytest.raises(InputError, match="clearance_joints.bearing_radius, journal_radius: "
                                          "'sliced:flush_steel' is built on the FE curve"):
-        build(ReducedScene.model_validate(scene), "test", tmp_path)
+        build(PlanarScene.model_validate(scene), "test", tmp_path)

@@ -309,7 +309,7 @@ def family_of(data, parameter, value, tmp_path):
 def linear_oscillator(f_hz):
     """A 2 kg block on a prismatic guide along y, held by a spring k = 800 N/m and a damper
     c = 4 N s/m (w_n = 20 rad/s, zeta = 0.05), forced by 3 N cos(2 pi f t)."""
-    return {"kind": "reduced", "duration": 1.0,
+    return {"kind": "planar", "duration": 1.0,
             "bodies": [{"name": "block", "mass": 2.0, "inertia": 0.01}],
             "joints": [{"type": "prismatic", "body": "block", "axis_deg": 90.0}],
             "springs": [{"body_i": "ground", "point_i": [0.0, -1.0], "body_j": "block",

@@ -11,7 +11,7 @@ from conftest import simulated
 
 from pinbore.core.errors import InputError
 from pinbore.reduced.mechanism import layout
-from pinbore.reduced.mechanism.scene import ReducedScene
+from pinbore.reduced.mechanism.scene import PlanarScene
 
 MASS, LENGTH = 2.0, 1.0                  # kg, m: a bar pinned at one end
 J_C = MASS * LENGTH ** 2 / 12            # kg m^2 about its centre
@@ -50,7 +50,7 @@ def test_the_spin_up_is_smooth_and_reaches_its_speed():
 
 
 def planar_bar(drive, duration=2 * T_S):
-    return {"kind": "reduced", "duration": duration, "gravity": [0.0, 0.0],
+    return {"kind": "planar", "duration": duration, "gravity": [0.0, 0.0],
             "bodies": [{"name": "bar", "mass": MASS, "inertia": J_C, "position": [LENGTH / 2, 0.0]}],
             "joints": [{"type": "revolute", "body_i": "ground", "point_i": [0.0, 0.0],
                         "body_j": "bar", "point_j": [-LENGTH / 2, 0.0]}],
@@ -126,7 +126,7 @@ def test_a_drive_profile_that_does_not_fit_is_one_line(drive, message):
     from pinbore.core import scene as scenes
 
     with pytest.raises(InputError) as err:
-        scenes.validate(ReducedScene, planar_bar(drive), "test")
+        scenes.validate(PlanarScene, planar_bar(drive), "test")
     assert message in str(err.value) and "\n" not in str(err.value)
 
 
@@ -134,6 +134,6 @@ def test_nonlinear_dynamics_needs_a_drive_at_constant_speed():
     """The Poincare section is taken once per forcing period: a spin-up has no period."""
     from pinbore.reduced.dynamics import studies
 
-    scene = ReducedScene.model_validate(planar_bar({"speed_rpm": 60.0, "spin_up_s": 1.0}))
+    scene = PlanarScene.model_validate(planar_bar({"speed_rpm": 60.0, "spin_up_s": 1.0}))
     with pytest.raises(InputError, match="drive at constant speed"):
         studies.require_forcing(scene, "test")

@@ -34,8 +34,8 @@ INTEGRATOR = {"rtol": 1e-11, "atol": 1e-14, "max_step": 1e-3}
 def block_on_a_guide(kind):
     """The block slides along y on an ideal guide (planar prismatic; spatial prismatic along
     y), a spring-damper from a ground point 1 m below at its free length."""
-    if kind == "reduced":
-        return {"kind": "reduced", "duration": 1.5, "integrator": INTEGRATOR,
+    if kind == "planar":
+        return {"kind": "planar", "duration": 1.5, "integrator": INTEGRATOR,
                 "bodies": [{"name": "block", "mass": MASS, "inertia": 0.01}],
                 "joints": [{"type": "prismatic", "body": "block", "axis_deg": 90.0}],
                 "springs": [{"body_i": "ground", "point_i": [0.0, -1.0], "body_j": "block", "point_j": [0.0, 0.0],
@@ -55,8 +55,8 @@ def wheel_on_a_pin(kind):
     a harmonic torque (the same numbers as the block's, in N m/rad, N m s/rad, N m, kg m^2)."""
     torsion = {"type": "spring", "body_i": "ground", "body_j": "wheel", "stiffness": STIFFNESS,
                "damping": DAMPING}
-    if kind == "reduced":
-        return {"kind": "reduced", "duration": 1.5, "integrator": INTEGRATOR,
+    if kind == "planar":
+        return {"kind": "planar", "duration": 1.5, "integrator": INTEGRATOR,
                 "bodies": [{"name": "wheel", "mass": 1.0, "inertia": MASS}],
                 "joints": [{"type": "revolute", "body_i": "ground", "point_i": [0.0, 0.0], "body_j": "wheel",
                             "point_j": [0.0, 0.0]}],
@@ -81,7 +81,7 @@ def coordinate(model, trajectory, which):
     return 2 * np.arctan2(e3, e0)
 
 
-@pytest.mark.parametrize("kind", ["reduced", "spatial"])
+@pytest.mark.parametrize("kind", ["planar", "spatial"])
 @pytest.mark.parametrize("scene, which", [(block_on_a_guide, "y"), (wheel_on_a_pin, "angle")],
                          ids=["force-spring", "torque-torsion"])
 def test_forced_oscillator_from_rest_in_closed_form(kind, scene, which):
@@ -102,7 +102,7 @@ def test_forced_oscillator_from_rest_in_closed_form(kind, scene, which):
     assert energy["work_in"][-1] > 0 and energy["dissipated"][-1] > 0
 
 
-@pytest.mark.parametrize("kind", ["reduced", "spatial"])
+@pytest.mark.parametrize("kind", ["planar", "spatial"])
 def test_a_shaken_drive_turns_its_body_by_its_harmonics(kind):
     """theta(t) = sum A (sin(2 pi f t + phase) - sin(phase)) of two harmonics, followed to the
     constraint's drift (Baumgarte-stabilised, 1e-8 rad)."""
@@ -110,7 +110,7 @@ def test_a_shaken_drive_turns_its_body_by_its_harmonics(kind):
                  {"amplitude_deg": 1.5, "frequency_hz": 6.0, "phase_deg": -60.0}]
     data = wheel_on_a_pin(kind)
     data.pop("loads")
-    if kind == "reduced":
+    if kind == "planar":
         data["drive"] = {"body": "wheel", "harmonics": harmonics}
     else:
         data["joints"][0]["name"] = "pin"
@@ -141,7 +141,7 @@ def test_a_shaken_drive_turns_its_body_by_its_harmonics(kind):
 def test_bad_excitation_is_one_line(edit, rule):
     from pinbore.reduced.mechanism import kinds
 
-    data = block_on_a_guide("reduced")
+    data = block_on_a_guide("planar")
     edit(data)
     with pytest.raises(InputError) as err:
         kinds.validate(data, "test")

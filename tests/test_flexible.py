@@ -52,7 +52,7 @@ def bodies(tmp_path_factory):
 
 
 def pendulum(path, duration=1.0, **body):
-    return {"kind": "reduced", "duration": duration, "gravity": [0.0, -G],
+    return {"kind": "planar", "duration": duration, "gravity": [0.0, -G],
             "bodies": [{"name": "beam", "modes_file": str(path), "position": [0.5, 0.0]} | body],
             "joints": [{"type": "revolute", "body_i": "ground", "point_i": [0.0, 0.0],
                         "body_j": "beam", "point_j": [-0.5, 0.0]}],
@@ -77,7 +77,7 @@ def test_a_point_of_a_flexible_body_moves_as_the_material_at_its_place(bodies):
     force there does its power (virtual work) to 1e-12. (The place is turned back by the
     inverse of I + theta k x, (I - theta k x) / (1 + theta^2); the states' interfaces turn
     by 0.2-1.3 rad, so that without the factor the velocities differed by 0.1-14 %.)"""
-    data = {"kind": "reduced", "duration": 0.1,
+    data = {"kind": "planar", "duration": 0.1,
             "bodies": [{"name": "link", "modes_file": str(bodies["link_steel_2d"])}],
             "output": {"plots": False}}
     for seed in range(3):
@@ -187,7 +187,7 @@ def test_a_free_mechanism_with_a_flexible_body_keeps_its_momenta(bodies):
     from pinbore.reduced.mechanism.outputs import per_step
 
     path = bodies["spinup_beam_2d"]
-    data = {"kind": "reduced", "duration": 3.0,
+    data = {"kind": "planar", "duration": 3.0,
             "bodies": [{"name": "hub", "mass": 50.0, "inertia": 5.0, "omega": 0.5},
                        {"name": "beam", "modes_file": str(path), "position": [5.5, 0.0], "omega": 0.5}],
             "joints": [{"type": "revolute", "body_i": "hub", "point_i": [0.5, 0.0],
@@ -273,7 +273,7 @@ def test_a_clamped_beam_settles_to_its_static_deflection(bodies):
 
 
 def spin_up_beam(path, stiffening=True, duration=20.0):
-    return {"kind": "reduced", "duration": duration,
+    return {"kind": "planar", "duration": duration,
             "bodies": [{"name": "beam", "modes_file": str(path), "position": [5.0, 0.0],
                         "stiffening": stiffening}],
             "joints": [{"type": "revolute", "body_i": "ground", "point_i": [0.0, 0.0],

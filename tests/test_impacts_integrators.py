@@ -18,7 +18,7 @@ from pinbore.reduced.mechanism.layout import LOG_RATE, LOG_TIME
 from pinbore.reduced.mechanism.model import build
 from pinbore.reduced.mechanism.outputs import per_step
 from pinbore.reduced.mechanism.run import simulate
-from pinbore.reduced.mechanism.scene import ReducedScene
+from pinbore.reduced.mechanism.scene import PlanarScene
 
 
 def rigid(data, model="newton", e=0.9):
@@ -33,7 +33,7 @@ def rigid(data, model="newton", e=0.9):
 
 def first_rebound(data):
     """The state just after the first impact ends (all bodies' velocities), and when."""
-    model = build(ReducedScene.model_validate(data), "test", ROOT)
+    model = build(PlanarScene.model_validate(data), "test", ROOT)
     run = simulate(model)
     cols = per_step(model, run)[0]
     force = cols["rod_slider_normal_force_N"]
@@ -87,7 +87,7 @@ def test_bouncing_journal_comes_to_rest_in_held_contact_carrying_its_weight():
     """Three-state model: a journal dropped inside a fixed bearing bounces (e = 0.5), the
     rebounds shrink below the rest speed, the contact is held, and then carries m g."""
     mass, g = 0.5, 9.81
-    data = {"kind": "reduced", "duration": 0.2, "gravity": [0.0, -g],
+    data = {"kind": "planar", "duration": 0.2, "gravity": [0.0, -g],
             "bodies": [{"name": "journal", "mass": mass, "inertia": 1e-5}],
             "clearance_joints": [{"name": "j", "bearing_body": "ground", "bearing_point": [0.0, 0.0],
                                   "journal_body": "journal", "journal_point": [0.0, 0.0],
@@ -95,7 +95,7 @@ def test_bouncing_journal_comes_to_rest_in_held_contact_carrying_its_weight():
                                   "nu": 0.3, "impact": "newton", "restitution": 0.5,
                                   "start": "free"}],
             "integrator": {"rtol": 1e-9, "atol": 1e-12}}
-    model = build(ReducedScene.model_validate(data), "test", ROOT)
+    model = build(PlanarScene.model_validate(data), "test", ROOT)
     run = simulate(model)
     assert run.status == 0
     cols = per_step(model, run)[0]
@@ -108,7 +108,7 @@ def test_bouncing_journal_comes_to_rest_in_held_contact_carrying_its_weight():
 
 
 def torsional_oscillator(method, damping):
-    return {"kind": "reduced", "duration": 0.05,
+    return {"kind": "planar", "duration": 0.05,
             "bodies": [{"name": "disc", "mass": 1.0, "inertia": 1e-4, "omega": 1.0}],
             "joints": [{"type": "revolute", "body_i": "ground", "point_i": [0.0, 0.0],
                         "body_j": "disc", "point_j": [0.0, 0.0]}],
@@ -156,7 +156,7 @@ def belt(friction, duration=1.2):
     penetration delta0 below the drum's (constant normal force N), against a torsion spring k.
     With r = R_j - delta0 it is a mass J/r^2 on a spring k/r^2 riding a belt of speed omega_b R_b."""
     c, delta0 = 0.5e-3, 2e-7
-    return {"kind": "reduced", "duration": duration,
+    return {"kind": "planar", "duration": duration,
             "bodies": [{"name": "drum", "mass": 1.0, "inertia": 1e-3},
                        {"name": "journal", "mass": 1.0, "inertia": 2e-6, "position": [0.0, -c - delta0]}],
             "joints": [{"type": "revolute", "body_i": "ground", "point_i": [0.0, 0.0],
@@ -182,7 +182,7 @@ def test_mass_on_belt_stick_slip_cycle_matches_the_closed_form():
     mu_s, mu_k = 0.4, 0.25
     data = belt({"law": "lugre", "mu_coulomb": mu_k, "mu_static": mu_s, "stribeck_speed": 1e-3,
                  "sigma0": 1e7, "sigma1": 300.0})   # bristles about critically damped
-    scene = ReducedScene.model_validate(data)
+    scene = PlanarScene.model_validate(data)
     cols, _, _, _ = solve(data)
     r_b, c, delta0 = 10e-3, 0.5e-3, 2e-7
     r = r_b - c - delta0

@@ -23,7 +23,7 @@ from pinbore.laws import lawsfile
 from pinbore.laws.elastic import Joint
 from pinbore.laws.lawsfile import law_force
 from pinbore.reduced.mechanism.model import build
-from pinbore.reduced.mechanism.scene import ReducedScene
+from pinbore.reduced.mechanism.scene import PlanarScene
 
 REFERENCE = float(np.exp(np.mean(np.log(APPROACH))))   # d_ref of the synthetic fit
 E0, E1 = 0.85, -0.04   # e(v0) = E0 + E1 ln(v0 / 1 m/s), the restitution law below
@@ -150,7 +150,7 @@ def test_the_exported_table_is_the_multibody_models(tmp_path):
     assert done.returncode == 0, done.stderr
     header, table = read_table(tmp_path / "out" / "liu.csv")
     assert header == ["approach_m", "force_N"]
-    model = build(ReducedScene.model_validate(calibrated_scene(laws_path)), "test", tmp_path)
+    model = build(PlanarScene.model_validate(calibrated_scene(laws_path)), "test", tmp_path)
     engine = np.exp(joint_table(model))
     np.testing.assert_allclose(table[:, 1], engine[:table.shape[0]], rtol=1e-12)
     np.testing.assert_allclose(table[:, 1], truth(table[:, 0]), rtol=1e-10)

@@ -18,14 +18,14 @@ from pinbore.reduced.mechanism import summary as reduced_summary
 from pinbore.reduced.mechanism.model import build
 from pinbore.reduced.mechanism.outputs import per_step
 from pinbore.reduced.mechanism.run import simulate
-from pinbore.reduced.mechanism.scene import ReducedScene
+from pinbore.reduced.mechanism.scene import PlanarScene
 
 FLORES = tomllib.loads((ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml").read_text())
 
 
 def solve(data, ideal=False):
     """Integrate a planar scene dict (ideal: its ideal twin, every clearance joint closed)."""
-    model = build(ReducedScene.model_validate(data), "test", ROOT, ideal=ideal)
+    model = build(PlanarScene.model_validate(data), "test", ROOT, ideal=ideal)
     run = simulate(model)
     assert run.status == 0, (run.status, run.t_end)
     cols, energy, drift = per_step(model, run)
@@ -110,7 +110,7 @@ def test_single_impact_restitution_equals_the_laws(law, e):
     """A journal thrown at 1 m/s against a fixed bearing rebounds with the effective
     restitution of its law, as measured by integrating the same impact alone."""
     mass, speed = 0.14, 1.0
-    data = {"kind": "reduced", "duration": 1.2e-3,
+    data = {"kind": "planar", "duration": 1.2e-3,
             "bodies": [{"name": "journal", "mass": mass, "inertia": 1e-5, "velocity": [0.0, -speed]}],
             "clearance_joints": [{"name": "j", "bearing_body": "ground", "bearing_point": [0.0, 0.0],
                                   "journal_body": "journal", "journal_point": [0.0, 0.0],
@@ -215,9 +215,26 @@ def test_flores_scene_runs_and_writes_everything(tmp_path):
     assert summary.impacts > 10 and summary.energy_balance.relative_to_peak_kinetic < 1e-3
 
 
+def test_the_planar_kinds_former_name_runs_with_one_warning(write_scene, tmp_path):
+    """kind = "reduced", the planar kind's former name: the same run as kind = "planar", and
+    one FutureWarning that names the key and the name to write."""
+    short = FLORES | {"duration": 2e-3, "output": {"plots": False}}
+    done = {}
+    for kind in ("planar", "reduced"):
+        done[kind] = pinbore("reduced", write_scene(short | {"kind": kind}, f"{kind}.toml"),
+                             "--out", tmp_path / kind)
+        assert done[kind].returncode == 0, done[kind].stderr
+    assert done["planar"].stderr == ""
+    warned = [line for line in done["reduced"].stderr.splitlines() if "FutureWarning" in line]
+    assert len(warned) == 1 and 'reduced.toml: kind: "reduced" is deprecated: write kind = "planar"' in warned[0]
+    runs = [reduced_summary.read(tmp_path / kind / "summary.json") for kind in ("planar", "reduced")]
+    assert runs[0].model == runs[1].model == "planar"
+    assert runs[0].clearance_joints == runs[1].clearance_joints
+
+
 def journal_in_fixed_bearing(friction, omega=10.0, duration=0.6):
     """A journal (1 kg) turned at omega inside a fixed bearing, under gravity."""
-    return {"kind": "reduced", "duration": duration, "gravity": [0.0, -9.81],
+    return {"kind": "planar", "duration": duration, "gravity": [0.0, -9.81],
             "bodies": [{"name": "journal", "mass": 1.0, "inertia": 1e-4}],
             "drive": {"body": "journal", "speed_rpm": omega * 60 / (2 * math.pi)},
             "clearance_joints": [{"name": "j", "bearing_body": "ground", "bearing_point": [0.0, 0.0],

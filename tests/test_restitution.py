@@ -16,7 +16,7 @@ from pinbore.laws import dissipative, lawsfile
 from pinbore.reduced.mechanism.model import build
 from pinbore.reduced.mechanism.outputs import per_step, summary
 from pinbore.reduced.mechanism.run import simulate
-from pinbore.reduced.mechanism.scene import ReducedScene
+from pinbore.reduced.mechanism.scene import PlanarScene
 
 # The FE impacts of the calibration: the coarse test scene (steel pin, c = 10 um), 50 steps
 # over the contact (e within 1e-3 of its 200-step value at 1 m/s, test_impact), four speeds
@@ -146,7 +146,7 @@ def journal_impact(laws_path, speed, duration, bearing=None):
     length) thrown at `speed` against a fixed bearing of the FE joint's radii and materials
     (steel, or `bearing`: E, nu), Liu's law per length, damping_law = "calibrated"."""
     length, mass_per_length = 0.02, 7850 * math.pi * 9.99e-3**2
-    data = {"kind": "reduced", "duration": duration, "laws_file": str(laws_path),
+    data = {"kind": "planar", "duration": duration, "laws_file": str(laws_path),
             "bodies": [{"name": "journal", "mass": mass_per_length * length, "inertia": 1e-5,
                         "velocity": [0.0, -speed]}],
             "clearance_joints": [{"name": "j", "bearing_body": "ground", "bearing_point": [0.0, 0.0],
@@ -157,7 +157,7 @@ def journal_impact(laws_path, speed, duration, bearing=None):
                                   "start": "free"} | (bearing or {})],
             "integrator": {"rtol": 1e-9, "atol": 1e-13, "max_step": 1e-6},
             "output": {"sample_time": duration / 50}}
-    model = build(ReducedScene.model_validate(data), "test", ROOT)
+    model = build(PlanarScene.model_validate(data), "test", ROOT)
     run = simulate(model)
     assert run.status == 0, (run.status, run.t_end)
     cols, _, _ = per_step(model, run)

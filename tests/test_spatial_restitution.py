@@ -110,7 +110,7 @@ def test_spatial_impact_matches_the_planar_calibrated_impact(tmp_path):
     speed = 1.0
     t_end = duration(speed, law.restitution(speed))
     _, run, cols = spatial_impact(path, speed, t_end, slices=8)
-    planar = {"kind": "reduced", "duration": t_end, "laws_file": str(path),
+    planar = {"kind": "planar", "duration": t_end, "laws_file": str(path),
               "bodies": [{"name": "journal", "mass": MASS, "inertia": 1e-5,
                           "velocity": [0.0, -speed]}],
               "clearance_joints": [{"name": "j", "bearing_body": "ground", "bearing_point": [0.0, 0.0],

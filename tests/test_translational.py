@@ -45,7 +45,7 @@ def resting_slider(kind: str, law: dict) -> dict:
     scene = {"kind": kind, "duration": 0.5, "gravity": [0.0, -G], "bodies": [body],
              "translational_joints": [joint], "integrator": {"rtol": 1e-6},
              "output": {"plots": False, "sample_time": 1e-3}}
-    if kind == "reduced":
+    if kind == "planar":
         body["inertia"] = 1e-4
         return scene
     for key in ("bearing_point", "bearing_axis", "journal_point", "journal_axis"):
@@ -65,8 +65,8 @@ def run(data: dict, source: str = "scene", ideal: bool = False):
     return model, trajectory
 
 
-@pytest.mark.parametrize("kind, law", [("reduced", {"impact": "newton", "restitution": 0.5}),
-                                       ("reduced", STEEL), ("spatial", STEEL)],
+@pytest.mark.parametrize("kind, law", [("planar", {"impact": "newton", "restitution": 0.5}),
+                                       ("planar", STEEL), ("spatial", STEEL)],
                          ids=["planar-impulse", "planar-compliant", "spatial-compliant"])
 def test_a_resting_slider_carries_the_free_body_diagram_forces(kind, law):
     """After 0.5 s the bouncing (e = 0.4-0.5, about ten impacts from 5 cm/s) has died out; the

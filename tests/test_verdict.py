@@ -11,7 +11,7 @@ from conftest import ROOT, pinbore
 
 from pinbore.core.scene import referenced_files
 from pinbore.reduced.mechanism import kinds, verdict
-from pinbore.reduced.mechanism.scene import ReducedScene
+from pinbore.reduced.mechanism.scene import PlanarScene
 from pinbore.reduced.mechanism.summary import Summary
 
 FLORES = tomllib.loads((ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml").read_text())
@@ -86,7 +86,7 @@ def test_default_fixed_step_is_clean(write_scene, tmp_path):
 
 def summary_with(**changes) -> Summary:
     """A clean summary of the Flores scene, with `changes` applied (dotted keys)."""
-    data = {"model": "planar", "coordinates": kinds.KINDS["reduced"].coordinates,
+    data = {"model": "planar", "coordinates": kinds.KINDS["planar"].coordinates,
             "status": "complete", "stop": None, "duration_s": 0.048, "time_reached_s": 0.048,
             "integrator": "dopri5", "impacts": 10, "steps": 100, "rejected_steps": 1,
             "rhs_evaluations": 700, "wall_time_s": 0.1, "warnings": [], "scene_file": "x.toml",
@@ -110,7 +110,7 @@ def scene_with_friction(friction):
     data = flores()
     if friction:
         data["clearance_joints"][0]["friction"] = friction
-    return ReducedScene.model_validate(data)
+    return PlanarScene.model_validate(data)
 
 
 COULOMB = {"law": "coulomb_ambrosio", "mu": 0.1}

@@ -41,7 +41,7 @@ SCENES = (
     Scene("fem", ("pinbore.fem.scene:FemScene",), "fem", "pinbore mesh, pinbore fem"),
     Scene("impact", ("pinbore.fem.impact.scene:ImpactScene",), "impact", "pinbore impact"),
     Scene("modes", ("pinbore.fem.modes.scene:ModesScene",), "modes", "pinbore modes"),
-    Scene("mechanism", ("pinbore.reduced.mechanism.scene:ReducedScene",
+    Scene("mechanism", ("pinbore.reduced.mechanism.scene:PlanarScene",
                         "pinbore.reduced.mechanism.scene:SpatialScene"),
           "reduced", "pinbore reduced, pinbore dynamics"),
     Scene("wear", ("pinbore.reduced.wear.scene:WearScene",), "wear", "pinbore wear"),

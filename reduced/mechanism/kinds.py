@@ -10,18 +10,18 @@ body (cpp/mechanism/planar.h, spatial.h).
 """
 
 import importlib
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 from pinbore.core import scene as scenes
 from pinbore.core.errors import InputError
-from pinbore.reduced.mechanism.scene import ReducedScene, SpatialScene
+from pinbore.reduced.mechanism.scene import RENAMED_KINDS, PlanarScene, SpatialScene
 
 
 @dataclass(frozen=True)
 class Kind:
-    name: str                  # "planar" or "spatial" (summary.json's `model`)
-    scene_kind: str            # the scene's `kind` key
+    name: str                  # "planar" or "spatial": the scene's `kind`, summary.json's `model`
     scene: type                # its scene model
     module: str                # its body kind's module
     coordinates: str           # its state's coordinates per body, for summary.json
@@ -36,8 +36,8 @@ class Kind:
 
 
 KINDS = {
-    "reduced": Kind(
-        "planar", "reduced", ReducedScene, "pinbore.reduced.mechanism.planar",
+    "planar": Kind(
+        "planar", PlanarScene, "pinbore.reduced.mechanism.planar",
         "x, y (m), phi (rad) of each body's centre of mass (a flexible body's mean-axis frame), "
         "then a flexible body's modal coordinates eta (m sqrt(kg))", 2,
         "rigid and flexible bodies in the plane (a flexible body: its FE modes in a floating "
@@ -46,7 +46,7 @@ KINDS = {
         "the journal centre inside the clearance circle and the normal contact force (a slider "
         "in its guide: its offset across the guide, its tilt and its four corners' normal forces)."),
     "spatial": Kind(
-        "spatial", "spatial", SpatialScene, "pinbore.reduced.mechanism.spatial",
+        "spatial", SpatialScene, "pinbore.reduced.mechanism.spatial",
         "x, y, z (m) of each body's centre of mass (a flexible body's mean-axis frame), Euler "
         "parameters e0..e3, then a flexible body's modal coordinates eta (m sqrt(kg))", 3,
         "rigid and flexible bodies in 3D on Euler parameters (a flexible body: its FE modes in a "
@@ -57,12 +57,17 @@ KINDS = {
         "contact forces against time (a journal: the slices' radial sum and the shoulders' axial "
         "force; a ball: its force on the socket; a slider: its offset, tilt and corner forces)."),
 }
-BY_NAME = {kind.name: kind for kind in KINDS.values()}
 
 
 def kind_of(data: dict, source: str) -> Kind:
-    """The kind of a scene's data (its `kind` key); one InputError line for another."""
+    """The kind of a scene's data (its `kind` key); one InputError line for another. A kind's
+    former name (scene.RENAMED_KINDS: "reduced", the planar kind's) is read as the kind, with
+    a FutureWarning naming the key."""
     kind = data.get("kind")
+    if isinstance(kind, str) and kind in RENAMED_KINDS:
+        warnings.warn(f'{source}: kind: "{kind}" is deprecated: write kind = '
+                      f'"{RENAMED_KINDS[kind]}"', FutureWarning, stacklevel=2)
+        kind = RENAMED_KINDS[kind]
     if kind not in KINDS:
         raise InputError(f"{source}: kind: {kind!r} is not a mechanism; valid: "
                          f"{', '.join(repr(k) for k in KINDS)}")

@@ -1,4 +1,4 @@
-r"""Planar bodies: the body kind of a planar mechanism (scenes kind = "reduced"); its
+r"""Planar bodies: the body kind of a planar mechanism (scenes kind = "planar"); its
 equations, which the compiled core computes (cpp/mechanism/planar.h), and what only Python
 does of it: the scene's bodies and ideal joints as the model's arrays, the consistent initial
 state, the outputs' columns and the flows' coordinates.

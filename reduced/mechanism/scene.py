@@ -1,4 +1,4 @@
-"""Mechanism scenes, SI units: `kind = "reduced"`, a planar mechanism (vectors [x, y], bodies
+"""Mechanism scenes, SI units: `kind = "planar"`, a planar mechanism (vectors [x, y], bodies
 of mass and inertia, angles in degrees), and `kind = "spatial"`, a spatial one (vectors
 [x, y, z], 3 x 3 inertia tensors, orientations as Euler parameters or rotation matrices).
 What the two share is written once here: torsion springs, stops and latches, linear
@@ -267,7 +267,7 @@ class MaybeFlexible(Strict):
         return self.modes_file is not None
 
 
-# ---- planar scenes (kind = "reduced")
+# ---- planar scenes (kind = "planar")
 class Body(MaybeFlexible):
     """A rigid body (mass, inertia) or a flexible one (MaybeFlexible)."""
 
@@ -458,8 +458,12 @@ class MechanismScene(Strict):
         return 1.0 / fundamental
 
 
-class ReducedScene(MechanismScene):
-    kind: Literal["reduced"]
+# a kind's former name, still read (reduced.mechanism.kinds warns where a scene is read)
+RENAMED_KINDS = {"reduced": "planar"}
+
+
+class PlanarScene(MechanismScene):
+    kind: Literal["planar"]
     gravity: Vector = [0.0, 0.0]
     bodies: list[Body] = pydantic.Field(min_length=1)
     joints: list[Revolute | Prismatic] = []
@@ -469,6 +473,12 @@ class ReducedScene(MechanismScene):
     torsion: list[TorsionSpring] = []
     springs: list[Spring] = []
     loads: list[Load] = []
+
+    @pydantic.model_validator(mode="before")
+    @classmethod
+    def _former_name(cls, data):
+        kind = data.get("kind") if isinstance(data, dict) else None
+        return data | {"kind": RENAMED_KINDS[kind]} if isinstance(kind, str) and kind in RENAMED_KINDS else data
 
     @pydantic.model_validator(mode="after")
     def _names(self):

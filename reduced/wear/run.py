@@ -36,7 +36,7 @@ def mechanism_of(scene: WearScene, base: Path, source: str):
     data = scenes.read_toml(path)
     mechanism = kinds.validate(data, str(path))
     if kinds.of_scene(mechanism).name != "planar":
-        raise InputError(f"{source}: mechanism_file: a planar mechanism (kind = \"reduced\") is "
+        raise InputError(f"{source}: mechanism_file: a planar mechanism (kind = \"planar\") is "
                          "needed: the wear of a spatial joint is not modelled")
     joints = {c.name: c for c in mechanism.clearance_joints}
     if scene.joint not in joints:

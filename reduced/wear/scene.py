@@ -3,7 +3,7 @@ joint's FE run, the two surfaces' wear coefficients and how many cycles wear the
 without the mechanism built or the FE files read.
 
     kind = "wear"
-    mechanism_file = "..."   a planar mechanism scene (kind = "reduced") with a periodic forcing
+    mechanism_file = "..."   a planar mechanism scene (kind = "planar") with a periodic forcing
     joint = "rod_slider"     its revolute clearance joint
     pressure_file = "..."    the joint's 2D FE run (pinbore fem): its pressure.csv
     curve_file = "..."       and its curve.csv (result.json beside it)
