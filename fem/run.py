@@ -40,7 +40,7 @@ def run(scene_path, out, comm=MPI.COMM_WORLD, scene: FemScene | None = None) -> 
         if result.steps and scene.output.picture:
             if scene.geometry.dim == 2:
                 outputs.picture(tmp / "contact.png", el, stepper.x, result, scene,
-                                sizing.arc_half_angle)
+                                sizing.arc_half_angle, stepper.clearance)
             elif comm.rank == 0:
                 outputs.pressure_pictures(tmp, result, scene, contact, el.symmetric)
         if comm.rank == 0:
