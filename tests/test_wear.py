@@ -171,24 +171,30 @@ def test_a_wear_run_over_more_periods_averages_them(tmp_path, flores_fe):
 def test_bad_wear_scenes_are_one_line(tmp_path, flores_fe, change, message):
     (tmp_path / "wear.toml").write_text(tomli_w.dumps(wear_scene(tmp_path, flores_fe, **change)))
     done = pinbore("wear", tmp_path / "wear.toml", "--out", tmp_path / "out")
-    assert done.returncode == 2 and message in done.stderr, done.stderr
+    assert done.returncode == 2 and all(m in done.stderr for m in messages), done.stderr
     assert len(done.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "out").exists()
 
 
-def test_an_fe_run_of_another_joint_is_one_line(tmp_path, flores_fe):
-    """The FE run's radii must be the joint's (its result.json says them)."""
+@pytest.mark.parametrize("change, messages", [
+    ({"pin_radius": 9.9e-3}, ["pin radius", "rod_slider"]),
+    ({"wear_file": "wear.csv"}, ["curve_file: the FE run of a worn joint"]),
+], ids=["radius", "worn"])
+def test_an_fe_run_of_another_joint_is_one_line(tmp_path, flores_fe, change, messages):
+    """The FE run's radii must be the joint's (its result.json says them), and its joint new
+    (the wear takes the new joint's pressure)."""
     import json
     import shutil
 
     other = tmp_path / "fe"
     shutil.copytree(flores_fe, other)
     data = json.loads((other / "result.json").read_text())
-    data["scene"]["geometry"]["pin_radius"] = 9.9e-3
+    data["scene"]["geometry"].update(change)
     (other / "result.json").write_text(json.dumps(data))
     (tmp_path / "wear.toml").write_text(tomli_w.dumps(wear_scene(tmp_path, other)))
     done = pinbore("wear", tmp_path / "wear.toml", "--out", tmp_path / "out")
-    assert done.returncode == 2 and "pin radius" in done.stderr and "rod_slider" in done.stderr, done.stderr
+    assert done.returncode == 2 and all(m in done.stderr for m in messages), done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1
 
 
 def test_the_report_leaves_out_a_wear_summary_it_cannot_trust(tmp_path, worn):
