@@ -17,6 +17,9 @@ bore edges then carry the edge loading). The layers close in towards the ends
 (z_k = L/2 (1 - cos(pi k / n)) over the whole length: the half model has exactly the nodes
 of the full one below the mid-plane), and a tilted pin is turned about the axis through its
 middle normal to the load.
+
+A worn joint (meshes.worn) is meshed as the round joint of its base circles, and its nodes
+are then moved radially onto the worn surfaces, in the scene's frame.
 """
 
 import math
