@@ -91,6 +91,9 @@ fem: $(FEM_CURVES) ## solve the default FE scenes (build/fem/<scene>/)
 build/fem/%/curve.csv: scenes/fem/%.toml $(CODE_fem) $(STAMP)
 	$(MPIEXEC) $(PINBORE) fem $< --out build/fem/$*
 
+# the worn joint's FE (its wear_file, written by the wear run)
+build/fem/flores_worn/curve.csv build/mesh/flores_worn/mesh.msh: build/wear/slider_crank_flores2004/summary.json
+
 impact: $(IMPACT_RUNS) ## run the dynamic impacts of scenes/impact/ (build/impact/<scene>/)
 
 build/impact/%/impact.json: scenes/impact/%.toml $(CODE_impact) $(STAMP)

@@ -5,11 +5,12 @@ Kinematics
 ----------
 The pin surface nodes are the slaves, the bore surface is the master. In the reference
 configuration the bore is the circle of radius R_i about the axis (3D: the cylinder
-0 <= z <= L, its radius widened near the ends by an optional edge relief delta(z)); its
-nodes sit on a grid of angles Theta_k (and levels Z_l in 3D). Between bore nodes the
-deformed bore is the *curved* patch
+0 <= z <= L, its radius widened near the ends by an optional edge relief delta(z); 2D, a
+worn joint: the curve r(Theta) = R_i + e(Theta), its wear beyond the circle R_i,
+meshes.worn); its nodes sit on a grid of angles Theta_k (and levels Z_l in 3D). Between bore
+nodes the deformed bore is the *curved* patch
 
-    2D:  Y(xi)      = R_i e_r(Theta_k + xi dTheta_k) + N_a(xi) u_a,          N = (1 - xi, xi)
+    2D:  Y(xi)      = r(Theta) e_r(Theta) + N_a(xi) u_a,   Theta = Theta_k + xi dTheta_k,  N = (1 - xi, xi)
     3D:  Y(xi, eta) = (R_i + delta(z)) e_r(Theta_k + xi dTheta_k) + z e_z + N_a(xi, eta) u_a,
                       z = Z_l + eta dZ_l,  N bilinear over the four corner nodes,
 
@@ -48,7 +49,8 @@ p_i is the contact pressure (Pa) at node i. Residual and tangent:
     (3D: (I - nu nu) replaced by t t, t the unit tangent along the circumference)
 
 b = (1, -N_a) over (pin node, bore nodes a) and rho the distance of Y from the axis, the
-radius of curvature. The residual is exact. The second term is the curvature of the bore
+radius of curvature (a worn bore: the deformed patch's own, |Y'|^3 / (Y' x Y''), which the
+worn surface's curvature sets). The residual is exact. The second term is the curvature of the bore
 acting on the relative displacement x - Y; the tangent leaves out the change of nu with the bore
 displacements, terms of relative size |g|/h (about 1e-6 at a converged state, h the element
 size), so Newton still converges quadratically to that level. Kept in, such terms are of
@@ -61,7 +63,8 @@ Coulomb friction (return map on a tangential penalty, active-set Newton)
 ------------------------------------------------------------------------
 The tangential position of pin node i on the bore is the position of its closest point in
 the bore's reference (material) coordinates: the arc length s_i = R_i Theta_c,
-Theta_c = Theta_k + xi dTheta_k (3D: and the axial position Z_c = Z_l + eta dZ_l).
+Theta_c = Theta_k + xi dTheta_k (3D: and the axial position Z_c = Z_l + eta dZ_l; a worn
+bore: the arc length of its reference curve, exact at its nodes and linear in xi between).
 A step from the converged state n (s_n, shear sigma_n) is a backward-Euler return map of an
 elastic-plastic interface (vectors of the surface coordinates in 3D, radial return):
 
@@ -106,6 +109,7 @@ PETSc residual and Jacobian with global indices (PETSc communicates off-process 
 assembly).
 """
 
+from collections.abc import Callable
 from dataclasses import dataclass, fields
 
 import dolfinx_solver  # noqa: F401  (loads PETSc's libraries; precedes petsc4py)
@@ -145,10 +149,42 @@ class BoreSurface:
     continuation: float = 0.5            # of the end layers, past the ends (closest_point):
                                          # half a layer where the pin ends with the bore, a
                                          # twentieth where it runs on beyond
+    wear: Callable | None = None         # 2D, a worn bore: theta -> (e, e', e''), its radius
+                                         # beyond `radius` (m) at the angles theta, with its
+                                         # slope and curvature (m/rad, m/rad^2)
 
     def __post_init__(self):
         self.widths = np.diff(np.append(self.angles, self.angles[0] + 2 * np.pi))
         self.dim = 2 if self.levels is None else 3
+        if self.wear is not None and self.dim == 3:
+            raise ValueError("a worn bore is planar (2D)")
+        # material coordinate s along the circumference: s = R Theta on a round bore; on a
+        # worn one the reference curve's arc length from Theta_0, linear within a patch
+        # (exact at the nodes), so that ds/dzeta is the patch's length
+        if self.wear is None:
+            self.starts, self.arcs = self.radius * self.angles, self.radius * self.widths
+            self.perimeter = 2 * np.pi * self.radius
+        else:
+            self.arcs = self._arc_lengths()
+            self.starts = self.radius * self.angles[0] + np.concatenate([[0.0], np.cumsum(self.arcs)[:-1]])
+            self.perimeter = float(self.arcs.sum())
+
+    def _arc_lengths(self, order: int = 8) -> np.ndarray:
+        """The length (m) of each patch of the worn reference curve, int |X0'| dTheta by
+        Gauss-Legendre of `order` points."""
+        nodes, weights = np.polynomial.legendre.leggauss(order)
+        theta = self.angles[:, None] + 0.5 * (1 + nodes[None, :]) * self.widths[:, None]
+        e, slope, _ = self.wear(theta.ravel())
+        speed = np.hypot(self.radius + e, slope).reshape(theta.shape)
+        return 0.5 * self.widths * (speed @ weights)
+
+    def worn(self, theta):
+        """The radius beyond `radius` (m) at the angles theta, its slope and curvature: 0 on a
+        round bore."""
+        if self.wear is None:
+            zero = np.zeros_like(theta)
+            return zero, zero, zero
+        return self.wear(theta)
 
     def corners(self, k, l):
         """Node indices (n, 2 or 4) of patches (k, l)."""
@@ -179,10 +215,13 @@ class BoreSurface:
         theta = self.angles[k] + zeta[:, 0] * width
         e_r = np.stack([np.cos(theta), np.sin(theta)], axis=1)
         e_t = np.stack([-e_r[:, 1], e_r[:, 0]], axis=1)
-        if self.dim == 2:
-            x0 = self.radius * e_r
-            dx0 = ((self.radius * width)[:, None] * e_t)[:, None, :]
-            ddx0 = (-(self.radius * width**2)[:, None] * e_r)[:, None, None, :]
+        if self.dim == 2:   # X0 = r(Theta) e_r, r = R + e(Theta) (a round bore: e = 0)
+            e, slope, curve = self.worn(theta)
+            r = self.radius + e
+            x0 = r[:, None] * e_r
+            dx0 = ((r * width)[:, None] * e_t + (slope * width)[:, None] * e_r)[:, None, :]
+            ddx0 = (((curve - r) * width**2)[:, None] * e_r
+                    + (2 * slope * width**2)[:, None] * e_t)[:, None, None, :]
             return x0, dx0, ddx0
         height = np.diff(self.levels)[l]
         z = self.levels[l] + zeta[:, 1] * height
@@ -206,6 +245,18 @@ class BoreSurface:
         ddx0 = np.stack([np.stack([dd_xixi, dd_xieta], 1), np.stack([dd_xieta, dd_etaeta], 1)], 1)
         return x0, dx0, ddx0
 
+    def curvature_radius(self, y, dy, ddy) -> np.ndarray:
+        """The bore's radius of curvature (m) at points Y of its patches (2D), with their
+        derivatives: |Y| on a round bore (its radius, to the bore's strain); on a worn one
+        the deformed patch's own, |Y'|^3 / (Y' x Y'') (negative where the worn bore bulges
+        towards the pin, inf where it is straight)."""
+        if self.wear is None:
+            return np.linalg.norm(y[:, :2], axis=1)
+        d1, d2 = dy[:, 0], ddy[:, 0, 0]
+        cross = d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]
+        with np.errstate(divide="ignore"):
+            return np.linalg.norm(d1, axis=1) ** 3 / cross
+
     def point(self, k, l, zeta):
         """Y (n, d), Y_,a (n, p, d), Y_,ab (n, p, p, d) and N (n, c), dN (n, p, c) on patches
         (k, l) at the surface coordinates zeta (n, p)."""
@@ -216,18 +267,19 @@ class BoreSurface:
                 ddx0 + np.einsum("npqc,ncd->npqd", ddn, u), n, dn)
 
     def position(self, k, l, zeta, previous):
-        """Material coordinates s (n, p) of surface points: arc length R Theta (unwrapped
-        next to `previous`) and, in 3D, the axial position z (m)."""
-        s = self.radius * (self.angles[k] + zeta[:, 0] * self.widths[k])
-        period = 2 * np.pi * self.radius
+        """Material coordinates s (n, p) of surface points: arc length R Theta (a worn bore:
+        the reference curve's, linear within a patch; unwrapped next to `previous`) and, in
+        3D, the axial position z (m)."""
+        s = self.starts[k] + zeta[:, 0] * self.arcs[k]
+        period = self.perimeter
         s = s - period * np.round((s - previous[:, 0]) / period)
         if self.dim == 2:
             return s[:, None]
         return np.stack([s, self.levels[l] + zeta[:, 1] * np.diff(self.levels)[l]], axis=1)
 
     def metric(self, k, l):
-        """d s / d zeta (n, p): R dTheta_k (and dZ_l)."""
-        arc = self.radius * self.widths[k]
+        """d s / d zeta (n, p): R dTheta_k, a worn bore's patch length (and dZ_l)."""
+        arc = self.arcs[k]
         if self.dim == 2:
             return arc[:, None]
         return np.stack([arc, np.diff(self.levels)[l]], axis=1)
@@ -331,7 +383,9 @@ def kinematics(x: np.ndarray, bore: BoreSurface, held: np.ndarray | None = None,
     nu /= np.linalg.norm(nu, axis=1)[:, None]
     t = dy[:, 0] / np.linalg.norm(dy[:, 0], axis=1)[:, None]
     g = np.where(proj.inside, np.einsum("nd,nd->n", y - x, nu), np.inf)
-    return Kinematics(x, proj, g, nu, t, np.linalg.norm(y[:, :2], axis=1), y, dy, ddy, n, dn)
+    rho = (bore.curvature_radius(y, dy, ddy) if bore.dim == 2
+           else np.linalg.norm(y[:, :2], axis=1))
+    return Kinematics(x, proj, g, nu, t, rho, y, dy, ddy, n, dn)
 
 
 def slip_gradient(kin: Kinematics, bore: BoreSurface) -> np.ndarray:
@@ -464,7 +518,8 @@ class PinBoreContact:
 
     def __init__(self, V, pin_dofs, bore_dofs, bore_radius, penalty, template: PETSc.Vec,
                  friction: float = 0.0, relief: Relief | None = None, bore_end=None,
-                 pin_frame=None, pivot: float = 0.0, pin_runs_on: bool = False):
+                 pin_frame=None, pivot: float = 0.0, pin_runs_on: bool = False,
+                 bore_wear: Callable | None = None):
         self.comm = V.mesh.comm
         self.penalty = penalty
         self.dim = dim = V.mesh.geometry.dim
@@ -483,7 +538,7 @@ class PinBoreContact:
         angles, levels = bore_grid
         self.bore = BoreSurface(bore_radius, angles, np.zeros((len(bore_X), dim)), levels,
                                 relief, bore_end if dim == 3 else None,
-                                0.05 if pin_runs_on else 0.5)
+                                0.05 if pin_runs_on else 0.5, bore_wear)
         rows = np.arange(dim)
         self.pin_rows = (dim * self.pin_nodes[:, None] + rows).astype(PETSc.IntType)
         self.bore_rows = (dim * bore_nodes[order_b][:, None] + rows).astype(PETSc.IntType)

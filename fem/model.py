@@ -20,12 +20,17 @@ DEFAULT_PENALTY_FACTOR = 100.0   # eps = factor E*/h
 DEFAULT_GAP_TOLERANCE = 1e-4  # fraction of max_approach
 
 
-def mesh_of(scene: FemScene, comm=MPI.COMM_WORLD):
-    """Build the gmsh model on rank 0 and distribute it: (MeshData, Sizing)."""
-    sizing = scene.sizing
+def mesh_of(scene: FemScene, comm=MPI.COMM_WORLD, worn=None):
+    """Build the gmsh model on rank 0 and distribute it: (MeshData, Sizing). `worn`: the
+    scene's worn joint (worn_joint), when its geometry names a wear_file."""
+    if (scene.geometry.wear_file is None) != (worn is None):
+        raise ValueError("a scene naming a wear_file is meshed with its worn joint "
+                         "(fem.scene.worn_joint), and only such a scene")
+    sizing = scene.sizing_of(worn)
     with gmsh_session():
         if comm.rank == 0:
-            pin_in_bore.build(scene.geometry, sizing, scene.load.direction_deg, scene.mesh_options)
+            pin_in_bore.build(scene.geometry, sizing, scene.load.direction_deg, scene.mesh_options,
+                              worn)
         data = dolfinx.io.gmsh.model_to_mesh(pin_in_bore.gmsh.model, comm, 0, gdim=scene.geometry.dim)
     return data, sizing
 
@@ -55,9 +60,12 @@ def tilt_frame(scene: FemScene) -> np.ndarray:
     return turn @ scene.geometry.tilt_frame @ turn.T
 
 
-def first_touch(pin_X: np.ndarray, direction, geometry) -> float:
+def first_touch(pin_X: np.ndarray, direction, geometry, worn=None) -> float:
     """Hub travel (m) along `direction` at which the first pin node meets the bore: the
-    clearance, or less for a tilted pin (its end reaches out)."""
+    clearance, or less for a tilted pin (its end reaches out); a worn joint's, where its
+    worn pin first meets its worn bore (meshes.worn.WornJoint.touch)."""
+    if worn is not None:
+        return worn.touch(math.degrees(math.atan2(direction[1], direction[0])))[0]
     if not geometry.tilt_deg:
         return geometry.clearance
     along = pin_X[:, :2] @ np.asarray(direction)[:2]
@@ -75,7 +83,7 @@ def overlap_shift(half_angle: float, pin_radius: float, clearance: float) -> flo
     return -b + math.sqrt(b * b + c * (2 * r + c)) - c
 
 
-def first_shift(scene: FemScene):
+def first_shift(scene: FemScene, worn=None):
     """The rigid shift of the pin that starts the first push (fem.solver.LoadStepper): for a
     push d, the travel at which the rigid overlap spans the contact arc estimated for d,
     Persson's half-angle at the geometric mean of the two forces that bracket the FE's
@@ -85,10 +93,12 @@ def first_shift(scene: FemScene):
     Moving the pin rigidly by all of d overlaps an arc far wider than the contact's (steel,
     c = 10 um, d = 2 um: 37 deg against 21 deg), and Newton spends its first iterations
     releasing nodes, each a new factorisation in 3D. Measured on the shipped scenes: the first
-    step's Newton iterations 7-10 -> 2-6 in 2D; 3D (88k dofs) 8 -> 4."""
+    step's Newton iterations 7-10 -> 2-6 in 2D; 3D (88k dofs) 8 -> 4. A worn joint: the round
+    joint that conforms as it does where they first touch (meshes.worn.WornJoint.local_joint)."""
     if scene.geometry.dim == 3 and scene.geometry.tilt_deg:
         return None
-    joint = scene.joint
+    joint = (scene.joint if worn is None
+             else worn.local_joint(scene.joint, scene.load.direction_deg)[0])
 
     def shift(d: float) -> float:
         liu_force, johnson_force = law_forces(d, joint)
@@ -97,22 +107,26 @@ def first_shift(scene: FemScene):
     return shift
 
 
-def bodies(scene: FemScene, comm=MPI.COMM_WORLD):
+def bodies(scene: FemScene, comm=MPI.COMM_WORLD, worn=None):
     """The mesh, the bodies and their contact, without a solver: (elasticity, contact,
-    material (None: the elasticity's constant stiffness alone), sizing, mesh data)."""
-    data, sizing = mesh_of(scene, comm)
+    material (None: the elasticity's constant stiffness alone), sizing, mesh data). `worn`:
+    the scene's worn joint (fem.scene.worn_joint), when its geometry names a wear_file."""
+    data, sizing = mesh_of(scene, comm, worn)
     el = Elasticity(data.mesh, data.cell_tags, data.facet_tags, scene.materials.pin,
                     scene.materials.bore,
                     (scene.tilt_pivot, scene.tilt_axis) if scene.geometry.dim == 3 else None)
     owned = el.V.dofmap.index_map.size_local
     surface = [d[d < owned] for d in (el.dofs["pin_surface"], el.dofs["bore_surface"])]
     g = scene.geometry
-    three_d = {} if g.dim == 2 else {
+    options = {} if g.dim == 2 else {
         "relief": g.relief,
         "bore_end": g.length, "pin_frame": tilt_frame(scene), "pivot": g.length / 2,
         "pin_runs_on": g.pin_overhang > 0}
-    contact = PinBoreContact(el.V, *surface, g.bore_radius, penalty_of(scene, sizing.contact_size),
-                             el.K.createVecRight(), friction=scene.contact.friction, **three_d)
+    if worn is not None:
+        options["bore_wear"] = worn.bore_excess
+    contact = PinBoreContact(el.V, *surface, g.bore_radius if worn is None else worn.bore_base,
+                             penalty_of(scene, sizing.contact_size), el.K.createVecRight(),
+                             friction=scene.contact.friction, **options)
     material = (ElastoPlastic(el, data.cell_tags, scene.materials.pin, scene.materials.bore)
                 if scene.materials.plastic else None)
     return el, contact, material, sizing, data
@@ -123,12 +137,13 @@ def gap_tolerance(scene: FemScene) -> float:
     return scene.contact.gap_tolerance or DEFAULT_GAP_TOLERANCE * scene.load.max_approach
 
 
-def build(scene: FemScene, comm=MPI.COMM_WORLD):
-    """Everything needed to solve the scene: (stepper, elasticity, contact, sizing, mesh data)."""
-    el, contact, material, sizing, data = bodies(scene, comm)
+def build(scene: FemScene, comm=MPI.COMM_WORLD, worn=None):
+    """Everything needed to solve the scene: (stepper, elasticity, contact, sizing, mesh data).
+    `worn`: the scene's worn joint (fem.scene.worn_joint), when its geometry names a wear_file."""
+    el, contact, material, sizing, data = bodies(scene, comm, worn)
     g = scene.geometry
     direction = np.append(scene.load.direction, [0.0] * (g.dim - 2))
-    stepper = LoadStepper(el, contact, clearance=first_touch(contact.pin_X, direction, g),
+    stepper = LoadStepper(el, contact, clearance=first_touch(contact.pin_X, direction, g, worn),
                           direction=direction, method=scene.contact.method,
                           gap_tolerance=gap_tolerance(scene),
                           newton_max_it=scene.solver.newton_max_it,
@@ -136,5 +151,5 @@ def build(scene: FemScene, comm=MPI.COMM_WORLD):
                           max_cutbacks=scene.solver.max_cutbacks,
                           force_atol=residual_tolerance(scene, contact.penalty * sizing.contact_size),
                           couplings=contact.couplings(direction, sizing.arc_half_angle),
-                          material=material, first_shift=first_shift(scene))
+                          material=material, first_shift=first_shift(scene, worn))
     return stepper, el, contact, sizing, data

@@ -141,9 +141,11 @@ def deformed_triangles(elasticity, u, magnify, pin_shift):
     return X + rigid + magnify * (disp - rigid)
 
 
-def picture(path: Path, elasticity, x, run, scene, arc_half_angle):
+def picture(path: Path, elasticity, x, run, scene, arc_half_angle, touch: float):
     """Deformed contact zone coloured by von Mises stress, beside the pressure profiles (and,
-    with friction, the shear profiles with the stick / slip state of the last step)."""
+    with friction, the shear profiles with the stick / slip state of the last step); `touch`
+    (m): the hub's travel to first touch, drawn unmagnified (the clearance, a worn joint's
+    first touch)."""
     comm = elasticity.mesh.comm
     u = dolfinx.fem.Function(elasticity.V)
     x.copy(u.x.petsc_vec)
@@ -157,7 +159,7 @@ def picture(path: Path, elasticity, x, run, scene, arc_half_angle):
     eps = half_angle(angle_from(scene.load.direction_deg, last.contact.angle), last.contact.pressure)
     view = 1.3 * g.bore_radius * max(np.sin(min(eps, np.pi / 2)), 0.02)
     magnify = 0.1 * view / max(last.approach, 1e-30)
-    cells = deformed_triangles(elasticity, u, magnify, g.clearance * direction)
+    cells = deformed_triangles(elasticity, u, magnify, touch * direction)
     n_cells = cells.shape[0]
     gathered = comm.gather((cells, vm.x.array[:n_cells]), root=0)
     if comm.rank != 0:

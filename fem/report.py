@@ -56,8 +56,8 @@ def persson_figure(runs) -> tuple[str, list]:
             label="Persson / Ciavarella-Decuzzi (infinite plate)")
     for name, result, curve, _ in runs:
         push = curve.only("push")
-        if not similar(result["scene"]) or not push.points:
-            continue
+        if not similar(result["scene"]) or not push.points or result.get("worn"):
+            continue   # (a worn joint is no round joint of its clearance)
         joint = joint_of(result)
         angle = push.half_angle
         ax.plot(push.force / (joint.e_star * joint.clearance), angle, "o", ms=4,
@@ -71,6 +71,63 @@ def persson_figure(runs) -> tuple[str, list]:
     ax.grid(alpha=0.3)
     ax.legend()
     return figure_data(fig), rows
+
+
+WEAR_KEYS = ("wear_file", "bore_frame_deg", "pin_frame_deg")
+
+
+def round_twin(result, runs):
+    """The run of the round joint a worn run wore: the same geometry but its wear, materials
+    and contact (any load direction: a round joint's curve does not depend on it), or None."""
+    def unworn(scene):
+        g = {k: v for k, v in scene["geometry"].items() if k not in WEAR_KEYS}
+        return g, scene["materials"], scene["contact"]
+
+    return next((run for run in runs if not run[1].get("worn")
+                 and unworn(run[1]["scene"]) == unworn(result["scene"])), None)
+
+
+def worn_part(runs) -> list[str]:
+    """Each worn joint's curve (geometry.wear_file) beside that of the round joint it wore:
+    force, stiffness and contact arc at the worn run's largest approach."""
+    pairs = [(run, round_twin(run[1], runs)) for run in runs if run[1].get("worn")]
+    pairs = [(worn, twin) for worn, twin in pairs if twin is not None]
+    if not pairs:
+        return []
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5))
+    rows = []
+    for k, ((name, result, curve, _), (twin, _, round_curve, _)) in enumerate(pairs):
+        worn, new = curve.only("push"), round_curve.only("push")
+        if worn.points < 2 or new.points < 2:
+            continue
+        axes[0].plot(worn.approach * 1e6, worn.force / 1e3, "o-", ms=3, color=f"C{k}", label=f"{name} (worn)")
+        axes[0].plot(new.approach * 1e6, new.force / 1e3, "s--", ms=3, color=f"C{k}", alpha=0.6,
+                     label=f"{twin} (new)")
+        axes[1].plot(worn.approach * 1e6, worn.half_angle, "o-", ms=3, color=f"C{k}")
+        axes[1].plot(new.approach * 1e6, new.half_angle, "s--", ms=3, color=f"C{k}", alpha=0.6)
+        d = min(worn.approach[-1], new.approach[-1])
+        force = [np.interp(d, c.approach, c.force) for c in (worn, new)]
+        slope = [np.interp(d, c.approach[1:], np.diff(c.force) / np.diff(c.approach)) for c in (worn, new)]
+        angle = [np.interp(d, c.approach, c.half_angle) for c in (worn, new)]
+        w = result["worn"]
+        rows.append([name, twin, f"{w['bore_max_depth_m'] * 1e6:.1f} / {w['pin_max_depth_m'] * 1e6:.1f}",
+                     f"{w['first_touch_m'] * 1e6:.1f} / {joint_of(result).clearance * 1e6:.1f}",
+                     f"{d * 1e6:.3g}", f"{force[0] / force[1]:.3f}", f"{slope[0] / slope[1]:.3f}",
+                     f"{angle[0]:.1f} / {angle[1]:.1f}"])
+    axes[0].set_ylabel("force per length (kN/m)")
+    axes[1].set_ylabel("contact half-angle (deg)")
+    for ax in axes:
+        ax.set_xlabel("approach beyond first touch (um)")
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=8)
+    return ["<h3>Worn joints</h3>", figure(figure_data(fig), (
+                "The FE of joints worn by <code>pinbore wear</code> (geometry.wear_file: the bore "
+                "and the pin meshed on their worn profiles) beside the round joints they wore: "
+                "force and contact half-angle against the approach beyond the worn surfaces' "
+                "first touch.")),
+            table(["worn scene", "new scene", "deepest wear bore / pin (um)",
+                   "first touch worn / c (um)", "at approach (um)", "force worn / new",
+                   "stiffness dF/d(approach) worn / new", "half-angle worn / new (deg)"], rows)]
 
 
 def friction_figure(runs) -> str | None:
@@ -159,6 +216,7 @@ def section(build_dir: Path, bench_dir: Path) -> str:
                                       "sticks, slips from its edges inwards, then slips whole; "
                                       "the full-slip torque equals mu R int p ds within 0.1 % "
                                       "(tests/test_fem_friction.py)."))
+    parts += worn_part(plane)
     parts += run_pictures(runs)
     for preview in sorted((build_dir / "mesh").glob("*/preview.png")):
         parts.append(figure(png_data(preview), f"Mesh of scene {html.escape(preview.parent.name)}: "

@@ -13,7 +13,7 @@ from tqdm import tqdm
 from pinbore.core import scene as scenes
 from pinbore.core.output import atomic_directory
 from pinbore.fem import model, outputs
-from pinbore.fem.scene import FemScene
+from pinbore.fem.scene import FemScene, worn_joint
 
 
 def run(scene_path, out, comm=MPI.COMM_WORLD, scene: FemScene | None = None) -> int:
@@ -21,8 +21,9 @@ def run(scene_path, out, comm=MPI.COMM_WORLD, scene: FemScene | None = None) -> 
     `scene`: the scene file's model when the caller validated it already."""
     scene = scenes.load(FemScene, scene_path) if scene is None else scene
     start = time.perf_counter()
+    worn = worn_joint(scene, Path(scene_path).parent, str(scene_path))
     with atomic_directory(out, comm) as tmp:
-        stepper, el, contact, sizing, data = model.build(scene, comm)
+        stepper, el, contact, sizing, data = model.build(scene, comm, worn)
         setup = time.perf_counter() - start
         programme = scene.load.programme
         fields = (outputs.FieldWriter(tmp / "fields.xdmf", el, contact, stepper.material)
@@ -39,7 +40,7 @@ def run(scene_path, out, comm=MPI.COMM_WORLD, scene: FemScene | None = None) -> 
         if result.steps and scene.output.picture:
             if scene.geometry.dim == 2:
                 outputs.picture(tmp / "contact.png", el, stepper.x, result, scene,
-                                sizing.arc_half_angle)
+                                sizing.arc_half_angle, stepper.clearance)
             elif comm.rank == 0:
                 outputs.pressure_pictures(tmp, result, scene, contact, el.symmetric)
         if comm.rank == 0:
@@ -49,7 +50,7 @@ def run(scene_path, out, comm=MPI.COMM_WORLD, scene: FemScene | None = None) -> 
             outputs.write_pressure(tmp / "pressure.csv", result, direction, sizing.arc_half_angle,
                                    contact)
             outputs.write_result(tmp / "result.json", summary(
-                scene, scene_path, result, el, contact, stepper, sizing, comm,
+                scene, scene_path, result, el, contact, stepper, sizing, comm, worn,
                 {"setup": setup, "solve": solve,
                  "post": time.perf_counter() - start - setup - solve,   # pictures, files
                  "total": time.perf_counter() - start}, beyond))
@@ -78,7 +79,19 @@ def symmetry_note(scene, el) -> str | None:
     return f"full model ({why})"
 
 
-def summary(scene, scene_path, result, el, contact, stepper, sizing, comm, wall, beyond=False):
+def worn_note(worn, stepper) -> dict | None:
+    """What result.json says about a worn joint: its deepest wear, the radii of the round
+    joint its mesh was built on, where the worn pin first touches its bore."""
+    if worn is None:
+        return None
+    return {"bore_max_depth_m": float(worn.bore_depth.max()),
+            "pin_max_depth_m": float(worn.pin_depth.max()),
+            "base_bore_radius_m": worn.bore_base, "base_pin_radius_m": worn.pin_base,
+            "first_touch_m": stepper.clearance}
+
+
+def summary(scene, scene_path, result, el, contact, stepper, sizing, comm, worn, wall,
+            beyond=False):
     steps = result.steps
     return {
         "scene_file": str(scene_path),
@@ -87,6 +100,7 @@ def summary(scene, scene_path, result, el, contact, stepper, sizing, comm, wall,
         "stop": None if result.stop is None else {"approach_m": result.stop.approach,
                                                   "message": result.stop.message},
         "dofs": el.num_dofs,
+        "worn": worn_note(worn, stepper),
         "ranks": comm.size,
         "mesh": {"contact_size_m": sizing.contact_size,
                  "refined_arc_half_angle_deg": math.degrees(sizing.arc_half_angle),

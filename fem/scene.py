@@ -7,10 +7,12 @@ from typing import Annotated, Literal
 
 import pydantic
 
-from pinbore.core.scene import Strict
+from pinbore.core.errors import InputError
+from pinbore.core.scene import Strict, named_file
 from pinbore.laws.elastic import Joint
 from pinbore.meshes.model import Geometry, MeshOptions
 from pinbore.meshes.sizing import Sizing, check_cells, estimate_sizing
+from pinbore.meshes.worn import read as read_worn
 
 
 class Material(Strict):
@@ -289,7 +291,28 @@ class FemScene(Strict):
         return estimate_sizing(self.joint, self.load.max_approach, self.mesh.contact_size,
                                self.mesh.grading, self.mesh.refine)
 
+    def sizing_of(self, worn=None) -> Sizing:
+        """`sizing`, or that of its worn joint (a meshes.worn.WornJoint: its wear_file read)."""
+        if worn is None:
+            return self.sizing
+        return worn.sizing(self.joint, self.load.direction_deg, self.load.max_approach, self.mesh)
+
     @property
     def effective_modulus(self) -> float:
         """E* with 1/E* = (1-nu_pin^2)/E_pin + (1-nu_bore^2)/E_bore (Pa), plane strain."""
         return self.joint.e_star
+
+
+def worn_joint(scene: FemScene, base, source: str):
+    """The worn joint of a scene whose geometry names a wear_file (meshes.worn.WornJoint; the
+    file relative to `base`, the scene's folder), its mesh's cells checked; None for a new
+    joint. Bad input is one InputError line naming `source` and the key."""
+    g = scene.geometry
+    if g.wear_file is None:
+        return None
+    worn = read_worn(g, named_file(g.wear_file, base), f"{source}: geometry.wear_file ({g.wear_file})")
+    try:
+        check_cells(worn.base_geometry(g), scene.sizing_of(worn), scene.mesh_options)
+    except ValueError as err:
+        raise InputError(f"{source}: {err} (the worn joint's mesh)") from None
+    return worn

@@ -1,7 +1,10 @@
 """wear.csv, the worn profiles of a journal and its bore that `pinbore wear` writes and a
-mechanism's revolute clearance joint runs on (its `wear_file`), defined once: per angle of
-each surface's own frame (deg, evenly spaced from -180) the depth worn from the bore and from
-the pin (m). Read back checked: a file that does not fit is one InputError line naming it.
+mechanism's revolute clearance joint (its `wear_file`) and an FE scene (`geometry.wear_file`)
+run on, defined once: per angle of each surface's own frame (deg, evenly spaced from -180) the
+depth worn from the bore and from the pin (m). Read back checked: a file that does not fit is
+one InputError line naming it. Between its angles a profile is the uniform Catmull-Rom spline
+through its points (`spline`), the curve the compiled core's worn joint interpolates
+(cpp/mechanism/worn.h) and the FE meshes and contacts.
 """
 
 from dataclasses import dataclass
@@ -28,6 +31,24 @@ class Profiles:
 def angles(points: int) -> np.ndarray:
     """`points` angles (deg) evenly spaced from -180."""
     return -180.0 + 360.0 * np.arange(points) / points
+
+
+def spline(points: np.ndarray, angle) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A periodic profile (its `points` at the angles evenly spaced from -pi) at the angles
+    `angle` (rad): its value, slope and curvature (per rad, per rad^2) on the uniform
+    Catmull-Rom spline through its points (C1, cubic between two points), the interpolation
+    of cpp/mechanism/worn.h (worn_depth); tests/test_wear.py checks the two agree."""
+    points = np.asarray(points, dtype=float)
+    n = points.size
+    step = 2 * np.pi / n
+    x = np.mod(np.asarray(angle, dtype=float) + np.pi, 2 * np.pi) / step
+    i = np.minimum(np.floor(x).astype(int), n - 1)
+    t = x - i
+    p0, p1, p2, p3 = (points[(i + j) % n] for j in (-1, 0, 1, 2))
+    c1, c2, c3 = p2 - p0, 2 * p0 - 5 * p1 + 4 * p2 - p3, 3 * p1 - p0 - 3 * p2 + p3
+    return (0.5 * (2 * p1 + t * (c1 + t * (c2 + t * c3))),
+            0.5 * (c1 + t * (2 * c2 + 3 * t * c3)) / step,
+            (c2 + 3 * t * c3) / step**2)
 
 
 def write(path: Path, profiles: Profiles) -> None:

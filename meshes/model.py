@@ -89,6 +89,10 @@ class Geometry(Strict):
     edge loading); `relief_length` and `relief_depth` round the bore's edges (see
     Relief): a profile of micrometres that the contact sees exactly and the mesh, built
     cylindrical, does not.
+
+    2D: `wear_file` (a wear.csv of `pinbore wear`) wears the bore and the pin: the bore's
+    surface is r = bore_radius + h_bore(theta - bore_frame_deg), the pin's r = pin_radius -
+    h_pin(theta - pin_frame_deg), theta the scene's angle (meshes.worn).
     """
 
     dim: Literal[2, 3]
@@ -101,6 +105,15 @@ class Geometry(Strict):
     pin_overhang: float = pydantic.Field(default=0.0, ge=0)
     relief_length: float | None = pydantic.Field(default=None, gt=0)
     relief_depth: float | None = pydantic.Field(default=None, gt=0)
+    wear_file: str | None = pydantic.Field(default=None, description=(
+        "a wear.csv (pinbore wear): the bore and the pin worn by its depths against angle "
+        "(2D); relative to the scene's folder"))
+    bore_frame_deg: float | None = pydantic.Field(default=None, ge=-360, le=360, description=(
+        "with wear_file: the angle (deg) of the bore's frame in the scene's, where the wear "
+        "file's bore angle 0 lies (default 0)"))
+    pin_frame_deg: float | None = pydantic.Field(default=None, ge=-360, le=360, description=(
+        "with wear_file: the angle (deg) of the pin's frame in the scene's, where the wear "
+        "file's pin angle 0 lies (default 0)"))
 
     @pydantic.model_validator(mode="after")
     def _consistent(self):
@@ -117,6 +130,12 @@ class Geometry(Strict):
         for key, value in three_d.items():
             if self.dim == 2 and value is not None:
                 raise ValueError(f"{key} applies to dim = 3 only")
+        if self.wear_file is not None and self.dim != 2:
+            raise ValueError("wear_file applies to dim = 2 only (a wear.csv is a planar "
+                             "joint's profiles)")
+        for key in ("bore_frame_deg", "pin_frame_deg"):
+            if getattr(self, key) is not None and self.wear_file is None:
+                raise ValueError(f"{key} applies with wear_file only")
         if (self.relief_length is None) != (self.relief_depth is None):
             raise ValueError("relief_length and relief_depth go together")
         if self.relief_length is not None and self.relief_length >= self.length / 2:

@@ -17,6 +17,9 @@ bore edges then carry the edge loading). The layers close in towards the ends
 (z_k = L/2 (1 - cos(pi k / n)) over the whole length: the half model has exactly the nodes
 of the full one below the mid-plane), and a tilted pin is turned about the axis through its
 middle normal to the load.
+
+A worn joint (meshes.worn) is meshed as the round joint of its base circles, and its nodes
+are then moved radially onto the worn surfaces, in the scene's frame.
 """
 
 import math
@@ -64,8 +67,14 @@ def layer_heights(n: int, half: bool) -> list[float]:
     return [v / z[-1] for v in z]
 
 
-def build(geometry, sizing: Sizing, direction_deg: float, mesh: MeshOptions = MeshOptions()) -> None:
-    """Build and mesh the model in the current gmsh session (see `session`)."""
+def build(geometry, sizing: Sizing, direction_deg: float, mesh: MeshOptions = MeshOptions(),
+          worn=None) -> None:
+    """Build and mesh the model in the current gmsh session (see `session`); a worn joint
+    (meshes.worn.WornJoint): the round joint of its base circles, its nodes then moved onto
+    the worn surfaces."""
+    round_geometry = geometry
+    if worn is not None:
+        geometry = worn.base_geometry(geometry)
     gmsh.model.add("pin_in_bore")
     occ = gmsh.model.occ
     # The pin and bore circles are split at the ends of the refined arc, so that gmsh meshes
@@ -119,6 +128,8 @@ def build(geometry, sizing: Sizing, direction_deg: float, mesh: MeshOptions = Me
     if geometry.tilt_deg:
         _tilt_pin(pin, geometry)
     _rotate_mesh(math.radians(direction_deg - CANONICAL_DIRECTION_DEG))
+    if worn is not None:
+        _wear_nodes(pin, housing, round_geometry, worn)
 
 
 def _tilt_pin(pin, geometry) -> None:
@@ -131,6 +142,27 @@ def _tilt_pin(pin, geometry) -> None:
             if tag not in done:
                 done.add(tag)
                 gmsh.model.mesh.setNode(int(tag), list((x - centre) @ geometry.tilt_frame.T + centre), [])
+
+
+def _wear_nodes(pin, housing, geometry, worn) -> None:
+    """Move the nodes of the round joint of the base circles radially onto the worn surfaces,
+    the move tapered linearly to nothing at the hub and at the housing's edge (meshes.worn)."""
+    pin_wall = worn.pin_base - geometry.hub_radius
+    housing_wall = geometry.housing_radius - worn.bore_base
+    for bodies, excess, weight in (
+            (pin, worn.pin_excess, lambda r: (r - geometry.hub_radius) / pin_wall),
+            (housing, worn.bore_excess, lambda r: (geometry.housing_radius - r) / housing_wall)):
+        tags, coords = [], []
+        for _, surface in bodies:
+            t, x, _ = gmsh.model.mesh.getNodes(2, surface, includeBoundary=True)
+            tags.append(t)
+            coords.append(x.reshape(-1, 3))
+        tags, first = np.unique(np.concatenate(tags), return_index=True)
+        x = np.concatenate(coords)[first]
+        r, theta = np.hypot(x[:, 0], x[:, 1]), np.arctan2(x[:, 1], x[:, 0])
+        scale = 1 + excess(theta)[0] * np.clip(weight(r), 0.0, 1.0) / r
+        for tag, point, k in zip(tags, x, scale):
+            gmsh.model.mesh.setNode(int(tag), [point[0] * k, point[1] * k, point[2]], [])
 
 
 def _tag_groups(geometry, pin, housing, half: bool) -> None:

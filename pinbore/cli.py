@@ -21,14 +21,15 @@ from pinbore.core.scene import referenced_files
 def _mesh(args) -> int:
     from pinbore.core import scene as scenes
     from pinbore.core.output import atomic_directory
-    from pinbore.fem.scene import FemScene   # the scene model only: no DOLFINx to mesh
+    from pinbore.fem.scene import FemScene, worn_joint   # no DOLFINx to mesh
 
     scene = scenes.load(FemScene, args.scene)   # validated before Gmsh and matplotlib load
+    worn = worn_joint(scene, Path(args.scene).parent, args.scene)   # its wear file, if any
     from pinbore.meshes import run as mesh_run
 
     with atomic_directory(args.out) as tmp:
-        mesh_run.write(scene.geometry, scene.sizing, scene.load.direction_deg,
-                       scene.mesh_options, tmp)
+        mesh_run.write(scene.geometry, scene.sizing_of(worn), scene.load.direction_deg,
+                       scene.mesh_options, tmp, worn)
     return 0
 
 

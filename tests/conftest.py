@@ -52,11 +52,13 @@ class Solved:
     def __init__(self, data: dict, approaches=None, on_step=None, hook=None):
         """hook: a dict that receives the stepper before the run (for on_step to read)."""
         from pinbore.fem import model
-        from pinbore.fem.scene import FemScene
+        from pinbore.fem.scene import FemScene, worn_joint
         from pinbore.core.scene import validate
 
         self.scene = validate(FemScene, data, "test scene")
-        self.stepper, self.el, self.contact, self.sizing, self.mesh_data = model.build(self.scene)
+        self.worn = worn_joint(self.scene, Path.cwd(), "test scene")   # a wear_file, if any
+        self.stepper, self.el, self.contact, self.sizing, self.mesh_data = model.build(
+            self.scene, worn=self.worn)
         if hook is not None:
             hook["stepper"] = self.stepper
         programme = self.scene.load.programme if approaches is None else [(a, 0, 0, 0) for a in approaches]

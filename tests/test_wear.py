@@ -176,19 +176,25 @@ def test_bad_wear_scenes_are_one_line(tmp_path, flores_fe, change, message):
     assert not (tmp_path / "out").exists()
 
 
-def test_an_fe_run_of_another_joint_is_one_line(tmp_path, flores_fe):
-    """The FE run's radii must be the joint's (its result.json says them)."""
+@pytest.mark.parametrize("change, messages", [
+    ({"pin_radius": 9.9e-3}, ["pin radius", "rod_slider"]),
+    ({"wear_file": "wear.csv"}, ["curve_file: the FE run of a worn joint"]),
+], ids=["radius", "worn"])
+def test_an_fe_run_of_another_joint_is_one_line(tmp_path, flores_fe, change, messages):
+    """The FE run's radii must be the joint's (its result.json says them), and its joint new
+    (the wear takes the new joint's pressure)."""
     import json
     import shutil
 
     other = tmp_path / "fe"
     shutil.copytree(flores_fe, other)
     data = json.loads((other / "result.json").read_text())
-    data["scene"]["geometry"]["pin_radius"] = 9.9e-3
+    data["scene"]["geometry"].update(change)
     (other / "result.json").write_text(json.dumps(data))
     (tmp_path / "wear.toml").write_text(tomli_w.dumps(wear_scene(tmp_path, other)))
     done = pinbore("wear", tmp_path / "wear.toml", "--out", tmp_path / "out")
-    assert done.returncode == 2 and "pin radius" in done.stderr and "rod_slider" in done.stderr, done.stderr
+    assert done.returncode == 2 and all(m in done.stderr for m in messages), done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1
 
 
 def test_the_report_leaves_out_a_wear_summary_it_cannot_trust(tmp_path, worn):
@@ -261,14 +267,11 @@ def worn_flores(tmp_path, rtol=None, restitution=None, rough=0.0) -> tuple:
 
 def catmull_rom(profile: np.ndarray, a: np.ndarray) -> np.ndarray:
     """A periodic profile (its points evenly from -pi) at the angles a, by the uniform
-    Catmull-Rom spline through its points (the C1 interpolation the core takes)."""
-    n = profile.size
-    x = np.mod(a + math.pi, 2 * math.pi) / (2 * math.pi / n)
-    i = np.minimum(np.floor(x).astype(int), n - 1)
-    t = x - i
-    p0, p1, p2, p3 = (profile[(i + j) % n] for j in (-1, 0, 1, 2))
-    return 0.5 * (2 * p1 + t * (p2 - p0) + t**2 * (2 * p0 - 5 * p1 + 4 * p2 - p3)
-                  + t**3 * (3 * p1 - p0 - 3 * p2 + p3))
+    Catmull-Rom spline through its points in Python (laws.wearfile.spline, which the FE of a
+    worn joint meshes and contacts): the test below checks it against the core's."""
+    from pinbore.laws.wearfile import spline
+
+    return spline(profile, a)[0]
 
 
 @pytest.mark.parametrize("rough", [0.0, 2e-6], ids=["smooth", "rough"])
@@ -276,7 +279,8 @@ def test_a_worn_journal_meets_its_bore_where_they_interfere_most(tmp_path, rough
     """At 40 recorded steps of the worn slider-crank, the contact's penetration is
     max over phi of e . u(phi) - c - h_bore(phi - phi_bore) - h_pin(phi - phi_pin), found by
     brute force on 400,001 angles (the profiles by the Catmull-Rom spline through their
-    points, written here again; within 1e-12 m of the maximum); at every step the contact direction the core reports (the
+    points in Python, laws.wearfile.spline: the same curve as the core's; within 1e-12 m of
+    the maximum); at every step the contact direction the core reports (the
     wear's history takes it) reaches the core's penetration within 5e-8 m. The rough
     profiles' extrema lie closer than the core's samples: the run completes and each
     maximum is found."""

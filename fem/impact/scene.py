@@ -106,6 +106,9 @@ class ImpactScene(Strict):
     def _consistent(self):
         if self.geometry.dim != 2:
             raise ValueError("geometry.dim: the impact runs in plane strain (dim = 2) only")
+        if self.geometry.wear_file is not None:
+            raise ValueError("geometry.wear_file: the impact runs on a new joint (the FE of a "
+                             "worn one is `pinbore fem`'s)")
         estimate = self.estimate
         if estimate.max_approach >= self.geometry.pin_radius - self.geometry.hub_radius:
             raise ValueError(f"impact.speed: the estimated approach {estimate.max_approach:.3g} m "

@@ -80,7 +80,11 @@ def _geometry(curve_file: Path, source: str) -> tuple[float, float]:
                      f"{source}: curve_file's result.json")
     try:
         g = data["scene"]["geometry"]
-        return float(g["pin_radius"]), float(g["bore_radius"])
+        radii = float(g["pin_radius"]), float(g["bore_radius"])
     except (KeyError, TypeError, ValueError):
         raise InputError(f"{source}: curve_file's result.json: no scene geometry (run pinbore "
                          "fem again)") from None
+    if g.get("wear_file") is not None:
+        raise InputError(f"{source}: curve_file: the FE run of a worn joint (its "
+                         "geometry.wear_file); the wear takes the pressure of the new joint's")
+    return radii
