@@ -69,6 +69,23 @@ def test_a_load_turning_round_the_bore_wears_it_uniformly_and_archards_volume():
     assert area == pytest.approx(K * F * slid, rel=2e-3)
 
 
+def test_a_contact_turning_between_sparse_steps_wears_no_ripples():
+    """The load turns 3 degrees between recorded steps (the Flores joint's contact slides
+    2.8 degrees a step, median) over a profile read every half degree and a contact arc of
+    +-5.7 degrees: each step's pressure swept over the turn to its neighbours lays the uniform
+    depth of a load turning at a constant rate, to round-off, and Archard's volume; the
+    pressure taken at the steps alone lays ripples of the steps' spacing (measured 10 %)."""
+    table = elliptic_table()
+    omega, v = 40.0, 0.3
+    t = np.linspace(0, 2 * math.pi / omega, 121)   # one turn in 120 steps of 3 degrees
+    at = profile.angles(720)
+    turning = np.mod(omega * t + math.pi, 2 * math.pi) - math.pi
+    bore = profile.worn_depth(table, t, np.full(t.size, F), turning, np.full(t.size, v), K, at, R)
+    mean = K * v * t[-1] * np.trapezoid(table.pressure[1], table.angles) / (2 * math.pi)
+    assert np.abs(bore / mean - 1).max() < 1e-9
+    assert profile.volume_per_length(bore, R) == pytest.approx(K * F * v * t[-1], rel=2e-3)
+
+
 @pytest.fixture(scope="module")
 def flores_fe(tmp_path_factory):
     """The FE run of the Flores joint (pin 9.5 mm in a bore of 10 mm, plane strain), pushed

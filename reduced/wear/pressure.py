@@ -24,16 +24,30 @@ class PressureTable:
     pin_radius: float             # m, of the FE run
     bore_radius: float            # m
 
+    def __post_init__(self):
+        # P(alpha) = integral of p from -pi to alpha, row by row (exact for p linear between
+        # the angles): a contact that turns takes the mean of p over the arc it sweeps
+        steps = 0.5 * (self.pressure[:, 1:] + self.pressure[:, :-1]) * np.diff(self.angles)
+        object.__setattr__(self, "integral", np.concatenate(
+            [np.zeros((self.forces.size, 1)), np.cumsum(steps, axis=1)], axis=1))
+
     def at(self, force: float) -> np.ndarray:
         """The pressure on `angles` under F' = force (N/m): linear between the FE steps;
         beyond the last one, its profile scaled by the force ratio (extrapolated: the run
         reports how far, wear.run)."""
+        return self._blend(self.pressure, force)
+
+    def integral_at(self, force: float) -> np.ndarray:
+        """P(alpha) on `angles`, the integral of at(force) from -pi (Pa rad)."""
+        return self._blend(self.integral, force)
+
+    def _blend(self, rows: np.ndarray, force: float) -> np.ndarray:
         top = self.forces[-1]
         if force >= top:
-            return self.pressure[-1] * (force / top)
+            return rows[-1] * (force / top)
         i = int(np.searchsorted(self.forces, force, side="right")) - 1
         a = (force - self.forces[i]) / (self.forces[i + 1] - self.forces[i])
-        return (1 - a) * self.pressure[i] + a * self.pressure[i + 1]
+        return (1 - a) * rows[i] + a * rows[i + 1]
 
     def resultant(self, k: int) -> float:
         """The load per unit length the pressure of step k carries, the integral of
