@@ -3,8 +3,9 @@ rod-slider joint over 1e5 crank revolutions (scenes/wear/slider_crank_flores2004
 at jump tolerances of 20, 10, 5 and 2.5 um, and one-way (the new joint's motion throughout).
 Per run: wall time, jumps kept and refused, mechanism runs, the bore's and the pin's deepest
 wear and worn volume, and the profiles' largest difference from the tightest run's, relative
-to its deepest wear. The mechanism is chaotic: a run's rate of wear (the mean of three
-revolutions) scatters, and so do the jumps; the tolerance bounds that scatter's effect too.
+to its deepest wear. The mechanism is chaotic: a run's rate of wear (the mean of its
+revolutions after the first) scatters, and so do the jumps; the tolerance bounds that
+scatter's effect too.
 Writes OUT/wear.csv and OUT/wear.png. Needs the joint's FE run (make fem).
 """
 
