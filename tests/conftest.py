@@ -192,3 +192,43 @@ def simulated(data: dict):
     trajectory = simulate(model)
     assert trajectory.status == 0
     return model, trajectory
+
+
+def stopped_midrun(args, cwd, out, signum, wait=1.0, group=False):
+    """`pinbore ARGS` in a process of its own (its own session and TMPDIR, cwd/tmp), stopped
+    by `signum` `wait` s after it takes `out`'s lock (or 10 s after it starts, if it has not
+    by then: a command that takes it only to write) (SIGINT to its process group as Ctrl-C
+    sends it, if `group`; else to the command): (the completed process, the seconds from the
+    signal to its exit, the processes of its session still running 2 s later, what it left in
+    its TMPDIR)."""
+    import os
+    import signal
+    import time
+
+    tmp = Path(cwd) / "tmp"
+    tmp.mkdir(exist_ok=True)
+    run = subprocess.Popen([sys.executable, "-m", "pinbore.cli", *map(str, args)], cwd=cwd,
+                           stderr=subprocess.PIPE, text=True, start_new_session=True,
+                           env=dict(os.environ, TMPDIR=str(tmp)))
+    lock = Path(out).parent / f".{Path(out).name}.pinbore-lock"
+    deadline = time.monotonic() + 10
+    while not lock.exists() and run.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.02)
+    time.sleep(wait)
+    assert run.poll() is None, f"the run ended before it could be stopped: {run.stderr.read()}"
+    (os.killpg if group else os.kill)(run.pid, signum)
+    sent = time.monotonic()
+    stderr = run.communicate(timeout=120)[1]
+    seconds = time.monotonic() - sent
+    time.sleep(2.0)
+    left = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[3]) == run.pid and fields[0] != "Z":
+            left.append(int(stat.parent.name))
+    for pid in left:   # the test's own processes, ended by id
+        os.kill(pid, signal.SIGKILL)
+    return subprocess.CompletedProcess(run.args, run.returncode, "", stderr), seconds, left, sorted(tmp.iterdir())

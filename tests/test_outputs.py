@@ -187,6 +187,30 @@ def test_a_stopped_run_leaves_no_temporaries_and_one_line(home, sig, code, word)
     assert [p.name for p in home.iterdir() if p.name.startswith(".")] == []
 
 
+@pytest.mark.parametrize("signum, group, code", [(signal.SIGTERM, False, 143), (signal.SIGINT, True, 130)],
+                         ids=["SIGTERM", "Ctrl-C"])
+def test_a_run_stopped_in_the_compiled_core_ends_at_once(tmp_path, signum, group, code):
+    """A stop while the compiled core integrates a mechanism (40 s of the Flores
+    slider-crank, about 20 s in one call of the core): the core asks Python for signals every
+    20 ms of its run, so the command ends within a second, one line, nothing left (it had
+    run on to the end of the call: 30 s for a flexible rod's 2 s)."""
+    import tomllib
+
+    import tomli_w
+    from conftest import stopped_midrun
+
+    data = tomllib.loads((ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml").read_text())
+    data["duration"] = 40.0
+    data["output"] = {"plots": False}
+    (tmp_path / "scene.toml").write_text(tomli_w.dumps(data))
+    done, seconds, left, temporaries = stopped_midrun(["reduced", "scene.toml", "--out", "out"], tmp_path,
+                                                      tmp_path / "out", signum, 1.0, group)
+    assert done.returncode == code and seconds < 1.0, (done.returncode, seconds, done.stderr)
+    assert len(done.stderr.strip().splitlines()) == 1 and "Traceback" not in done.stderr
+    assert left == [] and temporaries == []
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".") or p.name == "out"] == []
+
+
 def test_a_run_stopped_while_gmsh_meshes_ends_at_once(tmp_path):
     """SIGTERM while Gmsh meshes a flexible body near the cell cap (seconds of meshing): the
     command ends within a second (Gmsh's mesher does not return to Python until it is done;
