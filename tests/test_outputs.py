@@ -160,6 +160,44 @@ def test_a_second_writer_of_one_out_is_refused(home):
     assert pinbore("mesh", "scene.toml", "--out", "out", cwd=home).returncode == 0
 
 
+# each command's arguments (its inputs need not exist: under another run's lock it reads nothing)
+ARGUMENTS = {
+    "mesh": ["scene.toml"], "fem": ["scene.toml"], "impact": ["scene.toml"], "modes": ["scene.toml"],
+    "reduced": ["scene.toml"], "dynamics": ["scene.toml", "--analysis", "poincare"], "wear": ["scene.toml"],
+    "calibrate": ["curve.csv"], "export": ["laws.json", "--to", "table"], "study": ["study.toml"],
+    "report": ["--build", "build"],
+}
+
+
+def test_every_command_holds_its_out_before_its_work():
+    from pinbore import cli
+
+    assert set(ARGUMENTS) == set(cli.INPUTS)
+
+
+@pytest.mark.parametrize("command", list(ARGUMENTS))
+def test_a_command_into_a_locked_out_is_refused_before_its_work(home, command):
+    """A command holds its --out from before its work (core.output.reserved): while another
+    run writes it, the command is refused at once in one line, before it reads its inputs
+    (a wear run had computed for a minute and written over the first's output; a study's
+    points, a calibration's fits likewise), and leaves nothing behind."""
+    before = snapshot(home)
+    with _lock(home / "out"):
+        run = pinbore(command, *ARGUMENTS[command], "--out", "out", cwd=home)
+    assert run.returncode == 2, run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and "another pinbore run is writing it now" in lines[0], run.stderr
+    assert snapshot(home) == before
+
+
+def test_bad_input_under_new_folders_leaves_no_folder(home):
+    """The folders made to hold --out's lock go again when the command writes nothing."""
+    (home / "bad.toml").write_text('kind = "fem"\n[geometry]\nbore_radius = -1.0\n')
+    run = pinbore("fem", "bad.toml", "--out", "new/deeper/out", cwd=home)
+    assert run.returncode == 2 and len(run.stderr.strip().splitlines()) == 1, run.stderr
+    assert not (home / "new").exists()
+
+
 def test_temporaries_of_a_killed_run_are_swept(home):
     stale = home / ".out.pinbore-999999999-abc.tmp"   # no such process
     stale.mkdir()

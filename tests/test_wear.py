@@ -193,6 +193,26 @@ def test_bad_wear_scenes_are_one_line(tmp_path, flores_fe, change, message):
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.parametrize("signum, group, code, word", [(15, False, 143, "terminated"), (2, True, 130, "interrupted")],
+                         ids=["SIGTERM", "Ctrl-C"])
+def test_a_wear_run_stopped_while_it_computes_leaves_nothing(tmp_path, flores_fe, signum, group, code, word):
+    """SIGTERM or Ctrl-C while the mechanism runs (a coupled wear whose tolerance keeps it
+    jumping, long before its output is written): one line, exit 128 + signal, within a
+    second, no temporary folder (its worn profiles' pinbore-wear-*), lock or process left (the
+    stop handlers had been installed only for the writing: SIGTERM killed it outright with
+    its temporary folder left, and Ctrl-C went unanswered)."""
+    from conftest import stopped_midrun
+
+    data = wear_scene(tmp_path, flores_fe, cycles=1e6, coupling={"tolerance": 1e-12})
+    (tmp_path / "wear.toml").write_text(tomli_w.dumps(data))
+    done, seconds, left, temporaries = stopped_midrun(["wear", "wear.toml", "--out", "out"], tmp_path,
+                                                      tmp_path / "out", signum, 1.0, group)
+    assert done.returncode == code and seconds < 1.0, (done.returncode, seconds, done.stderr)
+    assert done.stderr.strip().splitlines() == [f"pinbore wear: {word}; outputs under way removed"]
+    assert left == [] and temporaries == []
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".") or p.name == "out"] == []
+
+
 @pytest.mark.parametrize("change, messages", [
     ({"pin_radius": 9.9e-3}, ["pin radius", "rod_slider"]),
     ({"wear_file": "wear.csv"}, ["curve_file: the FE run of a worn joint"]),
