@@ -249,6 +249,22 @@ def test_a_run_stopped_in_the_compiled_core_ends_at_once(tmp_path, signum, group
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".") or p.name == "out"] == []
 
 
+def test_a_stopped_commands_line_follows_its_progress_bar(tmp_path):
+    """SIGTERM during a continuation (its progress bar open): the command's line is the last
+    a terminal shows, on its own line (the bar, closed after it, had been redrawn over it)."""
+    from conftest import stopped_midrun
+
+    done, seconds, left, temporaries = stopped_midrun(
+        ["dynamics", ROOT / "scenes" / "reduced" / "impact_oscillator.toml", "--analysis", "continuation",
+         "--parameter", "frequency", "--range", "10", "30", "--points", "200", "--transient", "30",
+         "--periods", "5", "--out", "out"], tmp_path, tmp_path / "out", signal.SIGTERM, 0.5,
+        until="continuation:")
+    shown = [line.split("\r")[-1] for line in done.stderr.rstrip("\n").split("\n")]
+    assert done.returncode == 143 and shown[-1] == "pinbore dynamics: terminated; outputs under way removed", \
+        done.stderr[-500:]
+    assert "pinbore" not in "".join(shown[:-1]) and left == [] and temporaries == []
+
+
 def test_a_run_stopped_while_gmsh_meshes_ends_at_once(tmp_path):
     """SIGTERM while Gmsh meshes a flexible body near the cell cap (seconds of meshing): the
     command ends within a second (Gmsh's mesher does not return to Python until it is done;
