@@ -288,6 +288,27 @@ def test_a_killed_study_resumes_without_losing_or_repeating_a_point(tmp_path):
     assert quantities(rows) == quantities(rows_of(tmp_path / "whole"))
 
 
+@pytest.mark.parametrize("signum, group, code", [(signal.SIGTERM, False, 143), (signal.SIGINT, True, 130)],
+                         ids=["SIGTERM", "Ctrl-C"])
+def test_a_stopped_study_stops_its_workers_at_once(tmp_path, signum, group, code):
+    """SIGTERM to the study, or Ctrl-C (SIGINT to the whole process group, its workers
+    included), while its two workers run points of seconds each: the study ends within two
+    seconds in one line, its workers with it, nothing left (the workers' own
+    KeyboardInterrupt had printed their tracebacks, and the study waited for the points under
+    way: 11.5 s)."""
+    from conftest import stopped_midrun
+
+    study = tmp_path / "study.toml"
+    study.write_text(study_text([9.5e-3, 9.55e-3, 9.6e-3, 9.65e-3], duration=8.0))
+    done, seconds, left, temporaries = stopped_midrun(
+        ["study", study, "--out", "out", "--workers", "2"], tmp_path, tmp_path / "out", signum, 2.5, group)
+    assert done.returncode == code and seconds < 2.0, (done.returncode, seconds, done.stderr)
+    lines = [line.split("\r")[-1] for line in done.stderr.strip().split("\n")]
+    assert lines[-1] == f"pinbore study: {'terminated' if code == 143 else 'interrupted'}; outputs under way removed"
+    assert "Traceback" not in done.stderr and "KeyboardInterrupt" not in done.stderr
+    assert left == [] and temporaries == [] and not (tmp_path / "out").exists()
+
+
 def test_a_saltelli_study_finds_what_a_quantity_depends_on(tmp_path):
     """The clearance each point reports is 10 mm - journal radius, a function of the radius
     alone: its Sobol indices are exactly 0 for the restitution (the AB block that swaps the
