@@ -20,6 +20,7 @@ from conftest import ROOT, main_in_child, pinbore
 from scipy import stats
 
 from pinbore.core import uq
+from pinbore.core.errors import InputError
 
 ISHIGAMI_FIRST = np.array([0.3139, 0.4424, 0.0])     # a = 7, b = 0.1 (Ishigami & Homma 1990;
 ISHIGAMI_TOTAL = np.array([0.5576, 0.4424, 0.2437])  # Saltelli et al. 2008, table 4.3)
@@ -868,3 +869,22 @@ def test_the_report_marks_a_statistic_that_is_not_finite(tmp_path):
     assert "nan" not in page.lower().replace("not finite", "")
     assert "not finite" in page and "so not shown as results: peak_force_N" in page
     assert "clearance_m" not in page.split("so not shown as results:")[1]
+
+
+def test_a_key_the_base_leaves_out_is_set_then_varied(tmp_path):
+    """A flexible body's modes, which its scene leaves at its default (every mode of its
+    file), cannot be varied as it is (one line naming [set]); given a value under [set], it
+    is varied as the integer it is."""
+    from pinbore import study as runner
+
+    path = tmp_path / "study.toml"
+    text = (f'base = "{ROOT / "scenes/reduced/slider_crank_flores2004_flexible.toml"}"\n'
+            '[parameters."bodies.1.modes"]\nvalues = [2, 4]\n'
+            '[sampling]\nmethod = "grid"\n[[collect]]\nname = "impacts"\npath = "impacts"\n')
+    path.write_text(text)
+    with pytest.raises(InputError, match=r"parameters.bodies.1.modes: .*no such key .*under \[set\] first"):
+        runner.Plan(path, runner.load(path))
+    path.write_text(text.replace("[parameters.", '[set]\n"bodies.1.modes" = 6\n[parameters.'))
+    plan = runner.Plan(path, runner.load(path))
+    assert [p["bodies"][1]["modes"] for p in plan.scenes] == [2, 4]
+    assert all(type(p["bodies"][1]["modes"]) is int for p in plan.scenes)
