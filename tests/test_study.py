@@ -459,6 +459,9 @@ def test_a_large_table_is_also_parquet_with_the_csvs_values(tmp_path, monkeypatc
 
 # ---- bad input: one line, exit 2, nothing written, before any model is built
 
+UNIFORM = '{ kind = "uniform", low = 9.45e-3, high = 9.6e-3 }'
+TOLERANCE = ('[tolerance]\nparameter = "clearance_joints.0.journal_radius"\n'
+             'limit = { quantity = "peak_force_N", threshold = 4.9e4 }\ntarget = 0.01\n')
 BAD = [
     ("unknown key", lambda t: t.replace("[sampling]", "colour = 3\n[sampling]"), "colour: unknown key"),
     ("no such scene key", lambda t: t.replace("journal_radius\"]", "journal_radios\"]"),
@@ -491,6 +494,31 @@ BAD = [
     ("a negative seed", lambda t: t.replace("seed = 4", "seed = -1"), "sampling.seed"),
     ("a window after the run", lambda t: t + COLUMN.replace("[0.0, 0.0065]", "[0.5, 0.6]"),
      "collect.2.window_s: starts at 0.5 s, after the shortest run's end"),
+    ("a distribution short of its parameters",
+     lambda t: t.replace(UNIFORM, '{ kind = "normal", mean = 9.5e-3 }'), "a normal distribution takes mean, std"),
+    ("values and a distribution", lambda t: t.replace("distribution = ", "values = [9.5e-3]\ndistribution = "),
+     "give exactly one of values, grid, distribution"),
+    ("labels of a distribution", lambda t: t.replace("distribution = ", 'labels = ["a"]\ndistribution = '),
+     "labels name the values of a list or a grid"),
+    ("a statistic of a path", lambda t: t + '[[collect]]\nname = "n"\npath = "impacts"\nstatistic = "max"\n',
+     "statistic and window_s go with a column"),
+    ("no points for a random plan", lambda t: t.replace("points = 50\n", ""),
+     "sampling.points: monte_carlo needs the number of points"),
+    ("a quantity collected twice", lambda t: t + '[[collect]]\nname = "peak_force_N"\npath = "impacts"\n',
+     "collect: two quantities have one name"),
+    ("a limit on a quantity not collected",
+     lambda t: t + '[limit]\nquantity = "x"\nthreshold = 1.0\ntarget = 0.1\n', "limit.quantity: 'x' is not collected"),
+    ("a tolerance band of a parameter not uniform",
+     lambda t: t.replace(UNIFORM, '{ kind = "normal", mean = 9.5e-3, std = 1e-5 }') + TOLERANCE,
+     "tolerance.parameter: 'clearance_joints.0.journal_radius' must be a parameter with a uniform"),
+    ("a tolerance band of a Latin hypercube", lambda t: t.replace('"monte_carlo"', '"lhs"') + TOLERANCE,
+     "tolerance: needs sampling.method monte_carlo"),
+    ("a [set] key under a number", lambda t: t.replace("[set]\n", '[set]\n"duration.s" = 1.0\n'),
+     "set.duration.s: duration: holds a value, not a table"),
+    ("a parameter that is no number", lambda t: t.replace('"clearance_joints.0.journal_radius"]', '"clearance_joints.0.name"]'),
+     "parameters.clearance_joints.0.name: clearance_joints.0.name: not a number in the base scene"),
+    ("a parameter beyond a list", lambda t: t.replace('"clearance_joints.0.journal_radius"]', '"clearance_joints.3.E"]'),
+     "clearance_joints.3: no such item (the list has 1)"),
 ]
 
 
@@ -519,6 +547,17 @@ BAD_GRID = [
      "label"),
     ("a case that breaks the scene", lambda t: t + '[[cases.joint]]\nlabel = "a"\n"clearance_joints.0.nu" = 0.6\n',
      "point 0 (joint = a"),
+    ("points of a grid", lambda t: t.replace('method = "grid"', 'method = "grid"\npoints = 5'),
+     "sampling.points: a grid runs every combination"),
+    ("a grid of a distribution", lambda t: t.replace("values = [0.0095, 0.0096]", f"distribution = {UNIFORM}"),
+     "sampling.method: grid takes values or a grid"),
+    ("a random plan of values", lambda t: t.replace('method = "grid"', 'method = "lhs"\npoints = 4'),
+     "sampling.method: lhs samples distributions"),
+    ("a group of no case", lambda t: t + "[cases]\njoint = []\n", "cases.joint: give at least one case"),
+    ("two cases of one label", lambda t: t + '[[cases.joint]]\nlabel = "a"\nduration = 0.004\n'
+                                            '[[cases.joint]]\nlabel = "a"\nduration = 0.005\n',
+     "cases.joint: two cases have one label"),
+    ("a chaos of a grid", lambda t: t + "[surrogate]\ndegree = 1\n", "surrogate: fits the points of a random plan"),
 ]
 
 
@@ -767,6 +806,7 @@ BAD_OPTIONS = [
     ("a cache inside a file", lambda t: ["--cache", t / "study.toml" / "cache"], "which is a file"),
     ("a cache among other files", lambda t: ["--cache", ROOT / "scenes" / "reduced"], "not a cache entry"),
     ("more workers than the cores can run", lambda t: ["--workers", "10000"], "--workers"),
+    ("MPI ranks of mechanism points", lambda t: ["--ranks", "2"], "--ranks: MPI ranks run FE points"),
 ]
 
 

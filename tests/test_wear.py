@@ -176,7 +176,17 @@ def test_a_wear_run_over_more_periods_averages_them(tmp_path, flores_fe):
     assert result["bore"]["volume_m3"] == pytest.approx(K * 1000 * work, rel=0.02)
 
 
-@pytest.mark.parametrize("change, message", [
+def short_flores(folder) -> str:
+    """The Flores slider-crank run over less than a crank revolution, written into folder."""
+    import tomllib
+
+    data = tomllib.loads((ROOT / "scenes/reduced/slider_crank_flores2004.toml").read_text())
+    (folder / "short.toml").write_text(tomli_w.dumps(data | {"duration": 0.006}))
+    return str(folder / "short.toml")
+
+
+# each a change of the scene (or of it, given its folder): one line naming the key, before any run
+BAD_WEAR = [
     ({"joint": "crank_pin"}, "joint: 'crank_pin' is not a revolute clearance joint"),
     ({"periods": 1}, "periods"),
     ({"length": -1.0}, "length"),
@@ -184,8 +194,25 @@ def test_a_wear_run_over_more_periods_averages_them(tmp_path, flores_fe):
     ({"bore": {"wear_coefficient": 1.0}}, "wear_coefficient"),
     ({"pin": {}}, "pin.wear_coefficient"),
     ({"pressure_file": "/no/such/pressure.csv"}, "pressure.csv"),
-])
+    ({"cycles": math.inf}, "cycles: Input should be a finite number"),
+    ({"points": 10}, "points: Input should be greater than or equal to 36"),
+    ({"colour": "red"}, "colour: unknown key"),
+    ({"coupling": {"tolerance": 0.0}}, "coupling.tolerance: Input should be greater than 0"),
+    ({"coupling": {"tolerance": 1e-6, "first_jump": -1.0}}, "coupling.first_jump: Input should be greater than 0"),
+    ({"curve_file": "/no/such/curve.csv"}, "/no/such/curve.csv: cannot read"),
+    ({"mechanism_file": "/no/such/mechanism.toml"}, "/no/such/mechanism.toml: cannot read"),
+    ({"mechanism_file": str(ROOT / "scenes/reduced/spatial_slider_crank_flores.toml")},
+     'mechanism_file: a planar mechanism (kind = "planar") is needed'),
+    ({"mechanism_file": str(ROOT / "scenes/reduced/solar_panel_deployment.toml"), "joint": "hinge"},
+     "mechanism_file: a periodic analysis needs a periodic forcing"),   # a deployment
+    (lambda folder: {"mechanism_file": short_flores(folder)},
+     "mechanism_file: duration 0.006 s is shorter than one forcing period"),
+]
+
+
+@pytest.mark.parametrize("change, message", BAD_WEAR, ids=[m for _, m in BAD_WEAR])
 def test_bad_wear_scenes_are_one_line(tmp_path, flores_fe, change, message):
+    change = change(tmp_path) if callable(change) else change
     (tmp_path / "wear.toml").write_text(tomli_w.dumps(wear_scene(tmp_path, flores_fe, **change)))
     done = pinbore("wear", tmp_path / "wear.toml", "--out", tmp_path / "out")
     assert done.returncode == 2 and message in done.stderr, done.stderr
