@@ -1,5 +1,5 @@
-"""The reliability audit of issue 49, re-run as a script: every bad-input, extreme and
-interrupted case its findings name, against modes, export, the Python API, study,
+"""The third reliability audit, re-run as a script: every bad-input, extreme and
+interrupted case its findings named, against modes, export, the Python API, study,
 continuation, the report and make docs, and a SIGTERM and a Ctrl-C (SIGINT to the process
 group) sent to each long command mid-run.
 
@@ -38,7 +38,7 @@ the audit's scratch folder with the pinbore commands (the wear's FE run is taken
 build/fem/flores_wear when there). Writes OUT/audit.csv and prints the table by stage; exits
 0 whatever the cases do (it is a measurement), 1 if a fixture could not be built.
 
-    .venv/bin/python bench/audit.py --out bench            # about 8 minutes on 2 cores
+    .venv/bin/python bench/audit.py --out bench            # about 3 minutes on 2 cores
     .venv/bin/python bench/audit.py --only study,export    # some stages (no csv written)
 """
 
@@ -97,6 +97,7 @@ class Run:
     signal: tuple | None = None        # (signum, trigger, delay): see fired()
     out: Path | None = None            # the run's --out (its temporary folders and lock)
     companion: list | None = None      # argv of a run started first (two studies, one --out)
+    shown: str | None = None           # the command as the table shows it (default: argv)
 
 
 @dataclass
@@ -240,7 +241,7 @@ def execute(case: Case, folder: Path, fixtures: dict) -> dict:
             os.killpg(companion.pid, signal.SIGKILL)
             companion.wait()
             notes.append("the first run hung")
-    left = [p for p in session_processes(proc.pid)]
+    left = session_processes(proc.pid)
     deadline = time.monotonic() + 3
     while left and time.monotonic() < deadline:
         time.sleep(0.1)
@@ -261,12 +262,14 @@ def execute(case: Case, folder: Path, fixtures: dict) -> dict:
     outcome, note = classify(run, proc.returncode, lines, stderr, stdout, hung, sent, stop,
                              changed, appeared, leftovers(run, tmpdir), bool(left))
     notes = [note, *notes] if note else notes
-    command = " ".join(str(a) if not str(a).startswith(str(folder)) else str(a).replace(str(folder), "$CASE")
-                       for a in (run.argv if run.argv[:3] != PINBORE else ["pinbore", *run.argv[3:]]))
+    command = run.shown or " ".join(map(str, run.argv if run.argv[:3] != PINBORE else ["pinbore", *run.argv[3:]]))
     if run.signal:
         command = f"{signal.Signals(run.signal[0]).name} to: {command}"
-    return row(case, command, proc.returncode if not hung else None, lines, cpu, wall,
-               stop, outcome, "; ".join(notes), stderr)
+    def portable(text):   # the case's folder and the repository's, named
+        return text.replace(str(folder), "$CASE").replace(f"{ROOT}/", "").replace(PY, "python")
+
+    return row(case, portable(command), proc.returncode if not hung else None, lines,
+               cpu, wall, stop, outcome, portable("; ".join(notes)), stderr)
 
 
 def fired(trigger, run: Run, stderr: str, elapsed: float) -> bool:
@@ -303,19 +306,23 @@ def classify(run, code, lines, stderr, stdout, hung, sent, stop, changed, appear
             problems.append(f"exit {code}, {len(lines)} lines")
         if stop is not None and stop > STOP_LIMIT:
             problems.append(f"stopped {stop:.1f} s after the signal")
-        if left:
-            problems.append(f"left {', '.join(left[:3])}")
-        if running:
-            problems.append("left processes running")
-        return ("other", "; ".join(problems)) if problems else ("clean", first)
+        return ("other", "; ".join(problems)) if problems else left_behind(left, running) or ("clean", first)
     if code == 0:
         why = run.check(run.cwd, stdout) if run.check else None
         if isinstance(why, tuple):   # (outcome, note): a run that should not have run
             return why
-        return ("garbage complete", why) if why else ("accepted", "")
+        return ("garbage complete", why) if why else left_behind(left, running) or ("accepted", "")
     if code == run.clean_exit and len(lines) == 1 and (run.mark is None or run.mark(run.cwd)):
-        return "clean", first
+        return left_behind(left, running) or ("clean", first)
     return "other", f"exit {code}, {len(lines)} lines: {first}"
+
+
+def left_behind(left, running):
+    """("other", what) if the run left a temporary folder, lock or process behind, else None."""
+    if left or running:
+        return "other", "; ".join(([f"left {', '.join(left[:3])}"] if left else [])
+                                  + (["left processes running"] if running else []))
+    return None
 
 
 def row(case, command, code, lines, cpu, wall, stop, outcome, note, stderr=""):
@@ -568,7 +575,7 @@ def api_case(name, call, after="", check=None, laws_edit=None):
             (d / "laws.json").write_text(json.dumps(data))
         script = d / "call.py"
         script.write_text(API_HEAD.format(call=call, after=after))
-        return Run([PY, script, d, FLORES], d, check=check, out=d / "o")
+        return Run([PY, script, d, FLORES], d, check=check, out=d / "o", shown=f"python: {call}")
     return Case("Python API", name, setup)
 
 
@@ -674,17 +681,17 @@ def halve_peak(entry: Path):
     entry.write_text(json.dumps(data))
 
 
-def cache_check(cwd, stdout, fx_holder):
+def cache_check(cwd, stdout, fx):
     """The rerun's table is the fixture study's: an edited entry computed again."""
     mine = list(csv.DictReader((cwd / "out" / "results.csv").read_text().splitlines()))
-    theirs = list(csv.DictReader((fx_holder["study"] / "results.csv").read_text().splitlines()))
+    theirs = list(csv.DictReader((fx["study"] / "results.csv").read_text().splitlines()))
     for a, b in zip(mine, theirs):
         if abs(float(a["peak_force_N"]) - float(b["peak_force_N"])) > 1e-6 * abs(float(b["peak_force_N"])):
             return f"point {a['point']}: peak {a['peak_force_N']} served, computed {b['peak_force_N']}"
     return study_result(cwd / "out", 4)
 
 
-def cache_case(name, edit, fx_holder):
+def cache_case(name, edit):
     case = study_case(name, cache_edit(edit), RUN_LIMIT, points=4)
     inner = case.setup
 
@@ -763,9 +770,9 @@ STUDY_CASES = [
 
 
 def cache_cases():
-    return [cache_case("a cache entry edited by hand (a peak halved)", halve_peak, None),
-            cache_case("a cache entry {}", lambda e: e.write_text("{}"), None),
-            cache_case("a cache entry null", lambda e: e.write_text("null"), None)]
+    return [cache_case("a cache entry edited by hand (a peak halved)", halve_peak),
+            cache_case("a cache entry {}", lambda e: e.write_text("{}")),
+            cache_case("a cache entry null", lambda e: e.write_text("null"))]
 
 
 # ---------------------------------------------------------------- the report
