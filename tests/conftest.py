@@ -200,7 +200,7 @@ def stopped_midrun(args, cwd, out, signum, wait=1.0, group=False, until=None):
     by then: a command that takes it only to write) and, if `until`, has printed that text to
     stderr (SIGINT to its process group as Ctrl-C sends it, if `group`; else to the
     command): (the completed process, the seconds from the signal to its exit, the processes
-    of its session still running 2 s later, what it left in its TMPDIR)."""
+    of its session still running (given up to 2 s to end), what it left in its TMPDIR)."""
     import os
     import signal
     import threading
@@ -230,15 +230,21 @@ def stopped_midrun(args, cwd, out, signum, wait=1.0, group=False, until=None):
     run.wait(timeout=120)
     seconds = time.monotonic() - sent
     reader.join(timeout=10)
-    time.sleep(2.0)
-    left = []
-    for stat in Path("/proc").glob("[0-9]*/stat"):
-        try:
-            fields = stat.read_text().rsplit(")", 1)[1].split()
-        except OSError:
-            continue
-        if int(fields[3]) == run.pid and fields[0] != "Z":
-            left.append(int(stat.parent.name))
+
+    def session():
+        alive = []
+        for stat in Path("/proc").glob("[0-9]*/stat"):
+            try:
+                fields = stat.read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[3]) == run.pid and fields[0] != "Z":
+                alive.append(int(stat.parent.name))
+        return alive
+
+    deadline = time.monotonic() + 2.0
+    while (left := session()) and time.monotonic() < deadline:
+        time.sleep(0.05)
     for pid in left:   # the test's own processes, ended by id
         os.kill(pid, signal.SIGKILL)
     stderr = b"".join(said).decode(errors="replace")
