@@ -342,25 +342,41 @@ def atomic_directory(out: str | Path, comm=MPI.COMM_WORLD, inputs=()):
         comm.barrier()
 
 
+STOPS = {signal.SIGINT, signal.SIGTERM}
+
+
+@contextlib.contextmanager
+def signals_held():
+    """SIGINT and SIGTERM held off for the block (in the main thread, where Python's handlers
+    run; elsewhere nothing to hold): one that comes meanwhile is delivered as the block ends.
+    For a step that must happen whole (two renames, a worker process started)."""
+    held = threading.current_thread() is threading.main_thread()
+    if held:
+        signal.pthread_sigmask(signal.SIG_BLOCK, STOPS)
+    try:
+        yield
+    finally:
+        if held:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPS)
+
+
 def _commit(tmp: Path, out: Path) -> None:
     """Mark `tmp` as pinbore's and put it in place of `out`, with SIGINT and SIGTERM held off
     (a signal between the two renames would leave the old output under a temporary name)."""
-    signals = {signal.SIGINT, signal.SIGTERM}
-    held = threading.current_thread() is threading.main_thread()
-    if held:
-        signal.pthread_sigmask(signal.SIG_BLOCK, signals)
-    try:
-        command = _COMMAND.get()
-        (tmp / MARKER).write_text(MARKER_TEXT + (f"command: {command}\n" if command else ""))
-        if out.exists():
-            old = out.with_name(f"{_temporary_prefix(out, os.getpid())}old.tmp")
-            out.rename(old)
-            tmp.rename(out)
-            shutil.rmtree(old, ignore_errors=True)
-        else:
-            tmp.rename(out)
-    finally:
-        if held:   # a stop that came meanwhile is dropped: the output is complete, and the
-            for s in signals:   # run ends by itself (the caller restores the handlers)
-                signal.signal(s, signal.SIG_IGN)
-            signal.pthread_sigmask(signal.SIG_UNBLOCK, signals)
+    with signals_held():
+        try:
+            command = _COMMAND.get()
+            (tmp / MARKER).write_text(MARKER_TEXT + (f"command: {command}\n" if command else ""))
+            if out.exists():
+                old = out.with_name(f"{_temporary_prefix(out, os.getpid())}old.tmp")
+                out.rename(old)
+                tmp.rename(out)
+                shutil.rmtree(old, ignore_errors=True)
+            else:
+                tmp.rename(out)
+        finally:
+            if threading.current_thread() is threading.main_thread():
+                # a stop that came meanwhile is dropped: the output is complete, and the run
+                # ends by itself (the caller restores the handlers)
+                for s in STOPS:
+                    signal.signal(s, signal.SIG_IGN)

@@ -123,9 +123,12 @@ def cached_map(task, items, names, cache: Path, workers: int, scheduler: str | N
             todo[name] = item
     done_before = set(results)
     if todo:
+        from pinbore.core.output import signals_held   # noqa: PLC0415
+
         with executor(workers, scheduler, len(todo)) as pool:   # before the cache exists: a scheduler
             cache.mkdir(parents=True, exist_ok=True)  # that cannot be reached leaves nothing
-            futures = {pool.submit(task, item): name for name, item in todo.items()}
+            with signals_held():   # each worker started whole, so that a stop finds it
+                futures = {pool.submit(task, item): name for name, item in todo.items()}
             for future in tqdm(concurrent.futures.as_completed(futures), total=len(futures),
                                desc=desc, unit="point", initial=len(done_before)):
                 name = futures[future]
@@ -153,28 +156,40 @@ def refused(scheduler: str) -> None:
         return   # unreachable or slow: the client's own timeout says so
 
 
+_in_point = False   # a local worker runs a point (_point)
+
+
 def _worker_started() -> None:
     """A local worker's signals: Ctrl-C, which reaches the whole process group, is the
     parent's to handle (it stops the workers, below; a worker's own KeyboardInterrupt had
     printed its traceback); SIGTERM, the parent's stop, unwinds the point under way (its
-    temporary folders removed) and ends the worker (`_point`)."""
-    from pinbore.core.output import Terminated   # noqa: PLC0415
+    temporary folders removed, `_point`) or, between points, ends the worker at once. The
+    parent held both off while it started the worker (cached_map), which inherits that: let
+    them through (one that came meanwhile is handled now)."""
+    from pinbore.core.output import STOPS, Terminated   # noqa: PLC0415
 
     def stop(signum, frame):
-        raise Terminated
+        if _in_point:
+            raise Terminated
+        os._exit(128 + signum)
 
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, stop)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPS)
 
 
 def _point(task, item):
     """task(item) in a local worker; a worker stopped in it ends once the point has unwound."""
+    global _in_point
     from pinbore.core.output import Terminated   # noqa: PLC0415
 
+    _in_point = True
     try:
         return task(item)
     except (Terminated, KeyboardInterrupt):
         os._exit(128 + signal.SIGTERM)
+    finally:
+        _in_point = False
 
 
 def _stop_workers(processes) -> None:

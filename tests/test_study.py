@@ -289,20 +289,22 @@ def test_a_killed_study_resumes_without_losing_or_repeating_a_point(tmp_path):
     assert quantities(rows) == quantities(rows_of(tmp_path / "whole"))
 
 
-@pytest.mark.parametrize("signum, group, code", [(signal.SIGTERM, False, 143), (signal.SIGINT, True, 130)],
-                         ids=["SIGTERM", "Ctrl-C"])
-def test_a_stopped_study_stops_its_workers_at_once(tmp_path, signum, group, code):
+@pytest.mark.parametrize("signum, group, code, wait", [(signal.SIGTERM, False, 143, 2.5),
+                                                       (signal.SIGINT, True, 130, 2.5),
+                                                       (signal.SIGTERM, False, 143, 0.3)],
+                         ids=["SIGTERM", "Ctrl-C", "SIGTERM as the workers start"])
+def test_a_stopped_study_stops_its_workers_at_once(tmp_path, signum, group, code, wait):
     """SIGTERM to the study, or Ctrl-C (SIGINT to the whole process group, its workers
-    included), while its two workers run points of seconds each: the study ends within two
-    seconds in one line, its workers with it, nothing left (the workers' own
-    KeyboardInterrupt had printed their tracebacks, and the study waited for the points under
-    way: 11.5 s)."""
+    included), while its two workers run points of seconds each, or as they start: the study
+    ends within two seconds in one line, its workers with it, nothing left (the workers' own
+    KeyboardInterrupt had printed their tracebacks, the study waited for the points under
+    way, 25 s, and a worker whose start the stop cut printed an EOFError)."""
     from conftest import stopped_midrun
 
     study = tmp_path / "study.toml"
     study.write_text(study_text([9.5e-3, 9.55e-3, 9.6e-3, 9.65e-3], duration=8.0))
     done, seconds, left, temporaries = stopped_midrun(
-        ["study", study, "--out", "out", "--workers", "2"], tmp_path, tmp_path / "out", signum, 2.5, group)
+        ["study", study, "--out", "out", "--workers", "2"], tmp_path, tmp_path / "out", signum, wait, group)
     assert done.returncode == code and seconds < 2.0, (done.returncode, seconds, done.stderr)
     lines = [line.split("\r")[-1] for line in done.stderr.strip().split("\n")]
     assert lines[-1] == f"pinbore study: {'terminated' if code == 143 else 'interrupted'}; outputs under way removed"
