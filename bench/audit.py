@@ -824,10 +824,13 @@ def docs_case(name, which):
                 (skeleton / entry.name).symlink_to(entry)
         shutil.copytree(ROOT / "docs", skeleton / "docs", symlinks=True)
         (skeleton / "build" / "docs").mkdir(parents=True)
-        if (ROOT / "build" / "deps.mk").is_file():
-            shutil.copy(ROOT / "build" / "deps.mk", skeleton / "build" / "deps.mk")
+        deps = subprocess.run([PY, "-I", ROOT / "core" / "codedeps.py", ROOT], capture_output=True,
+                              text=True, check=True).stdout   # what make would include
+        (skeleton / "build" / "deps.mk").write_text(deps)
         (skeleton / "build" / "docs" / which).write_text("a file\n")
-        return Run(["make", "-s", "--no-print-directory", "docs"], skeleton, timeout=RUN_LIMIT,
+        # (-o: the repository's .venv and deps.mk are not made again from the skeleton)
+        return Run(["make", "-s", "--no-print-directory", "-o", ".venv/.installed", "-o", "build/deps.mk",
+                    "docs"], skeleton, timeout=RUN_LIMIT,
                    protect=[skeleton / "build", skeleton / "docs"],
                    check=lambda cwd, _: None if (cwd / "build/docs/html/index.html").is_file() else "no site")
     return Case("make docs", name, setup)
