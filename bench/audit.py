@@ -1,7 +1,7 @@
 """The third reliability audit, re-run as a script: every bad-input, extreme and
 interrupted case its findings named, against modes, export, the Python API, study,
 continuation, the report and make docs, and a SIGTERM and a Ctrl-C (SIGINT to the process
-group) sent to each long command mid-run.
+group) sent to each long command mid-run (export is not one: it ends within seconds).
 
 Each case runs as one process (`python -m pinbore.cli ...`, a Python snippet for the API,
 `make docs` in a skeleton of the repository) in a temporary folder of its own, with its own
