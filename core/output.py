@@ -346,37 +346,42 @@ STOPS = {signal.SIGINT, signal.SIGTERM}
 
 
 @contextlib.contextmanager
-def signals_held():
-    """SIGINT and SIGTERM held off for the block (in the main thread, where Python's handlers
-    run; elsewhere nothing to hold): one that comes meanwhile is delivered as the block ends.
-    For a step that must happen whole (two renames, a worker process started)."""
-    held = threading.current_thread() is threading.main_thread()
-    if held:
-        signal.pthread_sigmask(signal.SIG_BLOCK, STOPS)
+def signals_held(drop: bool = False):
+    """SIGINT and SIGTERM held off for the block, for a step that must happen whole (two
+    renames, a worker process started): Python's handlers (which run in the main thread,
+    whichever thread the signal reached) only note a signal meanwhile, and it is delivered to
+    the handlers as the block ends (`drop`: dropped, and both ignored from then on: the
+    caller restores the handlers). The main thread also blocks them, so that a process it
+    starts begins with them blocked (a worker lets them through once it is ready,
+    core.parallel). Elsewhere than in the main thread, nothing to hold."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    arrived = []
+    previous = {s: signal.signal(s, lambda signum, frame: arrived.append(signum)) for s in STOPS}
+    signal.pthread_sigmask(signal.SIG_BLOCK, STOPS)
     try:
         yield
     finally:
-        if held:
-            signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPS)
+        for s, handler in previous.items():
+            signal.signal(s, signal.SIG_IGN if drop else handler)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPS)   # one pending in this thread: noted or ignored
+        for s in [] if drop else dict.fromkeys(arrived):
+            signal.raise_signal(s)
 
 
 def _commit(tmp: Path, out: Path) -> None:
     """Mark `tmp` as pinbore's and put it in place of `out`, with SIGINT and SIGTERM held off
     (a signal between the two renames would leave the old output under a temporary name)."""
-    with signals_held():
-        try:
-            command = _COMMAND.get()
-            (tmp / MARKER).write_text(MARKER_TEXT + (f"command: {command}\n" if command else ""))
-            if out.exists():
-                old = out.with_name(f"{_temporary_prefix(out, os.getpid())}old.tmp")
-                out.rename(old)
-                tmp.rename(out)
-                shutil.rmtree(old, ignore_errors=True)
-            else:
-                tmp.rename(out)
-        finally:
-            if threading.current_thread() is threading.main_thread():
-                # a stop that came meanwhile is dropped: the output is complete, and the run
-                # ends by itself (the caller restores the handlers)
-                for s in STOPS:
-                    signal.signal(s, signal.SIG_IGN)
+    # a stop that comes meanwhile is dropped: the output is complete, and the run ends by
+    # itself (the caller restores the handlers)
+    with signals_held(drop=True):
+        command = _COMMAND.get()
+        (tmp / MARKER).write_text(MARKER_TEXT + (f"command: {command}\n" if command else ""))
+        if out.exists():
+            old = out.with_name(f"{_temporary_prefix(out, os.getpid())}old.tmp")
+            out.rename(old)
+            tmp.rename(out)
+            shutil.rmtree(old, ignore_errors=True)
+        else:
+            tmp.rename(out)
