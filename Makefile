@@ -194,8 +194,9 @@ bench: build/study/calibration_2d/summary.json $(MODES_RUNS) build/fem/flores_we
 	$(PY) bench/continuation.py --out bench
 	$(PY) bench/wear.py --out bench
 
-stress: $(STAMP) ## the stress matrix: bench/stress_*.csv, bench/stress.png (about 7 min)
+stress: build/fem/flores_wear/curve.csv $(STAMP) ## the stress matrix and the reliability audit: bench/stress_*.csv, bench/stress.png, bench/audit.csv (about 7 + 3 min)
 	$(PY) bench/stress.py --out bench
+	$(PY) bench/audit.py --out bench
 
 test: $(STAMP) ## run the test suite (what CI runs)
 	$(PY) -m pytest -n 2 -m "not slow" tests

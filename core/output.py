@@ -6,8 +6,8 @@ untouched and removes its temporary one. Under MPI, rank 0 owns the file system:
 the temporary directory, broadcasts its name, and renames it when the ranks agree that the
 run succeeded.
 
-What `--out` may be (`check_output`, applied by the CLI before any work and again by
-`atomic_directory` under its lock):
+What `--out` may be (`check_output`, applied by the CLI before any work, by `reserved` as
+it takes the lock, and again by `atomic_directory` under it):
 - a path that does not exist yet, or an empty directory;
 - a directory that pinbore wrote itself (it holds the marker file `.pinbore-output`) and that
   holds none of the run's inputs, by the same command (the marker names it) or by one that
@@ -19,7 +19,10 @@ Refused, with one line naming the rule: `""` and `.`, the working directory or a
 above it, a file, a directory that pinbore did not write and that is not empty, a path that
 contains an input (the scene, the curves, a cache), a parent that is a file or cannot be
 written. Two runs writing one `--out` at once: the second finds the lock (`flock` on
-`.<name>.pinbore-lock` beside it) and refuses. Temporary directories carry the writing
+`.<name>.pinbore-lock` beside it) and refuses at once: a command holds its `--out`
+(`reserved`) from before its work to its end, so that a second run is refused before it
+computes anything, and SIGINT and SIGTERM stop the work cleanly wherever it is (what it
+keeps in temporary folders removed as the stop unwinds). Temporary directories carry the writing
 process's id; one left by a killed process (SIGKILL) is removed by the next run for the same
 `--out`.
 """
@@ -41,6 +44,7 @@ from mpi4py import MPI
 from pinbore.core.errors import InputError
 
 _DECLARED: contextvars.ContextVar[tuple] = contextvars.ContextVar("declared_inputs", default=())
+_RESERVED: contextvars.ContextVar[Path | None] = contextvars.ContextVar("reserved", default=None)
 _COMMAND: contextvars.ContextVar[str | None] = contextvars.ContextVar("declared_command", default=None)
 
 MARKER = ".pinbore-output"
@@ -244,11 +248,56 @@ def _lock(out: Path):
         os.close(fd)
 
 
+def _remove_empty(folders) -> None:
+    """Remove the folders (innermost first) that are still empty."""
+    for folder in folders:
+        try:
+            folder.rmdir()
+        except OSError:
+            return
+
+
+@contextlib.contextmanager
+def reserved(out: str | Path, comm=MPI.COMM_WORLD):
+    """Hold the output `out` for a whole command, from before its work: checked
+    (check_output), locked (a second run writing it is refused at once, not after computing),
+    and SIGINT and SIGTERM turned into exceptions (KeyboardInterrupt, Terminated) for the
+    block, so that a stop anywhere in the work unwinds it cleanly. atomic_directory(out)
+    within the block writes under this lock. The folders made to hold the lock are removed
+    again if the block leaves them empty (bad input writes nothing)."""
+    out = Path(out)
+    with contextlib.ExitStack() as held:
+        held.enter_context(_stop_cleanly())
+        error = None
+        if comm.rank == 0:
+            try:
+                check_output(out)
+                missing, parent = [], out.absolute().parent
+                while not parent.exists():
+                    missing.append(parent)
+                    parent = parent.parent
+                try:
+                    out.absolute().parent.mkdir(parents=True, exist_ok=True)
+                except OSError as err:
+                    raise InputError(f"--out {out}: cannot write there ({err.strerror or err})") from None
+                held.callback(_remove_empty, missing)
+                held.enter_context(_lock(out))
+            except InputError as err:
+                error = str(err)
+        error = comm.bcast(error, root=0) if comm.size > 1 else error
+        if error:
+            raise InputError(error)
+        token = _RESERVED.set(out.resolve())
+        held.callback(_RESERVED.reset, token)
+        yield out
+
+
 @contextlib.contextmanager
 def atomic_directory(out: str | Path, comm=MPI.COMM_WORLD, inputs=()):
     """Yield a temporary directory that becomes `out` when the block exits cleanly.
 
-    `out` is checked (check_output, with the run's `inputs`) and locked first. An exception,
+    `out` is checked (check_output, with the run's `inputs`) and locked first (unless the
+    command holds it already: `reserved`). An exception,
     Ctrl-C or SIGTERM (raised as KeyboardInterrupt, Terminated) removes the temporary
     directory. A run that stops early but keeps what it computed (non-convergence) writes its
     files, marks them, and leaves the block normally.
@@ -261,7 +310,8 @@ def atomic_directory(out: str | Path, comm=MPI.COMM_WORLD, inputs=()):
             try:
                 check_output(out, inputs)
                 out.parent.mkdir(parents=True, exist_ok=True)
-                held.enter_context(_lock(out))
+                if _RESERVED.get() != out.resolve():
+                    held.enter_context(_lock(out))
                 check_output(out, inputs)   # again, now that no other run can change it
                 _sweep_stale(out)
                 tmp = tempfile.mkdtemp(prefix=_temporary_prefix(out, os.getpid()), suffix=".tmp",
@@ -292,14 +342,40 @@ def atomic_directory(out: str | Path, comm=MPI.COMM_WORLD, inputs=()):
         comm.barrier()
 
 
+STOPS = {signal.SIGINT, signal.SIGTERM}
+
+
+@contextlib.contextmanager
+def signals_held(drop: bool = False):
+    """SIGINT and SIGTERM held off for the block, for a step that must happen whole (two
+    renames, a worker process started): Python's handlers (which run in the main thread,
+    whichever thread the signal reached) only note a signal meanwhile, and it is delivered to
+    the handlers as the block ends (`drop`: dropped, and both ignored from then on: the
+    caller restores the handlers). The main thread also blocks them, so that a process it
+    starts begins with them blocked (a worker lets them through once it is ready,
+    core.parallel). Elsewhere than in the main thread, nothing to hold."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    arrived = []
+    previous = {s: signal.signal(s, lambda signum, frame: arrived.append(signum)) for s in STOPS}
+    signal.pthread_sigmask(signal.SIG_BLOCK, STOPS)
+    try:
+        yield
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, signal.SIG_IGN if drop else handler)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPS)   # one pending in this thread: noted or ignored
+        for s in [] if drop else dict.fromkeys(arrived):
+            signal.raise_signal(s)
+
+
 def _commit(tmp: Path, out: Path) -> None:
     """Mark `tmp` as pinbore's and put it in place of `out`, with SIGINT and SIGTERM held off
     (a signal between the two renames would leave the old output under a temporary name)."""
-    signals = {signal.SIGINT, signal.SIGTERM}
-    held = threading.current_thread() is threading.main_thread()
-    if held:
-        signal.pthread_sigmask(signal.SIG_BLOCK, signals)
-    try:
+    # a stop that comes meanwhile is dropped: the output is complete, and the run ends by
+    # itself (the caller restores the handlers)
+    with signals_held(drop=True):
         command = _COMMAND.get()
         (tmp / MARKER).write_text(MARKER_TEXT + (f"command: {command}\n" if command else ""))
         if out.exists():
@@ -309,8 +385,3 @@ def _commit(tmp: Path, out: Path) -> None:
             shutil.rmtree(old, ignore_errors=True)
         else:
             tmp.rename(out)
-    finally:
-        if held:   # a stop that came meanwhile is dropped: the output is complete, and the
-            for s in signals:   # run ends by itself (the caller restores the handlers)
-                signal.signal(s, signal.SIG_IGN)
-            signal.pthread_sigmask(signal.SIG_UNBLOCK, signals)

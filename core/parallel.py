@@ -22,7 +22,9 @@ import json
 import multiprocessing
 import os
 import re
+import signal
 import socket
+import time
 from pathlib import Path
 
 from tqdm import tqdm
@@ -33,6 +35,7 @@ SCHEDULER_TIMEOUT = 10   # s to connect to a Dask scheduler
 TCP = re.compile(r"(?:tcp://)?\[?([A-Za-z0-9_.:-]+?)\]?:([0-9]{1,5})/?")   # a TCP address: host, port
 ADDRESS = re.compile(r"[a-z][a-z0-9+.-]*://\S+|[A-Za-z0-9_.\[\]:-]+:[0-9]{1,5}")   # protocol://..., host:port
 WORKERS_PER_CORE = 4
+STOP_GRACE = 2.0   # s a stopped run's workers have to unwind their points before they are killed
 ENTRY = re.compile(r"\..*|.*\.json")   # a cache's files: entries (and hidden ones: entries being written, .gitignore)
 
 
@@ -120,9 +123,12 @@ def cached_map(task, items, names, cache: Path, workers: int, scheduler: str | N
             todo[name] = item
     done_before = set(results)
     if todo:
+        from pinbore.core.output import signals_held   # noqa: PLC0415
+
         with executor(workers, scheduler, len(todo)) as pool:   # before the cache exists: a scheduler
             cache.mkdir(parents=True, exist_ok=True)  # that cannot be reached leaves nothing
-            futures = {pool.submit(task, item): name for name, item in todo.items()}
+            with signals_held():   # each worker started whole, so that a stop finds it
+                futures = {pool.submit(task, item): name for name, item in todo.items()}
             for future in tqdm(concurrent.futures.as_completed(futures), total=len(futures),
                                desc=desc, unit="point", initial=len(done_before)):
                 name = futures[future]
@@ -150,20 +156,85 @@ def refused(scheduler: str) -> None:
         return   # unreachable or slow: the client's own timeout says so
 
 
+_in_point = False   # a local worker runs a point (_point)
+
+
+def _worker_started() -> None:
+    """A local worker's signals: Ctrl-C, which reaches the whole process group, is the
+    parent's to handle (it stops the workers, below; a worker's own KeyboardInterrupt had
+    printed its traceback); SIGTERM, the parent's stop, unwinds the point under way (its
+    temporary folders removed, `_point`) or, between points, ends the worker at once. The
+    parent held both off while it started the worker (cached_map), which inherits that: let
+    them through (one that came meanwhile is handled now)."""
+    from pinbore.core.output import STOPS, Terminated   # noqa: PLC0415
+
+    def stop(signum, frame):
+        if _in_point:
+            raise Terminated
+        os._exit(128 + signum)
+
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, stop)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPS)
+
+
+def _point(task, item):
+    """task(item) in a local worker; a worker stopped in it ends once the point has unwound."""
+    global _in_point
+    from pinbore.core.output import Terminated   # noqa: PLC0415
+
+    _in_point = True
+    try:
+        return task(item)
+    except (Terminated, KeyboardInterrupt):
+        os._exit(128 + signal.SIGTERM)
+    finally:
+        _in_point = False
+
+
+def _stop_workers(processes) -> None:
+    """End a stopped run's local workers now rather than after the points under way: SIGTERM
+    (each unwinds its point), then SIGKILL for one still running after STOP_GRACE s."""
+    for p in processes:
+        if p.is_alive():
+            p.terminate()
+    deadline = time.monotonic() + STOP_GRACE
+    for p in processes:
+        p.join(max(0.0, deadline - time.monotonic()))
+        if p.is_alive():
+            p.kill()
+            p.join()
+
+
+class _Local:
+    """A pool of local processes whose submit runs each task through `_point`."""
+
+    def __init__(self, pool):
+        self.pool = pool
+
+    def submit(self, task, item):
+        return self.pool.submit(_point, task, item)
+
+
 @contextlib.contextmanager
 def executor(workers: int, scheduler: str | None, pending: int | None = None):
     """An executor of local processes or of a Dask cluster for the block. A stop (Ctrl-C,
-    SIGTERM, an error) cancels the points not yet started instead of waiting for them; the
-    Dask client is closed. An unreachable scheduler is one InputError line."""
+    SIGTERM, an error) cancels the points not yet started instead of waiting for them and
+    ends the local workers' points under way (their temporary folders removed); the Dask
+    client is closed. An unreachable scheduler is one InputError line."""
     if scheduler is None:
         # spawned, not forked: the parent runs threads (tqdm, BLAS) that fork would copy mid-state
         pool = concurrent.futures.ProcessPoolExecutor(
             max_workers=max(1, min(workers, pending or workers)),
-            mp_context=multiprocessing.get_context("spawn"))
+            mp_context=multiprocessing.get_context("spawn"), initializer=_worker_started)
         try:
-            yield pool
+            yield _Local(pool)
         except BaseException:
+            # (the pool's processes: no public handle before Python 3.14's terminate_workers;
+            # shutdown forgets them)
+            processes = list((getattr(pool, "_processes", None) or {}).values())
             pool.shutdown(wait=False, cancel_futures=True)
+            _stop_workers(processes)
             raise
         pool.shutdown()
         return

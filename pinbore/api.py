@@ -22,7 +22,7 @@ from pathlib import Path
 
 from pinbore.core import scene as scenes
 from pinbore.core.errors import InputError
-from pinbore.core.output import declared_inputs
+from pinbore.core.output import declared_inputs, reserved
 
 
 def _path(name: str, value) -> Path:
@@ -128,7 +128,8 @@ def run(stage: str, source, out, base=None):
         raise ValueError(f"stage: {stage!r} is unknown; valid: {', '.join(STAGES)}")
     out = _path("out", out)
     runner, result = STAGES[stage](out)
-    with _scene_file(source, base) as path, declared_inputs([path, *scenes.referenced_files(path)]):
+    with _scene_file(source, base) as path, declared_inputs([path, *scenes.referenced_files(path)]), \
+            reserved(out):   # out checked and locked before the work, as the CLI holds it
         runner(path, out)
     return result()
 
@@ -144,6 +145,6 @@ def calibrate(curves, out, length=None, per_length=None, impacts=()):
     curves = [str(_path(f"curves.{k}", c)) for k, c in enumerate(curves)]
     impacts = [str(_path(f"impacts.{k}", i)) for k, i in enumerate(impacts)]
     out = _path("out", out)
-    with declared_inputs([*curves, *impacts]):
+    with declared_inputs([*curves, *impacts]), reserved(out):
         run.run(curves, out, length, per_length, impacts)
     return lawsfile.read(out / "laws.json")

@@ -13,8 +13,8 @@ import traceback
 from pathlib import Path
 
 from pinbore.core.errors import InputError
-from pinbore.core.output import (Terminated, check_output, clear_stop_signal, declared_command,
-                                 declared_inputs, exit_now, stop_signal)
+from pinbore.core.output import (Terminated, clear_stop_signal, declared_command, declared_inputs,
+                                 exit_now, reserved, stop_signal)
 from pinbore.core.scene import referenced_files
 
 
@@ -376,10 +376,12 @@ def main(argv=None) -> int:
     args = parser().parse_args(argv)
     clear_stop_signal()
     try:
-        with declared_command(args.command), declared_inputs(INPUTS[args.command](args)):
-            check_output(args.out)
+        # --out checked and locked, and stops made clean, before any work (core.output.reserved)
+        with declared_command(args.command), declared_inputs(INPUTS[args.command](args)), \
+                reserved(args.out):
             return args.func(args)
     except InputError as err:
+        _close_progress_bars()
         print(f"pinbore {args.command}: {err}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
@@ -390,13 +392,26 @@ def main(argv=None) -> int:
         if stop_signal() is not None:   # the stop surfaced as a library's error
             return _stopped(args.command, stop_signal())
         # a bug, not bad input: one line, the trace kept for a report
+        _close_progress_bars()
         print(f"pinbore {args.command}: internal error ({type(err).__name__}: {err}); "
               f"traceback in {_trace_file(args.command)}", file=sys.stderr)
         return 3
 
 
+def _close_progress_bars() -> None:
+    """Close the progress bars a stopped or failed run left open, so that the command's one
+    line follows them on a line of its own (a bar redrawn after it had hidden it)."""
+    tqdm = sys.modules.get("tqdm")
+    for bar in list(getattr(getattr(tqdm, "tqdm", None), "_instances", None) or ()):
+        try:
+            bar.close()
+        except Exception:   # noqa: BLE001 (a bar that cannot draw is no reason to fail)
+            pass
+
+
 def _stopped(command: str, signum: int) -> int:
     """One line for a run stopped by Ctrl-C or SIGTERM; the shell's exit code 128 + signal."""
+    _close_progress_bars()
     word = "interrupted" if signum == signal.SIGINT else "terminated"
     print(f"pinbore {command}: {word}; outputs under way removed", file=sys.stderr)
     exit_now(128 + signum)   # a Gmsh mesher left running ends with the process

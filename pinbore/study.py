@@ -422,7 +422,9 @@ def put(data: dict, key: str, value, create: bool = False) -> None:
             raise KeyError(f"{'.'.join(parts[:i])}: holds a value, not a table")
         elif part not in node:
             if not create:
-                raise KeyError(f"{'.'.join(parts[:i + 1])}: no such key in the base scene")
+                raise KeyError(f"{'.'.join(parts[:i + 1])}: no such key in the base scene (a key "
+                               "its default leaves out, such as a flexible body's modes, is "
+                               "given a value under [set] first)")
             node[part] = value if last else {}
         if last:
             if not create and (not isinstance(node[part], (int, float)) or isinstance(node[part], bool)):

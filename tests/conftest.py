@@ -192,3 +192,60 @@ def simulated(data: dict):
     trajectory = simulate(model)
     assert trajectory.status == 0
     return model, trajectory
+
+
+def stopped_midrun(args, cwd, out, signum, wait=1.0, group=False, until=None):
+    """`pinbore ARGS` in a process of its own (its own session and TMPDIR, cwd/tmp), stopped
+    by `signum` `wait` s after it takes `out`'s lock (or 10 s after it starts, if it has not
+    by then: a command that takes it only to write) and, if `until`, has printed that text to
+    stderr (SIGINT to its process group as Ctrl-C sends it, if `group`; else to the
+    command): (the completed process, the seconds from the signal to its exit, the processes
+    of its session still running (given up to 2 s to end), what it left in its TMPDIR)."""
+    import os
+    import signal
+    import threading
+    import time
+
+    tmp = Path(cwd) / "tmp"
+    tmp.mkdir(exist_ok=True)
+    run = subprocess.Popen([sys.executable, "-m", "pinbore.cli", *map(str, args)], cwd=cwd,
+                           stderr=subprocess.PIPE, start_new_session=True,
+                           env=dict(os.environ, TMPDIR=str(tmp)))
+    said = []
+    reader = threading.Thread(target=lambda: said.extend(iter(lambda: os.read(run.stderr.fileno(), 65536), b"")),
+                              daemon=True)
+    reader.start()
+    lock = Path(out).parent / f".{Path(out).name}.pinbore-lock"
+    deadline = time.monotonic() + 10
+    while not lock.exists() and run.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.02)
+    deadline = time.monotonic() + 60
+    while until is not None and until.encode() not in b"".join(said) and run.poll() is None \
+            and time.monotonic() < deadline:
+        time.sleep(0.02)
+    time.sleep(wait)
+    assert run.poll() is None, f"the run ended before it could be stopped: {b''.join(said).decode()}"
+    (os.killpg if group else os.kill)(run.pid, signum)
+    sent = time.monotonic()
+    run.wait(timeout=120)
+    seconds = time.monotonic() - sent
+    reader.join(timeout=10)
+
+    def session():
+        alive = []
+        for stat in Path("/proc").glob("[0-9]*/stat"):
+            try:
+                fields = stat.read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[3]) == run.pid and fields[0] != "Z":
+                alive.append(int(stat.parent.name))
+        return alive
+
+    deadline = time.monotonic() + 2.0
+    while (left := session()) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    for pid in left:   # the test's own processes, ended by id
+        os.kill(pid, signal.SIGKILL)
+    stderr = b"".join(said).decode(errors="replace")
+    return subprocess.CompletedProcess(run.args, run.returncode, "", stderr), seconds, left, sorted(tmp.iterdir())

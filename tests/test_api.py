@@ -70,7 +70,19 @@ BAD_CALLS = [
     (lambda t: pb.calibrate([ROOT / "nowhere.csv"], t / "c", length=-1.0), "length: -1.0 must be a finite length"),
     (lambda t: pb.calibrate(ROOT / "nowhere.csv", t / "c"), "lists of paths"),
     (lambda t: pb.calibrate([None], t / "c"), "curves.0: None must be a path"),
+    (lambda t: locked(t / "o", lambda: pb.run("reduced", IMPACT_OSCILLATOR, t / "o")),
+     "another pinbore run is writing it now"),
+    (lambda t: locked(t / "c", lambda: pb.calibrate([ROOT / "nowhere.csv"], t / "c")),
+     "another pinbore run is writing it now"),
 ]
+
+
+def locked(out, call):
+    """call() while another run holds out's lock: refused before its work."""
+    from pinbore.core.output import _lock
+
+    with _lock(out):
+        call()
 
 
 @pytest.mark.parametrize("call, message", BAD_CALLS, ids=range(len(BAD_CALLS)))

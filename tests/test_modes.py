@@ -7,6 +7,7 @@ command's bad input.
 """
 
 import copy
+import math
 
 import numpy as np
 import pytest
@@ -261,6 +262,21 @@ MODES = {"body": {"shape": "bar", "dim": 2, "length": 0.12, "width": 0.024, "thi
          "reduction": {"interfaces": ["a", "b"], "fixed_interface_modes": 4, "modes": 3}}
 
 
+PANEL = {"body": {"shape": "panel", "dim": 3, "length": 0.2, "width": 0.1, "thickness": 2e-3,
+                  "lugs": [0.05], "lug_radius": 0.008, "lug_bore_radius": 0.004, "lug_width": 0.02,
+                  "cell_size": 0.02},
+         "material": {"E": 7.0e10, "nu": 0.33, "density": 2700.0},
+         "reduction": {"interfaces": ["lug1"], "fixed_interface_modes": 4, "modes": 2}}
+
+
+def panel_with(**values):
+    """A panel on one hinge lug with body keys changed (None: left out)."""
+    data = copy.deepcopy(PANEL)
+    data["body"].update(values)
+    data["body"] = {k: v for k, v in data["body"].items() if v is not None}
+    return data
+
+
 def modes_with(table, **values):
     data = copy.deepcopy(MODES)
     data[table].update(values)
@@ -278,6 +294,16 @@ def modes_with(table, **values):
     (modes_with("body", cell_size=0.1), "body: cell_size must be at most half"),
     (modes_with("reduction", degree=3), "reduction.degree: Input should be 1 or 2"),
     (modes_with("body", density=1.0), "body.density: unknown key"),
+    (modes_with("reduction", interfaces=["a", "a"]), "reduction.interfaces: an interface is named twice"),
+    (modes_with("reduction", stiffening_held=["c"]), "reduction.stiffening_held.0: 'c' is not one of"),
+    (modes_with("reduction", stiffening_held=[]), "reduction.stiffening_held: one interface or more"),
+    (panel_with(eye_radius=0.004), "body: eye_radius belongs to a bar"),
+    (panel_with(lug_radius=None), "body: lugs need lug_radius"),
+    (panel_with(lug_bore_radius=0.008), "body: lug_bore_radius must be smaller than lug_radius"),
+    (panel_with(lug_radius=0.0009, lug_bore_radius=0.0005), "body: lug_radius must exceed thickness / 2"),
+    (panel_with(lugs=[0.095]), "must lie on the edge"),
+    (panel_with(lugs=[0.04, 0.05]), "body: the lugs overlap"),
+    (panel_with(thickness=math.inf), "body.thickness: Input should be a finite number"),
 ])
 def test_bad_modes_scene_is_one_line(write_scene, tmp_path, scene, message):
     from test_bad_input import expect_one_line

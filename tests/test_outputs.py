@@ -160,6 +160,44 @@ def test_a_second_writer_of_one_out_is_refused(home):
     assert pinbore("mesh", "scene.toml", "--out", "out", cwd=home).returncode == 0
 
 
+# each command's arguments (its inputs need not exist: under another run's lock it reads nothing)
+ARGUMENTS = {
+    "mesh": ["scene.toml"], "fem": ["scene.toml"], "impact": ["scene.toml"], "modes": ["scene.toml"],
+    "reduced": ["scene.toml"], "dynamics": ["scene.toml", "--analysis", "poincare"], "wear": ["scene.toml"],
+    "calibrate": ["curve.csv"], "export": ["laws.json", "--to", "table"], "study": ["study.toml"],
+    "report": ["--build", "build"],
+}
+
+
+def test_every_command_holds_its_out_before_its_work():
+    from pinbore import cli
+
+    assert set(ARGUMENTS) == set(cli.INPUTS)
+
+
+@pytest.mark.parametrize("command", list(ARGUMENTS))
+def test_a_command_into_a_locked_out_is_refused_before_its_work(home, command):
+    """A command holds its --out from before its work (core.output.reserved): while another
+    run writes it, the command is refused at once in one line, before it reads its inputs
+    (a wear run had computed for a minute and written over the first's output; a study's
+    points, a calibration's fits likewise), and leaves nothing behind."""
+    before = snapshot(home)
+    with _lock(home / "out"):
+        run = pinbore(command, *ARGUMENTS[command], "--out", "out", cwd=home)
+    assert run.returncode == 2, run.stderr
+    lines = run.stderr.strip().splitlines()
+    assert len(lines) == 1 and "another pinbore run is writing it now" in lines[0], run.stderr
+    assert snapshot(home) == before
+
+
+def test_bad_input_under_new_folders_leaves_no_folder(home):
+    """The folders made to hold --out's lock go again when the command writes nothing."""
+    (home / "bad.toml").write_text('kind = "fem"\n[geometry]\nbore_radius = -1.0\n')
+    run = pinbore("fem", "bad.toml", "--out", "new/deeper/out", cwd=home)
+    assert run.returncode == 2 and len(run.stderr.strip().splitlines()) == 1, run.stderr
+    assert not (home / "new").exists()
+
+
 def test_temporaries_of_a_killed_run_are_swept(home):
     stale = home / ".out.pinbore-999999999-abc.tmp"   # no such process
     stale.mkdir()
@@ -185,6 +223,46 @@ def test_a_stopped_run_leaves_no_temporaries_and_one_line(home, sig, code, word)
     assert "Traceback" not in stderr
     assert not (home / "out").exists()
     assert [p.name for p in home.iterdir() if p.name.startswith(".")] == []
+
+
+@pytest.mark.parametrize("signum, group, code", [(signal.SIGTERM, False, 143), (signal.SIGINT, True, 130)],
+                         ids=["SIGTERM", "Ctrl-C"])
+def test_a_run_stopped_in_the_compiled_core_ends_at_once(tmp_path, signum, group, code):
+    """A stop while the compiled core integrates a mechanism (40 s of the Flores
+    slider-crank, about 20 s in one call of the core): the core asks Python for signals every
+    20 ms of its run, so the command ends within a second, one line, nothing left (it had
+    run on to the end of the call: 30 s for a flexible rod's 2 s)."""
+    import tomllib
+
+    import tomli_w
+    from conftest import stopped_midrun
+
+    data = tomllib.loads((ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml").read_text())
+    data["duration"] = 40.0
+    data["output"] = {"plots": False}
+    (tmp_path / "scene.toml").write_text(tomli_w.dumps(data))
+    done, seconds, left, temporaries = stopped_midrun(["reduced", "scene.toml", "--out", "out"], tmp_path,
+                                                      tmp_path / "out", signum, 1.0, group)
+    assert done.returncode == code and seconds < 1.0, (done.returncode, seconds, done.stderr)
+    assert len(done.stderr.strip().splitlines()) == 1 and "Traceback" not in done.stderr
+    assert left == [] and temporaries == []
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".") or p.name == "out"] == []
+
+
+def test_a_stopped_commands_line_follows_its_progress_bar(tmp_path):
+    """SIGTERM during a continuation (its progress bar open): the command's line is the last
+    a terminal shows, on its own line (the bar, closed after it, had been redrawn over it)."""
+    from conftest import stopped_midrun
+
+    done, seconds, left, temporaries = stopped_midrun(
+        ["dynamics", ROOT / "scenes" / "reduced" / "impact_oscillator.toml", "--analysis", "continuation",
+         "--parameter", "frequency", "--range", "10", "30", "--points", "200", "--transient", "30",
+         "--periods", "5", "--out", "out"], tmp_path, tmp_path / "out", signal.SIGTERM, 0.5,
+        until="continuation:")
+    shown = [line.split("\r")[-1] for line in done.stderr.rstrip("\n").split("\n")]
+    assert done.returncode == 143 and shown[-1] == "pinbore dynamics: terminated; outputs under way removed", \
+        done.stderr[-500:]
+    assert "pinbore" not in "".join(shown[:-1]) and left == [] and temporaries == []
 
 
 def test_a_run_stopped_while_gmsh_meshes_ends_at_once(tmp_path):

@@ -20,6 +20,7 @@ from conftest import ROOT, main_in_child, pinbore
 from scipy import stats
 
 from pinbore.core import uq
+from pinbore.core.errors import InputError
 
 ISHIGAMI_FIRST = np.array([0.3139, 0.4424, 0.0])     # a = 7, b = 0.1 (Ishigami & Homma 1990;
 ISHIGAMI_TOTAL = np.array([0.5576, 0.4424, 0.2437])  # Saltelli et al. 2008, table 4.3)
@@ -288,6 +289,28 @@ def test_a_killed_study_resumes_without_losing_or_repeating_a_point(tmp_path):
     assert quantities(rows) == quantities(rows_of(tmp_path / "whole"))
 
 
+@pytest.mark.parametrize("signum, group, code, wait", [(signal.SIGINT, True, 130, 2.5),
+                                                       (signal.SIGTERM, False, 143, 0.3)],
+                         ids=["Ctrl-C", "SIGTERM as the workers start"])
+def test_a_stopped_study_stops_its_workers_at_once(tmp_path, signum, group, code, wait):
+    """SIGTERM to the study, or Ctrl-C (SIGINT to the whole process group, its workers
+    included), while its two workers run points of seconds each, or as they start: the study
+    ends within two seconds in one line, its workers with it, nothing left (the workers' own
+    KeyboardInterrupt had printed their tracebacks, the study waited for the points under
+    way, 25 s, and a worker whose start the stop cut printed an EOFError)."""
+    from conftest import stopped_midrun
+
+    study = tmp_path / "study.toml"
+    study.write_text(study_text([9.5e-3, 9.55e-3, 9.6e-3, 9.65e-3], duration=8.0))
+    done, seconds, left, temporaries = stopped_midrun(
+        ["study", study, "--out", "out", "--workers", "2"], tmp_path, tmp_path / "out", signum, wait, group)
+    assert done.returncode == code and seconds < 2.0, (done.returncode, seconds, done.stderr)
+    lines = [line.split("\r")[-1] for line in done.stderr.strip().split("\n")]
+    assert lines[-1] == f"pinbore study: {'terminated' if code == 143 else 'interrupted'}; outputs under way removed"
+    assert "Traceback" not in done.stderr and "KeyboardInterrupt" not in done.stderr
+    assert left == [] and temporaries == [] and not (tmp_path / "out").exists()
+
+
 def test_a_saltelli_study_finds_what_a_quantity_depends_on(tmp_path):
     """The clearance each point reports is 10 mm - journal radius, a function of the radius
     alone: its Sobol indices are exactly 0 for the restitution (the AB block that swaps the
@@ -437,6 +460,9 @@ def test_a_large_table_is_also_parquet_with_the_csvs_values(tmp_path, monkeypatc
 
 # ---- bad input: one line, exit 2, nothing written, before any model is built
 
+UNIFORM = '{ kind = "uniform", low = 9.45e-3, high = 9.6e-3 }'
+TOLERANCE = ('[tolerance]\nparameter = "clearance_joints.0.journal_radius"\n'
+             'limit = { quantity = "peak_force_N", threshold = 4.9e4 }\ntarget = 0.01\n')
 BAD = [
     ("unknown key", lambda t: t.replace("[sampling]", "colour = 3\n[sampling]"), "colour: unknown key"),
     ("no such scene key", lambda t: t.replace("journal_radius\"]", "journal_radios\"]"),
@@ -508,6 +534,62 @@ def test_a_bad_grid_is_one_line_before_any_model(tmp_path, name, edit, message):
     assert run.returncode == 2, run.stderr
     assert message in run.stderr and len(run.stderr.strip().splitlines()) == 1, run.stderr
     assert not (tmp_path / "out").exists()
+
+
+# more rules of the study file, each checked where the rows above show that no model loads:
+# run in this process (the CLI's main), a random plan's and a grid's
+BAD_FILE = [
+    ("a distribution short of its parameters",
+     lambda t: t.replace(UNIFORM, '{ kind = "normal", mean = 9.5e-3 }'), "a normal distribution takes mean, std"),
+    ("values and a distribution", lambda t: t.replace("distribution = ", "values = [9.5e-3]\ndistribution = "),
+     "give exactly one of values, grid, distribution"),
+    ("labels of a distribution", lambda t: t.replace("distribution = ", 'labels = ["a"]\ndistribution = '),
+     "labels name the values of a list or a grid"),
+    ("a statistic of a path", lambda t: t + '[[collect]]\nname = "n"\npath = "impacts"\nstatistic = "max"\n',
+     "statistic and window_s go with a column"),
+    ("no points for a random plan", lambda t: t.replace("points = 50\n", ""),
+     "sampling.points: monte_carlo needs the number of points"),
+    ("a quantity collected twice", lambda t: t + '[[collect]]\nname = "peak_force_N"\npath = "impacts"\n',
+     "collect: two quantities have one name"),
+    ("a limit on a quantity not collected",
+     lambda t: t + '[limit]\nquantity = "x"\nthreshold = 1.0\ntarget = 0.1\n', "limit.quantity: 'x' is not collected"),
+    ("a tolerance band of a parameter not uniform",
+     lambda t: t.replace(UNIFORM, '{ kind = "normal", mean = 9.5e-3, std = 1e-5 }') + TOLERANCE,
+     "tolerance.parameter: 'clearance_joints.0.journal_radius' must be a parameter with a uniform"),
+    ("a tolerance band of a Latin hypercube", lambda t: t.replace('"monte_carlo"', '"lhs"') + TOLERANCE,
+     "tolerance: needs sampling.method monte_carlo"),
+    ("a [set] key under a number", lambda t: t.replace("[set]\n", '[set]\n"duration.s" = 1.0\n'),
+     "set.duration.s: duration: holds a value, not a table"),
+    ("a parameter that is no number", lambda t: t.replace('"clearance_joints.0.journal_radius"]', '"clearance_joints.0.name"]'),
+     "parameters.clearance_joints.0.name: clearance_joints.0.name: not a number in the base scene"),
+    ("a parameter beyond a list", lambda t: t.replace('"clearance_joints.0.journal_radius"]', '"clearance_joints.3.E"]'),
+     "clearance_joints.3: no such item (the list has 1)"),
+]
+BAD_GRID_FILE = [
+    ("points of a grid", lambda t: t.replace('method = "grid"', 'method = "grid"\npoints = 5'),
+     "sampling.points: a grid runs every combination"),
+    ("a grid of a distribution", lambda t: t.replace("values = [0.0095, 0.0096]", f"distribution = {UNIFORM}"),
+     "sampling.method: grid takes values or a grid"),
+    ("a random plan of values", lambda t: t.replace('method = "grid"', 'method = "lhs"\npoints = 4'),
+     "sampling.method: lhs samples distributions"),
+    ("a group of no case", lambda t: t + "[cases]\njoint = []\n", "cases.joint: give at least one case"),
+    ("two cases of one label", lambda t: t + '[[cases.joint]]\nlabel = "a"\nduration = 0.004\n'
+                                            '[[cases.joint]]\nlabel = "a"\nduration = 0.005\n',
+     "cases.joint: two cases have one label"),
+    ("a chaos of a grid", lambda t: t + "[surrogate]\ndegree = 1\n", "surrogate: fits the points of a random plan"),
+]
+
+
+@pytest.mark.parametrize("name, edit, message, grid", [(*b, False) for b in BAD_FILE] + [(*b, True) for b in BAD_GRID_FILE],
+                         ids=[b[0] for b in BAD_FILE + BAD_GRID_FILE])
+def test_a_bad_study_file_is_one_line(tmp_path, name, edit, message, grid):
+    study = tmp_path / "study.toml"
+    study.write_text(edit(study_text([9.5e-3, 9.6e-3]) if grid else
+                          study_text(distribution=UNIFORM, points=50)))
+    run = pinbore("study", study, "--out", tmp_path / "out")
+    assert run.returncode == 2, run.stderr
+    assert message in run.stderr and len(run.stderr.strip().splitlines()) == 1, run.stderr
+    assert not (tmp_path / "out").exists() and not (tmp_path / "out-cache").exists()
 
 
 def test_an_unreachable_scheduler_is_one_line_and_writes_nothing(tmp_path):
@@ -745,6 +827,7 @@ BAD_OPTIONS = [
     ("a cache inside a file", lambda t: ["--cache", t / "study.toml" / "cache"], "which is a file"),
     ("a cache among other files", lambda t: ["--cache", ROOT / "scenes" / "reduced"], "not a cache entry"),
     ("more workers than the cores can run", lambda t: ["--workers", "10000"], "--workers"),
+    ("MPI ranks of mechanism points", lambda t: ["--ranks", "2"], "--ranks: MPI ranks run FE points"),
 ]
 
 
@@ -847,3 +930,22 @@ def test_the_report_marks_a_statistic_that_is_not_finite(tmp_path):
     assert "nan" not in page.lower().replace("not finite", "")
     assert "not finite" in page and "so not shown as results: peak_force_N" in page
     assert "clearance_m" not in page.split("so not shown as results:")[1]
+
+
+def test_a_key_the_base_leaves_out_is_set_then_varied(tmp_path):
+    """A flexible body's modes, which its scene leaves at its default (every mode of its
+    file), cannot be varied as it is (one line naming [set]); given a value under [set], it
+    is varied as the integer it is."""
+    from pinbore import study as runner
+
+    path = tmp_path / "study.toml"
+    text = (f'base = "{ROOT / "scenes/reduced/slider_crank_flores2004_flexible.toml"}"\n'
+            '[parameters."bodies.1.modes"]\nvalues = [2, 4]\n'
+            '[sampling]\nmethod = "grid"\n[[collect]]\nname = "impacts"\npath = "impacts"\n')
+    path.write_text(text)
+    with pytest.raises(InputError, match=r"parameters.bodies.1.modes: .*no such key .*under \[set\] first"):
+        runner.Plan(path, runner.load(path))
+    path.write_text(text.replace("[parameters.", '[set]\n"bodies.1.modes" = 6\n[parameters.'))
+    plan = runner.Plan(path, runner.load(path))
+    assert [p["bodies"][1]["modes"] for p in plan.scenes] == [2, 4]
+    assert all(type(p["bodies"][1]["modes"]) is int for p in plan.scenes)

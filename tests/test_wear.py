@@ -176,7 +176,17 @@ def test_a_wear_run_over_more_periods_averages_them(tmp_path, flores_fe):
     assert result["bore"]["volume_m3"] == pytest.approx(K * 1000 * work, rel=0.02)
 
 
-@pytest.mark.parametrize("change, message", [
+def short_flores(folder) -> str:
+    """The Flores slider-crank run over less than a crank revolution, written into folder."""
+    import tomllib
+
+    data = tomllib.loads((ROOT / "scenes/reduced/slider_crank_flores2004.toml").read_text())
+    (folder / "short.toml").write_text(tomli_w.dumps(data | {"duration": 0.006}))
+    return str(folder / "short.toml")
+
+
+# each a change of the scene (or of it, given its folder): one line naming the key, before any run
+BAD_WEAR = [
     ({"joint": "crank_pin"}, "joint: 'crank_pin' is not a revolute clearance joint"),
     ({"periods": 1}, "periods"),
     ({"length": -1.0}, "length"),
@@ -184,13 +194,50 @@ def test_a_wear_run_over_more_periods_averages_them(tmp_path, flores_fe):
     ({"bore": {"wear_coefficient": 1.0}}, "wear_coefficient"),
     ({"pin": {}}, "pin.wear_coefficient"),
     ({"pressure_file": "/no/such/pressure.csv"}, "pressure.csv"),
-])
+    ({"cycles": math.inf}, "cycles: Input should be a finite number"),
+    ({"points": 10}, "points: Input should be greater than or equal to 36"),
+    ({"colour": "red"}, "colour: unknown key"),
+    ({"coupling": {"tolerance": 0.0}}, "coupling.tolerance: Input should be greater than 0"),
+    ({"coupling": {"tolerance": 1e-6, "first_jump": -1.0}}, "coupling.first_jump: Input should be greater than 0"),
+    ({"curve_file": "/no/such/curve.csv"}, "/no/such/curve.csv: cannot read"),
+    ({"mechanism_file": "/no/such/mechanism.toml"}, "/no/such/mechanism.toml: cannot read"),
+    ({"mechanism_file": str(ROOT / "scenes/reduced/spatial_slider_crank_flores.toml")},
+     'mechanism_file: a planar mechanism (kind = "planar") is needed'),
+    ({"mechanism_file": str(ROOT / "scenes/reduced/solar_panel_deployment.toml"), "joint": "hinge"},
+     "mechanism_file: a periodic analysis needs a periodic forcing"),   # a deployment
+    (lambda folder: {"mechanism_file": short_flores(folder)},
+     "mechanism_file: duration 0.006 s is shorter than one forcing period"),
+]
+
+
+@pytest.mark.parametrize("change, message", BAD_WEAR, ids=[m for _, m in BAD_WEAR])
 def test_bad_wear_scenes_are_one_line(tmp_path, flores_fe, change, message):
+    change = change(tmp_path) if callable(change) else change
     (tmp_path / "wear.toml").write_text(tomli_w.dumps(wear_scene(tmp_path, flores_fe, **change)))
     done = pinbore("wear", tmp_path / "wear.toml", "--out", tmp_path / "out")
     assert done.returncode == 2 and message in done.stderr, done.stderr
     assert len(done.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("signum, group, code, word", [(15, False, 143, "terminated"), (2, True, 130, "interrupted")],
+                         ids=["SIGTERM", "Ctrl-C"])
+def test_a_wear_run_stopped_while_it_computes_leaves_nothing(tmp_path, flores_fe, signum, group, code, word):
+    """SIGTERM or Ctrl-C while the mechanism runs (a coupled wear whose tolerance keeps it
+    jumping, long before its output is written): one line, exit 128 + signal, within a
+    second, no temporary folder (its worn profiles' pinbore-wear-*), lock or process left (the
+    stop handlers had been installed only for the writing: SIGTERM killed it outright with
+    its temporary folder left, and Ctrl-C went unanswered)."""
+    from conftest import stopped_midrun
+
+    data = wear_scene(tmp_path, flores_fe, cycles=1e6, coupling={"tolerance": 1e-12})
+    (tmp_path / "wear.toml").write_text(tomli_w.dumps(data))
+    done, seconds, left, temporaries = stopped_midrun(["wear", "wear.toml", "--out", "out"], tmp_path,
+                                                      tmp_path / "out", signum, 1.0, group)
+    assert done.returncode == code and seconds < 1.0, (done.returncode, seconds, done.stderr)
+    assert done.stderr.strip().splitlines() == [f"pinbore wear: {word}; outputs under way removed"]
+    assert left == [] and temporaries == []
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".") or p.name == "out"] == []
 
 
 @pytest.mark.parametrize("change, messages", [

@@ -460,10 +460,19 @@ void bind_mechanism(nb::module_& parent)
           nb::gil_scoped_release release;
           Workspace<K> space(args);
           Integrator<K> integrator(args, space.work, static_cast<std::ptrdiff_t>(y0.size()));
+          // a signal's Python handler runs between steps: its exception (KeyboardInterrupt,
+          // pinbore's Terminated) ends the run and is raised here, so a stop is prompt
+          auto stop = []()
+          {
+            nb::gil_scoped_acquire acquire;
+            return PyErr_CheckSignals() != 0;
+          };
           return integrator.integrate(values(y0), t_end,
                                       {method, rtol, atol, max_step, onset_tol, speed_floor,
-                                       max_steps});
+                                       max_steps, stop});
         });
+        if (out.status == STOPPED)
+          throw nb::python_error();
         const std::size_t n = out.count, ny = y0.size();
         const std::size_t wc = std::max<std::ptrdiff_t>(args.ncontacts(), 1),
                           wt = std::max<std::ptrdiff_t>(args.torsion.rows, 1);

@@ -75,7 +75,8 @@ inline constexpr int LOAD_BODY = 0, LOAD_POINT = 1, LOAD_FORCE = 4, LOAD_TORQUE 
 // ---- the state after q and q', the impact log, the integrator's codes
 inline constexpr int DISSIPATED = 0, WORK_IN = 1, ENERGY_STATES = 2;
 inline constexpr int LOG_TIME = 0, LOG_JOINT = 1, LOG_RATE = 2, LOG_IMPULSE = 3, LOG_COLUMNS = 4;
-inline constexpr int OK = 0, BLOWN_UP = 1, TOO_MANY_STEPS = 2, STEP_TOO_SMALL = 3;
+inline constexpr int OK = 0, BLOWN_UP = 1, TOO_MANY_STEPS = 2, STEP_TOO_SMALL = 3,
+                     STOPPED = 4;   // the caller's stop() said so (a signal: the binding raises it)
 inline constexpr int DOPRI5 = 0, DOPRI5_FIXED = 1, ROSENBROCK23 = 2;
 
 // ---- small vectors: D = 2 (the plane) or 3 (space); an angular quantity is a float in the

@@ -11,7 +11,9 @@
 #include "engine.h"
 
 #include <array>
+#include <chrono>
 #include <cmath>
+#include <functional>
 #include <vector>
 
 namespace pinbore::mechanism
@@ -340,7 +342,13 @@ struct Settings
   int method;
   double rtol, atol, max_step, onset_tol, speed_floor;
   std::int64_t max_steps;
+  /// Asked every STOP_POLL of wall time (if given): true ends the integration, status
+  /// STOPPED (the binding's asks Python whether a signal came, so that a stop is prompt
+  /// however long the run).
+  std::function<bool()> stop = nullptr;
 };
+
+inline constexpr auto STOP_POLL = std::chrono::milliseconds(20);
 
 namespace tableau
 {
@@ -572,8 +580,19 @@ struct Integrator
     record();
     int status = OK;
     bool last_nan = false;
+    auto polled = std::chrono::steady_clock::now();
     while (t < t_end)
     {
+      if (set.stop and (accepted + rejected) % 16 == 0
+          and std::chrono::steady_clock::now() - polled >= STOP_POLL)
+      {
+        polled = std::chrono::steady_clock::now();
+        if (set.stop())
+        {
+          status = STOPPED;
+          break;
+        }
+      }
       if (accepted + rejected >= set.max_steps)
       {
         status = TOO_MANY_STEPS;
