@@ -69,6 +69,24 @@ class Solved:
     def forces(self):
         return [s.force[0] for s in self.run.steps]
 
+    def work_balance(self, states):
+        """Per step of the turn (the hub turning), the external work less the gain of elastic
+        energy (trapezoidal in the hub's forces, from the states on_step kept) and the
+        friction law's dissipated work: (balance, law), J/m."""
+        work, hub = states[0].duplicate(), self.el.dofs["hub"]
+
+        def forces_and_energy(x):
+            self.el.K.mult(x, work)
+            return work.getArray().reshape(-1, 2)[hub].copy(), 0.5 * x.dot(work)
+
+        balance, law = [], []
+        for i in [i for i, s in enumerate(self.run.steps) if s.point[1] > 0]:
+            (f0, e0), (f1, e1) = forces_and_energy(states[i - 1]), forces_and_energy(states[i])
+            u0, u1 = (states[k].getArray().reshape(-1, 2)[hub] for k in (i - 1, i))
+            balance.append(np.sum(0.5 * (f0 + f1) * (u1 - u0)) - (e1 - e0))
+            law.append(self.run.steps[i].dissipated)
+        return balance, law
+
     def half_angles_deg(self):
         from pinbore.fem.post import angle_from, half_angle
 
@@ -194,6 +212,16 @@ def simulated(data: dict):
     return model, trajectory
 
 
+def bench_audit():
+    """bench/audit.py as a module (its session_processes: a stopped command's leftovers)."""
+    import importlib.util   # noqa: PLC0415
+
+    spec = importlib.util.spec_from_file_location("audit", ROOT / "bench" / "audit.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def stopped_midrun(args, cwd, out, signum, wait=1.0, group=False, until=None):
     """`pinbore ARGS` in a process of its own (its own session and TMPDIR, cwd/tmp), stopped
     by `signum` `wait` s after it takes `out`'s lock (or 10 s after it starts, if it has not
@@ -231,19 +259,9 @@ def stopped_midrun(args, cwd, out, signum, wait=1.0, group=False, until=None):
     seconds = time.monotonic() - sent
     reader.join(timeout=10)
 
-    def session():
-        alive = []
-        for stat in Path("/proc").glob("[0-9]*/stat"):
-            try:
-                fields = stat.read_text().rsplit(")", 1)[1].split()
-            except OSError:
-                continue
-            if int(fields[3]) == run.pid and fields[0] != "Z":
-                alive.append(int(stat.parent.name))
-        return alive
-
+    session = bench_audit().session_processes
     deadline = time.monotonic() + 2.0
-    while (left := session()) and time.monotonic() < deadline:
+    while (left := session(run.pid)) and time.monotonic() < deadline:
         time.sleep(0.05)
     for pid in left:   # the test's own processes, ended by id
         os.kill(pid, signal.SIGKILL)

@@ -1,19 +1,11 @@
 """bench/audit.py's reading of a run (make stress): stderr's lines as a terminal leaves them,
 and the outcome each exit, stderr and file check gives."""
 
-import importlib.util
 import signal
 
 import pytest
 from conftest import ROOT
-
-
-def audit():
-    spec = importlib.util.spec_from_file_location("audit", ROOT / "bench" / "audit.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
+from conftest import bench_audit as audit
 
 BAR = "continuation:   5%|▌         | 5/100 [00:00<00:09,  9.82point/s, locating a grazing]"
 LINE = "pinbore dynamics: terminated; outputs under way removed"

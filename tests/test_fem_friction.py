@@ -6,7 +6,6 @@ import pytest
 import scipy.sparse
 import scipy.sparse.linalg
 from conftest import Solved, scene_dict, with_clearance
-
 from pinbore.fem.contact import OPEN, SLIP, STICK
 from pinbore.fem.elasticity import rigid_motion
 from pinbore.fem.post import angle_from, half_angle
@@ -132,23 +131,8 @@ def test_friction_never_adds_energy():
     states = []
     solved = Solved(scene_dict(contact={"friction": MU}, load={"rotation_deg": 0.08, "slide_steps": 8}),
                     on_step=lambda x, step: states.append(x.copy()))
-    el = solved.el
-    work = states[0].duplicate()
-    hub = el.dofs["hub"]
-
-    def hub_forces_and_energy(x):
-        el.K.mult(x, work)
-        return work.getArray().reshape(-1, 2)[hub].copy(), 0.5 * x.dot(work)
-
     assert all(s.dissipated >= 0 for s in solved.run.steps)
-    turning = [i for i, s in enumerate(solved.run.steps) if s.point[1] > 0]
-    balance, law = [], []
-    for i in turning:
-        (f0, e0), (f1, e1) = hub_forces_and_energy(states[i - 1]), hub_forces_and_energy(states[i])
-        u0 = states[i - 1].getArray().reshape(-1, 2)[hub]
-        u1 = states[i].getArray().reshape(-1, 2)[hub]
-        balance.append(np.sum(0.5 * (f0 + f1) * (u1 - u0)) - (e1 - e0))
-        law.append(solved.run.steps[i].dissipated)
+    balance, law = solved.work_balance(states)
     scale = max(law)
     assert min(balance) > -1e-3 * scale
     assert sum(balance) == pytest.approx(sum(law), rel=0.02)
