@@ -6,8 +6,8 @@ untouched and removes its temporary one. Under MPI, rank 0 owns the file system:
 the temporary directory, broadcasts its name, and renames it when the ranks agree that the
 run succeeded.
 
-What `--out` may be (`check_output`, applied by the CLI before any work, by `reserved` as
-it takes the lock, and again by `atomic_directory` under it):
+What `--out` may be (`check_output`, applied before any work by `reserved` as it takes the
+lock, and again by `atomic_directory` under it):
 - a path that does not exist yet, or an empty directory;
 - a directory that pinbore wrote itself (it holds the marker file `.pinbore-output`) and that
   holds none of the run's inputs, by the same command (the marker names it) or by one that
@@ -52,10 +52,11 @@ MARKER_TEXT = "Written by pinbore. A later run with this --out replaces this dir
 
 
 class Terminated(BaseException):
-    """SIGTERM arrived while an output was under way (raised where the process was)."""
+    """SIGTERM arrived during the command (raised where the process was)."""
 
 
-_stopped: list[int] = []   # the signals that arrived while an output was under way
+STOPS = (signal.SIGINT, signal.SIGTERM)
+_stopped: list[int] = []   # the signals that stopped the command (_stop)
 
 
 def _stop(signum, frame):
@@ -102,13 +103,15 @@ def stop_signal() -> int | None:
 @contextlib.contextmanager
 def _stop_cleanly():
     """Turn SIGINT and SIGTERM into exceptions for the block (main thread only), so that the
-    temporary directory is removed. Installed here, when the output starts, because libraries
-    loaded before it set handlers of their own."""
-    if threading.current_thread() is not threading.main_thread():
+    work under way unwinds and its temporary directories are removed. Installed when the
+    command holds its output (reserved, or atomic_directory alone), after the libraries it
+    loaded set handlers of their own; within a block that has them already, nothing changes
+    (a stop noted earlier in the command is kept)."""
+    if threading.current_thread() is not threading.main_thread() or signal.getsignal(signal.SIGINT) is _stop:
         yield
         return
     _stopped.clear()
-    previous = {s: signal.signal(s, _stop) for s in (signal.SIGINT, signal.SIGTERM)}
+    previous = {s: signal.signal(s, _stop) for s in STOPS}
     hook = sys.unraisablehook
 
     def quiet(unraisable):   # a stop swallowed by a callback is reported once, by the CLI
@@ -284,6 +287,8 @@ def reserved(out: str | Path, comm=MPI.COMM_WORLD):
                 held.enter_context(_lock(out))
             except InputError as err:
                 error = str(err)
+            except OSError as err:   # the lock could not be made (a full disk, a read-only folder)
+                error = f"--out {out}: cannot write there ({err.strerror or err})"
         error = comm.bcast(error, root=0) if comm.size > 1 else error
         if error:
             raise InputError(error)
@@ -342,8 +347,6 @@ def atomic_directory(out: str | Path, comm=MPI.COMM_WORLD, inputs=()):
         comm.barrier()
 
 
-STOPS = {signal.SIGINT, signal.SIGTERM}
-
 
 @contextlib.contextmanager
 def signals_held(drop: bool = False):
@@ -358,16 +361,22 @@ def signals_held(drop: bool = False):
         yield
         return
     arrived = []
-    previous = {s: signal.signal(s, lambda signum, frame: arrived.append(signum)) for s in STOPS}
-    signal.pthread_sigmask(signal.SIG_BLOCK, STOPS)
-    try:
+
+    def note(signum, frame):
+        arrived.append(signum)
+
+    # undone in reverse, each step whatever the one before raised: the mask lifted while the
+    # noting handlers still stand (a signal pending meanwhile is noted), the handlers put
+    # back, then what was noted delivered to them
+    with contextlib.ExitStack() as undo:
+        if not drop:
+            undo.callback(lambda: [signal.raise_signal(s) for s in dict.fromkeys(arrived)])
+        for s in STOPS:
+            undo.callback(signal.signal, s, signal.SIG_IGN if drop else signal.getsignal(s))
+            signal.signal(s, note)
+        signal.pthread_sigmask(signal.SIG_BLOCK, STOPS)
+        undo.callback(signal.pthread_sigmask, signal.SIG_UNBLOCK, STOPS)
         yield
-    finally:
-        for s, handler in previous.items():
-            signal.signal(s, signal.SIG_IGN if drop else handler)
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, STOPS)   # one pending in this thread: noted or ignored
-        for s in [] if drop else dict.fromkeys(arrived):
-            signal.raise_signal(s)
 
 
 def _commit(tmp: Path, out: Path) -> None:

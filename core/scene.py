@@ -71,6 +71,11 @@ def _rule(error: dict) -> str:
         return "required key is missing"
     if kind == "extra_forbidden":
         return "unknown key"
+    bound = {"greater_than": "gt", "greater_than_equal": "ge", "less_than": "lt",
+             "less_than_equal": "le"}.get(kind)
+    if bound is not None and isinstance(error.get("ctx", {}).get(bound), (int, float)):
+        # the bound as a number reads (1e-08, not pydantic's 0.00000001)
+        return f"{error['msg'].rsplit(' ', 1)[0]} {error['ctx'][bound]:g}"
     message = error["msg"]
     return message.removeprefix("Value error, ")
 

@@ -74,7 +74,7 @@ def scene(source, base=None):
         kind = data.get("kind", "modes" if "body" in data else None)
         from pinbore.reduced.mechanism import kinds   # noqa: PLC0415 (pydantic only)
 
-        if kind in kinds.KINDS or kind in kinds.RENAMED_KINDS:
+        if isinstance(kind, str) and (kind in kinds.KINDS or kind in kinds.RENAMED_KINDS):
             return kinds.load(path)
         if kind == "fem":
             from pinbore.fem.scene import FemScene as model   # noqa: PLC0415

@@ -68,7 +68,7 @@ def kind_of(data: dict, source: str) -> Kind:
         warnings.warn(f'{source}: kind: "{kind}" is deprecated: write kind = '
                       f'"{RENAMED_KINDS[kind]}"', FutureWarning, stacklevel=2)
         kind = RENAMED_KINDS[kind]
-    if kind not in KINDS:
+    if not isinstance(kind, str) or kind not in KINDS:
         raise InputError(f"{source}: kind: {kind!r} is not a mechanism; valid: "
                          f"{', '.join(repr(k) for k in KINDS)}")
     return KINDS[kind]
