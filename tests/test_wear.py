@@ -197,7 +197,8 @@ BAD_WEAR = [
     ({"cycles": math.inf}, "cycles: Input should be a finite number"),
     ({"points": 10}, "points: Input should be greater than or equal to 36"),
     ({"colour": "red"}, "colour: unknown key"),
-    ({"coupling": {"tolerance": 0.0}}, "coupling.tolerance: Input should be greater than 0"),
+    ({"coupling": {"tolerance": 0.0}}, "coupling.tolerance: Input should be greater than or equal to 1e-08"),
+    ({"coupling": {"tolerance": 1e-12}}, "coupling.tolerance: Input should be greater than or equal to 1e-08"),
     ({"coupling": {"tolerance": 1e-6, "first_jump": -1.0}}, "coupling.first_jump: Input should be greater than 0"),
     ({"curve_file": "/no/such/curve.csv"}, "/no/such/curve.csv: cannot read"),
     ({"mechanism_file": "/no/such/mechanism.toml"}, "/no/such/mechanism.toml: cannot read"),
@@ -230,7 +231,7 @@ def test_a_wear_run_stopped_while_it_computes_leaves_nothing(tmp_path, flores_fe
     its temporary folder left, and Ctrl-C went unanswered)."""
     from conftest import stopped_midrun
 
-    data = wear_scene(tmp_path, flores_fe, cycles=1e6, coupling={"tolerance": 1e-12})
+    data = wear_scene(tmp_path, flores_fe, cycles=1e6, coupling={"tolerance": 1e-8})
     (tmp_path / "wear.toml").write_text(tomli_w.dumps(data))
     done, seconds, left, temporaries = stopped_midrun(["wear", "wear.toml", "--out", "out"], tmp_path,
                                                       tmp_path / "out", signum, 1.0, group)

@@ -136,7 +136,7 @@ def test_the_meshed_surfaces_lie_on_the_worn_profiles(tmp_path):
 def test_the_worn_contact_tangent_matches_finite_differences(tmp_path):
     """At a converged state of a worn joint (the nodes in contact kept), the contact's tangent
     against central differences of its residual: the pin node's block along the bore's
-    tangent, w p / rho, within 1e-6 (measured 1e-7; rho the worn bore's own radius of curvature, 0.6 % from
+    tangent, w p / rho, within 1e-6 (measured 8e-8; rho the worn bore's own radius of curvature, 0.6 % from
     the round bore's |Y| here); along the normal within 1e-7; every column of the nodes in
     contact within 1e-4 of the tangent's largest entry (the terms the tangent leaves out:
     fem.contact)."""
@@ -225,8 +225,8 @@ def test_an_imprint_of_the_pin_is_the_conformal_contact_of_its_own_clearance(tmp
     """(b) A 100 um joint whose bore bears the pin's imprint of clearance c' = 10 um, 27.5 um
     deep (its edges 39.7 deg from the load): while the contact stays 5 deg inside the
     imprint, its half-angle is Persson's for c' within the tolerance of the round joint's test
-    (0.75 deg + (c'/R) sin eps: measured 0.3-0.6 deg) and its force that of the round joint of
-    clearance c' within 0.5 % (measured 0.4 %; the 100 um joint's is 40-60 % lower); beyond,
+    (0.75 deg + (c'/R) sin eps: measured 0.35-0.62 deg) and its force that of the round joint of
+    clearance c' within 0.5 % (measured 0.2 %; the 100 um joint's is 40-60 % lower); beyond,
     the contact stops at the imprint's edges (within 1 deg)."""
     from pinbore.laws.elastic import persson_half_angle
 

@@ -13,8 +13,9 @@ theta_c moving uniformly from theta_c,k to theta_c,k+1,
 
     (dt / 2) k |v_k| (P_k(u_k) - P_k(u_k+1)) / (u_k - u_k+1),   u = (theta - theta_c) R / R_bore,
 
-P_k the integral of p_k over the angle (exact for a contact turning uniformly under a constant
-load). The recorded steps sample a contact that slides, median 2.8 degrees apart on the Flores
+P_k the integral of p_k over the angle (exact, to the FE table's spacing, for a contact
+turning uniformly under a constant load; toward a neighbour out of contact the contact
+stands). The recorded steps sample a contact that slides, median 2.8 degrees apart on the Flores
 joint, where the worn profile is read every half degree: taken at the steps alone, p would lay
 ripples of that spacing into the profile. Both surfaces lose the same area per unit k. One-way:
 the geometry the pressure was computed on is kept (a cycle's wear is a fraction of a micrometre
@@ -50,7 +51,9 @@ def worn_depth(table, time, force_per_length, contact_angle, sliding_speed, coef
         for j in (k - 1, k + 1):   # the half intervals on either side of step k
             if not 0 <= j < time.size or time[j] == time[k]:
                 continue
-            turn = scale * (np.mod(contact_angle[j] - contact_angle[k] + math.pi, 2 * math.pi) - math.pi)
+            # toward a neighbour out of contact (its direction the offset's) the contact stands
+            turn = 0.0 if force_per_length[j] <= 0 else \
+                scale * (np.mod(contact_angle[j] - contact_angle[k] + math.pi, 2 * math.pi) - math.pi)
             if abs(turn) < SWEPT:
                 pressure = np.interp(start, table.angles, table.at(f), left=0.0, right=0.0)
             else:

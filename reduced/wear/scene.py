@@ -33,8 +33,10 @@ class Coupling(Strict):
     updated by cycle jumping (reduced.wear.jumping), each jump as long as its error estimate
     stays within the tolerance."""
 
-    tolerance: float = pydantic.Field(gt=0, le=1e-3, description=(
-        "m: the error estimate of a jump's depth at any angle"))
+    tolerance: float = pydantic.Field(ge=1e-8, le=1e-3, description=(
+        "m: the error estimate of a jump's depth at any angle (from 10 nm: a jump's error "
+        "falls as its size squared, so each halving costs about 1.4 times the runs, and below "
+        "that the runs of 1e5 cycles of a worn joint number in the thousands)"))
     first_jump: float | None = pydantic.Field(default=None, gt=0, description=(
         "cycles of the first jump (default: a twentieth of the cycles)"))
 
