@@ -1,5 +1,5 @@
-"""The third reliability audit, re-run as a script: every bad-input, extreme and
-interrupted case its findings named, against modes, export, the Python API, study,
+"""The reliability audit as a script: every bad-input, extreme and interrupted case of its
+findings, against modes, export, the Python API, study,
 continuation, the report and make docs, and a SIGTERM and a Ctrl-C (SIGINT to the process
 group) sent to each long command mid-run (export is not one: it ends within seconds).
 

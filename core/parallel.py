@@ -161,8 +161,7 @@ _in_point = False   # a local worker runs a point (_point)
 
 def _worker_started() -> None:
     """A local worker's signals: Ctrl-C, which reaches the whole process group, is the
-    parent's to handle (it stops the workers, below; a worker's own KeyboardInterrupt had
-    printed its traceback); SIGTERM, the parent's stop, unwinds the point under way (its
+    parent's to handle (it stops the workers, below; a worker prints nothing of it); SIGTERM, the parent's stop, unwinds the point under way (its
     temporary folders removed, `_point`) or, between points, ends the worker at once. The
     parent held both off while it started the worker (cached_map), which inherits that: let
     them through (one that came meanwhile is handled now)."""

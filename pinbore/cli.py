@@ -371,7 +371,7 @@ def _trace_file(command: str) -> Path:
 
 def main(argv=None) -> int:
     """Run a command. Known errors print one line: bad input exits 2, Ctrl-C 130, SIGTERM
-    while writing 143 (outputs under way are removed, nothing half written); anything
+    143 wherever the command is (outputs under way are removed, nothing half written); anything
     unexpected prints one line with where its traceback was written, and exits 3."""
     args = parser().parse_args(argv)
     clear_stop_signal()
@@ -400,7 +400,7 @@ def main(argv=None) -> int:
 
 def _close_progress_bars() -> None:
     """Close the progress bars a stopped or failed run left open, so that the command's one
-    line follows them on a line of its own (a bar redrawn after it had hidden it)."""
+    line follows them on a line of its own (a bar left open is redrawn over it)."""
     tqdm = sys.modules.get("tqdm")
     for bar in list(getattr(getattr(tqdm, "tqdm", None), "_instances", None) or ()):
         try:

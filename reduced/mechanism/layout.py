@@ -178,7 +178,8 @@ Args = namedtuple("Args", [
 Work = namedtuple("Work", ["bodies", "velocities", "jac", "phi", "phi_t", "rhs_c", "schur",
                            "force", "normal", "friction", "mjac", "row_bodies", "first"])
 
-# The integrator's status codes and methods (cpp/mechanism/integrator.h).
+# The integrator's status codes (cpp/mechanism/data.h; its STOPPED never reaches Python: the
+# binding raises the stop's exception) and methods (cpp/mechanism/integrator.h).
 OK, BLOWN_UP, TOO_MANY_STEPS, STEP_TOO_SMALL = 0, 1, 2, 3
 DOPRI5, DOPRI5_FIXED, ROSENBROCK23 = 0, 1, 2
 
