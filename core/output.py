@@ -260,6 +260,24 @@ def _remove_empty(folders) -> None:
             return
 
 
+def _on_rank0(comm, out: Path, work):
+    """work() on rank 0 (the file system's owner), its value broadcast to every rank; an
+    InputError, or an OSError of the folder (a full disk, a read-only folder), raised on every
+    rank as one InputError line."""
+    error = value = None
+    if comm.rank == 0:
+        try:
+            value = work()
+        except InputError as err:
+            error = str(err)
+        except OSError as err:
+            error = f"--out {out}: cannot write there ({err.strerror or err})"
+    error, value = comm.bcast((error, value), root=0) if comm.size > 1 else (error, value)
+    if error:
+        raise InputError(error)
+    return value
+
+
 @contextlib.contextmanager
 def reserved(out: str | Path, comm=MPI.COMM_WORLD):
     """Hold the output `out` for a whole command, from before its work: checked
@@ -271,27 +289,18 @@ def reserved(out: str | Path, comm=MPI.COMM_WORLD):
     out = Path(out)
     with contextlib.ExitStack() as held:
         held.enter_context(_stop_cleanly())
-        error = None
-        if comm.rank == 0:
-            try:
-                check_output(out)
-                missing, parent = [], out.absolute().parent
-                while not parent.exists():
-                    missing.append(parent)
-                    parent = parent.parent
-                try:
-                    out.absolute().parent.mkdir(parents=True, exist_ok=True)
-                except OSError as err:
-                    raise InputError(f"--out {out}: cannot write there ({err.strerror or err})") from None
-                held.callback(_remove_empty, missing)
-                held.enter_context(_lock(out))
-            except InputError as err:
-                error = str(err)
-            except OSError as err:   # the lock could not be made (a full disk, a read-only folder)
-                error = f"--out {out}: cannot write there ({err.strerror or err})"
-        error = comm.bcast(error, root=0) if comm.size > 1 else error
-        if error:
-            raise InputError(error)
+
+        def hold():
+            check_output(out)
+            missing, parent = [], out.absolute().parent
+            while not parent.exists():
+                missing.append(parent)
+                parent = parent.parent
+            out.absolute().parent.mkdir(parents=True, exist_ok=True)
+            held.callback(_remove_empty, missing)
+            held.enter_context(_lock(out))
+
+        _on_rank0(comm, out, hold)
         token = _RESERVED.set(out.resolve())
         held.callback(_RESERVED.reset, token)
         yield out
@@ -308,27 +317,20 @@ def atomic_directory(out: str | Path, comm=MPI.COMM_WORLD, inputs=()):
     files, marks them, and leaves the block normally.
     """
     out = Path(out)
-    tmp, error = None, None
     with contextlib.ExitStack() as held:
         held.enter_context(_stop_cleanly())
-        if comm.rank == 0:
-            try:
-                check_output(out, inputs)
-                out.parent.mkdir(parents=True, exist_ok=True)
-                if _RESERVED.get() != out.resolve():
-                    held.enter_context(_lock(out))
-                check_output(out, inputs)   # again, now that no other run can change it
-                _sweep_stale(out)
-                tmp = tempfile.mkdtemp(prefix=_temporary_prefix(out, os.getpid()), suffix=".tmp",
-                                       dir=out.parent)
-            except InputError as err:
-                error = str(err)
-            except OSError as err:
-                error = f"--out {out}: cannot write there ({err.strerror or err})"
-        error, tmp = comm.bcast((error, tmp), root=0)
-        if error:
-            raise InputError(error)
-        tmp = Path(tmp)
+
+        def start():
+            check_output(out, inputs)
+            out.parent.mkdir(parents=True, exist_ok=True)
+            if _RESERVED.get() != out.resolve():
+                held.enter_context(_lock(out))
+            check_output(out, inputs)   # again, now that no other run can change it
+            _sweep_stale(out)
+            return tempfile.mkdtemp(prefix=_temporary_prefix(out, os.getpid()), suffix=".tmp",
+                                    dir=out.parent)
+
+        tmp = Path(_on_rank0(comm, out, start))
         failed = None
         try:
             yield tmp
@@ -345,7 +347,6 @@ def atomic_directory(out: str | Path, comm=MPI.COMM_WORLD, inputs=()):
         if comm.rank == 0:
             _commit(tmp, out)
         comm.barrier()
-
 
 
 @contextlib.contextmanager
