@@ -1,6 +1,7 @@
 """Shared helpers: scenes as dicts, in-process FE solves, the CLI (in process or in its own)."""
 
 import copy
+import functools
 import math
 import subprocess
 import sys
@@ -212,8 +213,10 @@ def simulated(data: dict):
     return model, trajectory
 
 
+@functools.cache
 def bench_audit():
-    """bench/audit.py as a module (its session_processes: a stopped command's leftovers)."""
+    """bench/audit.py as a module, loaded once (its session_processes: a stopped command's
+    leftovers)."""
     import importlib.util   # noqa: PLC0415
 
     spec = importlib.util.spec_from_file_location("audit", ROOT / "bench" / "audit.py")
