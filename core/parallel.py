@@ -1,5 +1,5 @@
-"""Tasks run in parallel and cached point by point: the one runner of every sweep and study
-(`pinbore dynamics` sweeps, `pinbore study`).
+"""Tasks run in parallel and cached point by point: the runner under the sweep engine
+(core.sweep) of every sweep and study (`pinbore dynamics` sweeps, `pinbore study`).
 
 `cached_map(task, items, names, cache, workers, scheduler)` calls `task(item)` for every item
 whose result is not yet in `cache` (one JSON file per item, named by `names`), in parallel: on
@@ -11,7 +11,7 @@ resumes with every finished point kept and none computed twice; the points under
 stopped are computed again. Items of one name are computed once.
 
 The rules of the options (`default_workers`, `check_scheduler`, `check_workers`,
-`check_cache`) are here too, for the options models of the commands to share.
+`check_cache`) are here too, for the options model of the sweep engine (core.sweep.Runner).
 """
 
 import concurrent.futures

@@ -40,8 +40,8 @@ with the last row of its curve under `curve_last`. The base scene's `kind` says 
 
 Every point's scene is validated before any run (a point that breaks a rule is one line
 naming the point, the key and the rule; exit 2, nothing written). The points run in parallel
-through the one runner of the package (pinbore.core.parallel: long-lived local processes or a
-Dask cluster), cached by content: the name of a point's cache file is the SHA-256 of its kind,
+through the one sweep engine of the package, that of `pinbore dynamics` too (pinbore.core.sweep:
+long-lived local processes or a Dask cluster), cached by content: the name of a point's cache file is the SHA-256 of its kind,
 its whole scene, the files the scene names and the source of the code that runs it (the
 modules its run imports, read by pinbore.core.codedeps, and the class Point here), so a
 rerun runs only new or changed points, and a killed study resumes. A failed point is marked
@@ -72,14 +72,17 @@ import numpy as np
 import pydantic
 
 from pinbore.core import scene as scenes
-from pinbore.core import uq
+from pinbore.core import sweep, uq
 from pinbore.core.errors import InputError
 from pinbore.core.output import atomic_directory
 from pinbore.core.codedeps import code_hash
-from pinbore.core.parallel import cached_map, check_cache, check_scheduler, check_workers, default_workers
 from pinbore.core.scene import Strict
+from pinbore.core.sweep import digest_files, get, named_files, put
 
 SPEC_KEYS = ("values", "grid", "distribution")
+# a parameter's key the base scene does not have
+ABSENT = (f"{sweep.ABSENT} (a key its default leaves out, such as a flexible body's modes, is "
+          "given a value under [set] first)")
 # the files of an FE or impact point's run kept in DIR/points/<name>/ (its data; not its plots)
 KEPT_SUFFIXES = (".csv", ".json")
 # the number of points from which the results table is also written as Parquet (pyarrow)
@@ -321,37 +324,12 @@ class Study(Strict):
         return self
 
 
-class Options(Strict):
-    """The command line's options."""
+class Options(sweep.Runner):
+    """The command line's options: the sweep engine's (core.sweep.Runner: --out, --scheduler,
+    --workers, --cache) and the study's own."""
 
-    out: Path
-    workers: int = pydantic.Field(default_factory=default_workers, ge=1)
     ranks: int = pydantic.Field(default=1, ge=1)   # MPI ranks of an FE point
-    scheduler: str | None = None
-    cache: Path
     force: bool = False   # a plan of more than MAX_POINTS points
-
-    @pydantic.model_validator(mode="before")
-    @classmethod
-    def _default_cache(cls, data):
-        if isinstance(data, dict) and data.get("cache") is None:
-            return data | {"cache": Path(f"{data['out']}-cache")}
-        return data
-
-    @pydantic.field_validator("scheduler")
-    @classmethod
-    def _cluster(cls, address):
-        return check_scheduler(address)
-
-    @pydantic.field_validator("workers")
-    @classmethod
-    def _local(cls, workers, info: pydantic.ValidationInfo):
-        return check_workers(workers, info.data.get("scheduler"))
-
-    @pydantic.field_validator("cache")
-    @classmethod
-    def _cache_folder(cls, folder, info: pydantic.ValidationInfo):
-        return check_cache(folder, info.data.get("out"))
 
 
 def options(given: dict) -> Options:
@@ -404,49 +382,6 @@ def load(path: Path) -> Study:
                          if isinstance(cases, list) else cases
                          for group, cases in data["cases"].items()}
     return scenes.validate(Study, data, str(path))
-
-
-def put(data: dict, key: str, value, create: bool = False) -> None:
-    """Set a dotted key of a scene's data in place (list items by index). KeyError naming the
-    part of the key that is not in the scene (`create`: the last part may be new, and tables
-    on the way are made)."""
-    parts = key.split(".")
-    node = data
-    for i, part in enumerate(parts):
-        last = i == len(parts) - 1
-        if isinstance(node, list):
-            if not part.isdigit() or int(part) >= len(node):
-                raise KeyError(f"{'.'.join(parts[:i + 1])}: no such item (the list has {len(node)})")
-            part = int(part)
-        elif not isinstance(node, dict):
-            raise KeyError(f"{'.'.join(parts[:i])}: holds a value, not a table")
-        elif part not in node:
-            if not create:
-                raise KeyError(f"{'.'.join(parts[:i + 1])}: no such key in the base scene (a key "
-                               "its default leaves out, such as a flexible body's modes, is "
-                               "given a value under [set] first)")
-            node[part] = value if last else {}
-        if last:
-            if not create and (not isinstance(node[part], (int, float)) or isinstance(node[part], bool)):
-                raise KeyError(f"{key}: not a number in the base scene")
-            if not create and isinstance(node[part], int) and float(value).is_integer():
-                value = int(value)   # a count (modes, slices) stays an integer
-            node[part] = value
-        else:
-            node = node[part]
-
-
-def get(result: dict, path: str):
-    """A dotted path into a point's result (list items by index); KeyError when absent."""
-    node = result
-    for part in path.split("."):
-        if isinstance(node, list) and part.isdigit() and int(part) < len(node):
-            node = node[int(part)]
-        elif isinstance(node, dict) and part in node:
-            node = node[part]
-        else:
-            raise KeyError(path)
-    return node
 
 
 def scene_kind(data: dict, source: str):
@@ -522,7 +457,7 @@ class Plan:
         self.names = list(study.parameters)
         for name in self.names:
             try:
-                put(json.loads(json.dumps(base)), name, 0.0)
+                put(json.loads(json.dumps(base)), name, 0.0, absent=ABSENT)
             except KeyError as err:
                 raise InputError(f"{path}: parameters.{name}: {err.args[0]}") from None
         groups = list(study.cases)
@@ -565,9 +500,7 @@ class Plan:
         files = digest_files([*scenes.referenced_files(self.base_path),
                               *named_files(self.scenes, self.base_path.parent)])
         code = code_hash(CODE[self.kind]) + hashlib.sha256(inspect.getsource(Point).encode()).hexdigest()
-        self.keys = [hashlib.sha256(json.dumps([self.kind, d, files, code, self.columns],
-                                               sort_keys=True).encode()).hexdigest()
-                     for d in self.scenes]
+        self.keys = sweep.point_keys(self.kind, self.scenes, files, code, self.columns)
 
     def check_collect(self) -> None:
         """A mechanism's summary is known before the run: every collected path must name one
@@ -626,19 +559,6 @@ def point_scene(study_file, name: str, out=None) -> dict:
 
         Path(out).write_text(tomli_w.dumps(scenes.absolute_files(data, plan.base_path.parent)))
     return data
-
-
-def named_files(points, base: Path) -> list[Path]:
-    """Every file the points' scenes name (core.scene.named_files; [set] and cases
-    included), relative names taken from `base`, once each: what the points read, which
-    --out may not replace and their keys cover."""
-    return sorted({f for data in points for f in scenes.named_files(data, base)})
-
-
-def digest_files(paths) -> list[str]:
-    """SHA-256 of each file a scene names (its laws file ...)."""
-    return [hashlib.sha256(Path(p).read_bytes()).hexdigest() if Path(p).is_file() else str(p)
-            for p in paths]
 
 
 # ---- one point, in a worker
@@ -754,8 +674,7 @@ def run(study_file, options: Options) -> int:
     with atomic_directory(options.out, inputs=inputs) as tmp:
         start = time.perf_counter()
         task = Point(plan.kind, plan.base_path.parent, str(plan.base_path), plan.columns, options.ranks)
-        records, fresh = cached_map(task, plan.scenes, plan.keys, options.cache, options.workers,
-                                    options.scheduler, desc="study")
+        records, fresh = sweep.run(task, plan.scenes, plan.keys, options, desc="study")
         wall = time.perf_counter() - start
         rows = table(plan, records, fresh)
         write_results(tmp / "results.csv", plan, rows)
