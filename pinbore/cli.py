@@ -164,7 +164,8 @@ def _dynamics_command(sub) -> None:
     """`pinbore dynamics`. Its options have no argparse defaults (an option left out is absent
     from the parsed arguments): the options model of the analysis holds the defaults and the
     rules, and rejects an option that the analysis does not use."""
-    from pinbore.reduced.dynamics.analyses import PARAMETERS, ContinuationOptions, Sampled, Sweep
+    from pinbore.reduced.dynamics.analyses import ContinuationOptions, Sampled, Sweep
+    from pinbore.reduced.dynamics.parameters import NAMES
 
     def default(model, name):
         return model.model_fields[name].default
@@ -181,8 +182,10 @@ def _dynamics_command(sub) -> None:
                    choices=["poincare", "bifurcation", "lyapunov", "shooting", "continuation", "design"])
     d.add_argument("--out", required=True, type=Path, metavar="DIR",
                    help="output directory (replaced when complete)")
-    d.add_argument("--parameter", choices=list(PARAMETERS),
-                   help="bifurcation, continuation: the parameter (m, rpm, mu, Hz, or a factor)")
+    d.add_argument("--parameter", metavar="KEY",
+                   help="bifurcation, continuation: the parameter, a dotted key of the scene "
+                        f"(drive.speed_rpm, clearance_joints.0.friction.mu) or one of {NAMES} "
+                        "(m, rpm, mu, Hz, a factor)")
     d.add_argument("--range", type=float, nargs=2, metavar=("LOW", "HIGH"),
                    help="bifurcation, continuation: parameter range; design: clearance range (m)")
     d.add_argument("--points", type=int, help=f"sweep points (default {default(Sweep, 'points')}); "

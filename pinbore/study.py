@@ -40,8 +40,8 @@ with the last row of its curve under `curve_last`. The base scene's `kind` says 
 
 Every point's scene is validated before any run (a point that breaks a rule is one line
 naming the point, the key and the rule; exit 2, nothing written). The points run in parallel
-through the one sweep engine of the package, that of `pinbore dynamics` too (pinbore.core.sweep:
-long-lived local processes or a Dask cluster), cached by content: the name of a point's cache file is the SHA-256 of its kind,
+through the one sweep engine of the package (pinbore.core.sweep: long-lived local processes or a
+Dask cluster), cached by content: the name of a point's cache file is the SHA-256 of its kind,
 its whole scene, the files the scene names and the source of the code that runs it (the
 modules its run imports, read by pinbore.core.codedeps, and the class Point here), so a
 rerun runs only new or changed points, and a killed study resumes. A failed point is marked

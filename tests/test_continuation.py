@@ -670,10 +670,10 @@ def test_the_shaken_panels_continued_peak_force_is_its_time_domain_runs(tmp_path
     Hertz-Lankarani-Nikravesh contact): the orbit continuation finds from the state after 30
     periods has the peak contact force of the time-domain run's next periods, in their
     summaries, within 0.5 % (measured 6e-5: the orbit's tolerance)."""
-    from pinbore.reduced.dynamics import studies
+    from pinbore.reduced.dynamics import parameters
     from pinbore.reduced.mechanism import outputs
 
-    data = studies.with_parameter(tomllib.loads((ROOT / "scenes/reduced/deployed_panel_shaken.toml").read_text()),
+    data = parameters.with_parameter(tomllib.loads((ROOT / "scenes/reduced/deployed_panel_shaken.toml").read_text()),
                                   "frequency", 3.5, "")
     family = family_of(data, "frequency", 3.5, tmp_path)
     state, x, _ = family.settle(3.5, 30)

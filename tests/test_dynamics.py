@@ -10,9 +10,10 @@ import math
 
 import numpy as np
 import pytest
-from conftest import ROOT, pinbore
+from conftest import ROOT, main_in_child, pinbore
 from scipy.integrate import solve_ivp
 
+from pinbore.core import sweep
 from pinbore.reduced.dynamics import flow, studies
 
 FLORES = ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml"
@@ -42,6 +43,14 @@ class Duffing:
 
     def perturb(self, state, dx):
         return state[0] + dx, state[1]
+
+
+def duffing_sweep(values, cache, **where) -> list[dict]:
+    """duffing_point at every value through the sweep engine (core.sweep.run), cached in
+    `cache`; `where`: workers or scheduler."""
+    options = sweep.Runner(out=cache.parent / "out", cache=cache, **where)
+    keys = sweep.point_keys("duffing", [{"gamma": g} for g in values], [], "")
+    return sweep.run(duffing_point, values, keys, options)[0]
 
 
 def duffing_point(gamma):
@@ -79,7 +88,7 @@ def test_a_parallel_sweep_finds_the_period_doubling_and_resumes_from_its_cache(t
     one period doubling, where the exponent approaches zero from below; a second run reads
     every point from the cache."""
     values = [0.24, 0.25, 0.26, 0.27, 0.28]
-    rows = studies.sweep(duffing_point, values, tmp_path, 2, None, "duffing")
+    rows = duffing_sweep(values, tmp_path, workers=2)
     periods = [r["period"] for r in rows]
     first_two = periods.index(2)
     assert periods[:first_two] == [1] * first_two and set(periods[first_two:]) == {2}
@@ -88,7 +97,7 @@ def test_a_parallel_sweep_finds_the_period_doubling_and_resumes_from_its_cache(t
     exponents = [r["lyapunov_per_s"] for r in rows]
     assert max(exponents[:first_two]) == exponents[first_two - 1] < 0   # rising towards the doubling
     stamps = {p.name: p.stat().st_mtime_ns for p in tmp_path.iterdir()}
-    assert studies.sweep(duffing_point, values, tmp_path, 2, None, "duffing") == rows
+    assert duffing_sweep(values, tmp_path, workers=2) == rows
     assert {p.name: p.stat().st_mtime_ns for p in tmp_path.iterdir()} == stamps
 
 
@@ -129,6 +138,58 @@ def test_bifurcation_over_clearance_writes_its_diagram(tmp_path):
     assert sum(json.loads((tmp_path / "out" / "summary.json").read_text())["counts"].values()) == 2
 
 
+def speed_sweep(parameter, out, cache):
+    """A two-point bifurcation sweep of the Flores slider-crank's drive speed named
+    `parameter`: its summary.json and its bifurcation.csv."""
+    done = pinbore("dynamics", FLORES, "--analysis", "bifurcation", "--parameter", parameter,
+                   "--range", "3000", "5000", "--points", "2", "--transient", "3", "--periods", "4",
+                   "--workers", "2", "--out", out, "--cache", cache)
+    assert done.returncode == 0, done.stderr
+    return json.loads((out / "summary.json").read_text()), (out / "bifurcation.csv").read_text()
+
+
+def test_a_dotted_key_sweeps_as_its_shorthand_and_shares_its_cache(tmp_path, monkeypatch):
+    """--parameter drive.speed_rpm, the dotted key of the scene, sweeps the points that its
+    shorthand speed sweeps, each run on its own (their tables equal point for point); a rerun
+    by the other name in the shorthand's cache reads every point and runs none (the entries
+    are keyed by the points' scenes, which are one)."""
+    from pinbore.core import parallel
+
+    named, named_table = speed_sweep("speed", tmp_path / "named", tmp_path / "named-cache")
+    dotted, dotted_table = speed_sweep("drive.speed_rpm", tmp_path / "dotted", tmp_path / "dotted-cache")
+    assert dotted_table == named_table and dotted["counts"] == named["counts"]
+    assert (named["parameter"], dotted["parameter"]) == ("speed", "drive.speed_rpm")
+    assert sorted(p.name for p in (tmp_path / "named-cache").iterdir()) == \
+        sorted(p.name for p in (tmp_path / "dotted-cache").iterdir())
+    stamps = {p.name: p.stat().st_mtime_ns for p in (tmp_path / "named-cache").iterdir()}
+
+    def no_runner(*args, **kwargs):
+        raise AssertionError("a point ran")
+    monkeypatch.setattr(parallel, "executor", no_runner)
+    _, again = speed_sweep("drive.speed_rpm", tmp_path / "again", tmp_path / "named-cache")
+    assert again == named_table
+    assert {p.name: p.stat().st_mtime_ns for p in (tmp_path / "named-cache").iterdir()} == stamps
+
+
+@pytest.mark.parametrize("parameter, message", [
+    ("drive.speed", "--parameter drive.speed: no such key in the scene (--parameter takes a dotted key"),
+    ("clearance_joints.1.friction.mu", "--parameter clearance_joints.1.friction.mu: clearance_joints.1: no such "
+                                       "item (the list has 1)"),
+    ("clearance_joints.0.name", "--parameter clearance_joints.0.name: not a number"),
+    ("clearence", "--parameter clearence: no such key in the scene"),
+    ("drive..speed_rpm", "--parameter: 'drive..speed_rpm' must be a dotted key of the scene"),
+])
+def test_a_bad_dotted_key_is_one_line_naming_it(tmp_path, parameter, message):
+    """A parameter the scene has no number at is one line naming the key, exit 2, before any
+    model is built (under a second of CPU, the CLI's imports included), nothing written."""
+    run = main_in_child("dynamics", FLORES, "--analysis", "bifurcation", "--parameter", parameter,
+                        "--range", "1", "2", "--points", "2", "--out", tmp_path / "out")
+    assert run.returncode == 2 and message in run.stderr, run.stderr
+    assert len(run.stderr.strip().splitlines()) == 1 and "Traceback" not in run.stderr
+    assert float(run.stdout) < 1.0
+    assert not (tmp_path / "out").exists() and not (tmp_path / "out-cache").exists()
+
+
 @pytest.mark.parametrize("extra, message", [
     (["--analysis", "bifurcation", "--parameter", "clearance", "--range", "5e-4", "2e-4"], "--range: HIGH must exceed LOW"),
     (["--analysis", "bifurcation", "--parameter", "clearance", "--range", "2e-4", "5e-4", "--points", "0"], "--points: at least 2"),
@@ -148,7 +209,7 @@ def test_the_same_sweep_runs_on_a_dask_scheduler(tmp_path):
     distributed = pytest.importorskip("distributed")
     values = [0.20, 0.28]
     with distributed.LocalCluster(n_workers=1, processes=False, dashboard_address=None) as cluster:
-        rows = studies.sweep(duffing_point, values, tmp_path / "dask", 1, cluster.scheduler_address, "duffing")
+        rows = duffing_sweep(values, tmp_path / "dask", scheduler=cluster.scheduler_address)
     assert [(r["kind"], r["period"]) for r in rows] == [("periodic", 1), ("periodic", 2)]
 
 

@@ -12,6 +12,7 @@ import pytest
 from conftest import ROOT
 
 from pinbore import cli
+from pinbore.core.parallel import default_workers
 from pinbore.reduced.dynamics import analyses, studies
 
 FLORES = ROOT / "scenes" / "reduced" / "slider_crank_flores2004.toml"
@@ -55,7 +56,10 @@ BAD = [
     ([*BIFURCATION, *CLEARANCES, "--cache", "{tmp}/out/cache"], "--cache", "lies in --out"),
     # what an analysis needs
     (["--analysis", "bifurcation", *CLEARANCES], "--parameter",
-     "--analysis bifurcation needs it (one of clearance, speed, friction, frequency, amplitude)"),
+     "--analysis bifurcation needs it (a dotted key of the scene, or one of clearance, speed, friction, "
+     "frequency, amplitude)"),
+    ([*BIFURCATION[:3], "drive..speed_rpm", *CLEARANCES], "--parameter",
+     "'drive..speed_rpm' must be a dotted key of the scene (e.g. drive.speed_rpm) or one of clearance"),
     ([*BIFURCATION], "--range", "--analysis bifurcation needs it"),
     (["--analysis", "design", *SPEEDS], "--range", "--analysis design needs it"),
     ([*DESIGN], "--speeds", "--analysis design needs it"),
@@ -84,6 +88,8 @@ BAD = [
     # the scene at both ends of a swept range
     ([*BIFURCATION, "--range", "1e-4", "0.05"], "--range",
      "slider_crank_flores2004.toml with clearance 0.05: clearance_joints.0.journal_radius"),
+    (["--analysis", "bifurcation", "--parameter", "drive.speed_rpm", "--range", "0", "5000"], "--range",
+     "slider_crank_flores2004.toml with drive.speed_rpm 0: drive.speed_rpm: must not be 0"),
 ]
 
 
@@ -137,7 +143,7 @@ def test_the_makefile_command_lines_become_typed_options():
         "--out", "build/b", "--cache", "build/c"), "bifurcation")
     assert (bifurcation.parameter, bifurcation.range, bifurcation.points) == ("clearance", (1e-4, 5e-4), 40)
     assert (bifurcation.cache, bifurcation.workers, bifurcation.scheduler) == \
-        (Path("build/c"), analyses.default_workers(), None)
+        (Path("build/c"), default_workers(), None)
     design = analyses.parse(analyses.DesignOptions, given(
         *DESIGN, "--points", "5", *SPEEDS, "--transient", "10", "--periods", "10",
         "--max-force", "20000", "--max-deviation", "1.0", "--out", "build/d"), "design")
@@ -165,7 +171,7 @@ def test_the_table_of_analyses_matches_the_parser():
     dynamics = cli.parser()._subparsers._group_actions[0].choices["dynamics"]
     actions = {a.dest: a for a in dynamics._actions if a.dest not in ("help", "scene")}
     assert set(actions.pop("analysis").choices) == set(studies.ANALYSES)
-    assert set(actions["parameter"].choices) == set(analyses.PARAMETERS)
+    assert actions["parameter"].choices is None   # a dotted key of the scene, or a shorthand
     fields = {name for model, _ in studies.ANALYSES.values() for name in model.model_fields}
     assert fields == set(actions)
     assert all(issubclass(model, analyses.Analysis) and callable(function)
@@ -194,12 +200,14 @@ IMPACT_OSCILLATOR = ROOT / "scenes" / "reduced" / "impact_oscillator.toml"
      "--parameter speed: the scene has no drive turning at constant speed"),
     (IMPACT_OSCILLATOR, None, ["--parameter", "frequency", "--range", "15", "20"],
      "--range: the branch starts at the scene's frequency 14, outside 15 20"),
+    (IMPACT_OSCILLATOR, None, ["--parameter", "loads.0.frequency_hz", "--range", "15", "20"],
+     "--range: the branch starts at the scene's loads.0.frequency_hz 14, outside 15 20"),
     (IMPACT_OSCILLATOR, lambda d: d["loads"][0].update(frequency_hz=0.0), ["--parameter", "amplitude",
      "--range", "0.5", "2"], "loads.0.frequency_hz"),
     (IMPACT_OSCILLATOR, lambda d: d["loads"].append(dict(d["loads"][0], frequency_hz=20.0)),
      ["--parameter", "amplitude", "--range", "0.5", "2"], "frequency 20 Hz is not a whole multiple"),
-], ids=["frequency-without-excitation", "speed-without-drive", "start-outside-range", "frequency-zero",
-        "incommensurate"])
+], ids=["frequency-without-excitation", "speed-without-drive", "start-outside-range", "key-start-outside-range",
+        "frequency-zero", "incommensurate"])
 def test_a_continuation_the_scene_cannot_take_is_one_line_exit_2(tmp_path, capsys, write_scene, scene, edit,
                                                                  options, rule):
     data = tomllib.loads(scene.read_text())

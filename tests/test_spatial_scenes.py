@@ -18,6 +18,7 @@ from pinbore.laws import dissipative
 from pinbore.laws.elastic import Joint, hertz_point
 from pinbore.reduced.dynamics import flow as dynamics
 from pinbore.reduced.dynamics import studies
+from pinbore.reduced.dynamics.parameters import with_parameter
 from pinbore.reduced.mechanism.model import build
 from pinbore.reduced.mechanism.outputs import per_step
 from pinbore.reduced.mechanism.run import simulate
@@ -185,7 +186,7 @@ def test_bifurcation_point_of_the_misaligned_slider_crank():
     """One point of the clearance sweep on the misaligned scene (the dynamics tools take
     spatial scenes): its Poincare samples lie across the bore within the clearance plus the
     tilt's reach at the journal's mid-plane, and it is classified."""
-    point = studies.BifurcationPoint(MISALIGNED, SCENES, "test", "clearance", 1, 3)(3e-4)
+    point = studies.BifurcationPoint(SCENES, "test", 1, 3)(with_parameter(MISALIGNED, "clearance", 3e-4, "test"))
     assert point["kind"] in ("periodic", "chaotic", "quasi-periodic"), point
     observed = np.array(point["observed"])
     assert observed.shape == (3, 4)

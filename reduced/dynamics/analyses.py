@@ -10,43 +10,30 @@ Models: `PoincareOptions`, `LyapunovOptions` and `ShootingOptions` (one run of t
 `ContinuationOptions` (a branch of periodic orbits), `BifurcationOptions` and `DesignOptions`
 (sweeps, run in parallel and cached point by point).
 Their shared bases: `Analysis` (--out, --transient), `Sampled` (+ --periods), `Sweep`
-(+ --points, --scheduler, --workers, --cache).
+(+ --points, and the sweep engine's --scheduler, --workers, --cache: core.sweep.Runner).
 
 Rules: counts are whole numbers (--transient >= 0; --periods, --multiple, --workers,
---speeds N >= 1; --points >= 2; --sweeps >= 0); a range LOW HIGH is finite with LOW < HIGH,
-and a swept parameter stays physical (clearance > 0 m, speed > 0 rpm, friction mu >= 0,
+--speeds N >= 1; --points >= 2; --sweeps >= 0); a range LOW HIGH is finite with LOW < HIGH;
+--parameter is a dotted key of the scene or a shorthand (pinbore.reduced.dynamics.parameters),
+and a shorthand's range stays physical (clearance > 0 m, speed > 0 rpm, friction mu >= 0,
 frequency > 0 Hz, amplitude factor > 0); a continuation's --step is finite and > 0; a design
-threshold is > 0 (inf, the default: no threshold); --workers goes with local processes, not
-with --scheduler, which needs the dask `distributed` package; the cache folder (--cache,
-default OUT-cache) is no existing file and lies outside OUT (replaced when a run completes).
-What the options need of the scene (a drive, a valid scene at both ends of every swept
-range) is checked against the scene by `pinbore.reduced.dynamics.studies`.
+threshold is > 0 (inf, the default: no threshold); --workers, --scheduler and --cache follow
+the rules of core.sweep.Runner (local processes or a Dask cluster, not both; the cache folder,
+default OUT-cache, no existing file and outside OUT, which is replaced when a run completes).
+What the options need of the scene (a drive, the parameter's keys, a valid scene at both ends
+of every swept range) is checked against the scene by `pinbore.reduced.dynamics.studies`.
 """
 
 import math
 from pathlib import Path
-from typing import Annotated, Literal, NamedTuple
+from typing import Annotated, NamedTuple
 
 import pydantic
 
 from pinbore.core.errors import InputError
-from pinbore.core.parallel import check_cache, check_scheduler, check_workers, default_workers
 from pinbore.core.scene import Strict
-
-
-class Parameter(NamedTuple):
-    """A scene parameter that a study sets: its axis label, and whether a value must be
-    > 0 (a size or a speed) or only >= 0."""
-
-    label: str
-    positive: bool
-
-
-PARAMETERS = {"clearance": Parameter("m, radial clearance of every clearance joint", True),
-              "speed": Parameter("rpm, the drive's speed", True),
-              "friction": Parameter("mu of every clearance joint's friction law", False),
-              "frequency": Parameter("Hz, the forcing's fundamental (every harmonic in proportion)", True),
-              "amplitude": Parameter("x, a factor on every excitation amplitude (1: the scene's)", True)}
+from pinbore.core.sweep import Runner
+from pinbore.reduced.dynamics import parameters
 
 
 def at_least(minimum: int) -> pydantic.AfterValidator:
@@ -99,10 +86,9 @@ def _speed_count(grid: SpeedGrid) -> SpeedGrid:
 
 
 def physical(parameter: str, span: Span | SpeedGrid) -> Span | SpeedGrid:
-    """The range of `parameter` within its physical bounds (LOW is the smallest value)."""
-    positive = PARAMETERS[parameter].positive
-    if span.low < 0 or (positive and span.low == 0):
-        raise ValueError(f"{parameter} must be {'>' if positive else '>='} 0 (got LOW {span.low:g})")
+    """The range of `parameter` within its physical bounds (LOW is the smallest value;
+    parameters.physical)."""
+    parameters.physical(parameter, span.low)
     return span
 
 
@@ -120,6 +106,8 @@ def _threshold(value: float) -> float:
 
 
 Range = Annotated[Span, pydantic.AfterValidator(_finite_and_increasing)]
+Parameter = Annotated[str, pydantic.AfterValidator(parameters.check_name)]
+PARAMETER = f"a dotted key of the scene, or one of {parameters.NAMES}"
 Speeds = Annotated[SpeedGrid, pydantic.BeforeValidator(_whole_count),
                    pydantic.AfterValidator(_finite_and_increasing), pydantic.AfterValidator(_speed_count)]
 Threshold = Annotated[float, pydantic.AfterValidator(_threshold)]
@@ -170,7 +158,7 @@ class ContinuationOptions(Analysis):
     up- and a down-sweep of N values by direct integration too (each value starting from
     the state the last one reached: `transient` periods, then `periods` sampled)."""
 
-    parameter: Literal[tuple(PARAMETERS)] = pydantic.Field(description=f"one of {', '.join(PARAMETERS)}")
+    parameter: Parameter = pydantic.Field(description=PARAMETER)
     range: Range = pydantic.Field(description="LOW HIGH of the continued parameter")
     multiple: Annotated[int, at_least(1)] = 1
     points: Annotated[int, at_least(2)] = 200
@@ -191,45 +179,19 @@ class ContinuationOptions(Analysis):
         return [("range", self.parameter, self.range)]
 
 
-class Sweep(Sampled):
-    """A study of `points` values run in parallel: on local processes (`workers`) or on the
-    Dask cluster at `scheduler`, each point cached in `cache` as it is done."""
+class Sweep(Runner, Sampled):
+    """A study of `points` values run through the sweep engine (core.sweep.Runner: on local
+    processes, `workers`, or on the Dask cluster at `scheduler`, each point cached in `cache`
+    as it is done)."""
 
     points: Annotated[int, at_least(2)] = 50
-    scheduler: str | None = None
-    workers: Annotated[int, at_least(1)] = pydantic.Field(default_factory=default_workers)
-    cache: Path
-
-    @pydantic.model_validator(mode="before")
-    @classmethod
-    def _default_cache(cls, data):
-        """The cache folder defaults to OUT-cache, beside the outputs."""
-        if isinstance(data, dict) and "cache" not in data and isinstance(data.get("out"), Path):
-            return data | {"cache": Path(f"{data['out']}-cache")}
-        return data
-
-    @pydantic.field_validator("scheduler")
-    @classmethod
-    def _cluster(cls, address: str | None) -> str | None:
-        return check_scheduler(address)
-
-    @pydantic.field_validator("workers")
-    @classmethod
-    def _local(cls, workers: int, info: pydantic.ValidationInfo) -> int:
-        """Local processes only (a field validator runs on given values, not on the default)."""
-        return check_workers(workers, info.data.get("scheduler"))
-
-    @pydantic.field_validator("cache")
-    @classmethod
-    def _cache_folder(cls, folder: Path, info: pydantic.ValidationInfo) -> Path:
-        return check_cache(folder, info.data.get("out"))
 
 
 class BifurcationOptions(Sweep):
     """`--analysis bifurcation`: the Poincare samples and their classification at `points`
     values of `parameter` across `range`."""
 
-    parameter: Literal[tuple(PARAMETERS)] = pydantic.Field(description=f"one of {', '.join(PARAMETERS)}")
+    parameter: Parameter = pydantic.Field(description=PARAMETER)
     range: Range = pydantic.Field(description="LOW HIGH of the swept parameter")
 
     _physical = pydantic.field_validator("range")(parameter_range)

@@ -5,15 +5,17 @@ Lyapunov exponents, periodic orbits by shooting and design studies of a driven m
 before any work) and the function that runs it; `run` checks the scene against the options,
 runs the analysis into a temporary folder and moves it into place when complete.
 
-Sweeps run their points in parallel: on the local cores (a process pool), or on a Dask
-cluster when `--scheduler ADDRESS` is given (the same tasks through its executor). Each point
-is cached as JSON under the cache folder as soon as it is done, so an interrupted sweep
-resumes where it stopped.
+A sweep's parameter is a dotted key of the scene or a shorthand for some
+(pinbore.reduced.dynamics.parameters); each of its points is the scene's data with it set.
+The points run through the sweep engine of `pinbore study` (core.sweep): in parallel on the
+local cores, or on a Dask cluster when `--scheduler ADDRESS` is given, each cached by its
+content as soon as it is done, so an interrupted sweep resumes where it stopped and a point
+another sweep ran on the same scene is read, not run again. What is particular to dynamics
+stays here: the point of a bifurcation diagram and of a design map, their tables, and the
+mechanisms a continuation follows.
 """
 
-import copy
 import dataclasses
-import hashlib
 import json
 import math
 import sys
@@ -25,16 +27,15 @@ import numpy as np
 from tqdm import tqdm
 
 from pinbore.core import scene as scenes
+from pinbore.core import sweep
 from pinbore.core.errors import InputError
 from pinbore.core.output import atomic_directory
 from pinbore.core.codedeps import code_hash
-from pinbore.core.parallel import cached_map
-from pinbore.reduced.dynamics.analyses import (PARAMETERS, Analysis, BifurcationOptions, ContinuationOptions,
-                                               DesignOptions, LyapunovOptions, PoincareOptions, Sampled,
-                                               ShootingOptions)
+from pinbore.reduced.dynamics.analyses import (Analysis, BifurcationOptions, ContinuationOptions, DesignOptions,
+                                               LyapunovOptions, PoincareOptions, Sampled, ShootingOptions, Sweep)
+from pinbore.reduced.dynamics.parameters import label, parameter_value, with_parameter
 from pinbore.reduced.mechanism import kinds
 from pinbore.reduced.mechanism.layout import PRIM_ANGLE0
-from pinbore.reduced.mechanism.scene import clearance_joints
 
 
 def scene_model(data: dict) -> type:
@@ -63,68 +64,6 @@ def dynamics():
     from pinbore.reduced.dynamics import flow   # noqa: PLC0415
 
     return flow
-
-
-def with_parameter(data: dict, parameter: str, value: float, source: str) -> dict:
-    """The scene's data with the swept parameter set."""
-    data = copy.deepcopy(data)
-    joints = data.get("clearance_joints", [])
-    if parameter == "clearance":
-        if not joints and not data.get("translational_joints"):
-            raise InputError(f"{source}: --parameter clearance: the scene has no clearance joints")
-        for joint in joints:
-            joint["journal_radius"] = joint["bearing_radius"] - value
-        for joint in data.get("translational_joints", []):
-            joint["clearance"] = value
-    elif parameter == "speed":
-        if (data.get("drive") or {}).get("speed_rpm") is None:
-            raise InputError(f"{source}: --parameter speed: the scene has no drive turning at "
-                             "constant speed")
-        data["drive"]["speed_rpm"] = value
-    elif parameter in ("frequency", "amplitude"):
-        drive = data.get("drive") or {}
-        excitations = data.get("loads", []) + drive.get("harmonics", [])
-        if not excitations:
-            raise InputError(f"{source}: --parameter {parameter}: the scene has no harmonic loads "
-                             "or shaken drive (drive.harmonics)")
-        if parameter == "frequency":
-            if drive.get("speed_rpm") is not None:
-                raise InputError(f"{source}: --parameter frequency: the drive turns at constant "
-                                 "speed and sets the period; continue in speed instead")
-            ratio = value / min(e["frequency_hz"] for e in excitations)
-            for e in excitations:
-                e["frequency_hz"] *= ratio
-        else:
-            for load in data.get("loads", []):
-                for key in ("force", "torque"):
-                    if key in load:
-                        load[key] = [value * f for f in load[key]] if isinstance(load[key], list) \
-                            else value * load[key]
-            for h in drive.get("harmonics", []):
-                h["amplitude_deg"] *= value
-    elif parameter == "friction":
-        if not joints or any("mu" not in (j.get("friction") or {}) for j in joints):
-            raise InputError(f"{source}: --parameter friction: every clearance joint needs a "
-                             "friction law with a coefficient mu (coulomb_ambrosio, dahl, iwan_bilinear)")
-        for joint in joints:
-            joint["friction"]["mu"] = value
-    return data
-
-
-def parameter_value(scene, parameter: str) -> float:
-    """The scene's own value of a continued parameter: the first clearance joint's clearance,
-    the drive's speed, the first joint's friction coefficient, the forcing's fundamental
-    frequency, or the amplitude factor 1."""
-    joints = scene.clearance_joints
-    if parameter == "clearance":
-        return clearance_joints(scene)[0].gap()
-    if parameter == "speed":
-        return scene.drive.speed_rpm
-    if parameter == "friction":
-        return joints[0].friction.mu
-    if parameter == "frequency":
-        return 1.0 / scene.forcing_period()
-    return 1.0
 
 
 def require_forcing(scene, source: str) -> float:
@@ -173,73 +112,65 @@ def observed_samples(flow, states) -> np.ndarray:
 
 
 class BifurcationPoint:
-    """One point of a sweep: Poincare samples of the observed point and the classification
-    (periodic with its period, quasi-periodic, chaotic); the largest Lyapunov exponent only
-    where the samples are not periodic, over a fifth of the sampled periods (at least 10:
-    enough for its sign; `--analysis lyapunov` gives the converged value)."""
+    """One point of a sweep, run on its scene's data: Poincare samples of the observed point
+    and the classification (periodic with its period, quasi-periodic, chaotic); the largest
+    Lyapunov exponent only where the samples are not periodic, over a fifth of the sampled
+    periods (at least 10: enough for its sign; `--analysis lyapunov` gives the converged
+    value)."""
 
-    def __init__(self, data, base, source, parameter, transient, periods):
-        self.data, self.base, self.source = data, base, source
-        self.parameter, self.transient, self.periods = parameter, transient, periods
+    def __init__(self, base, source, transient, periods):
+        self.base, self.source = base, source
+        self.transient, self.periods = transient, periods
 
-    def __call__(self, value: float) -> dict:
+    def __call__(self, data: dict) -> dict:
         try:
-            return self._point(value)
+            return self._point(data)
         except FloatingPointError as err:   # a point whose integration fails is marked, not lost
-            return {"value": value, "kind": "failed", "period": None, "lyapunov_per_s": None,
-                    "observed": [], "reason": str(err)}
+            return {"kind": "failed", "period": None, "lyapunov_per_s": None, "observed": [],
+                    "reason": str(err)}
 
-    def _point(self, value: float) -> dict:
-        flow = mechanism_flow(with_parameter(self.data, self.parameter, value, self.source),
-                              self.base, self.source)
+    def _point(self, data: dict) -> dict:
+        flow = mechanism_flow(data, self.base, self.source)
         coords, states = dynamics().poincare(flow, flow.start(), self.transient, self.periods)
         exponent = None
         if dynamics().period_of(coords) is None:
             exponent, _ = dynamics().lyapunov(flow, states[-1], max(self.periods // 5, 10))
         kind, period = dynamics().classify(coords, exponent)
-        return {"value": value, "kind": kind, "period": period,
+        return {"kind": kind, "period": period,
                 "lyapunov_per_s": exponent if exponent is None or math.isfinite(exponent) else None,
                 "observed": observed_samples(flow, states).tolist()}
 
 
-def sweep(task, values, cache: Path, workers: int, scheduler: str | None, key: str) -> list[dict]:
-    """task(value) for every value, in parallel, each result cached in `cache` as
-    `<key>_<value>.json` (core.parallel.cached_map: resumable; a cached point that does not
-    read is computed again)."""
-    return cached_map(task, values, [f"{key}_{value!r}" for value in values], cache, workers,
-                      scheduler)[0]
-
-
-def sweep_key(data: dict, analysis: str, parameter: str, transient: int, periods: int) -> str:
-    """Cache key: the scene, the settings that change a point's result, and the code that
-    runs a point (core.codedeps: this module's import closure, the compiled core's
-    binary included; a changed model never reads old points)."""
-    code = code_hash(__name__)
-    text = json.dumps([data, analysis, parameter, transient, periods, code], sort_keys=True)
-    return f"{analysis}_{parameter}_{hashlib.sha256(text.encode()).hexdigest()[:12]}"
+def swept(target: SceneFile, analysis: str, task, points: list[dict], options: Sweep) -> list[dict]:
+    """task(data) of every point's scene data, through the sweep engine (core.sweep.run: on the
+    options' workers or cluster), each result cached by the point's content: the analysis, its
+    whole scene, the files it names, the code that runs it (this module's import closure,
+    core.codedeps: the compiled core's binary included) and the periods it discards and samples.
+    A point cached by another sweep of one scene (another range, the parameter by another name)
+    is read, not run again."""
+    files = sweep.digest_files(sweep.named_files(points, target.base))
+    keys = sweep.point_keys(f"dynamics.{analysis}", points, files, code_hash(__name__),
+                            options.transient, options.periods)
+    return sweep.run(task, points, keys, options)[0]
 
 
 class DesignPoint:
     """Peak contact force, impacts per revolution and the RMS deviation of the slider's
     acceleration from the ideal joint's (as a fraction of the ideal's RMS), over the sampled
-    revolutions after the transient, at one (clearance, speed)."""
+    revolutions after the transient, of one point's scene data (a clearance, a speed)."""
 
-    def __init__(self, data, base, source, transient, periods):
-        self.data, self.base, self.source = data, base, source
+    def __init__(self, base, source, transient, periods):
+        self.base, self.source = base, source
         self.transient, self.periods = transient, periods
 
-    def __call__(self, point) -> dict:
+    def __call__(self, data: dict) -> dict:
         try:
-            return self._point(point)
+            return self._point(data)
         except FloatingPointError as err:   # marked (NaN: blank in the map, outside every band)
-            return {"clearance_m": point[0], "speed_rpm": point[1], "peak_force_N": math.nan,
-                    "impacts_per_revolution": math.nan, "acceleration_deviation": math.nan,
-                    "reason": str(err)}
+            return {"peak_force_N": math.nan, "impacts_per_revolution": math.nan,
+                    "acceleration_deviation": math.nan, "reason": str(err)}
 
-    def _point(self, point) -> dict:
-        clearance, speed = point
-        data = with_parameter(with_parameter(self.data, "speed", speed, self.source),
-                              "clearance", clearance, self.source)
+    def _point(self, data: dict) -> dict:
         flow = mechanism_flow(data, self.base, self.source)
         state = flow.advance(flow.start(), self.transient)
         flow.advance(state, self.periods)
@@ -255,8 +186,7 @@ class DesignPoint:
         deviation = math.sqrt(np.mean((acceleration - reference) ** 2)
                               / np.mean(ideal_acceleration ** 2))
         forces = [cols[f"{c.name}_normal_force_N"] for c in flow.model.joints]
-        return {"clearance_m": clearance, "speed_rpm": speed,
-                "peak_force_N": float(max(np.max(f) for f in forces)),
+        return {"peak_force_N": float(max(np.max(f) for f in forces)),
                 "impacts_per_revolution": float(flow.last.counters[3]) / self.periods,
                 "acceleration_deviation": deviation}
 
@@ -317,19 +247,21 @@ def run(scene_file: str | Path, analysis: str, options: Analysis) -> int:
 
 def check_scene(scene, target: SceneFile, options: Analysis) -> None:
     """What the options need of the scene, before any work: a drive (the section is taken
-    once per revolution); a valid scene at both ends of every swept range (e.g. a clearance
-    below the bearing's radius, a friction law with a coefficient mu to set); a prismatic
-    body for the design study to measure."""
+    once per revolution); the keys of every swept parameter, and a valid scene with a
+    periodic forcing at both ends of its range (e.g. a clearance below the bearing's radius,
+    a friction law with a coefficient mu to set, a speed other than 0); a prismatic body for
+    the design study to measure."""
     require_forcing(scene, target.source)
     if isinstance(options, DesignOptions) and (scene.drive is None or scene.drive.speed_rpm is None):
         raise InputError(f"{target.source}: drive: the design study sweeps the drive's speed; "
                          "the scene has no drive turning at constant speed")
     for option, parameter, span in options.swept():
         for value in (span.low, span.high):
-            scenes.validate(type(scene), with_parameter(target.data, parameter, value, target.source),
-                            f"--{option}: {target.source} with {parameter} {value:g}")
+            where = f"--{option}: {target.source} with {parameter} {value:g}"
+            require_forcing(scenes.validate(type(scene), with_parameter(target.data, parameter, value,
+                                                                        target.source), where), where)
     if isinstance(options, ContinuationOptions):
-        value = parameter_value(scene, options.parameter)
+        value = parameter_value(scene, target.data, options.parameter)
         if not options.range.low <= value <= options.range.high:
             raise InputError(f"--range: the branch starts at the scene's {options.parameter} "
                              f"{value:g}, outside {options.range.low:g} {options.range.high:g}")
@@ -413,14 +345,13 @@ BIFURCATION_COLUMNS = ["value", "kind", "period", "lyapunov_per_s", "x_m", "y_m"
 def bifurcation_diagram(target: SceneFile, options: BifurcationOptions, tmp: Path) -> dict:
     """The swept parameter's points, each classified from its Poincare samples."""
     values = np.linspace(options.range.low, options.range.high, options.points).tolist()
-    task = BifurcationPoint(target.data, target.base, target.source, options.parameter,
-                            options.transient, options.periods)
-    key = sweep_key(target.data, "bifurcation", options.parameter, options.transient, options.periods)
-    rows = sweep(task, values, options.cache, options.workers, options.scheduler, key)
+    points = [with_parameter(target.data, options.parameter, v, target.source) for v in values]
+    task = BifurcationPoint(target.base, target.source, options.transient, options.periods)
+    rows = [{"value": v} | r for v, r in zip(values, swept(target, "bifurcation", task, points, options))]
     figures().write_table(tmp / "bifurcation.csv", BIFURCATION_COLUMNS,
                       [[r["value"], r["kind"], r["period"], r["lyapunov_per_s"], *j[:2]]
                        for r in rows for j in (r["observed"] or [[None, None]])])   # a failed point: one row
-    figures().bifurcation(tmp / "bifurcation.png", rows, options.parameter, PARAMETERS[options.parameter].label)
+    figures().bifurcation(tmp / "bifurcation.png", rows, options.parameter, label(options.parameter))
     kinds = [r["kind"] for r in rows]
     return {"parameter": options.parameter, "range": list(options.range), "points": options.points,
             "counts": {k: kinds.count(k) for k in sorted(set(kinds))}}
@@ -432,9 +363,11 @@ def design_map(target: SceneFile, options: DesignOptions, tmp: Path) -> dict:
     clearances = np.linspace(options.range.low, options.range.high, options.points).tolist()
     speeds = np.linspace(options.speeds.low, options.speeds.high, options.speeds.count).tolist()
     grid = [(c, v) for v in speeds for c in clearances]
-    task = DesignPoint(target.data, target.base, target.source, options.transient, options.periods)
-    key = sweep_key(target.data, "design", "clearance_speed", options.transient, options.periods)
-    rows = sweep(task, grid, options.cache, options.workers, options.scheduler, key)
+    points = [with_parameter(with_parameter(target.data, "speed", v, target.source), "clearance", c,
+                             target.source) for c, v in grid]
+    task = DesignPoint(target.base, target.source, options.transient, options.periods)
+    rows = [{"clearance_m": c, "speed_rpm": v} | r
+            for (c, v), r in zip(grid, swept(target, "design", task, points, options))]
     names = ["clearance_m", "speed_rpm", "peak_force_N", "impacts_per_revolution",
              "acceleration_deviation"]
     figures().write_table(tmp / "design.csv", names, [[r[n] for n in names] for r in rows])
@@ -547,7 +480,7 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
     direct up- and down-sweeps; `converged: false` and the reason when a branch could not be
     followed across the whole range (what converged is written)."""
     scene = scene_model(target.data).model_validate(target.data)
-    start_value = parameter_value(scene, options.parameter)
+    start_value = parameter_value(scene, target.data, options.parameter)
     low, high = options.range
     family = MechanismFamily(target, options.parameter, start_value)
     method = continuation()
@@ -597,7 +530,7 @@ def continued(target: SceneFile, options: ContinuationOptions, tmp: Path) -> dic
     if sweeps:
         figures().write_table(tmp / "sweeps.csv", SWEEP_COLUMNS, sweeps)
     figures().response(tmp / "response.png", rows, specials, sweeps, options.parameter,
-                       PARAMETERS[options.parameter].label, f"{target.path.stem}: {family.flow(start_value).observed_name()}")
+                       label(options.parameter), f"{target.path.stem}: {family.flow(start_value).observed_name()}")
     reasons = [b.reason for b in branches + doubled if not b.complete]
     reasons += [f"the branch stopped at its {len(b.points)} points at {b.points[-1].p:.6g}, short of "
                 f"the range [{low:g}, {high:g}] (more --points, or a larger --step)"
