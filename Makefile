@@ -177,7 +177,7 @@ build/report/index.html: $(FEM_CURVES) $(MESHES) $(MODES_RUNS) build/calibration
 	$(PINBORE) report --build build --out build/report
 	@echo "report: $(abspath $@)"
 
-bench: build/study/calibration_2d/summary.json $(MODES_RUNS) build/fem/flores_wear/curve.csv $(STAMP) ## run the benchmarks: bench/*.csv and plots (a few minutes)
+bench: build/study/calibration_2d/summary.json $(MODES_RUNS) build/fem/flores_wear/curve.csv build/fem/flores_worn/curve.csv $(STAMP) ## run the benchmarks: bench/*.csv and plots (a few minutes)
 	$(PY) bench/fem2d.py --out bench
 	$(PY) bench/fem3d.py --out bench
 	$(PY) bench/plastic.py --out bench
@@ -193,6 +193,7 @@ bench: build/study/calibration_2d/summary.json $(MODES_RUNS) build/fem/flores_we
 	$(PY) bench/flexible.py --out bench
 	$(PY) bench/continuation.py --out bench
 	$(PY) bench/wear.py --out bench
+	$(PY) bench/worn_order.py --out bench
 
 stress: build/fem/flores_wear/curve.csv $(STAMP) ## the stress matrix and the reliability audit: bench/stress_*.csv, bench/stress.png, bench/audit.csv (about 7 + 3 min)
 	$(PY) bench/stress.py --out bench

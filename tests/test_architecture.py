@@ -165,7 +165,8 @@ def test_a_bad_mechanism_scene_costs_well_under_a_second(tmp_path, command):
 # where a branch on the kind of mechanism would hide: the users of the mechanism model
 KIND_NEUTRAL = ["reduced/mechanism/model.py", "reduced/mechanism/run.py",
                 "reduced/mechanism/outputs.py", "reduced/mechanism/kernel.py",
-                "reduced/dynamics/flow.py", "reduced/dynamics/studies.py", "reduced/report.py",
+                "reduced/dynamics/flow.py", "reduced/dynamics/studies.py",
+                "reduced/dynamics/parameters.py", "reduced/report.py",
                 "bench/multibody.py", "bench/sweep.py", "bench/stress.py"]
 
 

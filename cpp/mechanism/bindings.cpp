@@ -172,6 +172,7 @@ Args args_of(nb::handle a, Held& held)
   args.loads = matrix<const double>(a, "loads", held);
   args.wear = matrix<const double>(a, "wear", held);
   args.wear_bounds = worn_bounds(args.wear);
+  args.wear_fine = worn_fine(args.wear);
   const std::ptrdiff_t nb_ = args.bodies(), nc = args.ncontacts();
   if (static_cast<std::ptrdiff_t>(args.offsets.size()) != nb_ + 1 or args.offsets[0] != 0
       or args.offsets[nb_] != static_cast<std::int64_t>(args.minv.size()))
@@ -290,7 +291,7 @@ std::span<double> values(const Array<double>& a) { return {a.data(), a.size()}; 
 
 /// f(t, y) into dy; each contact's deepest penetration into depth, its journal point's
 /// offset from its bearing point into offset and, given `direction`, the contact's direction
-/// into it (rows of `width`: a worn journal's where the surfaces interfere most); the ideal
+/// into it (rows of `width`: a worn journal's the normal of its arc's force); the ideal
 /// joints' largest gap |Phi| (no held rows).
 template <class K>
 double observe(double t, std::span<const double> y, std::span<double> dy, const Args& args,
@@ -357,7 +358,7 @@ void bind_mechanism(nb::module_& parent)
   PINBORE_LAYOUT(CONTACT_AT_CONTACT) PINBORE_LAYOUT(CONTACT_STIFFNESS)
   PINBORE_LAYOUT(CONTACT_FRICTION_ON) PINBORE_LAYOUT(CONTACT_LENGTH) PINBORE_LAYOUT(CONTACT_SLICES)
   PINBORE_LAYOUT(CONTACT_END_LENGTH) PINBORE_LAYOUT(CONTACT_SCALE) PINBORE_LAYOUT(CONTACT_COMPLIANCE)
-  PINBORE_LAYOUT(CONTACT_BORE_WEAR) PINBORE_LAYOUT(CONTACT_PIN_WEAR) PINBORE_LAYOUT(CONTACT_WEAR_REACH)
+  PINBORE_LAYOUT(CONTACT_BORE_WEAR) PINBORE_LAYOUT(CONTACT_PIN_WEAR) PINBORE_LAYOUT(CONTACT_WEAR_REACH) PINBORE_LAYOUT(WORN_ORDER)
   PINBORE_LAYOUT(CONTACT_COLUMNS) PINBORE_LAYOUT(RADIAL) PINBORE_LAYOUT(SLICED) PINBORE_LAYOUT(PLANE)
   PINBORE_LAYOUT(AXIS_RADIAL) PINBORE_LAYOUT(NO_FRICTION) PINBORE_LAYOUT(COULOMB)
   PINBORE_LAYOUT(STRIBECK) PINBORE_LAYOUT(LINEAR) PINBORE_LAYOUT(LUGRE) PINBORE_LAYOUT(DAHL)
@@ -743,6 +744,24 @@ void bind_mechanism(nb::module_& parent)
       "slice's approach (m) and weight (m); returns the bore's displacement (global).");
 
   // ---- the engine's pieces, for the tests that check them alone
+  m.def(
+      "round_moment", [](double delta, double clearance)
+      {
+        const auto [value, slope] = round_moment(delta, clearance);
+        return nb::make_tuple(value, slope);
+      },
+      nb::arg("delta"), nb::arg("clearance"),
+      "(Phi, dPhi/d delta) of a round joint's overlap at the penetration delta > 0 (m): Phi = "
+      "int d_+^4 dphi, d = (c + delta) cos phi - c (worn.h).");
+  m.def(
+      "moment_penetration", [](double moment, double clearance)
+      {
+        const auto [delta, slope] = moment_penetration(moment, clearance);
+        return nb::make_tuple(delta, slope);
+      },
+      nb::arg("moment"), nb::arg("clearance"),
+      "(delta_p, dPhi/d delta there) with round_moment(delta_p) = moment: a worn joint's "
+      "penetration (worn.h).");
   m.def(
       "spin_up", [](double t, double speed, double duration)
       {

@@ -185,11 +185,13 @@ struct Matrix
 };
 using Rows = Matrix<const double>;
 
-/// A worn profile's bounds (worn.h): the largest |h''| of its spline and a depth it never
-/// falls below.
+/// The order p of a worn joint's overlap mean (worn.h; pinbore.laws.tables.WORN_ORDER).
+inline constexpr int WORN_ORDER = 4;
+
+/// A worn profile's bound (worn.h): a depth its spline never falls below.
 struct WornBound
 {
-  double curvature = 0.0, lowest = 0.0;
+  double lowest = 0.0;
 };
 
 /// The mechanism (pinbore.reduced.mechanism.layout.Args): constants, but for the impact
@@ -214,6 +216,7 @@ struct Args
   Rows profile, flex, springs, loads;
   Rows wear;   // worn profiles: a row per surface, its depth at angles evenly from -pi
   std::vector<WornBound> wear_bounds;   // per profile (worn.h: worn_bounds)
+  std::vector<std::vector<double>> wear_fine;   // per profile, its spline on the arc's grid (worn.h)
   std::ptrdiff_t bodies() const { return static_cast<std::ptrdiff_t>(masses.size()); }
   std::ptrdiff_t ncontacts() const { return contacts.rows; }
 };

@@ -300,6 +300,7 @@ struct Engine
     double along;
     V relative;
     bool worn = false;   // a worn journal: the force at the centres with the torques below
+    double reach = 1.0;   // a worn journal's |d delta / d e| (its force's share along the normal)
     double turn_bearing = 0.0, turn_journal = 0.0;   // d delta / d(angle) of each body's frame
   };
   struct Plane
@@ -320,12 +321,11 @@ struct Engine
     return static_cast<std::int64_t>(contacts(k, column));
   }
 
-  /// A worn journal in its bore (the plane): the contact where they interfere most,
-  /// delta = max over phi of e . u(phi) - c - h_bore(phi - phi_b) - h_pin(phi - phi_j),
-  /// u(phi) the unit vector at phi, h the profiles in their frames (Args::wear); the normal
-  /// u(phi*), the rate u . e' + h_bore' w_b + h_pin' w_j and d delta / d phi_b = h_bore',
-  /// d delta / d phi_j = h_pin' (phi* maximises: the envelope theorem). The maximum is
-  /// the branch and bound of worn.h (worn_maximum), to 1e-9 of the clearance.
+  /// A worn journal in its bore (the plane): its penetration delta_p, the mean of order 4
+  /// of the overlap of the worn surfaces on the round joint's scale (worn.h: worn_overlap,
+  /// moment_penetration), with d delta_p / d(e, phi_b, phi_j) = dPhi / d(...) / Phi_round';
+  /// the normal along d delta_p / de (from the bore into the journal), `reach` its length,
+  /// the rate d delta_p / dt. Where nothing overlaps, delta is the deepest (negative) overlap.
   static void worn_radial(const Args& args, const Matrix<double>& s, std::ptrdiff_t k, const V& e,
                           const V& v, Radial& g)
   {
@@ -338,41 +338,31 @@ struct Engine
                          bj = body(contacts, k, CONTACT_JOURNAL_BODY);
       const auto [phi_b, w_b] = K::frame_angle(s, bb, contacts.cell<D>(k, CONTACT_BEARING_POINT));
       const auto [phi_j, w_j] = K::frame_angle(s, bj, contacts.cell<D>(k, CONTACT_JOURNAL_POINT));
-      auto profile = [&](std::ptrdiff_t r, double a) -> std::array<double, 3>
-      { return r < 0 ? std::array<double, 3>{0.0, 0.0, 0.0} : worn_depth(args.wear, r, a); };
-      auto both = [&](double phi, double& slope, double& curvature, double& hb, double& hp)
-      {
-        const auto b = profile(bore, phi - phi_b), j = profile(pin, phi - phi_j);
-        const double c = std::cos(phi), sn = std::sin(phi), eu = e[0] * c + e[1] * sn;
-        hb = b[1], hp = j[1];
-        slope = -e[0] * sn + e[1] * c - b[1] - j[1];
-        curvature = -eu - b[2] - j[2];
-        return eu - b[0] - j[0];
-      };
-      auto f = [&](double phi, double& slope, double& curvature)
-      {
-        double hb, hp;
-        return both(phi, slope, curvature, hb, hp);
-      };
-      auto bound = [&](std::ptrdiff_t r)
-      { return r < 0 ? WornBound{} : args.wear_bounds[static_cast<std::size_t>(r)]; };
-      const double size = norm(e), centre = size > 0.0 ? std::atan2(e[1], e[0]) : 0.0;
-      // a sample every four profile intervals (the bisection resolves what lies between:
-      // 80 evaluations on smooth profiles, 180 on rough ones); to 1e-9 of the clearance
-      const double step = 8.0 * std::numbers::pi / static_cast<double>(args.wear.cols);
-      const double phi = worn_maximum(f, centre, size, bound(bore).lowest + bound(pin).lowest,
-                                      size + bound(bore).curvature + bound(pin).curvature, step,
-                                      1e-9 * contacts(k, CONTACT_CLEARANCE));
-      double sl, cu, hb, hp;
-      const double value = both(phi, sl, cu, hb, hp);
-      const V n{std::cos(phi), std::sin(phi)};
-      g.delta = value - contacts(k, CONTACT_CLEARANCE);
+      auto lowest = [&](std::ptrdiff_t r)
+      { return r < 0 ? 0.0 : args.wear_bounds[static_cast<std::size_t>(r)].lowest; };
+      const Overlap o = worn_overlap(args.wear, bore < 0 ? nullptr : &args.wear_fine[static_cast<std::size_t>(bore)],
+                                     pin, lowest(bore) + lowest(pin), {e[0], e[1]}, phi_b, phi_j,
+                                     contacts(k, CONTACT_CLEARANCE));
+      g.worn = true;
+      const double size = std::hypot(o.gradient[0], o.gradient[1]);
+      if (not (o.moment > 0.0 and size > 0.0))
+      {   // open (or not finite): the deepest overlap, along e
+        const double r = norm(e);
+        g.delta = o.deepest;
+        g.normal = r > 0.0 ? scaled(e, 1.0 / r) : axis<D>(0);
+        g.point = add(g.at_bearing, scaled(g.normal, contacts(k, CONTACT_RADIUS)));
+        g.rate = dot(g.normal, v);
+        return;
+      }
+      const auto [delta, slope] = moment_penetration(o.moment, contacts(k, CONTACT_CLEARANCE));
+      const V n{o.gradient[0] / size, o.gradient[1] / size};
+      g.delta = delta;
       g.normal = n;
       g.point = add(g.at_bearing, scaled(n, contacts(k, CONTACT_RADIUS)));
-      g.rate = dot(n, v) + hb * w_b + hp * w_j;
-      g.worn = true;
-      g.turn_bearing = hb;
-      g.turn_journal = hp;
+      g.reach = size / slope;
+      g.turn_bearing = o.turn_bearing / slope;
+      g.turn_journal = o.turn_journal / slope;
+      g.rate = g.reach * dot(n, v) + g.turn_bearing * w_b + g.turn_journal * w_j;
     }
   }
 
@@ -665,10 +655,12 @@ struct Engine
                              static_cast<std::size_t>(args.tables.cols));
   }
 
-  /// A worn journal's forces (worn_radial): the normal force along u(phi*) between the
-  /// centres with the torques -F d delta / d phi on the two bodies' frames (the force of the
-  /// potential of delta), friction at the bore's surface point along its tangent as on a
-  /// round bore; the dissipated power (NaN beyond the law's table; 0 when open).
+  /// A worn journal's forces (worn_radial): the law's force F(delta_p, delta_p') of its
+  /// penetration, -F d delta_p / de on the journal at its centre (its opposite on the
+  /// bearing) with the torques -F d delta_p / dphi on the two frames (the force of the
+  /// potential of delta_p: an elastic contact keeps the energy book); friction at the bore's
+  /// surface point along the normal's tangent as on a round bore; the dissipated power (NaN
+  /// beyond the law's table; 0 when open).
   static double worn_contact(const Args& args, const Work& w, std::span<const double> y,
                              std::span<double> dy, std::ptrdiff_t k, double speed, const Radial& g)
   {
@@ -678,20 +670,23 @@ struct Engine
       const Matrix<double>& s = w.bodies;
       const std::int64_t bb = body(contacts, k, CONTACT_BEARING_BODY),
                          bj = body(contacts, k, CONTACT_JOURNAL_BODY);
+      if (std::isnan(g.delta))
+        return NaN;
       if (g.delta <= 0.0)
         return 0.0;
       const double f_el = elastic_force(args, k, g.delta);
-      const double f_n = laws::hysteresis_force(f_el, g.rate, speed, contact_chi(contacts, k, speed));
-      if (not std::isfinite(f_n))
+      const double f = laws::hysteresis_force(f_el, g.rate, speed, contact_chi(contacts, k, speed));
+      if (not std::isfinite(f))
         return NaN;
+      const double f_n = f * g.reach;   // the force between the centres
       w.normal[k] = f_n;
       K::push(w.force, s, bj, scaled(g.normal, -f_n), g.at_journal, args.offsets);
       K::push(w.force, s, bb, scaled(g.normal, f_n), g.at_bearing, args.offsets);
-      K::push_torque(w.force, s, bj, contacts.cell<D>(k, CONTACT_JOURNAL_POINT), -f_n * g.turn_journal,
+      K::push_torque(w.force, s, bj, contacts.cell<D>(k, CONTACT_JOURNAL_POINT), -f * g.turn_journal,
                      args.offsets);
-      K::push_torque(w.force, s, bb, contacts.cell<D>(k, CONTACT_BEARING_POINT), -f_n * g.turn_bearing,
+      K::push_torque(w.force, s, bb, contacts.cell<D>(k, CONTACT_BEARING_POINT), -f * g.turn_bearing,
                      args.offsets);
-      double power = (f_n - f_el) * g.rate;
+      double power = (f - f_el) * g.rate;
       if (contacts(k, CONTACT_FRICTION_ON) > 0.0
           and static_cast<int>(contacts(k, CONTACT_FRICTION_LAW)) != NO_FRICTION)
       {

@@ -1,18 +1,16 @@
 // A worn journal in its bore (the plane): the profiles' interpolation, their bounds, and the
-// search for the angle where the worn surfaces interfere most (engine.h: worn_radial).
+// contact spread over the arc where the worn surfaces overlap (engine.h: worn_radial).
 //
 // A profile is a row of Args::wear: the worn depth h (m) at n angles of its body's frame
 // evenly from -pi, periodic, interpolated by the uniform Catmull-Rom spline through its
-// points (C1; piecewise cubic, so h'' is linear on each piece and |h''| <= its largest end
-// value). The contact's interference
+// points (C1). The overlap at the angle phi,
 //
-//     f(phi) = e . u(phi) - h_bore(phi - phi_b) - h_pin(phi - phi_j)
+//     d(phi) = e . u(phi) - c - h_bore(phi - phi_b) - h_pin(phi - phi_j),
 //
-// has |f''| <= |e| + max|h_bore''| + max|h_pin''| = M everywhere, so on an interval [a, b]
-// f stays below its chord plus M (x - a)(b - x) / 2; and f <= |e| cos(phi - phi_e) - h_low
-// with h_low the least the two depths can sum to. The search (worn_maximum) is a branch and
-// bound on those two bounds: the global maximum to a set tolerance, whatever the profiles'
-// roughness, found where it moves continuously with the bodies.
+// measures the joint's penetration by its mean of order 4 over the arc where the surfaces
+// overlap, on the scale of a round joint: delta_p = Phi_round^-1(int d_+^4 dphi), the round
+// joint's own penetration on a round profile, smooth in the bodies' motion and in the
+// profiles however many nearly equal maxima d has (worn_overlap, moment_penetration).
 #pragma once
 
 #include "data.h"
@@ -27,8 +25,8 @@
 namespace pinbore::mechanism
 {
 
-/// A profile (row r of wear) at the angle a: its depth, slope and curvature.
-inline std::array<double, 3> worn_depth(const Rows& wear, std::ptrdiff_t r, double a)
+/// A profile (row r of wear) at the angle a: its depth (the Catmull-Rom spline).
+inline double worn_depth(const Rows& wear, std::ptrdiff_t r, double a)
 {
   const std::ptrdiff_t n = wear.cols;
   const double step = 2.0 * std::numbers::pi / static_cast<double>(n);
@@ -41,13 +39,11 @@ inline std::array<double, 3> worn_depth(const Rows& wear, std::ptrdiff_t r, doub
   auto at = [&](std::ptrdiff_t j) { return wear(r, ((j % n) + n) % n); };
   const double p0 = at(i - 1), p1 = at(i), p2 = at(i + 1), p3 = at(i + 2);
   const double c1 = -p0 + p2, c2 = 2 * p0 - 5 * p1 + 4 * p2 - p3, c3 = -p0 + 3 * p1 - 3 * p2 + p3;
-  return {0.5 * (2 * p1 + t * (c1 + t * (c2 + t * c3))),
-          0.5 * (c1 + t * (2 * c2 + 3 * t * c3)) / step,
-          0.5 * (2 * c2 + 6 * t * c3) / (step * step)};
+  return 0.5 * (2 * p1 + t * (c1 + t * (c2 + t * c3)));
 }
 
-/// Per profile (WornBound): the largest |h''| of its spline, and a depth it never falls
-/// below (its least point less the most a piece can sag between its points, M step^2 / 8).
+/// Per profile (WornBound): a depth its spline never falls below (its least point less the
+/// most a piece can sag between its points, max|h''| step^2 / 8).
 inline std::vector<WornBound> worn_bounds(const Rows& wear)
 {
   std::vector<WornBound> out(static_cast<std::size_t>(wear.rows));
@@ -67,115 +63,222 @@ inline std::vector<WornBound> worn_bounds(const Rows& wear)
       lowest = std::min(lowest, p1);
     }
     curvature /= step * step;
-    out[static_cast<std::size_t>(r)] = {curvature, lowest - curvature * step * step / 8.0};
+    out[static_cast<std::size_t>(r)] = {lowest - curvature * step * step / 8.0};
   }
   return out;
 }
 
-/// The most a function can reach on [a, b] (width w) given its ends' values fa, fb and
-/// |f''| <= m: the maximum of its chord plus m (x - a)(b - x) / 2.
-inline double chord_bound(double fa, double fb, double w, double m)
+/// The points of the arc's grid a profile's interval holds: the grid no coarser than 1/4
+/// degree, and at least 2 a profile's interval.
+inline int arc_fineness(std::ptrdiff_t points)
 {
-  const double sag = m * w * w;
-  if (sag <= 0.0)
-    return std::max(fa, fb);
-  const double t = std::clamp(0.5 + (fb - fa) / sag, 0.0, 1.0);
-  return fa + (fb - fa) * t + 0.5 * sag * t * (1.0 - t);
+  return static_cast<int>(std::max<std::ptrdiff_t>(2, (1440 + points - 1) / points));
 }
 
-/// The maximum over the circle of f (f(phi, slope, curvature) returns f and sets f', f''),
-/// given |f''| <= m,
-/// f <= size cos(phi - centre) - lowest, to within tol: samples at spacing step outward
-/// from centre while the cosine bound can beat the best, then each interval between them
-/// bisected while its chord bound exceeds the best by more than tol; the best point
-/// polished by Newton's method safeguarded by bisection where f' brackets a maximum in the
-/// last interval about it (to 1e-14 rad: f' = 0 there, which the contact's torques need).
-template <class F>
-double worn_maximum(F& f, double centre, double size, double lowest, double m, double step,
-                    double tol)
+/// Each profile's spline on the arc's grid (arc_fineness points an interval, from -pi).
+inline std::vector<std::vector<double>> worn_fine(const Rows& wear)
 {
-  struct Point
+  std::vector<std::vector<double>> out(static_cast<std::size_t>(wear.rows));
+  if (wear.cols < 3)
+    return out;
+  const std::ptrdiff_t total = wear.cols * arc_fineness(wear.cols);
+  const double step = 2.0 * std::numbers::pi / static_cast<double>(total);
+  for (std::ptrdiff_t r = 0; r < wear.rows; ++r)
+    for (std::ptrdiff_t k = 0; k < total; ++k)
+      out[static_cast<std::size_t>(r)].push_back(
+          worn_depth(wear, r, -std::numbers::pi + static_cast<double>(k) * step));
+  return out;
+}
+
+/// The overlap's moment over a linear piece from a to b, int_0^1 (a + (b - a) t)_+^4 dt,
+/// and its derivatives in a and b (WORN_ORDER = 4: polynomials, no division where both
+/// overlap).
+struct Piece
+{
+  double value, at_a, at_b;
+};
+
+inline Piece moment_piece(double a, double b)
+{
+  static_assert(WORN_ORDER == 4);
+  if (a <= 0.0 and b <= 0.0)
+    return {0.0, 0.0, 0.0};
+  if (a >= 0.0 and b >= 0.0)
   {
-    double x, value;
-  };
-  thread_local std::vector<Point> samples;
-  thread_local std::vector<std::array<Point, 2>> pending;
-  samples.clear();
-  pending.clear();
-  if (not (std::isfinite(size) and std::isfinite(m)))
-    return centre;   // a state not finite (an integrator's trial): its value is NaN
-  double slope, curvature;
-  Point top{centre, f(centre, slope, curvature)};   // the best point so far
-  samples.push_back(top);
-  const auto half = static_cast<std::ptrdiff_t>(std::ceil(std::numbers::pi / step));
-  // one side then the other; the last sample of each side bounds the rest below the best
-  std::ptrdiff_t right = 0;
-  for (int side : {1, -1})
+    const double a2 = a * a, b2 = b * b;
+    return {(a2 * a2 + a2 * a * b + a2 * b2 + a * b2 * b + b2 * b2) / 5.0,
+            (4 * a2 * a + 3 * a2 * b + 2 * a * b2 + b2 * b) / 5.0,
+            (a2 * a + 2 * a2 * b + 3 * a * b2 + 4 * b2 * b) / 5.0};
+  }
+  // one end overlaps: (b^5 / (b - a)) / 5 with b the overlapping end
+  const bool b_in = b > 0.0;
+  const double x = b_in ? b : a, y = b_in ? a : b, w = x - y, x4 = x * x * x * x;
+  const double value = x4 * x / (5.0 * w);
+  const double at_x = x4 / w - value / w, at_y = value / w;
+  return b_in ? Piece{value, at_y, at_x} : Piece{value, at_x, at_y};
+}
+
+/// The overlap of a worn journal and its bore: its moment Phi = int d_+^4 dpsi and the
+/// gradient of Phi in the journal centre's offset e and in the two frames' angles; the
+/// deepest overlap of the grid's points and its direction (worn_overlap).
+struct Overlap
+{
+  double moment = 0.0;                          // Phi (m^4 rad)
+  std::array<double, 2> gradient{0.0, 0.0};     // dPhi/de
+  double turn_bearing = 0.0, turn_journal = 0.0;   // dPhi/dphi_b, dPhi/dphi_j
+  double deepest = -std::numeric_limits<double>::infinity();   // the largest overlap (m)
+};
+
+/// The overlap of a worn journal and its bore at the bore's angles psi_k = -pi + k 2 pi / M
+/// (M = arc_fineness times the profile's points, the bore's frame at phi_b),
+///
+///     d_k = e . u(phi_b + psi_k) - h_bore(psi_k) - h_pin(psi_k + phi_b - phi_j) - c,
+///
+/// taken linear between the points: its moment Phi = sum of 2 pi / M times each piece's
+/// (moment_piece, exact for the linear pieces), whose gradient is each point's dPhi/dd_k
+/// times dd_k/de = u, dd_k/dphi_b = e . u' - h_pin', dd_k/dphi_j = h_pin'. The bore's spline
+/// on the grid is `bore` (worn_fine; null: round); the pin's, shifted by phi_b - phi_j, is
+/// evaluated with one set of weights a grid point of the interval. Only the window where
+/// e . u can exceed c plus the least depths (`lowest`) is visited; where nothing overlaps,
+/// `deepest` is the largest d_k or, outside the window, the bound |e| - c - lowest.
+inline Overlap worn_overlap(const Rows& wear, const std::vector<double>* bore, std::ptrdiff_t pin,
+                            double lowest, const std::array<double, 2>& e, double phi_b,
+                            double phi_j, double clearance)
+{
+  Overlap out;
+  const double size = std::hypot(e[0], e[1]);
+  const double reach = clearance + lowest;
+  if (not (std::isfinite(size) and std::isfinite(phi_b) and std::isfinite(phi_j)))
   {
-    for (std::ptrdiff_t i = 1; i <= half; ++i)
+    out.moment = out.deepest = std::numeric_limits<double>::quiet_NaN();
+    return out;
+  }
+  out.deepest = size - reach;   // a bound, where no point can overlap
+  if (size <= reach)
+    return out;
+  const std::ptrdiff_t n = wear.cols;
+  const int fine = arc_fineness(n);
+  const std::ptrdiff_t total = n * fine;
+  const double step = 2.0 * std::numbers::pi / static_cast<double>(total);
+  const double half = std::acos(std::clamp(reach / size, -1.0, 1.0));
+  const double centre = std::atan2(e[1], e[0]) - phi_b + std::numbers::pi;   // psi + pi, window's centre
+  const auto first = static_cast<std::ptrdiff_t>(std::floor((centre - half) / step)) - 1;
+  const std::ptrdiff_t last = std::min(static_cast<std::ptrdiff_t>(std::ceil((centre + half) / step)) + 1,
+                                       first + total);
+  // the pin's spline weights (value, slope) for each grid point of an interval
+  thread_local std::vector<std::array<double, 8>> weights;
+  thread_local std::vector<std::ptrdiff_t> shifts;
+  weights.resize(static_cast<std::size_t>(fine)), shifts.resize(static_cast<std::size_t>(fine));
+  if (pin >= 0)
+  {
+    const double interval = 2.0 * std::numbers::pi / static_cast<double>(n);
+    double a = (phi_b - phi_j) / interval;
+    a -= static_cast<double>(n) * std::floor(a / static_cast<double>(n));
+    for (int r = 0; r < fine; ++r)
     {
-      const double da = static_cast<double>(i) * step;
-      const double x = centre + side * da;
-      samples.push_back({x, f(x, slope, curvature)});
-      if (samples.back().value > top.value)
-        top = samples.back();
-      if (size * std::cos(std::min(da, std::numbers::pi)) - lowest < top.value)
-        break;
+      const double x = static_cast<double>(r) / fine + a, base = std::floor(x), t = x - base;
+      shifts[static_cast<std::size_t>(r)] = static_cast<std::ptrdiff_t>(base);
+      weights[static_cast<std::size_t>(r)] = {
+          0.5 * (-t + 2 * t * t - t * t * t), 0.5 * (2 - 5 * t * t + 3 * t * t * t),
+          0.5 * (t + 4 * t * t - 3 * t * t * t), 0.5 * (-t * t + t * t * t),
+          0.5 * (-1 + 4 * t - 3 * t * t) / interval, 0.5 * (-10 * t + 9 * t * t) / interval,
+          0.5 * (1 + 8 * t - 9 * t * t) / interval, 0.5 * (-2 * t + 3 * t * t) / interval};
     }
-    if (side > 0)
-      right = static_cast<std::ptrdiff_t>(samples.size());
   }
-  // the intervals, each between two neighbouring samples (the right side then the left)
-  auto between = [&](std::ptrdiff_t from, std::ptrdiff_t to)
+  thread_local std::vector<double> d, weight, cs, sn, slope;
+  const auto count = static_cast<std::size_t>(last - first + 1);
+  d.resize(count), weight.assign(count, 0.0), cs.resize(count), sn.resize(count), slope.resize(count);
+  const double a0 = phi_b - std::numbers::pi + static_cast<double>(first) * step;
+  const double c1 = std::cos(step), s1 = std::sin(step);
+  double c = std::cos(a0), sg = std::sin(a0);
+  out.deepest = -std::numeric_limits<double>::infinity();
+  auto wrap = [](std::ptrdiff_t i, std::ptrdiff_t m) { return ((i % m) + m) % m; };
+  for (std::size_t i = 0; i < count; ++i)
   {
-    for (std::ptrdiff_t i = from; i + 1 < to; ++i)
-      pending.push_back({samples[i], samples[i + 1]});
-  };
-  between(0, right);
-  if (static_cast<std::ptrdiff_t>(samples.size()) > right)
-  {
-    pending.push_back({samples[right], samples[0]});
-    between(right, static_cast<std::ptrdiff_t>(samples.size()));
+    const std::ptrdiff_t k = wrap(first + static_cast<std::ptrdiff_t>(i), total);
+    double hp = 0.0, hp1 = 0.0;
+    if (pin >= 0)
+    {
+      const auto r = static_cast<std::size_t>(k % fine);
+      const std::ptrdiff_t j = k / fine + shifts[r];
+      const auto& w = weights[r];
+      for (int m = 0; m < 4; ++m)
+      {
+        const double p = wear(pin, wrap(j - 1 + m, n));
+        hp += w[static_cast<std::size_t>(m)] * p, hp1 += w[static_cast<std::size_t>(m + 4)] * p;
+      }
+    }
+    cs[i] = c, sn[i] = sg, slope[i] = hp1;
+    d[i] = e[0] * c + e[1] * sg - (bore ? (*bore)[static_cast<std::size_t>(k)] : 0.0) - hp - clearance;
+    out.deepest = std::max(out.deepest, d[i]);
+    const double cn = c * c1 - sg * s1;
+    sg = sg * c1 + c * s1, c = cn;
   }
-  double width = step;   // the spacing about the best point when it became the best
-  while (not pending.empty())
+  if (out.deepest <= 0.0)
+    return out;
+  for (std::size_t i = 0; i + 1 < count; ++i)
   {
-    auto [a, b] = pending.back();
-    pending.pop_back();
-    const double w = std::abs(b.x - a.x);
-    if (chord_bound(a.value, b.value, w, m) <= top.value + tol or w < 1e-13)
+    const Piece p = moment_piece(d[i], d[i + 1]);
+    out.moment += step * p.value;
+    weight[i] += step * p.at_a, weight[i + 1] += step * p.at_b;
+  }
+  for (std::size_t i = 0; i < count; ++i)
+  {
+    const double w = weight[i];
+    if (w == 0.0)
       continue;
-    const double x = 0.5 * (a.x + b.x);
-    const Point mid{x, f(x, slope, curvature)};
-    if (mid.value > top.value)
-      top = mid, width = 0.5 * w;
-    pending.push_back({a, mid});
-    pending.push_back({mid, b});
+    out.gradient[0] += w * cs[i], out.gradient[1] += w * sn[i];
+    out.turn_bearing += w * (-e[0] * sn[i] + e[1] * cs[i] - slope[i]);
+    out.turn_journal += w * slope[i];
   }
-  // polish: f' = 0 where it changes sign from + to - about the best point
-  double lo = top.x - width, hi = top.x + width;
-  f(lo, slope, curvature);
-  const bool rises = slope > 0.0;
-  f(hi, slope, curvature);
-  if (not (rises and slope < 0.0))
-    return top.x;
-  double x = top.x, moved = hi - lo;
-  for (int it = 0; it < 60 and hi - lo > 1e-14; ++it)
+  return out;
+}
+
+/// The moment of a round joint's overlap at the penetration delta > 0, Phi(delta) = int
+/// d_+^4 dphi with d = (c + delta) cos phi - c, and dPhi/d delta: with t = sqrt(delta - d),
+///
+///     Phi = 4 int_0^sqrt(delta) (delta - t^2)^4 / sqrt(2c + 2 delta - t^2) dt,
+///
+/// a smooth integrand, by 12-point Gauss-Legendre (exact to rounding); the derivative under
+/// the integral (the integrand vanishes at the upper end).
+inline std::pair<double, double> round_moment(double delta, double clearance)
+{
+  static_assert(WORN_ORDER == 4);
+  static constexpr std::array<double, 6> x{0.1252334085114689, 0.3678314989981802, 0.5873179542866175,
+                                           0.7699026741943047, 0.9041172563704748, 0.9815606342467192};
+  static constexpr std::array<double, 6> w{0.2491470458134027, 0.2334925365383546, 0.20316742672306573,
+                                           0.16007832854334642, 0.10693932599531907, 0.04717533638651141};
+  const double root = std::sqrt(delta), big = 2.0 * clearance + 2.0 * delta;
+  double value = 0.0, slope = 0.0;
+  for (std::size_t i = 0; i < 12; ++i)
   {
-    f(x, slope, curvature);
-    if (slope == 0.0)
-      break;
-    (slope > 0.0 ? lo : hi) = x;
-    const double newton = curvature < 0.0 ? x - slope / curvature : std::numeric_limits<double>::quiet_NaN();
-    const double next = (newton > lo and newton < hi and std::abs(newton - x) < 0.5 * moved)
-                            ? newton
-                            : 0.5 * (lo + hi);
-    moved = std::abs(next - x);
-    x = next;
-    if (moved < 1e-15)
+    const double node = i < 6 ? -x[i] : x[i - 6], weight = w[i < 6 ? i : i - 6];
+    const double t = 0.5 * root * (1.0 + node), u = delta - t * t, r = 1.0 / std::sqrt(big - t * t);
+    const double u3 = u * u * u;
+    value += weight * u3 * u * r;
+    slope += weight * (4.0 * u3 * r - u3 * u * r * r * r);
+  }
+  return {2.0 * root * value, 2.0 * root * slope};
+}
+
+/// A worn joint's penetration delta_p = Phi_round^-1(Phi) and dPhi_round/d delta there:
+/// Newton's method on ln Phi_round(delta) = ln Phi (nearly linear in ln delta) from the
+/// parabolic arc's sqrt(2/c) B(5, 1/2) delta^(9/2), B(5, 1/2) = 256/315, to 1e-14.
+inline std::pair<double, double> moment_penetration(double moment, double clearance)
+{
+  double log_delta = std::log(moment / (std::sqrt(2.0 / clearance) * 256.0 / 315.0)) / 4.5;
+  std::pair<double, double> at{};
+  for (int it = 0; it < 40; ++it)
+  {
+    const double delta = std::exp(log_delta);
+    at = round_moment(delta, clearance);
+    const double change = (std::log(at.first) - std::log(moment)) / (delta * at.second / at.first);
+    log_delta -= change;
+    if (std::abs(change) < 1e-14)
       break;
   }
-  return f(x, slope, curvature) >= top.value - tol ? x : top.x;
+  const double delta = std::exp(log_delta);
+  return {delta, round_moment(delta, clearance).second};
 }
 
 } // namespace pinbore::mechanism

@@ -59,7 +59,7 @@ def observed_steps(model, run) -> dict:
     """kernel.observe at every accepted step of a Trajectory, each with the law memory (impact
     speeds, latches, contact modes) it was taken with: per-step arrays by name (rates,
     bodies, depths, normals, frictions, offsets, directions: each contact's, a worn journal's
-    where its surfaces interfere most; drift, kinetic, angles, stretches), and the args and
+    the normal of its overlap's force; drift, kinetic, angles, stretches), and the args and
     work it used."""
     times, states = run.times, run.states
     n, nc, nt = times.size, model.contacts.shape[0], model.torsion.shape[0]

@@ -26,8 +26,8 @@ class JointHistory:
 def of_run(model, trajectory, j: int, window: tuple[float, float]) -> JointHistory:
     """The history of planar clearance joint j (a journal in a bore) over the recorded steps
     of `trajectory` within `window` (s). The direction is the contact's as the core finds it
-    (the journal centre's offset e from the bore's on a round joint; on a worn one where the
-    surfaces interfere most); the slip v_s = t . (v_pin - v_bore) + (w_pin - w_bore) R_pin at
+    (the journal centre's offset e from the bore's on a round joint; on a worn one the normal
+    of the force of the arc where its surfaces overlap); the slip v_s = t . (v_pin - v_bore) + (w_pin - w_bore) R_pin at
     the contact, t its tangent, the material velocities taken at the journal's centre."""
     from pinbore.reduced.mechanism.outputs import observed_steps   # noqa: PLC0415
 

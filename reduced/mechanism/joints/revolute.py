@@ -34,7 +34,8 @@ class ClearanceJoint(JointMaterials, ContactLaw):
     start: Literal["ideal", "free", "placed"] = "ideal"
     wear_file: str | None = pydantic.Field(default=None, description=(
         "a wear.csv (pinbore wear): the bore's and the pin's worn depth against angle in their "
-        "bodies' frames; the journal then meets its bore where the worn surfaces interfere most"))
+        "bodies' frames; the journal then meets its bore over the arc where the worn surfaces "
+        "overlap, an elastic foundation that keeps the joint's law on a round profile"))
 
     @pydantic.model_validator(mode="after")
     def _normal_law(self):
