@@ -236,7 +236,8 @@ def test_a_study_reruns_only_what_changed(tmp_path):
 
 def test_an_fe_point_is_keyed_on_every_module_its_run_loads():
     """An FE or impact point's cache key covers the code of its run: the import closure of
-    the method of Point that runs it (study.CODE, read by core.codedeps). Every pinbore
+    its stage's model, runner and point function (study.point_code: the registry read by
+    core.codedeps). Every pinbore
     module its run loads (pinbore.fem.run and pinbore.fem.impact.run imported in a fresh
     interpreter) lies in it, so no edit its result could see leaves its cached result
     standing; the multibody engine and the calibration are not, so their edits rerun no FE
@@ -252,13 +253,13 @@ def test_an_fe_point_is_keyed_on_every_module_its_run_loads():
     # a compiled module's submodules are its own (pinbore.core.cpp.laws); a namespace
     # package has no code
     loaded = {codedeps.project_module(m, graph.files) for m in loaded} - {None}
-    both = graph.closure(study.CODE["fem"], study.CODE["impact"])
+    both = graph.closure(*study.point_code("fem"), *study.point_code("impact"))
     assert loaded - both == set()
-    for kind in ("fem", "impact"):
-        code = graph.closure(study.CODE[kind])
+    for stage in ("fem", "impact", "modes"):
+        code = graph.closure(*study.point_code(stage))
         assert not any(m.startswith(("pinbore.reduced.", "pinbore.calibration")) for m in code)
     assert {"pinbore.fem.modes.file", "pinbore.laws.lawsfile", "pinbore.reduced.mechanism.model",
-            "pinbore.core.cpp"} <= graph.closure(study.CODE["mechanism"])
+            "pinbore.core.cpp"} <= graph.closure(*study.point_code("reduced"))
 
 
 def test_a_killed_study_resumes_without_losing_or_repeating_a_point(tmp_path):
@@ -899,17 +900,18 @@ def test_a_points_cache_key_reads_the_source_of_every_module_of_its_run():
     """The code an FE point's key hashes: the source of every module of its closure as the
     running pinbore finds it (an editable install gives pinbore.core two folders: its
     source, and the installed tree of the compiled module, which holds no .py), the compiled
-    core's binary, and of pinbore.study the method that runs the point alone (a new plot
-    reruns nothing; the class Point is hashed beside it)."""
+    core's binary, and of the registry (pinbore.stages) the definitions that run a point
+    alone, not its table (the class Point is hashed beside it)."""
     from pinbore.core.codedeps import hashed
-    from pinbore.study import CODE
+    from pinbore.study import point_code
 
-    read = dict(hashed(CODE["fem"]))
+    read = dict(hashed(*point_code("fem")))
     for name in ("pinbore.fem.run", "pinbore.fem.elasticity", "pinbore.meshes.model", "pinbore.laws.relief"):
         path = ROOT / name.split(".")[1] / (name.split(".", 2)[2].replace(".", "/") + ".py")
         assert read[name] == path.read_bytes()
     assert read["pinbore.core.cpp"][:4] == b"\x7fELF" or len(read["pinbore.core.cpp"]) > 10000
-    assert read["pinbore.study"].startswith(b"def fem(self, data):")
+    assert b"def fem_point(data, point):" in read["pinbore.stages"]
+    assert b"STAGES = (" not in read["pinbore.stages"] and "pinbore.study" not in read
 
 
 def test_the_report_marks_a_statistic_that_is_not_finite(tmp_path):
@@ -949,3 +951,4 @@ def test_a_key_the_base_leaves_out_is_set_then_varied(tmp_path):
     plan = runner.Plan(path, runner.load(path))
     assert [p["bodies"][1]["modes"] for p in plan.scenes] == [2, 4]
     assert all(type(p["bodies"][1]["modes"]) is int for p in plan.scenes)
+
