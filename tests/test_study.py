@@ -952,3 +952,52 @@ def test_a_key_the_base_leaves_out_is_set_then_varied(tmp_path):
     assert [p["bodies"][1]["modes"] for p in plan.scenes] == [2, 4]
     assert all(type(p["bodies"][1]["modes"]) is int for p in plan.scenes)
 
+
+# A steel strip bending in its plane (plane stress): 0.5 m long, its in-plane depth varied,
+# on a coarse mesh (5 mm quadratic cells: two or three through the depth), two modes.
+BEAM = """[body]
+shape = "bar"
+dim = 2
+length = 0.5
+width = 0.01
+thickness = 0.02
+cell_size = 0.005
+
+[material]
+E = 2.1e11
+nu = 0.3
+density = 7850.0
+
+[reduction]
+interfaces = ["a"]
+fixed_interface_modes = 4
+modes = 2
+degree = 2
+"""
+
+
+def test_a_modes_study_gives_the_beams_bending_frequencies(tmp_path):
+    """A study of a modes scene (its points run `pinbore modes`): the strip's depth w varied,
+    its first two free-free bending frequencies collected. Euler-Bernoulli: f_n =
+    (beta_n L)^2 / (2 pi L^2) sqrt(E I / (rho A)), I / A = w^2 / 12, so f_1 grows as w and f_2 /
+    f_1 = (7.8532 / 4.7300)^2 = 2.757 whatever w (L / w >= 30: shear and rotary inertia
+    below 0.5 %)."""
+    (tmp_path / "beam.toml").write_text(BEAM)
+    study = tmp_path / "study.toml"
+    study.write_text('base = "beam.toml"\n[parameters."body.width"]\nvalues = [0.010, 0.016]\n'
+                     '[sampling]\nmethod = "grid"\n'
+                     '[[collect]]\nname = "f1_Hz"\npath = "frequencies_Hz.0"\n'
+                     '[[collect]]\nname = "f2_Hz"\npath = "frequencies_Hz.1"\n')
+    done = pinbore("study", study, "--out", tmp_path / "out", "--workers", "2")
+    assert done.returncode == 0, done.stderr
+    rows = rows_of(tmp_path / "out")
+    E, rho, L = 2.1e11, 7850.0, 0.5
+    for row in rows:
+        w = float(row["body.width"])
+        f1 = 4.730041**2 / (2 * math.pi * L**2) * math.sqrt(E * w**2 / 12 / rho)
+        assert float(row["f1_Hz"]) == pytest.approx(f1, rel=0.01)
+        assert float(row["f2_Hz"]) / float(row["f1_Hz"]) == pytest.approx((7.853205 / 4.730041) ** 2, rel=0.01)
+        assert (tmp_path / "out" / "points" / row["name"] / "modes.json").is_file()
+    ratio = float(rows[1]["f1_Hz"]) / float(rows[0]["f1_Hz"])
+    assert ratio == pytest.approx(0.016 / 0.010, rel=0.005)   # f_1 as w^1
+    assert json.loads((tmp_path / "out" / "summary.json").read_text())["stage"] == "modes"
