@@ -43,6 +43,10 @@ class Section:
 
 @dataclass(frozen=True)
 class Stage:
+    """A stage: a `pinbore` command, and what the API, the study, the report and make know of
+    it. A scene stage (one with a model) reads one scene file; the runner validates it again,
+    as it does when called from Python."""
+
     name: str                          # the command: `pinbore <name>`
     summary: str                       # its line in `pinbore --help`
     description: str                   # its `--help`
@@ -104,16 +108,14 @@ def _scene_inputs(args) -> list:
 def _wear_inputs(args) -> list:
     """A wear scene, the files it names, the result.json beside its FE curve and the files
     its mechanism scene names."""
-    from pinbore.core.scene import named_files, read_toml   # noqa: PLC0415
-
     files = _scene_inputs(args)
     try:
-        data = read_toml(args.scene)
+        data = scenes.read_toml(args.scene)
     except InputError:
         return files   # reading it for the run says why
     for key, path in (("curve_file", "result.json"), ("mechanism_file", None)):
         if isinstance(data.get(key), str):
-            (named,) = named_files({key: data[key]}, Path(args.scene).parent)
+            (named,) = scenes.named_files({key: data[key]}, Path(args.scene).parent)
             files += [named.parent / path] if path else referenced_files(named)
     return files
 
@@ -302,7 +304,7 @@ STAGES = (
           description="Run the base scene of a study file (TOML: base, [parameters], [sampling], "
                       "[[collect]], [limit], [tolerance]) through its stage at every point of its "
                       "grid or sample, in parallel and cached by content; write DIR/results.csv, "
-                      "DIR/statistics.json (confidence intervals, exceedance), DIR/sobol.csv "
+                      "DIR/summary.json, DIR/statistics.json (confidence intervals, exceedance), DIR/sobol.csv "
                       "(saltelli plans), DIR/tolerance.json and plots. See docs/study.md.",
           run="pinbore.study:command", arguments="pinbore.cli:study_arguments", inputs=_study_inputs,
           outputs=("results.csv", "summary.json", "statistics.json"),

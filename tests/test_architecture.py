@@ -297,8 +297,9 @@ def test_only_the_registry_branches_on_a_stage_or_a_kind():
 
 def test_the_registry_names_what_exists():
     """Every string entry of a stage ("module:name") names a loadable object, its model a
-    pydantic model or a validating function; the mechanism's kinds are those of
-    reduced.mechanism.kinds; the commands make reads (core.codedeps, by `ast`) are the stages."""
+    pydantic model or a validating function; its help names the files it writes, its typed
+    result among them; the mechanism's kinds are those of reduced.mechanism.kinds; the
+    commands make reads (core.codedeps, by `ast`) are the stages."""
     import pydantic
 
     from pinbore import stages
@@ -314,6 +315,8 @@ def test_the_registry_names_what_exists():
             model = stages.resolve(stage.model)
             assert not isinstance(model, type) or issubclass(model, pydantic.BaseModel)
         assert bool(stage.point) == bool(stage.kinds) == bool(stage.result), stage.name
+        assert all(f"/{file}" in stage.description for file in stage.outputs), stage.name
+        assert stage.result is None or stage.result[0] in stage.outputs
     assert stages.STAGE["reduced"].kinds == tuple(kinds.KINDS)
     graph = codedeps.Graph(codedeps.repository_folders(ROOT))
     assert list(codedeps.commands(graph)) == list(stages.STAGE)
