@@ -953,27 +953,12 @@ def test_a_key_the_base_leaves_out_is_set_then_varied(tmp_path):
     assert all(type(p["bodies"][1]["modes"]) is int for p in plan.scenes)
 
 
-# A steel strip bending in its plane (plane stress): 0.5 m long, its in-plane depth varied,
-# on a coarse mesh (5 mm quadratic cells: two or three through the depth), two modes.
-BEAM = """[body]
-shape = "bar"
-dim = 2
-length = 0.5
-width = 0.01
-thickness = 0.02
-cell_size = 0.005
 
-[material]
-E = 2.1e11
-nu = 0.3
-density = 7850.0
-
-[reduction]
-interfaces = ["a"]
-fixed_interface_modes = 4
-modes = 2
-degree = 2
-"""
+# the flexible pendulum's steel strip, bending in its plane (plane stress), shortened to 0.5 m
+# on a coarse mesh (5 mm quadratic cells: two or three through its depth), two modes
+BEAM = ROOT / "scenes/modes/pendulum_beam_2d.toml"
+BEAM_SET = {"body.length": 0.5, "body.width": 0.01, "body.cell_size": 0.005,
+            "reduction.fixed_interface_modes": 4, "reduction.modes": 2, "reduction.full_modes": 0}
 
 
 def test_a_modes_study_gives_the_beams_bending_frequencies(tmp_path):
@@ -982,16 +967,16 @@ def test_a_modes_study_gives_the_beams_bending_frequencies(tmp_path):
     (beta_n L)^2 / (2 pi L^2) sqrt(E I / (rho A)), I / A = w^2 / 12, so f_1 grows as w and f_2 /
     f_1 = (7.8532 / 4.7300)^2 = 2.757 whatever w (L / w >= 30: shear and rotary inertia
     below 0.5 %)."""
-    (tmp_path / "beam.toml").write_text(BEAM)
     study = tmp_path / "study.toml"
-    study.write_text('base = "beam.toml"\n[parameters."body.width"]\nvalues = [0.010, 0.016]\n'
-                     '[sampling]\nmethod = "grid"\n'
+    study.write_text(f'base = "{BEAM}"\n[set]\n' + "".join(f'"{k}" = {v}\n' for k, v in BEAM_SET.items())
+                     + '[parameters."body.width"]\nvalues = [0.010, 0.016]\n[sampling]\nmethod = "grid"\n'
                      '[[collect]]\nname = "f1_Hz"\npath = "frequencies_Hz.0"\n'
                      '[[collect]]\nname = "f2_Hz"\npath = "frequencies_Hz.1"\n')
     done = pinbore("study", study, "--out", tmp_path / "out", "--workers", "2")
     assert done.returncode == 0, done.stderr
     rows = rows_of(tmp_path / "out")
-    E, rho, L = 2.1e11, 7850.0, 0.5
+    material, L = tomllib.loads(BEAM.read_text())["material"], BEAM_SET["body.length"]
+    E, rho = material["E"], material["density"]
     for row in rows:
         w = float(row["body.width"])
         f1 = 4.730041**2 / (2 * math.pi * L**2) * math.sqrt(E * w**2 / 12 / rho)
