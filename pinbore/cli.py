@@ -1,6 +1,7 @@
-"""The `pinbore` command: one subcommand per stage of the registry (pinbore.stages).
+"""The `pinbore` command: one subcommand per stage, from the mesh to the report.
 
-Bad input prints one line `pinbore <command>: <file>: <key>: <rule>` and exits with 2.
+Its subcommands, their help and what each runs and reads are the stage registry's
+(pinbore.stages). Bad input prints one line `pinbore <command>: <file>: <key>: <rule>` and exits with 2.
 """
 
 import argparse
