@@ -44,9 +44,10 @@ CALIBRATION_STUDIES := $(addprefix build/study/,$(addsuffix /summary.json,calibr
 
 # The code each command runs, read from the code: build/deps.mk (written by core/codedeps.py,
 # plain Python, so before .venv exists; again whenever a source file changes) sets
-# CODE_<command>, the source files of the import closure of the command's function in
-# pinbore/cli.py (lazy imports included), and LAWS_SCENES, the mechanism scenes whose TOML
-# names a laws_file. Read by every goal but clean and help (the rules below need it).
+# CODE_<command>, the source files of the import closure of the command's stage (its scene
+# model and runner in the registry pinbore/stages.py, lazy imports included), and
+# LAWS_SCENES, the mechanism scenes whose TOML names a laws_file. Read by every goal but
+# clean and help (the rules below need it).
 DEPS_PYTHON = $(if $(wildcard $(PY)),$(PY),$(or $(PYTHON312),python3))
 ifneq ($(if $(MAKECMDGOALS),$(filter-out clean help,$(MAKECMDGOALS)),all),)
 include build/deps.mk

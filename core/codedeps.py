@@ -4,7 +4,7 @@ study and of the dynamics sweeps come from here, so that an edit of any module a
 imports reruns that stage and a cached result never stands for other code.
 
 An entry is a module (`pinbore.fem.run`) or a function or class in one
-(`pinbore.cli:_modes`, `pinbore.study:Point.fem`). Its closure holds:
+(`pinbore.cli:main`, `pinbore.stages:fem_point`). Its closure holds:
 
 - the module of the entry, its statements outside functions (what importing it runs) and, for a
   function or class entry, that definition whole;
@@ -16,14 +16,23 @@ An entry is a module (`pinbore.fem.run`) or a function or class in one
   runs its packages' `__init__`; their lazy attributes, `pinbore.run`, are not followed);
 - the compiled modules reached (COMPILED: no source; make rebuilds them with .venv).
 
-A dispatcher, a module whose functions each load another stage (`pinbore.cli`), is an entry
-by its function: the closure of the module whole would be every stage.
+A dispatcher, a module whose functions and table reach every stage (`pinbore.cli`, the stage
+registry `pinbore.stages`), counts for what importing it runs, and is an entry by its
+function: the closure of the module whole would be every stage.
+
+The code a stage runs is named in the registry (pinbore/stages.py, read here with `ast`):
+each `Stage(...)` names its scene model, runner, point function, report sections ... as
+"module:name" strings. The code of a stage's fields is those modules whole (a dispatcher's
+function alone), with the registry's own Stage class and resolve; a stage that runs every
+stage's code of some fields (`uses`: the study runs every model, runner and point; the report
+every section) has those too.
 
 Run as a script (stdlib only, no install needed: `python3 -I core/codedeps.py`), it prints
 the make dependency file of the repository it lies in (`make` writes it to build/deps.mk): per
-command of `pinbore` (pinbore/cli.py), CODE_<command> the source files of its closure; and
-LAWS_SCENES, the mechanism scenes (scenes/reduced/) whose TOML names a `laws_file`, which
-wait for the calibration.
+command of `pinbore` (a stage of the registry), CODE_<command> the source files of the closure
+of the command line's entry and of the stage's model and runner; and LAWS_SCENES, the
+mechanism scenes (scenes/reduced/) whose TOML names a `laws_file`, which wait for the
+calibration.
 """
 
 import ast
@@ -33,7 +42,12 @@ import tomllib
 from pathlib import Path
 
 COMPILED = ("pinbore.core.cpp",)   # the compiled core (cpp/): part of the floor it lies in
-CLI = "pinbore.cli"                # the dispatcher of the `pinbore` command: one entry per command
+CLI = "pinbore.cli"                # the `pinbore` command: main dispatches to the registry
+REGISTRY = "pinbore.stages"        # the stage registry: STAGES, each stage's code in strings
+DISPATCHERS = (CLI, REGISTRY)
+REGISTRY_CODE = (f"{REGISTRY}:Stage", f"{REGISTRY}:resolve")   # how every stage is run
+COMMAND_CODE = ("model", "run")    # the fields of a stage whose code its command runs
+FIELD_CODE = {"point": ("model", "run", "point")}   # a study point runs its stage's model and runner
 MECHANISM_SCENES = "scenes/reduced"
 LAWS_KEY = "laws_file"             # a mechanism scene's key naming a calibration's laws.json
 
@@ -172,7 +186,8 @@ class Graph:
         if tree is None:
             return set()
         package = self.files[name].stem == "__init__"
-        found = imported(outside_functions(tree), name, package, self.files, strings=loads_by_name(tree))
+        strings = loads_by_name(tree) and name not in DISPATCHERS   # a dispatcher's strings: its stages
+        found = imported(outside_functions(tree), name, package, self.files, strings=strings)
         if whole:
             found |= imported(ast.walk(tree), name, package, self.files, strings=False)
         if qualname is not None:
@@ -203,6 +218,7 @@ class Graph:
                 todo.append((name, True))
         while todo:
             name, is_whole = todo.pop()
+            is_whole = is_whole and name not in DISPATCHERS
             if name in whole or (not is_whole and name in run):
                 continue
             (whole if is_whole else run).add(name)
@@ -268,21 +284,47 @@ def code_hash(*entries: str) -> str:
     return digest.hexdigest()
 
 
-def commands(graph: Graph) -> dict[str, str]:
-    """The `pinbore` commands and the function of pinbore/cli.py that runs each: the
-    functions its parser dispatches to (`set_defaults(func=_x)`, `_scene_command(sub, "x",
-    _x, ...)`), command x for function _x."""
-    tree = graph.tree(CLI)
-    defined = {n.name for n in tree.body if isinstance(n, ast.FunctionDef)}
-    named = set()
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Call):
-            callee = node.func.attr if isinstance(node.func, ast.Attribute) else getattr(node.func, "id", None)
-            if callee == "set_defaults":
-                named |= {k.value.id for k in node.keywords if k.arg == "func" and isinstance(k.value, ast.Name)}
-            elif callee == "_scene_command":
-                named |= {a.id for a in node.args if isinstance(a, ast.Name)}
-    return {name.removeprefix("_"): name for name in sorted(named & defined)}
+def registry(graph: Graph) -> dict[str, dict[str, list[str]]]:
+    """Stage -> field -> the strings of that field, from each `Stage(...)` of the registry's
+    source, in its order (nothing imported)."""
+    stages = {}
+    for node in ast.walk(graph.tree(REGISTRY)):
+        if isinstance(node, ast.Call) and getattr(node.func, "id", None) == "Stage":
+            fields = {k.arg: [c.value for c in ast.walk(k.value)
+                              if isinstance(c, ast.Constant) and isinstance(c.value, str)]
+                      for k in node.keywords}
+            stages[fields["name"][0]] = fields
+    return stages
+
+
+def entry(graph: Graph, text: str) -> str | None:
+    """The code entry a registry string names: "module:name" is the module whole (a
+    dispatcher's: that function or class alone); None when it names no module of the project."""
+    module, _, name = text.partition(":")
+    if module not in graph.files:
+        return None
+    return text if module in DISPATCHERS and name else module
+
+
+def stage_code(graph: Graph, stage: str, fields) -> list[str]:
+    """The code entries of a stage's fields (a point's: FIELD_CODE), and of every stage that
+    has a field the stage `uses` (the study: every stage's points; the report: every
+    section), with the registry's REGISTRY_CODE."""
+    stages = registry(graph)
+
+    def code(of: dict, field: str) -> list[str]:
+        return [text for f in FIELD_CODE.get(field, (field,)) for text in of.get(f, [])] if of.get(field) else []
+
+    named = [text for field in fields for text in code(stages[stage], field)]
+    named += [text for field in stages[stage].get("uses", []) for other in stages.values()
+              for text in code(other, field)]
+    return list(dict.fromkeys([*REGISTRY_CODE, *filter(None, (entry(graph, t) for t in named))]))
+
+
+def commands(graph: Graph) -> dict[str, list[str]]:
+    """The `pinbore` commands (the stages of the registry) and the code entries each runs: the
+    command line's main, and its stage's model and runner (stage_code)."""
+    return {stage: [f"{CLI}:main", *stage_code(graph, stage, COMMAND_CODE)] for stage in registry(graph)}
 
 
 def laws_scenes(root: Path) -> list[str]:
@@ -296,10 +338,11 @@ def make_deps(root: Path) -> str:
     """The text of the make dependency file of the repository at `root` (paths relative to it)."""
     graph = Graph(repository_folders(root))
     lines = ["# build/deps.mk: written by core/codedeps.py from the source (do not edit): the",
-             "# source files each `pinbore` command runs (the import closure of its function in",
-             "# pinbore/cli.py), and the mechanism scenes that read the calibration's laws file"]
-    for command, function in commands(graph).items():
-        files = [path.relative_to(root).as_posix() for path in graph.sources(f"{CLI}:{function}")]
+             "# source files each `pinbore` command runs (the import closure of its stage's code",
+             "# in the registry, pinbore/stages.py), and the mechanism scenes that read the",
+             "# calibration's laws file"]
+    for command, entries in commands(graph).items():
+        files = [path.relative_to(root).as_posix() for path in graph.sources(*entries)]
         lines.append(f"CODE_{command} := {' '.join(files)}")
     lines.append(f"LAWS_SCENES := {' '.join(laws_scenes(root))}")
     # read again when any source file changes (a new file counts once a module imports it,

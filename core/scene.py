@@ -5,8 +5,11 @@ Every scene model derives from `Strict`: unknown keys are errors, missing keys a
 and a broken rule is reported as one line `<file>: <key>: <rule>`.
 """
 
+import contextlib
 import json
+import tempfile
 import tomllib
+import warnings
 from pathlib import Path
 from typing import Annotated
 
@@ -16,6 +19,8 @@ from pinbore.core.errors import InputError
 
 # What a stage's file that does not read as its model most likely is, and the remedy.
 RUN_AGAIN = "written by another version of pinbore? run pinbore {command} again"
+# a scene kind's former name -> the kind's name, still read (normal_kind)
+RENAMED_KINDS = {"reduced": "planar"}
 
 
 class Strict(pydantic.BaseModel):
@@ -127,6 +132,59 @@ def absolute_files(data, base: Path):
     scene file's names are against its folder; a relative base is taken from the working
     directory)."""
     return _map_files(data, lambda name: str((Path(base) / name).absolute()))
+
+
+def normal_kind(data: dict, source: str) -> dict:
+    """Scene data whose `kind` is a former name (RENAMED_KINDS) as a copy of it with the
+    kind's name, and a FutureWarning naming the file, the key and the name to write (shown
+    once per file and process); other data as it is. Every reader of a scene's kind reads it
+    through here."""
+    kind = data.get("kind")
+    if not isinstance(kind, str) or kind not in RENAMED_KINDS:
+        return data
+    warnings.warn(f'{source}: kind: "{kind}" is deprecated: write kind = "{RENAMED_KINDS[kind]}"',
+                  FutureWarning, stacklevel=1)   # one location: the same file warns once
+    return data | {"kind": RENAMED_KINDS[kind]}
+
+
+def _toml_ready(node, where: str = "") -> None:
+    """Scene data that TOML can hold: string keys, no None (TOML has no null: leave the key
+    out); InputError naming the key."""
+    if isinstance(node, dict):
+        for key, value in node.items():
+            if not isinstance(key, str):
+                raise InputError(f"scene: {where + ': ' if where else ''}the key {key!r} must be a string")
+            _toml_ready(value, f"{where}.{key}" if where else key)
+    elif isinstance(node, (list, tuple)):
+        for k, value in enumerate(node):
+            _toml_ready(value, f"{where}.{k}")
+    elif node is None:
+        raise InputError(f"scene: {where}: None is no TOML value (leave the key out for its default)")
+
+
+def write_scene(path: str | Path, data: dict, base) -> Path:
+    """Write scene data as a TOML scene file at `path`, the files it names made absolute
+    against `base` (absolute_files: where the data's relative names are taken from); its path.
+    Data that TOML cannot hold is one InputError line naming the key."""
+    import tomli_w   # noqa: PLC0415
+
+    _toml_ready(data)
+    path = Path(path)
+    path.write_text(tomli_w.dumps(absolute_files(data, base)), encoding="utf-8")
+    return path
+
+
+@contextlib.contextmanager
+def scene_file(data: dict, base, name: str = "scene"):
+    """Scene data as a scene file for the block (write_scene, in a temporary folder removed
+    after it, which the block may also write its outputs to); an InputError of the block
+    names the data, `name`, not that file."""
+    with tempfile.TemporaryDirectory(prefix="pinbore-scene-") as folder:
+        path = write_scene(Path(folder) / "scene.toml", data, base)
+        try:
+            yield path
+        except InputError as err:
+            raise InputError(str(err).replace(str(path), name)) from None
 
 
 def load(model: type[pydantic.BaseModel], path: str | Path) -> pydantic.BaseModel:

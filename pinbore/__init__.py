@@ -13,7 +13,8 @@ from the floors below it:
     pinbore.calibration  calibration/   law fits and ranking on the FE curves: laws.json
     pinbore.reduced      reduced/       mechanisms with clearance joints, their nonlinear
                                         dynamics, the wear of a joint
-    pinbore (the roof)   pinbore/       the `pinbore` command, the Python API (`pinbore.run`),
+    pinbore (the roof)   pinbore/       the registry of stages that the rest reads, the
+                                        `pinbore` command, the Python API (`pinbore.run`),
                                         studies, the report, the laws' export
 """
 

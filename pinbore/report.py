@@ -1,39 +1,24 @@
 """`pinbore report`: one self-contained HTML page (images inline) from the results in build/.
 
-Each stage contributes a section, a function of what that stage wrote under build/ (and the
-benchmarks under bench/); a section whose results are absent says so. The page is a pure
+Each stage contributes its sections (pinbore.stages: Stage.sections), each a function of what
+that stage wrote under build/ (and the benchmarks under bench/); a section whose results are
+absent says so. The page is a pure
 function of the files it reads: built again from the same files it is the same.
 """
 
 import html
-import importlib
 import re
+import sys
 from pathlib import Path
 
+from pinbore import stages
 from pinbore.core.errors import InputError
 from pinbore.core.html import STYLE
 from pinbore.core.output import atomic_directory
 
-# (heading, module, function): each section a function of what its stage wrote under build/
-# (and of bench/), imported when the page is built (a bad --build answers before any loads)
-SECTIONS = [
-    ("FE contact", "pinbore.fem.report", "section"),
-    ("dynamic impacts", "pinbore.fem.impact.report", "section"),
-    ("flexible bodies", "pinbore.fem.modes.report", "section"),
-    ("calibration", "pinbore.calibration.report", "section"),
-    ("reduced models", "pinbore.reduced.report", "section"),
-    ("nonlinear dynamics", "pinbore.reduced.report", "dynamics_section"),
-    ("wear", "pinbore.reduced.wear.report", "section"),
-    ("studies", "pinbore.study", "section"),
-]
-# the first screen's answers: (module, function) -> [(question, answer HTML)]
-ANSWERS = [("pinbore.calibration.report", "answers"), ("pinbore.reduced.report", "answers"),
-           ("pinbore.study", "answers")]
+# each section's and answer's module is imported when the page is built (a bad --build
+# answers before any loads)
 HEADING = re.compile(r"^<h2>(.*?)</h2>", re.S)
-
-
-def _call(module: str, function: str, *args):
-    return getattr(importlib.import_module(module), function)(*args)
 
 
 def folded(index: int, heading: str, content: str) -> tuple[str, str]:
@@ -51,16 +36,24 @@ def answers_box(build_dir: Path) -> str:
     """The first screen: what the results answer, each with its number (a stage without
     results says nothing here)."""
     rows = []
-    for module, function in ANSWERS:
+    for function in stages.answers():
         try:
-            rows += _call(module, function, build_dir)
+            rows += stages.resolve(function)(build_dir)
         except Exception:   # noqa: BLE001 (its section, reading the same files, says why)
-            rows.append((html.escape(module.split(".")[1]), "not available: its files do not "
+            rows.append((html.escape(function.partition(":")[0].split(".")[1]), "not available: its files do not "
                          "read (see its section)"))
     if not rows:
         return "<p class='note'>No results to answer from yet: run <code>make</code>.</p>"
     items = "".join(f"<tr><th>{q}</th><td>{a}</td></tr>" for q, a in rows)
     return f"<section class='answers'><h2>Answers</h2><table>{items}</table></section>"
+
+
+def command(args) -> int:
+    """`pinbore report` on its parsed arguments (pinbore.stages): 1 when a section was left out."""
+    _, problems = build(args.build, args.out)
+    for line in problems:
+        print(f"pinbore report: {line}", file=sys.stderr)
+    return 1 if problems else 0
 
 
 def build(build_dir, out) -> tuple[Path, list[str]]:
@@ -76,9 +69,10 @@ def build(build_dir, out) -> tuple[Path, list[str]]:
         raise InputError(f"--build {build_dir}: not a directory of results (run make first)")
     bench = Path("bench")
     sections, contents, problems = [], [], []
-    for index, (heading, module, function) in enumerate(SECTIONS):
+    for index, section in enumerate(stages.sections()):
+        heading = section.heading
         try:
-            content = _call(module, function, build_dir, bench)
+            content = stages.resolve(section.function)(build_dir, bench)
         except Exception as err:   # noqa: BLE001 (a section fails alone, whatever broke it)
             why = str(err) if isinstance(err, InputError) else (
                 f"its files do not read as expected ({type(err).__name__}: {err})")

@@ -34,16 +34,20 @@ The study file (a strict model: unknown keys are refused):
     limit = { quantity = "peak_force_N", threshold = 5.0e4 }
     target = 0.01
 
-A point's result is what its command writes: the summary of `pinbore reduced` (summary.json,
-computed in process, no files; with the statistics of its collected columns under `series`), impact.json of `pinbore impact`, result.json of `pinbore fem`
-with the last row of its curve under `curve_last`. The base scene's `kind` says which.
+A point runs through the stage of its base scene's `kind` (pinbore.stages: any stage that
+takes a scene kind), and its result is what that stage writes: the summary of `pinbore
+reduced` (summary.json, computed in process, no files; with the statistics of its collected
+columns under `series`), impact.json of `pinbore impact`, modes.json of `pinbore modes`,
+summary.json of `pinbore wear`, result.json of `pinbore fem` with the last row of its curve
+under `curve_last`.
 
 Every point's scene is validated before any run (a point that breaks a rule is one line
 naming the point, the key and the rule; exit 2, nothing written). The points run in parallel
 through the one sweep engine of the package (pinbore.core.sweep: long-lived local processes or a
-Dask cluster), cached by content: the name of a point's cache file is the SHA-256 of its kind,
+Dask cluster), cached by content: the name of a point's cache file is the SHA-256 of its stage,
 its whole scene, the files the scene names and the source of the code that runs it (the
-modules its run imports, read by pinbore.core.codedeps, and the class Point here), so a
+modules its stage's model, runner and point function import, read by pinbore.core.codedeps,
+and the class Point here), so a
 rerun runs only new or changed points, and a killed study resumes. A failed point is marked
 in results.csv with its reason; the command then exits 1 and keeps the others.
 
@@ -63,7 +67,6 @@ import json
 import math
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 from typing import Annotated, Literal
@@ -75,9 +78,10 @@ from pinbore.core import scene as scenes
 from pinbore.core import sweep, uq
 from pinbore.core.errors import InputError
 from pinbore.core.output import atomic_directory
-from pinbore.core.codedeps import code_hash
+from pinbore.core.codedeps import code_hash, installed_graph, stage_code
 from pinbore.core.scene import Strict
 from pinbore.core.sweep import digest_files, get, named_files, put
+from pinbore.stages import STAGE, of_scene, resolve
 
 SPEC_KEYS = ("values", "grid", "distribution")
 # a parameter's key the base scene does not have
@@ -89,11 +93,15 @@ KEPT_SUFFIXES = (".csv", ".json")
 PARQUET_ROWS = 1000
 # a label of a case or a value: a part of a point's name, and so of a folder's
 LabelText = Annotated[str, pydantic.Field(pattern=r"^[A-Za-z0-9_.+-]*$")]
-# the code that may decide a point's result, by the point's kind: the method of Point that
-# runs it, read with what it imports (core.codedeps: its import closure, lazy imports and the
-# compiled core included), and the class Point (not the rest of this module: a new plot
-# reruns nothing). An edit of the multibody engine so reruns no FE point.
-CODE = {kind: f"pinbore.study:Point.{kind}" for kind in ("fem", "impact", "mechanism", "wear")}
+
+
+def point_code(stage: str) -> list[str]:
+    """The code that may decide a point's result: its stage's scene model, runner and point
+    function (pinbore.stages), read with what they import (core.codedeps: the import closure,
+    lazy imports and the compiled core included); the class Point is hashed beside it (not the
+    rest of this module: a new plot reruns nothing). An edit of the multibody engine so
+    reruns no FE point."""
+    return stage_code(installed_graph(), stage, ("point",))
 
 
 class Grid(Strict):
@@ -384,20 +392,6 @@ def load(path: Path) -> Study:
     return scenes.validate(Study, data, str(path))
 
 
-def scene_kind(data: dict, source: str):
-    """(kind name for CODE, scene model) of a scene's data."""
-    kind = data.get("kind")
-    if kind == "fem":
-        from pinbore.fem.scene import FemScene   # noqa: PLC0415 (pydantic only)
-        return "fem", FemScene
-    if kind == "impact":
-        from pinbore.fem.impact.scene import ImpactScene   # noqa: PLC0415 (pydantic only)
-        return "impact", ImpactScene
-    if kind == "wear":
-        from pinbore.reduced.wear.scene import WearScene   # noqa: PLC0415 (pydantic only)
-        return "wear", WearScene
-    from pinbore.reduced.mechanism import kinds   # noqa: PLC0415 (pydantic only)
-    return "mechanism", kinds.kind_of(data, source).scene
 
 
 def value_labels(study: Study, rows: int) -> list[tuple[str, ...]]:
@@ -452,8 +446,8 @@ class Plan:
                 put(base, key, value, create=True)
             except KeyError as err:
                 raise InputError(f"{path}: set.{key}: {err.args[0]}") from None
-        self.kind, self.model = scene_kind(base, source)
-        scenes.validate(self.model, base, f"{path}: the base scene {source} with [set]")
+        self.stage, base = of_scene(base, source)
+        self.stage.validate(base, f"{path}: the base scene {source} with [set]")
         self.names = list(study.parameters)
         for name in self.names:
             try:
@@ -477,7 +471,7 @@ class Plan:
                     put(data, name, float(value))
                 where = ", ".join([f"{g} = {c.label}" for g, c in zip(groups, combo)]
                                   + [f"{n} = {v:.6g}" for n, v in zip(self.names, row)])
-                scenes.validate(self.model, data, f"{path}: point {len(self.scenes)} ({where})")
+                self.stage.validate(data, f"{path}: point {len(self.scenes)} ({where})")
                 values.append(row)
                 self.cases.append({g: c.label for g, c in zip(groups, combo)})
                 self.point_names.append("_".join(
@@ -499,19 +493,22 @@ class Plan:
                         for c in study.collect if c.column is not None]
         files = digest_files([*scenes.referenced_files(self.base_path),
                               *named_files(self.scenes, self.base_path.parent)])
-        code = code_hash(CODE[self.kind]) + hashlib.sha256(inspect.getsource(Point).encode()).hexdigest()
-        self.keys = sweep.point_keys(self.kind, self.scenes, files, code, self.columns)
+        code = (code_hash(*point_code(self.stage.name))
+                + hashlib.sha256(inspect.getsource(Point).encode()).hexdigest())
+        self.keys = sweep.point_keys(self.stage.name, self.scenes, files, code, self.columns)
 
     def check_collect(self) -> None:
-        """A mechanism's summary is known before the run: every collected path must name one
-        of its keys (a joint by its name), and a column must begin with the name of one of
-        its bodies, clearance joints or output points (its whole name is checked in the run,
-        whose columns it is). Columns are a mechanism's only."""
+        """A mechanism's summary (a stage whose points have time series) is known before the
+        run: every collected path must name one of its keys (a joint by its name), and a
+        column must begin with the name of one of its bodies, clearance joints or output
+        points (its whole name is checked in the run, whose columns it is). Columns are a
+        mechanism's only."""
         columns = [(i, c) for i, c in enumerate(self.study.collect) if c.column is not None]
-        if self.kind != "mechanism":
+        if not self.stage.series:
             if columns:
                 raise InputError(f"{self.path}: collect.{columns[0][0]}.column: only a "
-                                 f"mechanism's time series has columns (this base is {self.kind})")
+                                 f"mechanism's time series has columns (this base is a "
+                                 f"{self.stage.name} scene)")
             return
         from pinbore.reduced.mechanism.summary import JointPeaks, Summary   # noqa: PLC0415
         scene = self.scenes[0]
@@ -555,97 +552,54 @@ def point_scene(study_file, name: str, out=None) -> dict:
         raise InputError(f"{path}: no point named {name!r} (points: {', '.join(plan.point_names)})")
     data = plan.scenes[plan.point_names.index(name)]
     if out is not None:
-        import tomli_w   # noqa: PLC0415
-
-        Path(out).write_text(tomli_w.dumps(scenes.absolute_files(data, plan.base_path.parent)))
+        scenes.write_scene(out, data, plan.base_path.parent)
     return data
 
 
 # ---- one point, in a worker
 
 class Point:
-    """Runs one point's scene data in this process and returns {"status", "reason",
-    "seconds", "result"}: status "complete", "suspect" (the run's verdict doubts it),
-    "incomplete" (it stopped early) or "failed" (an error; reason says which)."""
+    """Runs one point's scene data in this process through its stage's point function
+    (pinbore.stages: Stage.point) and returns {"status", "reason", "seconds", "result"}:
+    status "complete", "suspect" (the run's verdict doubts it), "incomplete" (it stopped
+    early) or "failed" (an error; reason says which)."""
 
-    def __init__(self, kind: str, base: Path, source: str, columns=(), ranks: int = 1):
-        self.kind, self.base, self.source = kind, Path(base), source
+    def __init__(self, stage: str, base: Path, source: str, columns=(), ranks: int = 1):
+        # the base scene's folder, absolute where the study starts (a worker may run elsewhere)
+        self.stage, self.base, self.source = stage, Path(base).absolute(), source
         self.columns = list(columns)   # (name, column, statistic, window) of a mechanism's series
-        self.ranks = ranks             # of an FE point: mpiexec -n ranks pinbore fem
+        self.ranks = ranks             # of a point of an MPI stage: mpiexec -n ranks pinbore <stage>
 
     def __call__(self, data: dict) -> dict:
         start = time.perf_counter()
         try:
-            status, reason, result = getattr(self, self.kind)(data)
+            status, reason, result = resolve(STAGE[self.stage].point)(data, self)
         except Exception as err:   # noqa: BLE001 (a point that fails is marked, the study goes on)
             status, reason, result = "failed", f"{type(err).__name__}: {err}", {}
         return {"status": status, "reason": reason, "seconds": time.perf_counter() - start,
                 "result": result}
 
-    def mechanism(self, data):
-        from pinbore.reduced.mechanism import kinds   # noqa: PLC0415
-        from pinbore.reduced.mechanism.run import summarised   # noqa: PLC0415 (compiled)
-
-        _, _, series, summary = summarised(kinds.validate(data, self.source), self.source, self.base)
-        stop = summary.stop.reason if summary.stop else "; ".join(summary.verdict)
-        result = json.loads(summary.model_dump_json())
-        steps = series["steps"]
-        result["series"] = {}
+    def series(self, steps: dict) -> dict:
+        """The statistics of the collected columns of a time series (name -> value)."""
+        out = {}
         for name, column, statistic, window in self.columns:
             if column not in steps:
                 raise KeyError(f"column {column!r}: not in the time series (columns: "
                                f"{', '.join(k for k in steps if k != 'time_s')})")
-            result["series"][name] = column_statistic(steps["time_s"], steps[column], statistic, window)
-        return summary.status, stop, result
+            out[name] = column_statistic(steps["time_s"], steps[column], statistic, window)
+        return out
 
-    def fem(self, data):
-        from pinbore.fem import run as fem_run   # noqa: PLC0415
-
-        def read(out, code):
-            result = json.loads((out / "result.json").read_text())
-            rows = (out / "curve.csv").read_text().splitlines()
-            result["curve_last"] = {k: float(v) for k, v in zip(rows[0].split(","), rows[-1].split(","))
-                                    if k != "stage"}
-            return result
-        def on_ranks(path, out):
-            """pinbore fem on `ranks` MPI processes (MPICH's mpiexec beside this Python, as
-            the venv has it, else on PATH); its exit code."""
-            mpiexec = Path(sys.executable).parent / "mpiexec"
-            command = [str(mpiexec) if mpiexec.exists() else "mpiexec", "-n", str(self.ranks),
-                       sys.executable, "-m", "pinbore.cli", "fem", str(path), "--out", str(out)]
-            return subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL).returncode
-
-        return self._in_folder(data, on_ranks if self.ranks > 1 else lambda path, out: fem_run.run(path, out),
-                               read)
-
-    def impact(self, data):
-        from pinbore.fem.impact import run as impact_run   # noqa: PLC0415
-        from pinbore.fem.impact.scene import ImpactScene   # noqa: PLC0415
-
-        return self._in_folder(
-            data, lambda path, out: impact_run.run(path, out, scenes.load(ImpactScene, path)),
-            lambda out, code: json.loads((out / "impact.json").read_text()))
-
-    def wear(self, data):
-        from pinbore.reduced.wear import run as wear_run   # noqa: PLC0415
-
-        return self._in_folder(data, wear_run.run,
-                               lambda out, code: json.loads((out / "summary.json").read_text()))
-
-    def _in_folder(self, data, command, read):
-        """Run a command that writes files on the point's scene, written as TOML in a
-        temporary folder (names of files made absolute), and read its result."""
-        import tomli_w   # noqa: PLC0415
-
-        data = scenes.absolute_files(data, self.base)
-        with tempfile.TemporaryDirectory(prefix="pinbore-study-") as folder:
-            path = Path(folder) / "scene.toml"
-            path.write_text(tomli_w.dumps(data))
-            code = command(path, Path(folder) / "out")
-            if not (Path(folder) / "out").is_dir():
+    def in_folder(self, data, read):
+        """Run the stage's command on the point's scene, written as a scene file in a
+        temporary folder (core.scene.scene_file: names of files made absolute), and read
+        its result from the folder it wrote: read(out) -> dict."""
+        with scenes.scene_file(data, self.base, f"{self.source} (a point's scene)") as path:
+            out = path.parent / "out"
+            code = self._run(path, out)
+            if not out.is_dir():
                 return "failed", f"the run wrote nothing (exit {code})", {}
-            result = read(Path(folder) / "out", code)
-            result["files"] = {f.name: f.read_text() for f in sorted((Path(folder) / "out").iterdir())
+            result = read(out)
+            result["files"] = {f.name: f.read_text() for f in sorted(out.iterdir())
                                if f.suffix in KEPT_SUFFIXES}
         if code == 0:
             return "complete", "", result
@@ -653,8 +607,26 @@ class Point:
         reason = "; ".join(result.get("verdict") or []) or str(result.get("stop") or f"exit {code}")
         return status, reason, result
 
+    def _run(self, path: Path, out: Path) -> int:
+        """The stage's command on the scene file, in process or, with ranks, as `pinbore
+        <stage>` on that many MPI processes (MPICH's mpiexec beside this Python, as the venv
+        has it, else on PATH); its exit code."""
+        if self.ranks == 1:
+            return STAGE[self.stage].run_scene(path, out)
+        mpiexec = Path(sys.executable).parent / "mpiexec"
+        command = [str(mpiexec) if mpiexec.exists() else "mpiexec", "-n", str(self.ranks),
+                   sys.executable, "-m", "pinbore.cli", self.stage, str(path), "--out", str(out)]
+        return subprocess.run(command, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL).returncode
+
 
 # ---- the command
+
+def command(args) -> int:
+    """`pinbore study` on its parsed arguments (pinbore.stages)."""
+    given = {"out": args.out, "workers": args.workers, "ranks": args.ranks,
+             "scheduler": args.scheduler, "cache": args.cache, "force": args.force}
+    return run(args.study, options(given))
+
 
 def run(study_file, options: Options) -> int:
     """`pinbore study`: validate the study and every point, run them (cached), write the
@@ -666,14 +638,14 @@ def run(study_file, options: Options) -> int:
                          "scene in memory before the first runs): fewer values or sampling.points, "
                          "or --force")
     plan = Plan(path, study)
-    if options.ranks > 1 and plan.kind != "fem":
+    if options.ranks > 1 and not plan.stage.mpi:
         raise InputError(f"--ranks: MPI ranks run FE points (pinbore fem); {path}'s points are "
-                         f"{plan.kind} runs, which run on one process")
+                         f"{plan.stage.name} runs, which run on one process")
     inputs = [path, plan.base_path, options.cache, *named_files(plan.scenes, plan.base_path.parent)]
     # --out is checked against every file a point reads, and locked, before the points run
     with atomic_directory(options.out, inputs=inputs) as tmp:
         start = time.perf_counter()
-        task = Point(plan.kind, plan.base_path.parent, str(plan.base_path), plan.columns, options.ranks)
+        task = Point(plan.stage.name, plan.base_path.parent, str(plan.base_path), plan.columns, options.ranks)
         records, fresh = sweep.run(task, plan.scenes, plan.keys, options, desc="study")
         wall = time.perf_counter() - start
         rows = table(plan, records, fresh)
@@ -689,7 +661,7 @@ def run(study_file, options: Options) -> int:
         if study.sampling.method != "grid":   # a grid's points are chosen, not drawn
             figures_of(tmp, plan, rows, stats)
         failed = [r for r in rows if r["status"] != "complete"]
-        summary = {"study_file": str(path), "base": str(plan.base_path), "kind": plan.kind,
+        summary = {"study_file": str(path), "base": str(plan.base_path), "stage": plan.stage.name,
                    "points": len(rows), "ran": sum(fresh), "from_cache": len(rows) - sum(fresh),
                    "complete": len(rows) - len(failed), "failed": len(failed),
                    "wall_time_s": wall, "point_seconds": sum(r["seconds"] for r in rows if r["ran"]),

@@ -2,9 +2,10 @@
 FE to calibration to the multibody model, each result read back typed; a scene as a dict."""
 
 import math
+from pathlib import Path
 
 import pytest
-from conftest import ROOT, scene_dict
+from conftest import ROOT, pinbore, scene_dict
 
 import pinbore as pb   # `pinbore` is conftest's command
 from pinbore.core.errors import InputError
@@ -91,3 +92,66 @@ def test_a_bad_argument_is_an_input_error_naming_it(tmp_path, call, message):
         call(tmp_path)
     assert message in str(caught.value) and "pinbore-scene-" not in str(caught.value)
     assert not (tmp_path / "o").exists() and not (tmp_path / "c").exists()
+
+
+def laws_home(tmp_path):
+    """A folder holding cal/laws.json (a synthetic calibration) and a calibrated Flores
+    slider-crank naming it relatively, cal/laws.json, run for a tenth of a crank turn."""
+    from test_calibration import calibrated_scene, synthetic_laws_file
+
+    (tmp_path / "cal").mkdir()
+    synthetic_laws_file(tmp_path / "cal")
+    return calibrated_scene("cal/laws.json") | {"duration": 0.0012, "output": {"plots": False}}
+
+
+def test_a_dicts_relative_files_are_taken_from_base_or_the_working_folder(tmp_path, monkeypatch):
+    """A dict's relative `*_file` names are taken from `base`, else from the working folder
+    (core.scene.scene_file writes them absolute in its temporary scene file); the same run
+    either way, and from elsewhere without base, one line naming the dict's key."""
+    data = laws_home(tmp_path)
+    from_base = pb.run("reduced", data, tmp_path / "a", base=tmp_path)
+    monkeypatch.chdir(tmp_path)
+    from_here = pb.run("reduced", data, "b")
+    assert from_base.status == from_here.status == "complete"
+    assert from_base.clearance_joints == from_here.clearance_joints
+    monkeypatch.chdir(tmp_path / "cal")
+    with pytest.raises(InputError, match="laws_file") as caught:
+        pb.run("reduced", data, tmp_path / "c")
+    assert "pinbore-scene-" not in str(caught.value) and not (tmp_path / "c").exists()
+
+
+def test_a_study_points_relative_files_are_taken_from_its_base_scene(tmp_path, monkeypatch):
+    """A study's points name files relative to the base scene's folder, wherever the study
+    and its workers run: in process (a mechanism's points) and through a scene file
+    (Point.in_folder, as an FE, impact, modes or wear point runs; core.scene.scene_file, as
+    pinbore.run writes a dict); both give the run pinbore.run gives."""
+    import csv
+    import json
+
+    import tomli_w
+
+    from pinbore import study as runner
+
+    data = laws_home(tmp_path)
+    for folder in ("scenes", "studies", "elsewhere"):
+        (tmp_path / folder).mkdir()
+    (tmp_path / "scenes" / "calibrated.toml").write_text(tomli_w.dumps(data | {"laws_file": "../cal/laws.json"}))
+    (tmp_path / "studies" / "s.toml").write_text(
+        'base = "../scenes/calibrated.toml"\n[parameters."clearance_joints.0.restitution"]\n'
+        'values = [0.9]\n[sampling]\nmethod = "grid"\n'
+        '[[collect]]\nname = "peak_N"\npath = "clearance_joints.rod_slider.peak_normal_force_N"\n')
+    joint = data["clearance_joints"][0] | {"restitution": 0.9}
+    peak = pb.run("reduced", data | {"clearance_joints": [joint]}, tmp_path / "ref",
+                  base=tmp_path).clearance_joints["rod_slider"].peak_normal_force_N
+    monkeypatch.chdir(tmp_path / "elsewhere")
+    done = pinbore("study", "../studies/s.toml", "--out", "out", "--workers", "1")
+    assert done.returncode == 0, done.stderr
+    (row,) = csv.DictReader((tmp_path / "elsewhere/out/results.csv").open())
+    assert float(row["peak_N"]) == pytest.approx(peak, rel=1e-12)
+    path = Path("../studies/s.toml")   # a relative base scene's folder, made absolute by Point
+    plan = runner.Plan(path, runner.load(path))
+    point = runner.Point("reduced", plan.base_path.parent, str(plan.base_path))
+    monkeypatch.chdir(tmp_path / "cal")   # a worker that runs elsewhere
+    status, _, result = point.in_folder(plan.scenes[0], lambda out: json.loads((out / "summary.json").read_text()))
+    assert status == "complete"
+    assert result["clearance_joints"]["rod_slider"]["peak_normal_force_N"] == pytest.approx(peak, rel=1e-12)

@@ -127,10 +127,11 @@ def test_rooms_go_one_way():
     quasi-static FE solver does not reach into the dynamic impact's room."""
     below = {"pinbore.reduced.mechanism": ("pinbore.reduced.dynamics", "pinbore.reduced.report"),
              "pinbore.reduced.dynamics": ("pinbore.reduced.report",)}
-    wrong = [f"{a} imports {b}" for a, targets in graph().items() for room, above in below.items()
+    edges = graph()
+    wrong = [f"{a} imports {b}" for a, targets in edges.items() for room, above in below.items()
              if a.startswith(room) for b in targets if b.startswith(above)]
-    fem_core = [a for a in graph() if a.startswith("pinbore.fem.") and not a.startswith("pinbore.fem.impact")]
-    wrong += [f"{a} imports {b}" for a in fem_core for b in graph()[a] if b.startswith("pinbore.fem.impact")]
+    fem_core = [a for a in edges if a.startswith("pinbore.fem.") and not a.startswith("pinbore.fem.impact")]
+    wrong += [f"{a} imports {b}" for a in fem_core for b in edges[a] if b.startswith("pinbore.fem.impact")]
     assert not wrong, "\n".join(wrong)
 
 
@@ -257,3 +258,80 @@ def test_no_branch_on_a_clearance_joint_type():
                       for node in ast.walk(top) if isinstance(node, ast.Compare)
                       for types in [named_types(node, TYPES)] if types]
     assert not wrong, "\n".join(wrong)
+
+
+# the registries that name stages and scene kinds: the stages' (pinbore.stages) and the
+# mechanism's kinds' (reduced.mechanism.kinds)
+REGISTRIES = {"pinbore/stages.py", "reduced/mechanism/kinds.py"}
+# a rule of a model, not a dispatch: the wear of a joint takes a planar mechanism
+KIND_RULES = {("reduced/wear/run.py", "planar")}
+
+
+def stage_and_kind_names() -> set[str]:
+    from pinbore import stages
+
+    return {s.name for s in stages.STAGES} | {kind for s in stages.STAGES for kind in s.kinds}
+
+
+def test_only_the_registry_branches_on_a_stage_or_a_kind():
+    """The command line, the API, the study, the report and make's dependencies read one
+    registry (pinbore.stages): no module of the package compares with a stage's or a scene
+    kind's name, nor holds a table keyed by them (a scene model names its own kind as a
+    Literal, no comparison)."""
+    names = stage_and_kind_names()
+    wrong = []
+    for path in modules().values():
+        name = path.relative_to(ROOT).as_posix()
+        if name in REGISTRIES:
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.Compare):
+                wrong += [f"{name} line {node.lineno}: compares with {value!r}"
+                          for value in named_types(node, names) if (name, value) not in KIND_RULES]
+            elif isinstance(node, ast.Dict):
+                keys = [k.value for k in node.keys if isinstance(k, ast.Constant) and k.value in names]
+                if len(keys) > 1:
+                    wrong.append(f"{name} line {node.lineno}: a table keyed by {', '.join(keys)}")
+            elif isinstance(node, ast.Match):
+                wrong.append(f"{name} line {node.lineno}: a match statement")
+    assert not wrong, "\n".join(wrong)
+
+
+def test_the_registry_names_what_exists():
+    """Every string entry of a stage ("module:name") names a loadable object, its model a
+    pydantic model or a validating function; its help names the files it writes, its typed
+    result among them; the mechanism's kinds are those of reduced.mechanism.kinds; the
+    commands make reads (core.codedeps, by `ast`) are the stages."""
+    import pydantic
+
+    from pinbore import stages
+    from pinbore.reduced.mechanism import kinds
+
+    for stage in stages.STAGES:
+        entries = [stage.run, *filter(None, (stage.model, stage.arguments, stage.point)),
+                   *(s.function for s in stage.sections), *stage.answers,
+                   *([stage.result[1]] if stage.result else [])]
+        for entry in entries:
+            assert callable(stages.resolve(entry)), f"{stage.name}: {entry}"
+        if stage.model:
+            model = stages.resolve(stage.model)
+            assert not isinstance(model, type) or issubclass(model, pydantic.BaseModel)
+        assert bool(stage.point) == bool(stage.kinds) == bool(stage.result), stage.name
+        assert all(f"/{file}" in stage.description for file in stage.outputs), stage.name
+        assert stage.result is None or stage.result[0] in stage.outputs
+    assert stages.STAGE["reduced"].kinds == tuple(kinds.KINDS)
+    graph = codedeps.Graph(codedeps.repository_folders(ROOT))
+    assert list(codedeps.commands(graph)) == list(stages.STAGE)
+
+
+def test_a_scene_is_validated_without_its_stage_loading(tmp_path):
+    """Validating a scene of each kind (pinbore.scene) loads its model alone: neither DOLFINx,
+    Gmsh nor matplotlib."""
+    scenes = [ROOT / "scenes/fem/steel_c100um.toml", ROOT / "scenes/modes/link_steel_2d.toml",
+              *sorted((ROOT / "scenes/impact").glob("*.toml"))[:1],
+              ROOT / "scenes/reduced/slider_crank_flores2004.toml", *sorted((ROOT / "scenes/wear").glob("*.toml"))[:1]]
+    code = ("import sys, pinbore; " + "; ".join(f"pinbore.scene({str(s)!r})" for s in scenes)
+            + "; loaded = {m.split('.')[0] for m in sys.modules} & {'dolfinx', 'gmsh', 'matplotlib'}"
+            + "; assert not loaded, loaded")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert run.returncode == 0, run.stderr

@@ -278,8 +278,8 @@ BAD = {
 
 
 def test_every_command_is_held_to_it():
-    from pinbore.cli import INPUTS
-    assert set(BAD) == set(INPUTS)
+    from pinbore.stages import STAGE
+    assert set(BAD) == set(STAGE)
 
 
 @pytest.mark.parametrize("command", list(BAD))

@@ -11,7 +11,7 @@ import pydantic
 import pytest
 from conftest import ROOT
 
-from pinbore import cli
+from pinbore import cli, stages
 from pinbore.core.parallel import default_workers
 from pinbore.reduced.dynamics import analyses, studies
 
@@ -131,7 +131,7 @@ def test_a_scene_without_a_turning_drive_is_one_line_exit_2(tmp_path, capsys, wr
 
 def given(*options: str) -> dict:
     """The options the CLI gives the model for a `pinbore dynamics` command line."""
-    return cli._options_given(cli.parser().parse_args(["dynamics", str(FLORES), *options]))
+    return stages.options_given(cli.parser().parse_args(["dynamics", str(FLORES), *options]))
 
 
 def test_the_makefile_command_lines_become_typed_options():

@@ -70,13 +70,17 @@ def graph() -> codedeps.Graph:
 
 
 def closure_files(command: str) -> set[str]:
-    """The source files of the import closure of a command's function in pinbore/cli.py."""
-    function = codedeps.commands(graph())[command]
-    return {path.relative_to(ROOT).as_posix() for path in graph().sources(f"{codedeps.CLI}:{function}")}
+    """The source files of the import closure of a command's code: the command line's main
+    and its stage's model and runner in the registry (pinbore/stages.py)."""
+    return {path.relative_to(ROOT).as_posix() for path in graph().sources(*codedeps.commands(graph())[command])}
 
 
 def test_every_stage_of_make_has_its_command():
-    """The commands make runs are commands of pinbore/cli.py that codedeps finds."""
+    """The commands make runs are stages of the registry that codedeps reads, the same as
+    the registry holds when imported."""
+    from pinbore import stages
+
+    assert list(codedeps.commands(graph())) == [stage.name for stage in stages.STAGES]
     makefile = (ROOT / "Makefile").read_text()
     run = set(re.findall(r"\$\(PINBORE\) (\w+)", makefile))
     assert run <= set(codedeps.commands(graph()))
@@ -91,14 +95,34 @@ def test_a_stage_reruns_when_any_module_it_imports_is_edited(tree, targets):
     assert set(targets) == {"mesh", "fem", "impact", "modes", "calibrate", "reduced", "wear",
                             "dynamics", "study", "report"}
     for command, found in targets.items():
-        files = closure_files(command)
-        edited = [arg for path in sorted(files) for arg in ("-W", path)]
         for target in dict.fromkeys([found[0], found[-1]]):
-            dry = make(tree, "-n", "--debug=v", "-o", "build/deps.mk", *edited, target)
-            newer = {prerequisite for prerequisite, of in NEWER.findall(dry) if of == target}
-            assert files - newer == set(), f"{target}: editing these reruns no `pinbore {command}`"
-            assert f".venv/bin/pinbore {command} " in dry
+            assert not_rerun(tree, command, target) == set(), \
+                f"{target}: editing these reruns no `pinbore {command}`"
             assert ".venv/bin/pinbore" not in make(tree, "-n", target)
+
+
+def not_rerun(tree: Path, command: str, target: str) -> set[str]:
+    """The files of the command's import closure that, taken as edited, are no prerequisite
+    make finds newer than the target; every file when make would not run the command."""
+    files = closure_files(command)
+    edited = [arg for path in sorted(files) for arg in ("-W", path)]
+    dry = make(tree, "-n", "--debug=v", "-o", "build/deps.mk", *edited, target)
+    if f".venv/bin/pinbore {command} " not in dry:
+        return files
+    return files - {prerequisite for prerequisite, of in NEWER.findall(dry) if of == target}
+
+
+def test_a_module_dropped_from_a_stages_list_is_found(tree, targets):
+    """The check above fails when build/deps.mk's list of a stage lacks a module of its
+    closure (here fem/elasticity.py dropped from CODE_modes, as a hand list had dropped it)."""
+    deps = tree / "build/deps.mk"
+    kept = deps.read_text()
+    try:
+        deps.write_text("\n".join(line.replace(" fem/elasticity.py", "") if line.startswith("CODE_modes ")
+                                  else line for line in kept.splitlines()) + "\n")
+        assert not_rerun(tree, "modes", targets["modes"][0]) == {"fem/elasticity.py"}
+    finally:
+        deps.write_text(kept)
 
 
 def test_editing_what_the_modal_reduction_imports_reruns_modes(tree, targets):
@@ -110,13 +134,16 @@ def test_editing_what_the_modal_reduction_imports_reruns_modes(tree, targets):
     for edited in ("fem/elasticity.py", "meshes/model.py", "laws/relief.py"):
         assert ".venv/bin/pinbore modes " in make(tree, "-n", "-o", "build/deps.mk", "-W", edited,
                                                  targets["modes"][0])
-    # what the command's function imports, loaded as it runs
-    named = sorted(graph().imports(codedeps.CLI, "_modes", whole=False))
+    # what the stage's model and runner load (the command line and the registry with them)
+    from pinbore import stages
+
+    modes = stages.STAGE["modes"]
     loaded = subprocess.run(
-        [sys.executable, "-c", f"import sys; import {', '.join(named)}; "
+        [sys.executable, "-c", "import sys; import pinbore.cli; from pinbore.stages import STAGE, resolve; "
+         f"resolve({modes.model!r}); resolve({modes.run!r}); "
          "print(' '.join(m for m in sys.modules if m.startswith('pinbore')))"],
         capture_output=True, text=True, check=True).stdout.split()
-    closure = graph().closure(f"{codedeps.CLI}:_modes")
+    closure = graph().closure(*codedeps.commands(graph())["modes"])
     assert {codedeps.project_module(m, graph().files) for m in loaded} - {None} - closure == set()
 
 

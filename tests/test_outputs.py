@@ -59,13 +59,12 @@ def test_a_refused_out_destroys_nothing(home, out, rule, command):
 
 
 def test_every_command_declares_what_it_reads():
-    """One table (pinbore.cli.INPUTS) names the files each command reads; a command without
-    its line could not run (the CLI looks it up), and this test lists the parser's commands
-    so that a new one cannot be added without one."""
-    from pinbore import cli
+    """One table (pinbore.stages.STAGES) names the files each command reads (Stage.inputs);
+    the parser's commands are its stages, each with its inputs."""
+    from pinbore import cli, stages
 
     commands = set(cli.parser()._subparsers._group_actions[0].choices)
-    assert commands == set(cli.INPUTS)
+    assert commands == set(stages.STAGE) and all(callable(s.inputs) for s in stages.STAGES)
 
 
 def _impacts_home(home):
@@ -100,7 +99,7 @@ def _report_home(out):
     return setup
 
 
-# a command whose --out holds a file it reads (declared in one place, pinbore.cli.INPUTS), or
+# a command whose --out holds a file it reads (declared in one place, pinbore.stages), or
 # is a folder that is not pinbore's: refused, nothing touched
 DESTRUCTIVE = [
     ("calibrate --out holding an --impacts run", _impacts_home, "holds the input B/impact.json"),
@@ -170,9 +169,9 @@ ARGUMENTS = {
 
 
 def test_every_command_holds_its_out_before_its_work():
-    from pinbore import cli
+    from pinbore import stages
 
-    assert set(ARGUMENTS) == set(cli.INPUTS)
+    assert set(ARGUMENTS) == set(stages.STAGE)
 
 
 @pytest.mark.parametrize("command", list(ARGUMENTS))

@@ -236,7 +236,8 @@ def test_a_study_reruns_only_what_changed(tmp_path):
 
 def test_an_fe_point_is_keyed_on_every_module_its_run_loads():
     """An FE or impact point's cache key covers the code of its run: the import closure of
-    the method of Point that runs it (study.CODE, read by core.codedeps). Every pinbore
+    its stage's model, runner and point function (study.point_code: the registry read by
+    core.codedeps). Every pinbore
     module its run loads (pinbore.fem.run and pinbore.fem.impact.run imported in a fresh
     interpreter) lies in it, so no edit its result could see leaves its cached result
     standing; the multibody engine and the calibration are not, so their edits rerun no FE
@@ -252,13 +253,13 @@ def test_an_fe_point_is_keyed_on_every_module_its_run_loads():
     # a compiled module's submodules are its own (pinbore.core.cpp.laws); a namespace
     # package has no code
     loaded = {codedeps.project_module(m, graph.files) for m in loaded} - {None}
-    both = graph.closure(study.CODE["fem"], study.CODE["impact"])
+    both = graph.closure(*study.point_code("fem"), *study.point_code("impact"))
     assert loaded - both == set()
-    for kind in ("fem", "impact"):
-        code = graph.closure(study.CODE[kind])
+    for stage in ("fem", "impact", "modes"):
+        code = graph.closure(*study.point_code(stage))
         assert not any(m.startswith(("pinbore.reduced.", "pinbore.calibration")) for m in code)
     assert {"pinbore.fem.modes.file", "pinbore.laws.lawsfile", "pinbore.reduced.mechanism.model",
-            "pinbore.core.cpp"} <= graph.closure(study.CODE["mechanism"])
+            "pinbore.core.cpp"} <= graph.closure(*study.point_code("reduced"))
 
 
 def test_a_killed_study_resumes_without_losing_or_repeating_a_point(tmp_path):
@@ -899,17 +900,18 @@ def test_a_points_cache_key_reads_the_source_of_every_module_of_its_run():
     """The code an FE point's key hashes: the source of every module of its closure as the
     running pinbore finds it (an editable install gives pinbore.core two folders: its
     source, and the installed tree of the compiled module, which holds no .py), the compiled
-    core's binary, and of pinbore.study the method that runs the point alone (a new plot
-    reruns nothing; the class Point is hashed beside it)."""
+    core's binary, and of the registry (pinbore.stages) the definitions that run a point
+    alone, not its table (the class Point is hashed beside it)."""
     from pinbore.core.codedeps import hashed
-    from pinbore.study import CODE
+    from pinbore.study import point_code
 
-    read = dict(hashed(CODE["fem"]))
+    read = dict(hashed(*point_code("fem")))
     for name in ("pinbore.fem.run", "pinbore.fem.elasticity", "pinbore.meshes.model", "pinbore.laws.relief"):
         path = ROOT / name.split(".")[1] / (name.split(".", 2)[2].replace(".", "/") + ".py")
         assert read[name] == path.read_bytes()
     assert read["pinbore.core.cpp"][:4] == b"\x7fELF" or len(read["pinbore.core.cpp"]) > 10000
-    assert read["pinbore.study"].startswith(b"def fem(self, data):")
+    assert b"def fem_point(data, point):" in read["pinbore.stages"]
+    assert b"STAGES = (" not in read["pinbore.stages"] and "pinbore.study" not in read
 
 
 def test_the_report_marks_a_statistic_that_is_not_finite(tmp_path):
@@ -949,3 +951,38 @@ def test_a_key_the_base_leaves_out_is_set_then_varied(tmp_path):
     plan = runner.Plan(path, runner.load(path))
     assert [p["bodies"][1]["modes"] for p in plan.scenes] == [2, 4]
     assert all(type(p["bodies"][1]["modes"]) is int for p in plan.scenes)
+
+
+
+# the flexible pendulum's steel strip, bending in its plane (plane stress), shortened to 0.5 m
+# on a coarse mesh (5 mm quadratic cells: two or three through its depth), two modes
+BEAM = ROOT / "scenes/modes/pendulum_beam_2d.toml"
+BEAM_SET = {"body.length": 0.5, "body.width": 0.01, "body.cell_size": 0.005,
+            "reduction.fixed_interface_modes": 4, "reduction.modes": 2, "reduction.full_modes": 0}
+
+
+def test_a_modes_study_gives_the_beams_bending_frequencies(tmp_path):
+    """A study of a modes scene (its points run `pinbore modes`): the strip's depth w varied,
+    its first two free-free bending frequencies collected. Euler-Bernoulli: f_n =
+    (beta_n L)^2 / (2 pi L^2) sqrt(E I / (rho A)), I / A = w^2 / 12, so f_1 grows as w and f_2 /
+    f_1 = (7.8532 / 4.7300)^2 = 2.757 whatever w (L / w >= 30: shear and rotary inertia
+    below 0.5 %)."""
+    study = tmp_path / "study.toml"
+    study.write_text(f'base = "{BEAM}"\n[set]\n' + "".join(f'"{k}" = {v}\n' for k, v in BEAM_SET.items())
+                     + '[parameters."body.width"]\nvalues = [0.010, 0.016]\n[sampling]\nmethod = "grid"\n'
+                     '[[collect]]\nname = "f1_Hz"\npath = "frequencies_Hz.0"\n'
+                     '[[collect]]\nname = "f2_Hz"\npath = "frequencies_Hz.1"\n')
+    done = pinbore("study", study, "--out", tmp_path / "out", "--workers", "2")
+    assert done.returncode == 0, done.stderr
+    rows = rows_of(tmp_path / "out")
+    material, L = tomllib.loads(BEAM.read_text())["material"], BEAM_SET["body.length"]
+    E, rho = material["E"], material["density"]
+    for row in rows:
+        w = float(row["body.width"])
+        f1 = 4.730041**2 / (2 * math.pi * L**2) * math.sqrt(E * w**2 / 12 / rho)
+        assert float(row["f1_Hz"]) == pytest.approx(f1, rel=0.01)
+        assert float(row["f2_Hz"]) / float(row["f1_Hz"]) == pytest.approx((7.853205 / 4.730041) ** 2, rel=0.01)
+        assert (tmp_path / "out" / "points" / row["name"] / "modes.json").is_file()
+    ratio = float(rows[1]["f1_Hz"]) / float(rows[0]["f1_Hz"])
+    assert ratio == pytest.approx(0.016 / 0.010, rel=0.005)   # f_1 as w^1
+    assert json.loads((tmp_path / "out" / "summary.json").read_text())["stage"] == "modes"

@@ -10,13 +10,12 @@ body (cpp/mechanism/planar.h, spatial.h).
 """
 
 import importlib
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
 from pinbore.core import scene as scenes
 from pinbore.core.errors import InputError
-from pinbore.reduced.mechanism.scene import RENAMED_KINDS, PlanarScene, SpatialScene
+from pinbore.reduced.mechanism.scene import PlanarScene, SpatialScene
 
 
 @dataclass(frozen=True)
@@ -61,13 +60,8 @@ KINDS = {
 
 def kind_of(data: dict, source: str) -> Kind:
     """The kind of a scene's data (its `kind` key); one InputError line for another. A kind's
-    former name (scene.RENAMED_KINDS: "reduced", the planar kind's) is read as the kind, with
-    a FutureWarning naming the key."""
-    kind = data.get("kind")
-    if isinstance(kind, str) and kind in RENAMED_KINDS:
-        warnings.warn(f'{source}: kind: "{kind}" is deprecated: write kind = '
-                      f'"{RENAMED_KINDS[kind]}"', FutureWarning, stacklevel=2)
-        kind = RENAMED_KINDS[kind]
+    former name is read as the kind (core.scene.normal_kind: with a FutureWarning)."""
+    kind = scenes.normal_kind(data, source).get("kind")
     if not isinstance(kind, str) or kind not in KINDS:
         raise InputError(f"{source}: kind: {kind!r} is not a mechanism; valid: "
                          f"{', '.join(repr(k) for k in KINDS)}")
@@ -81,6 +75,7 @@ def of_scene(scene) -> Kind:
 
 def validate(data: dict, source: str):
     """The scene of its data, validated by its kind's model (one InputError line)."""
+    data = scenes.normal_kind(data, source)
     return scenes.validate(kind_of(data, source).scene, data, source)
 
 

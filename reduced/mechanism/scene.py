@@ -458,10 +458,6 @@ class MechanismScene(Strict):
         return 1.0 / fundamental
 
 
-# a kind's former name, still read (reduced.mechanism.kinds warns where a scene is read)
-RENAMED_KINDS = {"reduced": "planar"}
-
-
 class PlanarScene(MechanismScene):
     kind: Literal["planar"]
     gravity: Vector = [0.0, 0.0]
@@ -473,12 +469,6 @@ class PlanarScene(MechanismScene):
     torsion: list[TorsionSpring] = []
     springs: list[Spring] = []
     loads: list[Load] = []
-
-    @pydantic.model_validator(mode="before")
-    @classmethod
-    def _former_name(cls, data):
-        kind = data.get("kind") if isinstance(data, dict) else None
-        return data | {"kind": RENAMED_KINDS[kind]} if isinstance(kind, str) and kind in RENAMED_KINDS else data
 
     @pydantic.model_validator(mode="after")
     def _names(self):
