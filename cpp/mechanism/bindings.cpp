@@ -172,7 +172,6 @@ Args args_of(nb::handle a, Held& held)
   args.loads = matrix<const double>(a, "loads", held);
   args.wear = matrix<const double>(a, "wear", held);
   args.wear_bounds = worn_bounds(args.wear);
-  args.wear_fine = worn_fine(args.wear);
   const std::ptrdiff_t nb_ = args.bodies(), nc = args.ncontacts();
   if (static_cast<std::ptrdiff_t>(args.offsets.size()) != nb_ + 1 or args.offsets[0] != 0
       or args.offsets[nb_] != static_cast<std::int64_t>(args.minv.size()))

@@ -216,7 +216,6 @@ struct Args
   Rows profile, flex, springs, loads;
   Rows wear;   // worn profiles: a row per surface, its depth at angles evenly from -pi
   std::vector<WornBound> wear_bounds;   // per profile (worn.h: worn_bounds)
-  std::vector<std::vector<double>> wear_fine;   // per profile, its spline on the arc's grid (worn.h)
   std::ptrdiff_t bodies() const { return static_cast<std::ptrdiff_t>(masses.size()); }
   std::ptrdiff_t ncontacts() const { return contacts.rows; }
 };

@@ -340,8 +340,7 @@ struct Engine
       const auto [phi_j, w_j] = K::frame_angle(s, bj, contacts.cell<D>(k, CONTACT_JOURNAL_POINT));
       auto lowest = [&](std::ptrdiff_t r)
       { return r < 0 ? 0.0 : args.wear_bounds[static_cast<std::size_t>(r)].lowest; };
-      const Overlap o = worn_overlap(args.wear, bore < 0 ? nullptr : &args.wear_fine[static_cast<std::size_t>(bore)],
-                                     pin, lowest(bore) + lowest(pin), {e[0], e[1]}, phi_b, phi_j,
+      const Overlap o = worn_overlap(args.wear, bore, pin, lowest(bore) + lowest(pin), {e[0], e[1]}, phi_b, phi_j,
                                      contacts(k, CONTACT_CLEARANCE));
       g.worn = true;
       const double size = std::hypot(o.gradient[0], o.gradient[1]);

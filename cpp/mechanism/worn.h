@@ -25,23 +25,6 @@
 namespace pinbore::mechanism
 {
 
-/// A profile (row r of wear) at the angle a: its depth (the Catmull-Rom spline).
-inline double worn_depth(const Rows& wear, std::ptrdiff_t r, double a)
-{
-  const std::ptrdiff_t n = wear.cols;
-  const double step = 2.0 * std::numbers::pi / static_cast<double>(n);
-  double x = (a + std::numbers::pi) / step;
-  x -= static_cast<double>(n) * std::floor(x / static_cast<double>(n));
-  auto i = static_cast<std::ptrdiff_t>(x);
-  if (i >= n)
-    i = n - 1;
-  const double t = x - static_cast<double>(i);
-  auto at = [&](std::ptrdiff_t j) { return wear(r, ((j % n) + n) % n); };
-  const double p0 = at(i - 1), p1 = at(i), p2 = at(i + 1), p3 = at(i + 2);
-  const double c1 = -p0 + p2, c2 = 2 * p0 - 5 * p1 + 4 * p2 - p3, c3 = -p0 + 3 * p1 - 3 * p2 + p3;
-  return 0.5 * (2 * p1 + t * (c1 + t * (c2 + t * c3)));
-}
-
 /// Per profile (WornBound): a depth its spline never falls below (its least point less the
 /// most a piece can sag between its points, max|h''| step^2 / 8).
 inline std::vector<WornBound> worn_bounds(const Rows& wear)
@@ -73,21 +56,6 @@ inline std::vector<WornBound> worn_bounds(const Rows& wear)
 inline int arc_fineness(std::ptrdiff_t points)
 {
   return static_cast<int>(std::max<std::ptrdiff_t>(2, (1440 + points - 1) / points));
-}
-
-/// Each profile's spline on the arc's grid (arc_fineness points an interval, from -pi).
-inline std::vector<std::vector<double>> worn_fine(const Rows& wear)
-{
-  std::vector<std::vector<double>> out(static_cast<std::size_t>(wear.rows));
-  if (wear.cols < 3)
-    return out;
-  const std::ptrdiff_t total = wear.cols * arc_fineness(wear.cols);
-  const double step = 2.0 * std::numbers::pi / static_cast<double>(total);
-  for (std::ptrdiff_t r = 0; r < wear.rows; ++r)
-    for (std::ptrdiff_t k = 0; k < total; ++k)
-      out[static_cast<std::size_t>(r)].push_back(
-          worn_depth(wear, r, -std::numbers::pi + static_cast<double>(k) * step));
-  return out;
 }
 
 /// The overlap's moment over a linear piece from a to b, int_0^1 (a + (b - a) t)_+^4 dt,
@@ -136,12 +104,12 @@ struct Overlap
 ///
 /// taken linear between the points: its moment Phi = sum of 2 pi / M times each piece's
 /// (moment_piece, exact for the linear pieces), whose gradient is each point's dPhi/dd_k
-/// times dd_k/de = u, dd_k/dphi_b = e . u' - h_pin', dd_k/dphi_j = h_pin'. The bore's spline
-/// on the grid is `bore` (worn_fine; null: round); the pin's, shifted by phi_b - phi_j, is
-/// evaluated with one set of weights a grid point of the interval. Only the window where
+/// times dd_k/de = u, dd_k/dphi_b = e . u' - h_pin', dd_k/dphi_j = h_pin'. The profiles are
+/// rows `bore` and `pin` of wear (-1: round), their splines evaluated with one set of weights
+/// a grid point of a profile's interval (the pin's shifted by phi_b - phi_j). Only the window where
 /// e . u can exceed c plus the least depths (`lowest`) is visited; where nothing overlaps,
 /// `deepest` is the largest d_k or, outside the window, the bound |e| - c - lowest.
-inline Overlap worn_overlap(const Rows& wear, const std::vector<double>* bore, std::ptrdiff_t pin,
+inline Overlap worn_overlap(const Rows& wear, std::ptrdiff_t bore, std::ptrdiff_t pin,
                             double lowest, const std::array<double, 2>& e, double phi_b,
                             double phi_j, double clearance)
 {
@@ -165,26 +133,41 @@ inline Overlap worn_overlap(const Rows& wear, const std::vector<double>* bore, s
   const auto first = static_cast<std::ptrdiff_t>(std::floor((centre - half) / step)) - 1;
   const std::ptrdiff_t last = std::min(static_cast<std::ptrdiff_t>(std::ceil((centre + half) / step)) + 1,
                                        first + total);
-  // the pin's spline weights (value, slope) for each grid point of an interval
-  thread_local std::vector<std::array<double, 8>> weights;
+  auto wrap = [](std::ptrdiff_t i, std::ptrdiff_t m) { return ((i % m) + m) % m; };
+  // the profiles' spline weights (value, slope) for each grid point of an interval: the
+  // bore's at its own angles, the pin's shifted by phi_b - phi_j
+  thread_local std::vector<std::array<double, 8>> bore_weights, pin_weights;
   thread_local std::vector<std::ptrdiff_t> shifts;
-  weights.resize(static_cast<std::size_t>(fine)), shifts.resize(static_cast<std::size_t>(fine));
-  if (pin >= 0)
+  const double interval = 2.0 * std::numbers::pi / static_cast<double>(n);
+  auto weights_at = [interval](double t) -> std::array<double, 8>
   {
-    const double interval = 2.0 * std::numbers::pi / static_cast<double>(n);
-    double a = (phi_b - phi_j) / interval;
-    a -= static_cast<double>(n) * std::floor(a / static_cast<double>(n));
-    for (int r = 0; r < fine; ++r)
-    {
-      const double x = static_cast<double>(r) / fine + a, base = std::floor(x), t = x - base;
-      shifts[static_cast<std::size_t>(r)] = static_cast<std::ptrdiff_t>(base);
-      weights[static_cast<std::size_t>(r)] = {
-          0.5 * (-t + 2 * t * t - t * t * t), 0.5 * (2 - 5 * t * t + 3 * t * t * t),
-          0.5 * (t + 4 * t * t - 3 * t * t * t), 0.5 * (-t * t + t * t * t),
-          0.5 * (-1 + 4 * t - 3 * t * t) / interval, 0.5 * (-10 * t + 9 * t * t) / interval,
-          0.5 * (1 + 8 * t - 9 * t * t) / interval, 0.5 * (-2 * t + 3 * t * t) / interval};
-    }
+    return {0.5 * (-t + 2 * t * t - t * t * t), 0.5 * (2 - 5 * t * t + 3 * t * t * t),
+            0.5 * (t + 4 * t * t - 3 * t * t * t), 0.5 * (-t * t + t * t * t),
+            0.5 * (-1 + 4 * t - 3 * t * t) / interval, 0.5 * (-10 * t + 9 * t * t) / interval,
+            0.5 * (1 + 8 * t - 9 * t * t) / interval, 0.5 * (-2 * t + 3 * t * t) / interval};
+  };
+  bore_weights.resize(static_cast<std::size_t>(fine)), pin_weights.resize(static_cast<std::size_t>(fine));
+  shifts.resize(static_cast<std::size_t>(fine));
+  double a = (phi_b - phi_j) / interval;
+  a -= static_cast<double>(n) * std::floor(a / static_cast<double>(n));
+  for (int r = 0; r < fine; ++r)
+  {
+    const double x = static_cast<double>(r) / fine + a, base = std::floor(x);
+    bore_weights[static_cast<std::size_t>(r)] = weights_at(static_cast<double>(r) / fine);
+    pin_weights[static_cast<std::size_t>(r)] = weights_at(x - base);
+    shifts[static_cast<std::size_t>(r)] = static_cast<std::ptrdiff_t>(base);
   }
+  auto spline = [&](std::ptrdiff_t row, std::ptrdiff_t j, const std::array<double, 8>& w, double& slope)
+  {
+    double value = 0.0;
+    slope = 0.0;
+    for (int m = 0; m < 4; ++m)
+    {
+      const double p = wear(row, wrap(j - 1 + m, n));
+      value += w[static_cast<std::size_t>(m)] * p, slope += w[static_cast<std::size_t>(m + 4)] * p;
+    }
+    return value;
+  };
   thread_local std::vector<double> d, weight, cs, sn, slope;
   const auto count = static_cast<std::size_t>(last - first + 1);
   d.resize(count), weight.assign(count, 0.0), cs.resize(count), sn.resize(count), slope.resize(count);
@@ -192,24 +175,17 @@ inline Overlap worn_overlap(const Rows& wear, const std::vector<double>* bore, s
   const double c1 = std::cos(step), s1 = std::sin(step);
   double c = std::cos(a0), sg = std::sin(a0);
   out.deepest = -std::numeric_limits<double>::infinity();
-  auto wrap = [](std::ptrdiff_t i, std::ptrdiff_t m) { return ((i % m) + m) % m; };
   for (std::size_t i = 0; i < count; ++i)
   {
     const std::ptrdiff_t k = wrap(first + static_cast<std::ptrdiff_t>(i), total);
-    double hp = 0.0, hp1 = 0.0;
+    const auto r = static_cast<std::size_t>(k % fine);
+    double hb = 0.0, hp = 0.0, hb1 = 0.0, hp1 = 0.0;
+    if (bore >= 0)
+      hb = spline(bore, k / fine, bore_weights[r], hb1);
     if (pin >= 0)
-    {
-      const auto r = static_cast<std::size_t>(k % fine);
-      const std::ptrdiff_t j = k / fine + shifts[r];
-      const auto& w = weights[r];
-      for (int m = 0; m < 4; ++m)
-      {
-        const double p = wear(pin, wrap(j - 1 + m, n));
-        hp += w[static_cast<std::size_t>(m)] * p, hp1 += w[static_cast<std::size_t>(m + 4)] * p;
-      }
-    }
+      hp = spline(pin, k / fine + shifts[r], pin_weights[r], hp1);
     cs[i] = c, sn[i] = sg, slope[i] = hp1;
-    d[i] = e[0] * c + e[1] * sg - (bore ? (*bore)[static_cast<std::size_t>(k)] : 0.0) - hp - clearance;
+    d[i] = e[0] * c + e[1] * sg - hb - hp - clearance;
     out.deepest = std::max(out.deepest, d[i]);
     const double cn = c * c1 - sg * s1;
     sg = sg * c1 + c * s1, c = cn;

@@ -30,6 +30,11 @@ class PressureTable:
         steps = 0.5 * (self.pressure[:, 1:] + self.pressure[:, :-1]) * np.diff(self.angles)
         object.__setattr__(self, "integral", np.concatenate(
             [np.zeros((self.forces.size, 1)), np.cumsum(steps, axis=1)], axis=1))
+        # the reach of a contact's pressure (rad): the largest |alpha| of the angles where a
+        # step presses and of their neighbours (p is linear between the angles)
+        pressed = np.flatnonzero(np.any(self.pressure > 0, axis=0))
+        near = np.clip(np.concatenate([pressed - 1, pressed + 1]), 0, self.angles.size - 1)
+        object.__setattr__(self, "reach", float(np.abs(self.angles[near]).max()) if pressed.size else 0.0)
 
     def at(self, force: float) -> np.ndarray:
         """The pressure on `angles` under F' = force (N/m): linear between the FE steps;

@@ -37,23 +37,34 @@ def angles(points: int) -> np.ndarray:
 
 def worn_depth(table, time, force_per_length, contact_angle, sliding_speed, coefficient: float,
                at: np.ndarray, radius: float) -> np.ndarray:
-    """h at the angles `at` (m) of a surface of `radius` (m) after the history (arrays per
-    recorded step: s, N/m, rad in the surface's frame, m/s) on the pressure table
-    (wear.pressure.PressureTable)."""
+    """h at the angles `at` (m, evenly spaced from -pi: `angles`) of a surface of `radius` (m)
+    after the history (arrays per recorded step: s, N/m, rad in the surface's frame, m/s) on
+    the pressure table (wear.pressure.PressureTable). A step touches only the angles within
+    the table's reach of its contact (the arc it sweeps added)."""
     scale = radius / table.bore_radius
     depth = np.zeros(at.size)
+    spacing = 2 * math.pi / at.size
     for k in range(time.size):
         f, v = force_per_length[k], sliding_speed[k]
         if f <= 0 or v == 0:
             continue
-        start = scale * (np.mod(at - contact_angle[k] + math.pi, 2 * math.pi) - math.pi)
-        integral = None
+        sides = []
         for j in (k - 1, k + 1):   # the half intervals on either side of step k
             if not 0 <= j < time.size or time[j] == time[k]:
                 continue
             # toward a neighbour out of contact (its direction the offset's) the contact stands
             turn = 0.0 if force_per_length[j] <= 0 else \
                 scale * (np.mod(contact_angle[j] - contact_angle[k] + math.pi, 2 * math.pi) - math.pi)
+            sides.append((j, turn))
+        if not sides:
+            continue
+        reach = (table.reach + max(abs(turn) for _, turn in sides)) / scale
+        centre = int(round((contact_angle[k] + math.pi) / spacing))
+        count = min(2 * int(reach / spacing) + 5, at.size)
+        window = (centre - count // 2 + np.arange(count)) % at.size
+        start = scale * (np.mod(at[window] - contact_angle[k] + math.pi, 2 * math.pi) - math.pi)
+        integral = None
+        for j, turn in sides:
             if abs(turn) < SWEPT:
                 pressure = np.interp(start, table.angles, table.at(f), left=0.0, right=0.0)
             else:
@@ -61,7 +72,7 @@ def worn_depth(table, time, force_per_length, contact_angle, sliding_speed, coef
                 swept = (np.interp(start, table.angles, integral, left=0.0, right=integral[-1])
                          - np.interp(start - turn, table.angles, integral, left=0.0, right=integral[-1]))
                 pressure = swept / turn
-            depth += 0.5 * abs(time[j] - time[k]) * archard_depth_rate(pressure, v, coefficient)
+            depth[window] += 0.5 * abs(time[j] - time[k]) * archard_depth_rate(pressure, v, coefficient)
     return depth
 
 
