@@ -430,7 +430,7 @@ def test_a_large_table_is_also_parquet_with_the_csvs_values(tmp_path, monkeypatc
     point an int64), and each row's clearance is 10 mm - r; without pyarrow the CSV alone is
     written and the summary says why."""
     from pinbore import cli
-    from pinbore import study as runner
+    from pinbore.study import runner   # (the command reads PARQUET_ROWS there)
 
     monkeypatch.setattr(runner, "PARQUET_ROWS", 3)
     if not installed:
