@@ -131,7 +131,7 @@ def _export_inputs(args) -> list:
 def _study_inputs(args) -> list:
     """A study file, its base scene and every file that names (pinbore.study, which reads
     this registry: loaded by name)."""
-    return resolve("pinbore.study:inputs")(args.study)
+    return resolve("pinbore.study.schema:inputs")(args.study)
 
 
 def _report_inputs(args) -> list:
@@ -169,7 +169,7 @@ def export(args) -> int:
     return exporting.run(args.laws, args.to, args.out, args.scene, args.joint, args.law)
 
 
-# ---- a study point of each stage (pinbore.study.Point: in_folder, series)
+# ---- a study point of each stage (pinbore.study.point.Point: in_folder, series)
 
 def fem_point(data, point):
     """result.json, with the last row of curve.csv under `curve_last`."""
@@ -306,9 +306,10 @@ STAGES = (
                       "grid or sample, in parallel and cached by content; write DIR/results.csv, "
                       "DIR/summary.json, DIR/statistics.json (confidence intervals, exceedance), DIR/sobol.csv "
                       "(saltelli plans), DIR/tolerance.json and plots. See docs/study.md.",
-          run="pinbore.study:command", arguments="pinbore.cli:study_arguments", inputs=_study_inputs,
+          run="pinbore.study.runner:command", arguments="pinbore.cli:study_arguments", inputs=_study_inputs,
           outputs=("results.csv", "summary.json", "statistics.json"),
-          sections=(Section("studies", "pinbore.study:section"),), answers=("pinbore.study:answers",),
+          sections=(Section("studies", "pinbore.study.report:section"),),
+          answers=("pinbore.study.report:answers",),
           uses=("point",)),
     Stage(name="report", summary="build the HTML report from the results under build/",
           description="Collect the results under BUILD into one self-contained HTML page, "
