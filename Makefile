@@ -74,8 +74,18 @@ help: ## list the targets
 
 venv: $(STAMP) ## create .venv with Python 3.12 and the pinned dependencies
 
+# the packages of the source: the editable install maps each module where it was when
+# installed, so a package added or moved (a module become a package) installs again, without
+# making the results older (an order-only prerequisite of the stamp; before .venv exists there
+# is nothing to install again)
+LAYOUT := $(VENV)/.layout
+$(LAYOUT): $(wildcard */__init__.py */*/__init__.py */*/*/__init__.py)
+	@mkdir -p $(VENV)
+	@if [ -x $(PY) ] && [ -e $(STAMP) ]; then $(VENV)/bin/pip install --quiet --disable-pip-version-check --no-deps --no-build-isolation -e .; fi
+	@touch $@
+
 # the compiled core (cpp/) builds in the editable install; a change of it rebuilds it
-$(STAMP): requirements.lock pyproject.toml CMakeLists.txt $(wildcard cpp/*.cpp cpp/*.h cpp/*/*.cpp cpp/*/*.h)
+$(STAMP): requirements.lock pyproject.toml CMakeLists.txt $(wildcard cpp/*.cpp cpp/*.h cpp/*/*.cpp cpp/*/*.h) | $(LAYOUT)
 	@test -n "$(PYTHON312)" || { echo "make: Python 3.12 not found (PATH or ~/.pyenv/versions/3.12.*); set PYTHON312=/path/to/python3.12" >&2; exit 2; }
 	$(PYTHON312) -m venv $(VENV)
 	$(VENV)/bin/pip install --quiet --disable-pip-version-check -r requirements.lock
