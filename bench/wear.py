@@ -1,11 +1,18 @@
-"""Cost against accuracy of the coupled wear's cycle jumping: the Flores slider-crank's
-rod-slider joint over 1e5 crank revolutions (scenes/wear/slider_crank_flores2004_coupled.toml)
-at jump tolerances of 20, 10, 5 and 2.5 um, and one-way (the new joint's motion throughout).
+"""Cost against accuracy of the coupled wear's cycle jumping, the Flores slider-crank's rod-slider
+joint over 1e5 crank revolutions, on two mechanisms:
+
+- chaotic: the shipped scene (scenes/wear/slider_crank_flores2004_coupled.toml, 5000 rpm,
+  frictionless) at jump tolerances of 20, 10, 5 and 2.5 um, and one-way (the new joint's
+  motion throughout). A run's rate of wear (the mean of its revolutions after the first)
+  scatters, and so do the jumps; the tolerance bounds that scatter's effect too.
+- periodic: the same joint at 150 rpm with Coulomb friction (mu 0.1), its slider pulled by a
+  soft spring (bench/slider_crank_flores2004_loaded.toml: in contact throughout after the first
+  revolution; 3 revolutions a run), at 2.5, 1, 0.5, 0.25 and 0.125 um.
+
 Per run: wall time, jumps kept and refused, mechanism runs, the bore's and the pin's deepest
-wear and worn volume, and the profiles' largest difference from the tightest run's, relative
-to its deepest wear. The mechanism is chaotic: a run's rate of wear (the mean of its
-revolutions after the first) scatters, and so do the jumps; the tolerance bounds that
-scatter's effect too.
+wear and worn volume, and the bore's and the pin's profiles' largest difference from the
+tightest run's of their mechanism, relative to its deepest wear of that surface, with the
+worn volume's relative difference.
 Writes OUT/wear.csv and OUT/wear.png. Needs the joint's FE run (make fem).
 """
 
@@ -27,7 +34,11 @@ from pinbore.laws import wearfile
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "wear" / "slider_crank_flores2004_coupled.toml"
-TOLERANCES = [20e-6, 10e-6, 5e-6, 2.5e-6]
+LOADED = ROOT / "bench" / "slider_crank_flores2004_loaded.toml"
+# mechanism -> (its wear scene's changes, one-way too, the jump tolerances (m))
+LADDERS = {"chaotic": ({}, True, [20e-6, 10e-6, 5e-6, 2.5e-6]),
+           "periodic": ({"mechanism_file": str(LOADED), "periods": 3}, False,
+                        [2.5e-6, 1e-6, 0.5e-6, 0.25e-6, 0.125e-6])}
 
 
 def run(data: dict, folder: Path, name: str) -> dict:
@@ -44,51 +55,69 @@ def run(data: dict, folder: Path, name: str) -> dict:
             "profiles": wearfile.read(folder / name / "wear.csv")}
 
 
+def ladder(base: dict, one_way: bool, tolerances, folder: Path, name: str) -> dict:
+    """The runs of one mechanism: one-way if asked, then coupled at each tolerance."""
+    runs = {}
+    if one_way:
+        runs["one-way"] = run({k: v for k, v in base.items() if k != "coupling"}, folder, f"{name}_one_way")
+    for tolerance in tolerances:
+        label = f"{tolerance * 1e6:g} um"
+        runs[label] = run(base | {"coupling": {"tolerance": tolerance}}, folder, f"{name}_tol_{tolerance * 1e6:g}")
+        print(f"{name}, {label}: {runs[label]['wall']:.1f} s", file=sys.stderr)
+    return runs
+
+
+def rows_of(name: str, runs: dict, reference: str) -> list[dict]:
+    """The table's rows of one mechanism's runs against its run `reference`."""
+    ref = runs[reference]
+    rows = []
+    for label, r in runs.items():
+        s, p = r["summary"], r["profiles"]
+        differences = {f"{surface}_difference": f"{np.abs(getattr(p, surface) - getattr(ref['profiles'], surface)).max() / getattr(ref['profiles'], surface).max():.4f}"
+                       for surface in ("bore", "pin")}
+        rows.append({"mechanism": name, "run": label, "wall_time_s": f"{r['wall']:.1f}",
+                     "jumps": len(s["jumps"]) - 1 if s["coupled"] else 0,
+                     "refused": s["refused_jumps"], "mechanism_runs": s["mechanism_runs"],
+                     "bore_max_depth_um": f"{s['bore']['max_depth_m'] * 1e6:.2f}",
+                     "pin_max_depth_um": f"{s['pin']['max_depth_m'] * 1e6:.2f}",
+                     "bore_volume_mm3": f"{s['bore']['volume_m3'] * 1e9:.4f}", **differences,
+                     "volume_difference": f"{s['bore']['volume_m3'] / ref['summary']['bore']['volume_m3'] - 1:.5f}"})
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--out", type=Path, default=ROOT / "bench")
     out = parser.parse_args().out
     out.mkdir(parents=True, exist_ok=True)
     base = tomllib.loads(SCENE.read_text())
-    runs = {}
+    rows, ladders = [], {}
     with tempfile.TemporaryDirectory(prefix="pinbore-bench-wear-") as folder:
-        folder = Path(folder)
-        one_way = {k: v for k, v in base.items() if k != "coupling"}
-        runs["one-way"] = run(one_way, folder, "one_way")
-        for tolerance in TOLERANCES:
-            data = base | {"coupling": {"tolerance": tolerance}}
-            runs[f"{tolerance * 1e6:g} um"] = run(data, folder, f"tol_{tolerance * 1e6:g}")
-            print(f"{tolerance * 1e6:g} um: {runs[f'{tolerance * 1e6:g} um']['wall']:.1f} s", file=sys.stderr)
-    reference = runs[f"{TOLERANCES[-1] * 1e6:g} um"]["profiles"]
-    deepest = max(reference.bore.max(), reference.pin.max())
-    rows = []
-    for name, r in runs.items():
-        s, p = r["summary"], r["profiles"]
-        difference = max(np.abs(p.bore - reference.bore).max(), np.abs(p.pin - reference.pin).max())
-        rows.append({"run": name, "wall_time_s": f"{r['wall']:.1f}", "jumps": len(s["jumps"]) - 1 if s["coupled"] else 0,
-                     "refused": s["refused_jumps"], "mechanism_runs": s["mechanism_runs"],
-                     "bore_max_depth_um": f"{s['bore']['max_depth_m'] * 1e6:.1f}",
-                     "pin_max_depth_um": f"{s['pin']['max_depth_m'] * 1e6:.1f}",
-                     "bore_volume_mm3": f"{s['bore']['volume_m3'] * 1e9:.2f}",
-                     "difference_from_tightest": f"{difference / deepest:.3f}"})
+        for name, (changes, one_way, tolerances) in LADDERS.items():
+            ladders[name] = ladder(base | changes, one_way, tolerances, Path(folder), name)
+            rows += rows_of(name, ladders[name], f"{tolerances[-1] * 1e6:g} um")
     with open(out / "wear.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
-    fig, (ax, bx) = plt.subplots(1, 2, figsize=(12, 4.5))
-    for name, r in runs.items():
-        p = r["profiles"]
-        ax.plot(p.angle_deg, p.bore * 1e6, lw=0.9, label=name)
-    ax.set_xlabel("angle in the bore's frame (deg)")
-    ax.set_ylabel("bore's worn depth after 1e5 revolutions (um)")
-    ax.legend(fontsize=8)
-    coupled = [r for r in rows if r["run"] != "one-way"]
-    bx.plot([float(r["wall_time_s"]) for r in coupled], [float(r["difference_from_tightest"]) for r in coupled], "o-")
-    for r in coupled:
-        bx.annotate(r["run"], (float(r["wall_time_s"]), float(r["difference_from_tightest"])), fontsize=8)
+    fig, axes = plt.subplots(1, 3, figsize=(16, 4.5))
+    for ax, (name, surface) in zip(axes[:2], (("chaotic", "bore"), ("periodic", "pin"))):
+        for label, r in ladders[name].items():
+            ax.plot(r["profiles"].angle_deg, getattr(r["profiles"], surface) * 1e6, lw=0.9, label=label)
+        ax.set_xlabel(f"angle in the {surface}'s frame (deg)")
+        ax.set_ylabel(f"{surface}'s worn depth after 1e5 revolutions (um)")
+        ax.set_title(f"{name} mechanism")
+        ax.legend(fontsize=8)
+    bx = axes[2]
+    for name in LADDERS:
+        coupled = [r for r in rows if r["mechanism"] == name and r["run"] != "one-way"][:-1]
+        for surface, mark in (("bore", "o-"), ("pin", "s--")):
+            bx.loglog([float(r["wall_time_s"]) for r in coupled], [float(r[f"{surface}_difference"]) for r in coupled],
+                      mark, label=f"{name}, {surface}")
     bx.set_xlabel("wall time (s)")
     bx.set_ylabel("largest profile difference / deepest wear")
-    bx.set_title("cycle jumping: cost against the tightest tolerance's profile")
+    bx.set_title("against the tightest tolerance's profile")
+    bx.legend(fontsize=8)
     save_png(fig, out / "wear.png", layout=True)
 
 
