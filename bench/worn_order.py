@@ -6,8 +6,9 @@ the force along the push and across it, per unit length, from the worn surfaces'
 The mechanism's worn joint gives the joint's round FE law (build/fem/flores_wear/curve.csv) at
 the penetration delta_p = Phi_0^-1(int d_+^p dphi), times its gradient (docs/theory/wear.md);
 this script evaluates that by brute force (400,000 angles, Phi_0 by quadrature) for the
-orders 2, 4 (the engine's), 8 and the largest overlap (p -> infinity), pushed from its own
-first touch, and writes OUT/worn_order.csv (per order the range of the ratios to the FE's
+orders 2, 4 (the engine's), 8 and the largest overlap (p -> infinity), pushed from the
+surfaces' first touch (one for every order: delta_p > 0 exactly where they overlap), and
+writes OUT/worn_order.csv (per order the range of the ratios to the FE's
 force along and across the push) and OUT/worn_order.png. Needs `make fem` and `make wear`.
 """
 
@@ -74,7 +75,9 @@ def main(out: Path) -> None:
     profiles = wearfile.read(profiles_file)
     phi = np.linspace(-math.pi, math.pi, ANGLES, endpoint=False)
     step = phi[1] - phi[0]
-    depth = wearfile.spline(profiles.bore, phi)[0] + wearfile.spline(profiles.pin, phi)[0]
+    # each profile in its body's frame, placed in the scene's as meshes/worn.py places it
+    depth = (wearfile.spline(profiles.bore, phi - math.radians(geometry.get("bore_frame_deg", 0.0)))[0]
+             + wearfile.spline(profiles.pin, phi - math.radians(geometry.get("pin_frame_deg", 0.0)))[0])
     u = np.array([np.cos(phi), np.sin(phi)])
 
     def overlap(s):

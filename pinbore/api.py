@@ -19,6 +19,7 @@ against `base` (default: the working folder), as a scene file's are against its 
 import contextlib
 import os
 from pathlib import Path
+from types import SimpleNamespace
 
 from pinbore import stages
 from pinbore.core import scene as scenes
@@ -62,7 +63,8 @@ def run(stage: str, source, out, base=None):
     if stage not in known:
         raise ValueError(f"stage: {stage!r} is unknown; valid: {', '.join(known)}")
     out = _path("out", out)
-    with _scene_file(source, base) as path, declared_inputs([path, *scenes.referenced_files(path)]), \
+    with _scene_file(source, base) as path, \
+            declared_inputs(known[stage].inputs(SimpleNamespace(scene=path))), \
             reserved(out):   # out checked and locked before the work, as the CLI holds it
         known[stage].run_scene(path, out)
     return known[stage].read_result(out)

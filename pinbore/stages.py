@@ -331,7 +331,7 @@ def of_scene(data: dict, source: str) -> tuple[Stage, dict]:
             return stage, data
     kindless = "; ".join(f"a {s.name} scene: a [{s.kindless}] table" for s in STAGES if s.kindless)
     raise InputError(f"{source}: kind: {kind!r} is unknown; valid: "
-                     f"{', '.join(k for s in STAGES for k in s.kinds if s.kindless is None)} ({kindless})")
+                     f"{', '.join(k for s in STAGES for k in s.kinds)} ({kindless})")
 
 
 def with_result() -> dict[str, Stage]:

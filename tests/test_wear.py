@@ -350,7 +350,7 @@ def worn_model(data):
 def test_the_round_overlap_moment_and_its_inverse():
     """Phi(delta) = int d_+^4 dphi of a round journal offset by c + delta (the core's
     round_moment, the worn joint's scale of penetration) is the adaptive quadrature of the
-    overlap (c + delta) cos phi - c within 1e-12 from 1 nm to 0.5 mm, its slope the central
+    overlap (c + delta) cos phi - c within 1e-10 from 1 nm to 0.5 mm, its slope the central
     difference's within 1e-7, and the parabolic arc's closed form sqrt(2/c) B(5, 1/2)
     delta^(9/2) where delta << c (to delta / c); moment_penetration inverts it to 1e-13."""
     from scipy.integrate import quad

@@ -185,7 +185,7 @@ struct Matrix
 };
 using Rows = Matrix<const double>;
 
-/// The order p of a worn joint's overlap mean (worn.h; pinbore.laws.tables.WORN_ORDER).
+/// The order p of a worn joint's overlap mean (worn.h; pinbore.reduced.mechanism.layout.WORN_ORDER).
 inline constexpr int WORN_ORDER = 4;
 
 /// A worn profile's bound (worn.h): a depth its spline never falls below.

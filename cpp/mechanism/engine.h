@@ -344,8 +344,8 @@ struct Engine
                                      contacts(k, CONTACT_CLEARANCE));
       g.worn = true;
       const double size = std::hypot(o.gradient[0], o.gradient[1]);
-      if (not (o.moment > 0.0 and size > 0.0))
-      {   // open (or not finite): the deepest overlap, along e
+      if (not (o.moment >= std::numeric_limits<double>::min() and size > 0.0))
+      {   // open (or an overlap whose moment underflows, or not finite): the deepest overlap, along e
         const double r = norm(e);
         g.delta = o.deepest;
         g.normal = r > 0.0 ? scaled(e, 1.0 / r) : axis<D>(0);

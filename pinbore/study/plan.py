@@ -15,7 +15,8 @@ from pinbore.core.codedeps import code_hash
 from pinbore.core.errors import InputError
 from pinbore.core.sweep import digest_files, named_files, put
 from pinbore.stages import of_scene
-from pinbore.study.point import Point, column_statistic, point_code
+from pinbore.study import point as point_module
+from pinbore.study.point import Point, point_code
 from pinbore.study.schema import Study, load
 
 # a parameter's key the base scene does not have
@@ -123,8 +124,7 @@ class Plan:
         files = digest_files([*scenes.referenced_files(self.base_path),
                               *named_files(self.scenes, self.base_path.parent)])
         code = (code_hash(*point_code(self.stage.name))
-                + hashlib.sha256((inspect.getsource(Point)
-                                  + inspect.getsource(column_statistic)).encode()).hexdigest())
+                + hashlib.sha256(inspect.getsource(point_module).encode()).hexdigest())
         self.keys = sweep.point_keys(self.stage.name, self.scenes, files, code, self.columns)
 
     def check_collect(self) -> None:

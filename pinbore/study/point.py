@@ -21,9 +21,9 @@ KEPT_SUFFIXES = (".csv", ".json")
 def point_code(stage: str) -> list[str]:
     """The code that may decide a point's result: its stage's scene model, runner and point
     function (pinbore.stages), read with what they import (core.codedeps: the import closure,
-    lazy imports and the compiled core included); the class Point and the column_statistic it
-    calls are hashed beside it (not the rest of pinbore.study: a new plot reruns nothing). An
-    edit of the multibody engine so reruns no FE point."""
+    lazy imports and the compiled core included); this module is hashed beside it whole (Point,
+    the statistics of its series, the files it keeps; not the rest of pinbore.study: a new
+    plot reruns nothing). An edit of the multibody engine so reruns no FE point."""
     return stage_code(installed_graph(), stage, ("point",))
 
 

@@ -65,8 +65,8 @@ CONTACT_COMPLIANCE = CONTACT_KIND + 27   # SLICED: bulk compliance c_b (m^2/N; 0
 CONTACT_BORE_WEAR = CONTACT_KIND + 28
 CONTACT_PIN_WEAR = CONTACT_KIND + 29
 CONTACT_WEAR_REACH = CONTACT_KIND + 30
-WORN_ORDER = 4
 CONTACT_COLUMNS = CONTACT_KIND + 31
+WORN_ORDER = 4   # p of a worn journal's overlap mean, its penetration (cpp/mechanism/worn.h)
 RADIAL, SLICED, PLANE, AXIS_RADIAL = 0, 1, 2, 3   # AXIS_RADIAL: a journal point from the bore's axis
 
 # friction laws (column CONTACT_FRICTION_LAW) and their parameter columns

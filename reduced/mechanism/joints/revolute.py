@@ -35,7 +35,8 @@ class ClearanceJoint(JointMaterials, ContactLaw):
     wear_file: str | None = pydantic.Field(default=None, description=(
         "a wear.csv (pinbore wear): the bore's and the pin's worn depth against angle in their "
         "bodies' frames; the journal then meets its bore over the arc where the worn surfaces "
-        "overlap, an elastic foundation that keeps the joint's law on a round profile"))
+        "overlap (their overlap's mean of order 4 on the round joint's scale), which keeps the "
+        "joint's law on a round profile"))
 
     @pydantic.model_validator(mode="after")
     def _normal_law(self):
