@@ -521,7 +521,8 @@ def test_cycle_jumping_follows_an_accelerating_wear_in_closed_form():
 def test_the_coupled_wear_runs_the_mechanism_on_its_worn_joint(tmp_path, flores_fe):
     """[coupling]: the jumps cover the cycles, each within the tolerance, one run of the worn
     mechanism each (the rate at the predictor stands for the next jump's start) besides the
-    first; the last jump's record is the written profile's deepest wear."""
+    first; the last jump's record is the written profile's deepest wear and volume, the first's
+    first impact the new joint's."""
     import json
 
     data = wear_scene(tmp_path, flores_fe, cycles=200.0,
@@ -535,3 +536,13 @@ def test_the_coupled_wear_runs_the_mechanism_on_its_worn_joint(tmp_path, flores_
     assert result["mechanism_runs"] == 3 and result["refused_jumps"] == 0
     assert all(j["error_m"] <= 1e-3 for j in jumps)
     assert jumps[-1]["bore_max_depth_m"] == pytest.approx(result["bore"]["max_depth_m"], rel=1e-12)
+    assert jumps[-1]["volume_m3"] == pytest.approx(result["bore"]["volume_m3"], rel=1e-12)
+    assert jumps[0]["volume_m3"] == 0.0 and jumps[1]["volume_m3"] > 0
+    # the new joint's first impact is the Flores mechanism's largest force (0.25 ms): its peak
+    # as the mechanism's own summary finds it (refined between steps), within 2 %
+    from pinbore.reduced.mechanism import kinds
+    from pinbore.reduced.mechanism.run import summarised
+
+    path = ROOT / "scenes/reduced/slider_crank_flores2004.toml"
+    new = summarised(kinds.load(path), str(path), path.parent)[3].clearance_joints["rod_slider"]
+    assert jumps[0]["first_impact_force_N"] == pytest.approx(new.peak_normal_force_N, rel=2e-2)

@@ -14,13 +14,15 @@ from pinbore.reduced.mechanism import kernel
 class JointHistory:
     """Per recorded step: time (s), the contact's normal force (N), the direction of the
     contact from the bore's centre in the bore's frame and in the pin's (rad), and the
-    tangential speed of the pin's surface over the bore's there (m/s)."""
+    tangential speed of the pin's surface over the bore's there (m/s); and of the whole run,
+    the largest force of the joint's first contact (N: its first impact)."""
 
     time: np.ndarray
     force: np.ndarray
     bore_angle: np.ndarray
     pin_angle: np.ndarray
     sliding_speed: np.ndarray
+    first_impact: float = 0.0
 
 
 def of_run(model, trajectory, j: int, window: tuple[float, float]) -> JointHistory:
@@ -37,7 +39,8 @@ def of_run(model, trajectory, j: int, window: tuple[float, float]) -> JointHisto
     keep = (trajectory.times >= window[0]) & (trajectory.times <= window[1])
     seen = observed_steps(model, trajectory)
     rows = list(model.contact_rows[j])
-    force = seen["normals"][:, rows].sum(axis=1)[keep]
+    whole = seen["normals"][:, rows].sum(axis=1)
+    force = whole[keep]
     args, work = seen["args"], seen["work"]
     states = trajectory.states[keep]
     offsets = np.empty((states.shape[0], 4))
@@ -51,7 +54,19 @@ def of_run(model, trajectory, j: int, window: tuple[float, float]) -> JointHisto
     slip = (-np.sin(bore_angle) * offsets[:, 2] + np.cos(bore_angle) * offsets[:, 3]
             + (w_j - w_b) * c.journal_radius)
     return JointHistory(trajectory.times[keep], force, bore_angle,
-                        np.mod(bore_angle + phi_b - phi_j + math.pi, 2 * math.pi) - math.pi, slip)
+                        np.mod(bore_angle + phi_b - phi_j + math.pi, 2 * math.pi) - math.pi, slip,
+                        first_contact_peak(whole))
+
+
+def first_contact_peak(force: np.ndarray) -> float:
+    """The largest of a force history's first run of steps in contact (force > 0; 0 if none)."""
+    touching = np.flatnonzero(force > 0)
+    if touching.size == 0:
+        return 0.0
+    start = touching[0]
+    parted = np.flatnonzero(force[start:] <= 0)
+    end = start + (parted[0] if parted.size else force.size - start)
+    return float(force[start:end].max())
 
 
 def _rotation(model, states, body: int) -> tuple[np.ndarray, np.ndarray]:

@@ -89,7 +89,7 @@ def run(scene_path, out) -> int:
                 depth, jumps = jumping.jump(
                     lambda h: joined(*cycle(split(h))), np.zeros(2 * at.size), scene.cycles,
                     scene.coupling.tolerance, scene.coupling.first_jump or scene.cycles / 20,
-                    record=lambda h, info: jump_record(split(h), info))
+                    record=lambda h, info: jump_record(split(h), info, table, scene.length))
                 last = cycle.last
                 worn = {"angles": at} | split(depth)
     except Stopped as err:
@@ -163,11 +163,13 @@ def split(h: np.ndarray) -> dict:
     return {"bore": h[:half], "pin": h[half:]}
 
 
-def jump_record(worn: dict, cycle) -> dict:
-    """What a kept jump records of the joint at its end: the deepest wear of each surface and
-    the peak contact force of the run on it."""
+def jump_record(worn: dict, cycle, table, length: float) -> dict:
+    """What a kept jump records of the joint at its end: the deepest wear of each surface, the
+    bore's worn volume (the pin's is the same) and, of the run on it, the peak contact force of
+    a cycle and the largest force of its first impact."""
     return {"bore_max_depth_m": float(np.max(worn["bore"])), "pin_max_depth_m": float(np.max(worn["pin"])),
-            "peak_force_N": float(np.max(cycle.force))}
+            "volume_m3": profile.volume_per_length(worn["bore"], table.bore_radius) * length,
+            "peak_force_N": float(np.max(cycle.force)), "first_impact_force_N": cycle.first_impact}
 
 
 def averaged_periods(end: float, period: float) -> int:
@@ -205,7 +207,8 @@ def summary(scene, source, mechanism_path, table, cycle, worn, period, periods: 
 
 def picture(path: Path, worn: dict, joint, scene, result) -> None:
     """The worn depths against angle, the worn bore and pin drawn (depth exaggerated), and,
-    coupled, the deepest wear and the peak contact force against the cycles."""
+    coupled, the deepest wear, the worn volume, the peak contact force of a cycle and the first
+    impact's against the cycles."""
     from pinbore.core.figures import plt, save_png   # noqa: PLC0415
 
     panels = 3 if result.coupled else 2
@@ -234,10 +237,12 @@ def picture(path: Path, worn: dict, joint, scene, result) -> None:
         cx.plot(n, [j.bore_max_depth_m * 1e6 for j in result.jumps], "o-", ms=3, label="bore, deepest (um)")
         cx.plot(n, [j.pin_max_depth_m * 1e6 for j in result.jumps], "s-", ms=3, label="pin, deepest (um)")
         cx.set_xlabel("cycles")
-        cx.set_ylabel("worn depth (um)")
+        cx.set_ylabel("worn depth (um), volume (mm^3)")
+        cx.plot(n, [j.volume_m3 * 1e9 for j in result.jumps], "d-", ms=3, label="worn volume (mm^3)")
         fx = cx.twinx()
-        fx.plot(n, [j.peak_force_N / 1e3 for j in result.jumps], "k^--", ms=3, label="peak contact force (kN)")
-        fx.set_ylabel("peak contact force of a cycle (kN)")
+        fx.plot(n, [j.peak_force_N / 1e3 for j in result.jumps], "k^--", ms=3, label="peak force of a cycle (kN)")
+        fx.plot(n, [j.first_impact_force_N / 1e3 for j in result.jumps], "kv:", ms=3, label="first impact's force (kN)")
+        fx.set_ylabel("contact force (kN)")
         cx.legend(loc="upper left", fontsize=8)
         fx.legend(loc="lower right", fontsize=8)
         cx.set_title(f"{len(result.jumps) - 1} jumps, {result.mechanism_runs} runs")

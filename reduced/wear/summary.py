@@ -21,14 +21,17 @@ class SurfaceWear(Strict):
 
 class Jump(Strict):
     """A kept jump of the coupled wear: the cycles reached, its size, its error estimate, and
-    the joint there (the deepest wear, the peak contact force of the run on it)."""
+    the joint there (the deepest wear, the bore's worn volume, the peak contact force of a
+    cycle of the run on it and the largest force of the run's first impact)."""
 
     cycles: float = pydantic.Field(ge=0)
     size: float = pydantic.Field(ge=0)
     error_m: float = pydantic.Field(ge=0)
     bore_max_depth_m: float = pydantic.Field(ge=0)
     pin_max_depth_m: float = pydantic.Field(ge=0)
+    volume_m3: float = pydantic.Field(ge=0)
     peak_force_N: float = pydantic.Field(ge=0)
+    first_impact_force_N: float = pydantic.Field(ge=0)
 
 
 class WearSummary(Strict):
