@@ -60,12 +60,11 @@ CONTACT_END_LENGTH = CONTACT_KIND + 25   # SLICED: end length e of a sliced law 
 CONTACT_SCALE = CONTACT_KIND + 26        # SLICED: stiffness factor a of a sliced law
 CONTACT_COMPLIANCE = CONTACT_KIND + 27   # SLICED: bulk compliance c_b (m^2/N; 0: none)
 # a worn planar journal (RADIAL): its bore's and its pin's profile (their row in Args.wear plus
-# one; 0: not worn) and the deepest the two reach together (m): its penetration is the mean of
-# order WORN_ORDER of the worn surfaces' overlap on the round joint's scale (cpp/mechanism/worn.h)
+# one; 0: not worn): its penetration is the mean of order WORN_ORDER of the worn surfaces'
+# overlap on the round joint's scale (cpp/mechanism/worn.h)
 CONTACT_BORE_WEAR = CONTACT_KIND + 28
 CONTACT_PIN_WEAR = CONTACT_KIND + 29
-CONTACT_WEAR_REACH = CONTACT_KIND + 30
-CONTACT_COLUMNS = CONTACT_KIND + 31
+CONTACT_COLUMNS = CONTACT_KIND + 30
 WORN_ORDER = 4   # p of a worn journal's overlap mean, its penetration (cpp/mechanism/worn.h)
 RADIAL, SLICED, PLANE, AXIS_RADIAL = 0, 1, 2, 3   # AXIS_RADIAL: a journal point from the bore's axis
 

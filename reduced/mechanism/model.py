@@ -179,10 +179,9 @@ def build(scene, source: str, base: Path, ideal: bool = False) -> Model:
 
 def worn_columns(wear: list, bore, pin) -> dict:
     """A worn contact's columns: its bore's and its pin's rows of Args.wear (appended to
-    `wear`; one plus their index) and the deepest they reach together (m)."""
+    `wear`; one plus their index)."""
     wear += [np.asarray(bore, float), np.asarray(pin, float)]
-    return {layout.CONTACT_BORE_WEAR: len(wear) - 1, layout.CONTACT_PIN_WEAR: len(wear),
-            layout.CONTACT_WEAR_REACH: float(np.max(bore) + np.max(pin))}
+    return {layout.CONTACT_BORE_WEAR: len(wear) - 1, layout.CONTACT_PIN_WEAR: len(wear)}
 
 
 def worn_rows(wear: list) -> np.ndarray:
