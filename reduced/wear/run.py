@@ -165,7 +165,7 @@ def split(h: np.ndarray) -> dict:
 
 def jump_record(worn: dict, cycle, table, length: float) -> dict:
     """What a kept jump records of the joint at its end: the deepest wear of each surface, the
-    bore's worn volume (the pin's is the same) and, of the run on it, the peak contact force of
+    bore's worn volume and, of the run on it, the peak contact force of
     a cycle and the largest force of its first impact."""
     return {"bore_max_depth_m": float(np.max(worn["bore"])), "pin_max_depth_m": float(np.max(worn["pin"])),
             "volume_m3": profile.volume_per_length(worn["bore"], table.bore_radius) * length,
