@@ -207,7 +207,7 @@ def summary(scene, source, mechanism_path, table, cycle, worn, period, periods: 
 
 def picture(path: Path, worn: dict, joint, scene, result) -> None:
     """The worn depths against angle, the worn bore and pin drawn (depth exaggerated), and,
-    coupled, the deepest wear, the worn volume, the peak contact force of a cycle and the first
+    coupled, the deepest wear, the bore's worn volume, the peak contact force of a cycle and the first
     impact's against the cycles."""
     from pinbore.core.figures import plt, save_png   # noqa: PLC0415
 
@@ -238,7 +238,7 @@ def picture(path: Path, worn: dict, joint, scene, result) -> None:
         cx.plot(n, [j.pin_max_depth_m * 1e6 for j in result.jumps], "s-", ms=3, label="pin, deepest (um)")
         cx.set_xlabel("cycles")
         cx.set_ylabel("worn depth (um), volume (mm^3)")
-        cx.plot(n, [j.volume_m3 * 1e9 for j in result.jumps], "d-", ms=3, label="worn volume (mm^3)")
+        cx.plot(n, [j.volume_m3 * 1e9 for j in result.jumps], "d-", ms=3, label="bore's worn volume (mm^3)")
         fx = cx.twinx()
         fx.plot(n, [j.peak_force_N / 1e3 for j in result.jumps], "k^--", ms=3, label="peak force of a cycle (kN)")
         fx.plot(n, [j.first_impact_force_N / 1e3 for j in result.jumps], "kv:", ms=3, label="first impact's force (kN)")
