@@ -207,8 +207,8 @@ def summary(scene, source, mechanism_path, table, cycle, worn, period, periods: 
 
 def picture(path: Path, worn: dict, joint, scene, result) -> None:
     """The worn depths against angle, the worn bore and pin drawn (depth exaggerated), and,
-    coupled, the deepest wear, the bore's worn volume, the peak contact force of a cycle and the first
-    impact's against the cycles."""
+    coupled, the deepest wear, the bore's worn volume, the peak contact force of a cycle and
+    the first impact's against the cycles."""
     from pinbore.core.figures import plt, save_png   # noqa: PLC0415
 
     panels = 3 if result.coupled else 2
