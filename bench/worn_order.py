@@ -22,33 +22,14 @@ import numpy as np
 from scipy.optimize import brentq
 
 from pinbore.core.figures import plt, save_png
+from pinbore.fem import curve
 from pinbore.laws import wearfile
+from pinbore.laws.lawsfile import Section
 
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "fem" / "flores_worn.toml"
 ORDERS = [2, 4, 8, math.inf]
 ANGLES = 400_000
-
-
-def curve(path: Path):
-    """(approach, force along, force across) of a curve.csv (m, N/m)."""
-    rows = list(csv.DictReader(path.read_text().splitlines()))
-    return tuple(np.array([float(r[k]) for r in rows]) for k in
-                 ("approach_m", "force_per_length_N_per_m", "tangential_force_per_length_N_per_m"))
-
-
-def round_law(approach, force):
-    """The round FE curve as a law: log-log through its points, the end segments' power laws
-    beyond them."""
-    la, lf = np.log(approach), np.log(force)
-
-    def law(x):
-        if x <= 0:
-            return 0.0
-        lx = math.log(x)
-        i = int(np.clip(np.searchsorted(la, lx) - 1, 0, la.size - 2))
-        return math.exp(lf[i] + (lf[i + 1] - lf[i]) / (la[i + 1] - la[i]) * (lx - la[i]))
-    return law
 
 
 def round_moment(delta: float, c: float, p: float) -> float:
@@ -70,8 +51,15 @@ def main(out: Path) -> None:
     for path in (worn, new, profiles_file):
         if not path.is_file():
             raise SystemExit(f"bench/worn_order.py: {path} is missing: run `make fem wear` first")
-    approach, fe_along, fe_across = curve(worn)
-    law = round_law(*curve(new)[:2])
+    fe = curve.read(worn)
+    approach, fe_along, fe_across = fe.approach, fe.force, fe.tangential_force
+    new_curve = curve.read(new)
+    # the round FE curve as the per-length law a section gives: log-log between its points
+    section = Section(curve=str(new), approach_m=new_curve.approach.tolist(),
+                      force_N_per_m=new_curve.force.tolist())
+
+    def law(x):
+        return float(section.force(x)) if x > 0 else 0.0
     profiles = wearfile.read(profiles_file)
     phi = np.linspace(-math.pi, math.pi, ANGLES, endpoint=False)
     step = phi[1] - phi[0]
