@@ -12,7 +12,7 @@ from tqdm import tqdm
 
 from pinbore.core import scene as scenes
 from pinbore.core.output import atomic_directory
-from pinbore.fem import model, outputs
+from pinbore.fem import compliance, model, outputs
 from pinbore.fem.scene import FemScene, worn_joint
 
 
@@ -49,6 +49,13 @@ def run(scene_path, out, comm=MPI.COMM_WORLD, scene: FemScene | None = None) -> 
                                 scene.tilt_pivot[2], 2 if el.symmetric else 1)
             outputs.write_pressure(tmp / "pressure.csv", result, direction, sizing.arc_half_angle,
                                    contact)
+        if scene.geometry.dim == 2 and not scene.materials.plastic and worn is None:
+            # collective: the bodies' surface compliance (a conformal contact's kernel)
+            kernel = compliance.surface_compliance(el, data.facet_tags, scene.geometry.pin_radius,
+                                                   scene.geometry.bore_radius, scene.load.direction_deg)
+            if comm.rank == 0:
+                compliance.write(tmp / "compliance.csv", kernel)
+        if comm.rank == 0:
             outputs.write_result(tmp / "result.json", summary(
                 scene, scene_path, result, el, contact, stepper, sizing, comm, worn,
                 {"setup": setup, "solve": solve,

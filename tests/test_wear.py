@@ -206,14 +206,28 @@ BAD_WEAR = [
      'mechanism_file: a planar mechanism (kind = "planar") is needed'),
     ({"mechanism_file": str(ROOT / "scenes/reduced/solar_panel_deployment.toml"), "joint": "hinge"},
      "mechanism_file: a periodic analysis needs a periodic forcing"),   # a deployment
-    (lambda folder: {"mechanism_file": short_flores(folder)},
+    (lambda folder, fe: {"mechanism_file": short_flores(folder)},
      "mechanism_file: duration 0.006 s is shorter than one forcing period"),
+    ({"coupling": {"tolerance": 1e-6, "pressure": "old"}}, "coupling.pressure: Input should be 'new' or 'worn'"),
+    (lambda folder, fe: without_compliance(folder, fe), "coupling.pressure: \"worn\" needs the FE run's compliance.csv"),
 ]
+
+
+def without_compliance(folder, fe) -> dict:
+    """The FE run `fe` copied without its compliance.csv, the worn joint's pressure asked."""
+    import shutil
+
+    copy = folder / "fe_copy"
+    copy.mkdir()
+    for name in ("pressure.csv", "curve.csv", "result.json"):
+        shutil.copy(fe / name, copy / name)
+    return {"pressure_file": str(copy / "pressure.csv"), "curve_file": str(copy / "curve.csv"),
+            "coupling": {"tolerance": 1e-6, "pressure": "worn"}}
 
 
 @pytest.mark.parametrize("change, message", BAD_WEAR, ids=[m for _, m in BAD_WEAR])
 def test_bad_wear_scenes_are_one_line(tmp_path, flores_fe, change, message):
-    change = change(tmp_path) if callable(change) else change
+    change = change(tmp_path, flores_fe) if callable(change) else change
     (tmp_path / "wear.toml").write_text(tomli_w.dumps(wear_scene(tmp_path, flores_fe, **change)))
     done = pinbore("wear", tmp_path / "wear.toml", "--out", tmp_path / "out")
     assert done.returncode == 2 and message in done.stderr, done.stderr
@@ -546,3 +560,42 @@ def test_the_coupled_wear_runs_the_mechanism_on_its_worn_joint(tmp_path, flores_
     path = ROOT / "scenes/reduced/slider_crank_flores2004.toml"
     new = summarised(kinds.load(path), str(path), path.parent)[3].clearance_joints["rod_slider"]
     assert jumps[0]["first_impact_force_N"] == pytest.approx(new.peak_normal_force_N, rel=2e-2)
+
+
+def test_the_worn_joints_own_pressure_wears_archards_volume(tmp_path, flores_fe):
+    """[coupling] pressure = "worn": the pressure of the joint as it wears, its contact solved
+    on the FE run's surface compliance (fem.compliance.Conformal; tests/test_worn_fe.py checks
+    it against the worn FE run). Archard's volume is k times the load times the distance slid
+    whatever the pressure's shape: on one run of the mechanism the cycle's volumes are the FE
+    table's within the share of the pressure's arc off the load (1 - cos alpha over the
+    contact's half-angle, under 1 %), the pin's twice the bore's; the bore's deepest wear lies
+    where the table's does, within 2 degrees. The scene runs through `pinbore wear`."""
+    import json
+
+    from pinbore.core import scene as scenes
+    from pinbore.fem import compliance
+    from pinbore.reduced.wear import run as wear_run
+    from pinbore.reduced.wear.scene import WearScene
+
+    data = wear_scene(tmp_path, flores_fe, cycles=200.0,
+                      coupling={"tolerance": 1e-3, "first_jump": 100.0, "pressure": "worn"})
+    (tmp_path / "wear.toml").write_text(tomli_w.dumps(data))
+    scene = scenes.load(WearScene, tmp_path / "wear.toml")
+    mechanism, path, _, period = wear_run.mechanism_of(scene, tmp_path, "test")
+    table = pressure.read(flores_fe / "pressure.csv", flores_fe / "curve.csv", "test")
+    at = profile.angles(scene.points)
+    new = np.zeros(at.size)
+    rates = {}
+    for name, kernel in (("table", None), ("worn", compliance.read(flores_fe / "compliance.csv"))):
+        cycle = wear_run.Cycle(scene, mechanism, path, table, period, at, tmp_path, kernel)
+        rates[name] = cycle({"bore": new, "pin": new})[0]
+    volume = {name: profile.volume_per_length(r["bore"], table.bore_radius) for name, r in rates.items()}
+    assert volume["worn"] == pytest.approx(volume["table"], rel=1e-2)
+    pin = profile.volume_per_length(rates["worn"]["pin"], table.pin_radius)
+    assert pin == pytest.approx(2 * volume["worn"], rel=1e-9)
+    deepest = [math.degrees(at[np.argmax(r["bore"])]) for r in rates.values()]
+    assert abs(deepest[0] - deepest[1]) <= 2.0
+    done = pinbore("wear", tmp_path / "wear.toml", "--out", tmp_path / "out")
+    assert done.returncode == 0, done.stderr
+    result = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert result["coupled"] and result["jumps"][-1]["cycles"] == 200.0

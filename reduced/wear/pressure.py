@@ -107,3 +107,41 @@ def _geometry(curve_file: Path, source: str) -> tuple[float, float]:
         raise InputError(f"{source}: curve_file: the FE run of a worn joint (its "
                          "geometry.wear_file); the wear takes the pressure of the new joint's")
     return radii
+
+
+SECTOR = math.radians(5)   # rad: the load directions a worn joint's pressure is solved along
+LEVELS = (1 / 27, 1 / 9, 1 / 3, 1.0)   # of a sector's largest load: the loads it is solved under
+
+
+def worn_tables(conformal, table: PressureTable, force_per_length, bore_angle, pin_angle,
+                weight) -> list:
+    """The pressure of the worn joint (fem.compliance.Conformal: the FE's compliance on the
+    worn surfaces) for each recorded step: per sector of SECTOR of the load's direction in the
+    bore's frame that the steps visit, the joint loaded along the sector's middle by LEVELS
+    of its steps' largest load, the pin turned by their mean turn (weighted by `weight`, the
+    steps' share of the wear), as a PressureTable on the angles from the load (the FE run's
+    radii of `table`); None for a step out of contact."""
+    forces = np.asarray(force_per_length, float)
+    on = forces > 0
+    sector = np.floor((np.asarray(bore_angle) + math.pi) / SECTOR).astype(int)
+    turn = np.asarray(bore_angle) - np.asarray(pin_angle)
+    grid = -math.pi + conformal.spacing * np.arange(conformal.n + 1)
+    out = [None] * forces.size
+    for s in np.unique(sector[on]):
+        mine = on & (sector == s)
+        w = np.asarray(weight)[mine] + 1e-300
+        mean_turn = math.atan2(np.sum(w * np.sin(turn[mine])), np.sum(w * np.cos(turn[mine])))
+        direction = -math.pi + (s + 0.5) * SECTOR
+        top = float(forces[mine].max())
+        rows = [np.zeros(grid.size)]
+        for level in LEVELS:
+            p, theta, _ = conformal.loaded(level * top, direction, mean_turn)
+            p = conformal.on_bore(p, theta)
+            alpha = np.mod(theta - direction + math.pi, 2 * math.pi) - math.pi
+            order = np.argsort(alpha)
+            rows.append(np.interp(grid, alpha[order], p[order], left=0.0, right=0.0))
+        sector_table = PressureTable(top * np.array((0.0,) + LEVELS), grid, np.array(rows),
+                                     table.pin_radius, table.bore_radius)
+        for k in np.flatnonzero(mine):
+            out[k] = sector_table
+    return out

@@ -36,11 +36,12 @@ def angles(points: int) -> np.ndarray:
 
 
 def worn_depth(table, time, force_per_length, contact_angle, sliding_speed, coefficient: float,
-               at: np.ndarray, radius: float) -> np.ndarray:
+               at: np.ndarray, radius: float, tables=None) -> np.ndarray:
     """h at the angles `at` (m, evenly spaced from -pi: `angles`) of a surface of `radius` (m)
     after the history (arrays per recorded step: s, N/m, rad in the surface's frame, m/s) on
     the pressure table (wear.pressure.PressureTable). A step touches only the angles within
-    the table's reach of its contact (the arc it sweeps added)."""
+    the table's reach of its contact (the arc it sweeps added). `tables`: a table per step
+    (wear.pressure.worn_tables) in place of `table`."""
     scale = radius / table.bore_radius
     depth = np.zeros(at.size)
     spacing = 2 * math.pi / at.size
@@ -48,6 +49,7 @@ def worn_depth(table, time, force_per_length, contact_angle, sliding_speed, coef
         f, v = force_per_length[k], sliding_speed[k]
         if f <= 0 or v == 0:
             continue
+        mine = table if tables is None else tables[k]
         sides = []
         for j in (k - 1, k + 1):   # the half intervals on either side of step k
             if not 0 <= j < time.size or time[j] == time[k]:
@@ -58,7 +60,7 @@ def worn_depth(table, time, force_per_length, contact_angle, sliding_speed, coef
             sides.append((j, turn))
         if not sides:
             continue
-        reach = (table.reach + max(abs(turn) for _, turn in sides)) / scale
+        reach = (mine.reach + max(abs(turn) for _, turn in sides)) / scale
         centre = int(round((contact_angle[k] + math.pi) / spacing))
         count = min(2 * int(reach / spacing) + 5, at.size)
         window = (centre - count // 2 + np.arange(count)) % at.size
@@ -66,11 +68,11 @@ def worn_depth(table, time, force_per_length, contact_angle, sliding_speed, coef
         integral = None
         for j, turn in sides:
             if abs(turn) < SWEPT:
-                pressure = np.interp(start, table.angles, table.at(f), left=0.0, right=0.0)
+                pressure = np.interp(start, mine.angles, mine.at(f), left=0.0, right=0.0)
             else:
-                integral = table.integral_at(f) if integral is None else integral
-                swept = (np.interp(start, table.angles, integral, left=0.0, right=integral[-1])
-                         - np.interp(start - turn, table.angles, integral, left=0.0, right=integral[-1]))
+                integral = mine.integral_at(f) if integral is None else integral
+                swept = (np.interp(start, mine.angles, integral, left=0.0, right=integral[-1])
+                         - np.interp(start - turn, mine.angles, integral, left=0.0, right=integral[-1]))
                 pressure = swept / turn
             depth[window] += 0.5 * abs(time[j] - time[k]) * archard_depth_rate(pressure, v, coefficient)
     return depth

@@ -77,10 +77,21 @@ def run(scene_path, out) -> int:
     check_radii(table, joint, source)
     from pinbore.reduced.mechanism.model import laws_path   # noqa: PLC0415
 
+    kernel_file, kernel = None, None
+    if scene.coupling is not None and scene.coupling.pressure == "worn":
+        from pinbore.fem import compliance   # noqa: PLC0415
+
+        kernel_file = scenes.named_file(scene.curve_file, base).parent / "compliance.csv"
+        if not kernel_file.is_file():
+            raise InputError(f"{source}: coupling.pressure: \"worn\" needs the FE run's "
+                             f"compliance.csv beside its curve_file ({kernel_file}: no such file; "
+                             "run pinbore fem again)")
+        kernel = compliance.read(kernel_file)
+
     at = profile.angles(scene.points)
     try:
         with tempfile.TemporaryDirectory(prefix="pinbore-wear-") as folder:
-            cycle = Cycle(scene, mechanism, mechanism_path, table, period, at, Path(folder))
+            cycle = Cycle(scene, mechanism, mechanism_path, table, period, at, Path(folder), kernel)
             if scene.coupling is None:
                 rates, last = cycle(None)
                 worn = {"angles": at, "bore": scene.cycles * rates["bore"], "pin": scene.cycles * rates["pin"]}
@@ -100,7 +111,7 @@ def run(scene_path, out) -> int:
         print(f"pinbore wear: {source}: the joint's load reaches {result.peak_force_per_length_N_per_m:.4g} N/m, "
               f"beyond the FE run's {table.forces[-1]:.4g} N/m: the pressure there is the last "
               "step's scaled (extrapolated)", file=sys.stderr)
-    inputs = [mechanism_path, laws_path(mechanism, mechanism_path.parent)]
+    inputs = [mechanism_path, laws_path(mechanism, mechanism_path.parent), kernel_file]
     with atomic_directory(out, inputs=[p for p in inputs if p is not None]) as tmp:
         wearfile.write(tmp / "wear.csv", wearfile.Profiles(np.degrees(worn["angles"]), worn["bore"], worn["pin"]))
         wear_summary.write(tmp / wear_summary.SUMMARY, result)
@@ -115,10 +126,14 @@ class Stopped(Exception):
 class Cycle:
     """The wear of one cycle (m per cycle, bore and pin, on `at`) of the joint worn by given
     profiles (None: new): the mechanism run on them (its joint's wear_file a wear.csv in
-    `folder`), its periods after the first averaged; `last` the last run's joint history."""
+    `folder`), its periods after the first averaged; `last` the last run's joint history.
+    With the FE run's surface compliance `kernel`, the pressure on given profiles is the worn
+    joint's own (wear.pressure.worn_tables), else the FE table's."""
 
-    def __init__(self, scene, mechanism, mechanism_path, table, period, at, folder: Path):
+    def __init__(self, scene, mechanism, mechanism_path, table, period, at, folder: Path,
+                 kernel=None):
         self.scene, self.mechanism, self.path, self.table = scene, mechanism, mechanism_path, table
+        self.kernel = kernel
         self.period, self.at, self.folder = period, at, folder
         self.last, self.periods = None, 1
 
@@ -144,8 +159,17 @@ class Cycle:
         self.periods = averaged_periods(end, self.period)
         self.last = cycle = history.of_run(model, trajectory, j, (end - self.periods * self.period, end))
         load = cycle.force / self.scene.length
+        tables = None
+        if worn is not None and self.kernel is not None:
+            from pinbore.fem.compliance import Conformal   # noqa: PLC0415
+
+            joint = Conformal(self.kernel, self.table.pin_radius, self.table.bore_radius,
+                              worn["bore"], worn["pin"])
+            tables = pressure.worn_tables(joint, self.table, load, cycle.bore_angle, cycle.pin_angle,
+                                          load * np.abs(cycle.sliding_speed))
         rates = {name: profile.worn_depth(self.table, cycle.time, load, angle, cycle.sliding_speed,
-                                          getattr(self.scene, name).wear_coefficient, self.at, radius)
+                                          getattr(self.scene, name).wear_coefficient, self.at, radius,
+                                          tables)
                        / self.periods
                  for name, angle, radius in (("bore", cycle.bore_angle, self.table.bore_radius),
                                              ("pin", cycle.pin_angle, self.table.pin_radius))}

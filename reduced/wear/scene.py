@@ -39,6 +39,11 @@ class Coupling(Strict):
         "that the runs of 1e5 cycles of a worn joint number in the thousands)"))
     first_jump: float | None = pydantic.Field(default=None, gt=0, description=(
         "cycles of the first jump (default: a twentieth of the cycles)"))
+    pressure: Literal["new", "worn"] = pydantic.Field(default="new", description=(
+        "the contact pressure the wear follows: \"new\", the FE run's of the new joint (its "
+        "pressure_file) at every load; \"worn\", the joint's own as it wears, its worn "
+        "surfaces' contact solved on the FE run's surface compliance (compliance.csv beside "
+        "its curve_file; fem.compliance.Conformal) along the directions the load takes"))
 
 
 class WearScene(Strict):

@@ -1,0 +1,243 @@
+r"""The surface compliance of a 2D joint's elastic bodies (plane strain, per unit length): how
+far a contact pressure opens the gap between pin and bore, the kernel a conformal contact is
+solved on (reduced.wear.pressure.Conformal).
+
+A pressure p(theta) per unit of the bore's arc, pressing the pin inward and the bore outward
+at the angle theta about the bore's centre (on the pin the same force per radian,
+p R_b / R_p per unit of its arc), moves the bodies' surfaces radially, the pin's hub held
+and the housing's edge clamped (the FE run's supports). With p interpolated linearly
+between angles evenly spaced by Delta, p = sum_j p_j hat_j, the gap at theta_i opens by
+
+    u_bore(theta_i) - u_pin(theta_i) = sum_j C(theta_i - theta_j) p_j,
+
+C the response to the hat of unit height at the load's direction: one solve of the FE's
+stiffness (fem.elasticity), read at the surface nodes, interpolated to the angles and made
+even (the bodies are round: C depends on the angle between load and point only). Linear
+elasticity, small strain: a worn surface shifted by micrometres keeps it.
+"""
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+
+from pinbore.core.errors import InputError
+
+SETTLED = 1e-6   # of the load: the loaded contact's resultant misses it by less
+NEWTON = 100
+FIRST_PUSH = 1e-7   # of the bore's radius: the first push beyond touch
+SWAPS, PASSES = 20, 400   # active-set passes changing every sign at once, passes in all
+POINTS = 720   # angles around the joint (0.5 degree): the hat's half-width and the kernel's spacing
+COLUMNS = ("angle_deg", "compliance_m_per_Pa")
+
+
+def surface_compliance(el, facet_tags, pin_radius: float, bore_radius: float, direction_deg: float,
+                       points: int = POINTS) -> np.ndarray:
+    """C at the angle offsets -pi + 2 pi k / points (m/Pa; see the module docstring) of the
+    bodies of `el` (fem.elasticity.Elasticity, 2D), the hat centred on `direction_deg` (where
+    the mesh is refined)."""
+    import dolfinx   # noqa: PLC0415 (the stage that runs DOLFINx)
+    import dolfinx.fem.petsc   # noqa: PLC0415
+    import ufl   # noqa: PLC0415
+    from petsc4py import PETSc   # noqa: PLC0415
+
+    from pinbore.meshes.model import BORE_SURFACE, PIN_SURFACE   # noqa: PLC0415
+
+    mesh = el.mesh
+    theta0 = math.radians(direction_deg)
+    spacing = 2 * math.pi / points
+    x = ufl.SpatialCoordinate(mesh)
+    along = math.cos(theta0) * x[0] + math.sin(theta0) * x[1]
+    across = -math.sin(theta0) * x[0] + math.cos(theta0) * x[1]
+    hat = ufl.max_value(0.0, 1.0 - abs(ufl.atan2(across, along)) / spacing)
+    radial = x / ufl.sqrt(ufl.dot(x, x))
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
+    v = ufl.TestFunction(el.V)
+    load = dolfinx.fem.form(-hat * (bore_radius / pin_radius) * ufl.dot(radial, v) * ds(PIN_SURFACE)
+                            + hat * ufl.dot(radial, v) * ds(BORE_SURFACE))
+    b = dolfinx.fem.petsc.assemble_vector(load)
+    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    dolfinx.fem.petsc.set_bc(b, el.bcs, alpha=0.0)   # the supports held (zero values)
+    ksp = PETSc.KSP().create(mesh.comm)
+    ksp.setOperators(el.K_bc)
+    ksp.setType("preonly")
+    ksp.getPC().setType("lu")
+    ksp.getPC().setFactorSolverType("mumps")
+    u = el.K_bc.createVecRight()
+    ksp.solve(b, u)
+    u.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+    owned = el.V.dofmap.index_map.size_local
+    values = u.getArray(readonly=True).reshape(-1, 2)
+    X = el.V.tabulate_dof_coordinates()[:, :2]
+    offsets = -math.pi + spacing * np.arange(points)
+    opening = np.zeros(points)
+    for name, sign in (("bore_surface", 1.0), ("pin_surface", -1.0)):
+        dofs = el.dofs[name]
+        dofs = dofs[dofs < owned]
+        P = X[dofs]
+        r = np.linalg.norm(P, axis=1)
+        radial_u = np.sum(values[dofs] * P, axis=1) / r
+        angle = np.mod(np.arctan2(P[:, 1], P[:, 0]) - theta0 + math.pi, 2 * math.pi) - math.pi
+        gathered = mesh.comm.allgather((angle, radial_u))
+        angle = np.concatenate([a for a, _ in gathered])
+        radial_u = np.concatenate([w for _, w in gathered])
+        order = np.argsort(angle)
+        opening += sign * np.interp(offsets, angle[order], radial_u[order], period=2 * math.pi)
+    ksp.destroy()
+    return 0.5 * (opening + np.roll(opening[::-1], 1))   # even about the load: C(-a) = C(a)
+
+
+def write(path: Path, kernel: np.ndarray) -> None:
+    """compliance.csv: C (m/Pa) against the angle offset (deg), evenly from -180."""
+    angles = -180.0 + 360.0 * np.arange(kernel.size) / kernel.size
+    with open(path, "w", newline="") as f:
+        out = csv.writer(f)
+        out.writerow(COLUMNS)
+        for a, c in zip(angles, kernel):
+            out.writerow([f"{a:.6f}", f"{c:.9e}"])
+
+
+def read(path) -> np.ndarray:
+    """The kernel of a compliance.csv (its angle offsets evenly from -180 degrees); one
+    InputError line for a file that is not one."""
+    path = Path(path)
+    try:
+        with open(path, newline="") as f:
+            rows = [row for row in csv.reader(f) if row]
+    except (OSError, UnicodeDecodeError, csv.Error) as err:
+        raise InputError(f"{path}: cannot read ({getattr(err, 'strerror', None) or err})") from None
+    if not rows or tuple(rows[0]) != COLUMNS:
+        raise InputError(f"{path}: the header must be {','.join(COLUMNS)} (run pinbore fem again)")
+    try:
+        table = np.array([[float(a), float(c)] for a, c in rows[1:]])
+    except ValueError:
+        raise InputError(f"{path}: a row is not two numbers (run pinbore fem again)") from None
+    n = len(table)
+    if n < 36 or not np.allclose(table[:, 0], -180.0 + 360.0 * np.arange(n) / n, atol=1e-5) \
+            or not np.all(np.isfinite(table[:, 1])) or table[n // 2, 1] <= 0:
+        raise InputError(f"{path}: the angles must run evenly from -180 deg (at least 36) with a "
+                         "finite compliance, positive under the load (run pinbore fem again)")
+    return table[:, 1]
+
+
+class Conformal:
+    """The contact of a worn pin in its worn bore, both elastic, on the surface compliance C
+    (`kernel`, m/Pa on POINTS-like even offsets): the pressure p_i (Pa per unit of the bore's
+    arc) at the pin's points beta_i (the kernel's angles in the pin's frame), with
+
+        g_i(e) + sum_j C(beta_i - beta_j) p_j >= 0,   p_i >= 0,   p_i (g_i + ...) = 0,
+
+    g_i(e) = r_b(theta_i) - |X_i| the exact gap of the rigid bodies at point i, X_i its
+    position r_p(beta_i) u(beta_i + turn) + e from the bore's centre at the angle theta_i,
+    the pin's centre at e and turned by `turn` in the bore's frame, r_b = R_b + h_b,
+    r_p = R_p - h_p the worn radii (the profiles' Catmull-Rom splines, laws.wearfile). The
+    pin pushed to e (`pushed`) or loaded by a force per unit length (`loaded`, e found:
+    sum_j p_j R_b Delta u(theta_j) = F' u(direction)). Solved by the primal-dual active set
+    method, the gap linearised in e about the last iterate (exact at convergence)."""
+
+    def __init__(self, kernel: np.ndarray, pin_radius: float, bore_radius: float,
+                 bore_depth: np.ndarray, pin_depth: np.ndarray):
+        from pinbore.laws.wearfile import spline   # noqa: PLC0415
+
+        n = kernel.size
+        self.n, self.spacing = n, 2 * math.pi / n
+        self.by_offset = np.roll(kernel, -(n // 2))   # C at the offset d * spacing, d = 0..n-1
+        self.bore_radius, self.bore_depth = bore_radius, np.asarray(bore_depth, float)
+        self.beta = -math.pi + self.spacing * np.arange(n)
+        self.pin_surface = pin_radius - spline(pin_depth, self.beta)[0]
+        self.spline = spline
+
+    def gap(self, e, turn: float, points: np.ndarray):
+        """(g_i (m), -d g_i / d e (the gap's closing direction: X_i / |X_i| less the worn
+        bore's slope h_b'(theta_i) times d theta_i / d e), theta_i (rad)) at the pin's points
+        `points`."""
+        b = self.beta[points] + turn
+        r = self.pin_surface[points]
+        x, y = r * np.cos(b) + e[0], r * np.sin(b) + e[1]
+        size = np.hypot(x, y)
+        theta = np.arctan2(y, x)
+        depth, slope, _ = self.spline(self.bore_depth, theta)
+        turning = slope / size   # d r_b / d theta times |d theta / d e|, along the tangent
+        return (self.bore_radius + depth - size,
+                np.stack([(x + turning * y) / size, (y - turning * x) / size], axis=1), theta)
+
+    def facing(self, direction: float, turn: float, half_angle: float = math.radians(75)) -> np.ndarray:
+        """The pin's points within half_angle of `direction` (rad, the bore's frame)."""
+        centre = int(round((direction - turn + math.pi) / self.spacing))
+        half = int(half_angle / self.spacing)
+        return (centre + np.arange(-half, half + 1)) % self.n
+
+    def pushed(self, e, turn: float, points: np.ndarray, active=None):
+        """(p, theta, the active set) at `points` with the pin's centre at e."""
+        g, _, theta = self.gap(np.asarray(e, float), turn, points)
+        p, active = self._solve(self.matrix(points), g, active)
+        return p, theta, active
+
+    def loaded(self, force: float, direction: float, turn: float, points=None):
+        """(p, theta, e) at `points` (default: those facing the load) with the pin pushed along
+        `direction` (the unit vector u, the FE run's push: the pin held across it) until the
+        load per unit length along it, R(s) = sum_j p_j R_b Delta n_j . u (n_j = -d g_j / d e),
+        is `force` (N/m): from the rigid pin's touch e_0, e = e_0 + s u with s found by
+        Newton's method on R(s) (its slope the contact's stiffness
+        R_b Delta (N_A u)^T C_AA^-1 (N_A u) on the active set A) kept within a bracket."""
+        points = self.facing(direction, turn) if points is None else points
+        u = np.array([math.cos(direction), math.sin(direction)])
+        weight = self.bore_radius * self.spacing
+        C = self.matrix(points)
+        e0 = np.zeros(2)
+        for _ in range(3):   # the rigid pin moved along u until its first point touches
+            g, normal, _ = self.gap(e0, turn, points)
+            ahead = normal @ u > 0.3
+            e0 = e0 + u * np.min(g[ahead] / (normal[ahead] @ u))
+        low, high, s, active = 0.0, math.inf, FIRST_PUSH * self.bore_radius, None
+        for _ in range(NEWTON):
+            g, normal, theta = self.gap(e0 + s * u, turn, points)
+            p, active = self._solve(C, g, active)
+            A = np.flatnonzero(active)
+            along = normal[A] @ u
+            miss = force - weight * (p[A] @ along)
+            if abs(miss) <= SETTLED * force:
+                return p, theta, e0 + s * u
+            low, high = (s, high) if miss > 0 else (low, s)
+            slope = weight * along @ np.linalg.solve(C[np.ix_(A, A)], along) if A.size else 0.0
+            step = s + miss / slope if slope > 0 else math.inf
+            if not low < step < high:   # out of the bracket: double it, or halve it
+                step = 2 * s if math.isinf(high) else 0.5 * (low + high)
+            s = step
+        raise ArithmeticError(f"the conformal contact's load was not met in {NEWTON} steps")
+
+    def on_bore(self, p: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """The pressure per unit of the bore's arc (Pa) at theta of the solution p at
+        consecutive points: point i carries p_i R_b Delta, spread over the bore's arc
+        between its neighbours (the pin's points, offset by e, lie closer there than Delta)."""
+        return p * self.spacing / np.abs(np.gradient(np.unwrap(theta)))
+
+    def matrix(self, points: np.ndarray) -> np.ndarray:
+        """C(beta_i - beta_j) between the pin's points `points`."""
+        return self.by_offset[(points[:, None] - points[None, :]) % self.n]
+
+    @staticmethod
+    def _solve(C, g, active=None):
+        """p >= 0 with g + C p >= 0 complementary (the compliance C between the points, the
+        rigid gaps g): (p, the active set), from the active set `active` (default: g < 0);
+        every sign change at once (primal-dual active set), then one at a time, the worst
+        first, should the set cycle."""
+        m = g.size
+        active = g < 0 if active is None else active.copy()
+        for passes in range(PASSES):
+            A = np.flatnonzero(active)
+            p = np.zeros(m)
+            if A.size:
+                p[A] = np.linalg.solve(C[np.ix_(A, A)], -g[A])
+            opened = g + C[:, A] @ p[A]
+            negative, closed = p < 0, (~active) & (opened < 0)
+            if not negative.any() and not closed.any():
+                return p, active
+            if passes < SWAPS:
+                active = (active & ~negative) | closed
+            elif negative.any():
+                active[np.argmin(np.where(negative, p, np.inf))] = False
+            else:
+                active[np.argmin(np.where(closed, opened, np.inf))] = True
+        raise ArithmeticError(f"the conformal contact's active set did not settle in {PASSES} passes")
