@@ -321,47 +321,27 @@ struct Engine
     return static_cast<std::int64_t>(contacts(k, column));
   }
 
-  /// A worn journal in its bore (the plane): its penetration delta_p, the mean of order 4
-  /// of the overlap of the worn surfaces on the round joint's scale (worn.h: worn_overlap,
-  /// moment_penetration), with d delta_p / d(e, phi_b, phi_j) = dPhi / d(...) / Phi_round';
-  /// the normal along d delta_p / de (from the bore into the journal), `reach` its length,
-  /// the rate d delta_p / dt. Where nothing overlaps, delta is the deepest (negative) overlap.
+  /// A worn journal in its bore (the plane): its section (worn_section) in the plane's frame
+  /// at the two frames' angles; the rate d delta_p / dt = reach n . v + turn_b w_b + turn_j w_j.
   static void worn_radial(const Args& args, const Matrix<double>& s, std::ptrdiff_t k, const V& e,
                           const V& v, Radial& g)
   {
     if constexpr (D == 2)
     {
       const Rows& contacts = args.contacts;
-      const auto bore = static_cast<std::ptrdiff_t>(contacts(k, CONTACT_BORE_WEAR)) - 1;
-      const auto pin = static_cast<std::ptrdiff_t>(contacts(k, CONTACT_PIN_WEAR)) - 1;
       const std::int64_t bb = body(contacts, k, CONTACT_BEARING_BODY),
                          bj = body(contacts, k, CONTACT_JOURNAL_BODY);
       const auto [phi_b, w_b] = K::frame_angle(s, bb, contacts.cell<D>(k, CONTACT_BEARING_POINT));
       const auto [phi_j, w_j] = K::frame_angle(s, bj, contacts.cell<D>(k, CONTACT_JOURNAL_POINT));
-      auto lowest = [&](std::ptrdiff_t r)
-      { return r < 0 ? 0.0 : args.wear_bounds[static_cast<std::size_t>(r)].lowest; };
-      const Overlap o = worn_overlap(args.wear, bore, pin, lowest(bore) + lowest(pin), {e[0], e[1]}, phi_b, phi_j,
-                                     contacts(k, CONTACT_CLEARANCE));
+      const WornSection ws = worn_section(args, k, {e[0], e[1]}, phi_b, phi_j);
       g.worn = true;
-      const double size = std::hypot(o.gradient[0], o.gradient[1]);
-      if (not (o.moment >= std::numeric_limits<double>::min() and size > 0.0))
-      {   // open (or an overlap whose moment underflows, or not finite): the deepest overlap, along e
-        const double r = norm(e);
-        g.delta = o.deepest;
-        g.normal = r > 0.0 ? scaled(e, 1.0 / r) : axis<D>(0);
-        g.point = add(g.at_bearing, scaled(g.normal, contacts(k, CONTACT_RADIUS)));
-        g.rate = dot(g.normal, v);
-        return;
-      }
-      const auto [delta, slope] = moment_penetration(o.moment, contacts(k, CONTACT_CLEARANCE));
-      const V n{o.gradient[0] / size, o.gradient[1] / size};
-      g.delta = delta;
-      g.normal = n;
-      g.point = add(g.at_bearing, scaled(n, contacts(k, CONTACT_RADIUS)));
-      g.reach = size / slope;
-      g.turn_bearing = o.turn_bearing / slope;
-      g.turn_journal = o.turn_journal / slope;
-      g.rate = g.reach * dot(n, v) + g.turn_bearing * w_b + g.turn_journal * w_j;
+      g.delta = ws.delta;
+      g.normal = {ws.normal[0], ws.normal[1]};
+      g.point = add(g.at_bearing, scaled(g.normal, contacts(k, CONTACT_RADIUS)));
+      g.reach = ws.reach;
+      g.turn_bearing = ws.turn_bearing;
+      g.turn_journal = ws.turn_journal;
+      g.rate = g.reach * dot(g.normal, v) + g.turn_bearing * w_b + g.turn_journal * w_j;
     }
   }
 
@@ -385,7 +365,7 @@ struct Engine
     }
     const double size = norm(e);
     const double delta = size - contacts(k, CONTACT_CLEARANCE);
-    if (contacts(k, CONTACT_BORE_WEAR) != 0.0 or contacts(k, CONTACT_PIN_WEAR) != 0.0)
+    if (is_worn(contacts, k))
     {   // the force between the centres: its velocities there
       Radial g{delta, axis<D>(0), pb, 0.0, pj, pb, along,
                sub(K::material_velocity(s, bj, pj), K::material_velocity(s, bb, pb))};

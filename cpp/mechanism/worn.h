@@ -257,4 +257,58 @@ inline std::pair<double, double> moment_penetration(double moment, double cleara
   return {delta, round_moment(delta, clearance).second};
 }
 
+/// Whether contact k runs on worn profiles (CONTACT_BORE_WEAR or CONTACT_PIN_WEAR set).
+inline bool is_worn(const Rows& contacts, std::ptrdiff_t k)
+{
+  return contacts(k, CONTACT_BORE_WEAR) != 0.0 or contacts(k, CONTACT_PIN_WEAR) != 0.0;
+}
+
+/// The depth worn contact k's two profiles together never fall below (their worn_bounds; a
+/// round surface's 0): its journal cannot overlap its bore within |e| <= c + that.
+inline double worn_lowest(const Args& args, std::ptrdiff_t k)
+{
+  double lowest = 0.0;
+  for (const int column : {CONTACT_BORE_WEAR, CONTACT_PIN_WEAR})
+  {
+    const auto r = static_cast<std::ptrdiff_t>(args.contacts(k, column)) - 1;
+    lowest += r < 0 ? 0.0 : args.wear_bounds[static_cast<std::size_t>(r)].lowest;
+  }
+  return lowest;
+}
+
+/// A worn journal in its bore's section: its penetration delta_p = Phi_round^-1(Phi) on the
+/// round joint's scale (worn_overlap, moment_penetration) and its derivatives
+/// d delta_p / d(e, phi_b, phi_j) = dPhi / d(...) / Phi_round'(delta_p): `normal` along
+/// d delta_p / de (from the bore into the journal), `reach` its length, `turn_bearing`,
+/// `turn_journal` the two frames' angles'. e, phi_b, phi_j in any one frame of the section
+/// (the plane's: the planar joint; the bore's own, phi_b = 0: a spatial joint's slice).
+/// Where nothing overlaps (or Phi underflows, or the input is not finite) delta is the
+/// deepest (negative) overlap, the normal along e, reach 1 and no turn.
+struct WornSection
+{
+  double delta;
+  std::array<double, 2> normal;
+  double reach = 1.0, turn_bearing = 0.0, turn_journal = 0.0;
+};
+
+inline WornSection worn_section(const Args& args, std::ptrdiff_t k, const std::array<double, 2>& e,
+                                double phi_b, double phi_j)
+{
+  const Rows& contacts = args.contacts;
+  const auto bore = static_cast<std::ptrdiff_t>(contacts(k, CONTACT_BORE_WEAR)) - 1;
+  const auto pin = static_cast<std::ptrdiff_t>(contacts(k, CONTACT_PIN_WEAR)) - 1;
+  const double clearance = contacts(k, CONTACT_CLEARANCE);
+  const Overlap o = worn_overlap(args.wear, bore, pin, worn_lowest(args, k), e, phi_b,
+                                 phi_j, clearance);
+  const double size = std::hypot(o.gradient[0], o.gradient[1]);
+  if (not (o.moment >= std::numeric_limits<double>::min() and size > 0.0))
+  {
+    const double r = std::hypot(e[0], e[1]);
+    return {o.deepest, r > 0.0 ? std::array<double, 2>{e[0] / r, e[1] / r} : std::array<double, 2>{1.0, 0.0}};
+  }
+  const auto [delta, slope] = moment_penetration(o.moment, clearance);
+  return {delta, {o.gradient[0] / size, o.gradient[1] / size}, size / slope, o.turn_bearing / slope,
+          o.turn_journal / slope};
+}
+
 } // namespace pinbore::mechanism
