@@ -302,6 +302,7 @@ struct Engine
     bool worn = false;   // a worn journal: the force at the centres with the torques below
     double reach = 1.0;   // a worn journal's |d delta / d e| (its force's share along the normal)
     double turn_bearing = 0.0, turn_journal = 0.0;   // d delta / d(angle) of each body's frame
+    double approach = 0.0;   // a worn journal's impact speed: its deepest overlap's rate
   };
   struct Plane
   {
@@ -310,6 +311,8 @@ struct Engine
     double rate, side;
     V relative;
   };
+  /// A contact's penetration and its approach rate (its impact speed at the onset: a worn
+  /// journal's the rate of its deepest overlap, worn_section) and direction.
   struct Depth
   {
     double delta, rate;
@@ -322,7 +325,8 @@ struct Engine
   }
 
   /// A worn journal in its bore (the plane): its section (worn_section) in the plane's frame
-  /// at the two frames' angles; the rate d delta_p / dt = reach n . v + turn_b w_b + turn_j w_j.
+  /// at the two frames' angles; the rate d delta_p / dt = reach n . v + turn_b w_b + turn_j w_j,
+  /// the approach (its deepest overlap's rate) likewise.
   static void worn_radial(const Args& args, const Matrix<double>& s, std::ptrdiff_t k, const V& e,
                           const V& v, Radial& g)
   {
@@ -342,6 +346,8 @@ struct Engine
       g.turn_bearing = ws.turn_bearing;
       g.turn_journal = ws.turn_journal;
       g.rate = g.reach * dot(g.normal, v) + g.turn_bearing * w_b + g.turn_journal * w_j;
+      g.approach = dot(V{ws.approach[0], ws.approach[1]}, v) + ws.approach_bearing * w_b
+                   + ws.approach_journal * w_j;
     }
   }
 
@@ -421,7 +427,7 @@ struct Engine
         return {-std::numeric_limits<double>::infinity(), 0.0};   // the plane has none
     }
     const Radial g = radial_geometry(args, s, k);
-    return {g.delta, g.rate, g.normal};
+    return {g.delta, g.worn ? g.approach : g.rate, g.normal};
   }
 
   /// The held contact's row delta = 0 (its multiplier is the normal force).
