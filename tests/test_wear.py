@@ -404,11 +404,11 @@ def test_a_round_profile_keeps_the_joints_law(tmp_path):
         assert errors[2880, delta, 0.3] < errors[720, delta, 0.3] / 10
 
 
-@pytest.mark.parametrize("kind", ["planar"])
+@pytest.mark.parametrize("kind", ["planar", "spatial"])
 def test_a_round_profile_keeps_the_joints_impact(tmp_path, kind):
     """The Flores slider-crank's first impact (damped: Lankarani-Nikravesh, e = 0.9; 4e-4 s,
-    rtol 1e-10; tests/test_planar_as_spatial.py's twins, `kind` the one) with a wear.csv of
-    zero depths against the same joint without one. The zero profile's penetration is the
+    rtol 1e-10; tests/test_planar_as_spatial.py's twins, `kind` the one: in space every slice
+    of the journal worn) with a wear.csv of zero depths against the same joint without one. The zero profile's penetration is the
     round one measured on the arc grid's chords: a round joint whose clearance is larger by
     the chord's sag s = c (2 pi / M)^2 / 8 (M = 1440 points a turn: 1.2e-9 m). So the bodies
     agree within a few sags (3 s; the rod's angle 3 s over its half-length, 0.06 m), and the
