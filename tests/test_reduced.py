@@ -131,7 +131,7 @@ def test_single_impact_restitution_equals_the_laws(law, e):
 
 # the columns that hold a vector: three each (a planar mechanism reads two of them)
 VECTORS = {"CONTACT_": ("CONTACT_BEARING_POINT", "CONTACT_BEARING_AXIS", "CONTACT_JOURNAL_POINT",
-                        "CONTACT_JOURNAL_AXIS"),
+                        "CONTACT_JOURNAL_AXIS", "CONTACT_BEARING_REFERENCE", "CONTACT_JOURNAL_REFERENCE"),
            "PRIM_": ("PRIM_S_I", "PRIM_S_J", "PRIM_A_I", "PRIM_B_J", "PRIM_C_I"),
            "TORSION_": ("TORSION_A_I", "TORSION_B_J", "TORSION_C_I", "TORSION_S_I", "TORSION_S_J"), "LOG_": ()}
 

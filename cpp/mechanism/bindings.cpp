@@ -195,8 +195,12 @@ Args args_of(nb::handle a, Held& held)
       if (args.contacts(k, column) != 0.0)
       {
         index_in(args.contacts(k, column), 1, args.wear.rows + 1, "a contact's worn profile");
-        if (args.wear.cols < 3 or static_cast<int>(args.contacts(k, CONTACT_KIND)) != RADIAL)
-          throw std::invalid_argument("mechanism: a worn profile is a planar journal's, of 3 angles or more");
+        const int kind = static_cast<int>(args.contacts(k, CONTACT_KIND));
+        if (args.wear.cols < 3 or not (kind == RADIAL or kind == SLICED))
+          throw std::invalid_argument("mechanism: a worn profile is a journal's (RADIAL, SLICED), "
+                                      "of 3 angles or more");
+        if (kind == SLICED and args.contacts(k, CONTACT_COMPLIANCE) != 0.0)
+          throw std::invalid_argument("mechanism: a worn SLICED contact takes no bulk compliance");
       }
   }
   check_rows(args);
@@ -358,6 +362,7 @@ void bind_mechanism(nb::module_& parent)
   PINBORE_LAYOUT(CONTACT_FRICTION_ON) PINBORE_LAYOUT(CONTACT_LENGTH) PINBORE_LAYOUT(CONTACT_SLICES)
   PINBORE_LAYOUT(CONTACT_END_LENGTH) PINBORE_LAYOUT(CONTACT_SCALE) PINBORE_LAYOUT(CONTACT_COMPLIANCE)
   PINBORE_LAYOUT(CONTACT_BORE_WEAR) PINBORE_LAYOUT(CONTACT_PIN_WEAR) PINBORE_LAYOUT(WORN_ORDER)
+  PINBORE_LAYOUT(CONTACT_BEARING_REFERENCE) PINBORE_LAYOUT(CONTACT_JOURNAL_REFERENCE)
   PINBORE_LAYOUT(CONTACT_COLUMNS) PINBORE_LAYOUT(RADIAL) PINBORE_LAYOUT(SLICED) PINBORE_LAYOUT(PLANE)
   PINBORE_LAYOUT(AXIS_RADIAL) PINBORE_LAYOUT(NO_FRICTION) PINBORE_LAYOUT(COULOMB)
   PINBORE_LAYOUT(STRIBECK) PINBORE_LAYOUT(LINEAR) PINBORE_LAYOUT(LUGRE) PINBORE_LAYOUT(DAHL)
@@ -722,25 +727,15 @@ void bind_mechanism(nb::module_& parent)
         if (approaches.size() < slices or weights.size() < slices)
           throw std::invalid_argument("slice_approaches: approaches and weights need a value a slice");
         E::refresh(args, values(y), work);
-        const auto bore = E::bore_section(work.bodies, args.contacts, k);
-        const auto fr = E::section_frame(bore.ub, bore.a0, bore.a1);
-        const laws::Section sec = E::section(args, k, fr);
-        const double scale = args.contacts(k, CONTACT_SCALE),
-                     end_length = args.contacts(k, CONTACT_END_LENGTH);
-        const auto [dx, dy] = laws::bore_displacement(sec, end_length, scale,
-                                                      args.contacts(k, CONTACT_COMPLIANCE));
-        for (long i = 0; i < sec.slices; ++i)
-        {
-          approaches.data()[i] = laws::slice_contact(i, dx, dy, sec).approach;
-          weights.data()[i] = scale * laws::slice_geometry(i, sec.length, sec.slices, end_length).weight;
-        }
-        const Vec3 d = add(scaled(fr.f, dx), scaled(fr.g, dy));
+        const Vec3 d = E::slice_penetrations(args, work.bodies, k, {approaches.data(), slices},
+                                             {weights.data(), slices});
         return nb::make_tuple(d[0], d[1], d[2]);
       },
       nb::arg("y"), nb::arg("args"), nb::arg("work"), nb::arg("k"), nb::arg("approaches"),
       nb::arg("weights"),
       "The slices of sliced contact k with the bore moved by its bulk compliance: each "
-      "slice's approach (m) and weight (m); returns the bore's displacement (global).");
+      "slice's approach (m; a worn slice's penetration delta_p) and weight (m); returns the "
+      "bore's displacement (global).");
 
   // ---- the engine's pieces, for the tests that check them alone
   m.def(

@@ -302,6 +302,7 @@ struct Engine
     bool worn = false;   // a worn journal: the force at the centres with the torques below
     double reach = 1.0;   // a worn journal's |d delta / d e| (its force's share along the normal)
     double turn_bearing = 0.0, turn_journal = 0.0;   // d delta / d(angle) of each body's frame
+    double approach = 0.0;   // a worn journal's impact speed: its deepest overlap's rate
   };
   struct Plane
   {
@@ -310,6 +311,8 @@ struct Engine
     double rate, side;
     V relative;
   };
+  /// A contact's penetration and its approach rate (its impact speed at the onset: a worn
+  /// journal's the rate of its deepest overlap, worn_section) and direction.
   struct Depth
   {
     double delta, rate;
@@ -321,47 +324,30 @@ struct Engine
     return static_cast<std::int64_t>(contacts(k, column));
   }
 
-  /// A worn journal in its bore (the plane): its penetration delta_p, the mean of order 4
-  /// of the overlap of the worn surfaces on the round joint's scale (worn.h: worn_overlap,
-  /// moment_penetration), with d delta_p / d(e, phi_b, phi_j) = dPhi / d(...) / Phi_round';
-  /// the normal along d delta_p / de (from the bore into the journal), `reach` its length,
-  /// the rate d delta_p / dt. Where nothing overlaps, delta is the deepest (negative) overlap.
+  /// A worn journal in its bore (the plane): its section (worn_section) in the plane's frame
+  /// at the two frames' angles; the rate d delta_p / dt = reach n . v + turn_b w_b + turn_j w_j,
+  /// the approach (its deepest overlap's rate) likewise.
   static void worn_radial(const Args& args, const Matrix<double>& s, std::ptrdiff_t k, const V& e,
                           const V& v, Radial& g)
   {
     if constexpr (D == 2)
     {
       const Rows& contacts = args.contacts;
-      const auto bore = static_cast<std::ptrdiff_t>(contacts(k, CONTACT_BORE_WEAR)) - 1;
-      const auto pin = static_cast<std::ptrdiff_t>(contacts(k, CONTACT_PIN_WEAR)) - 1;
       const std::int64_t bb = body(contacts, k, CONTACT_BEARING_BODY),
                          bj = body(contacts, k, CONTACT_JOURNAL_BODY);
       const auto [phi_b, w_b] = K::frame_angle(s, bb, contacts.cell<D>(k, CONTACT_BEARING_POINT));
       const auto [phi_j, w_j] = K::frame_angle(s, bj, contacts.cell<D>(k, CONTACT_JOURNAL_POINT));
-      auto lowest = [&](std::ptrdiff_t r)
-      { return r < 0 ? 0.0 : args.wear_bounds[static_cast<std::size_t>(r)].lowest; };
-      const Overlap o = worn_overlap(args.wear, bore, pin, lowest(bore) + lowest(pin), {e[0], e[1]}, phi_b, phi_j,
-                                     contacts(k, CONTACT_CLEARANCE));
+      const WornSection ws = worn_section(args, k, {e[0], e[1]}, phi_b, phi_j);
       g.worn = true;
-      const double size = std::hypot(o.gradient[0], o.gradient[1]);
-      if (not (o.moment >= std::numeric_limits<double>::min() and size > 0.0))
-      {   // open (or an overlap whose moment underflows, or not finite): the deepest overlap, along e
-        const double r = norm(e);
-        g.delta = o.deepest;
-        g.normal = r > 0.0 ? scaled(e, 1.0 / r) : axis<D>(0);
-        g.point = add(g.at_bearing, scaled(g.normal, contacts(k, CONTACT_RADIUS)));
-        g.rate = dot(g.normal, v);
-        return;
-      }
-      const auto [delta, slope] = moment_penetration(o.moment, contacts(k, CONTACT_CLEARANCE));
-      const V n{o.gradient[0] / size, o.gradient[1] / size};
-      g.delta = delta;
-      g.normal = n;
-      g.point = add(g.at_bearing, scaled(n, contacts(k, CONTACT_RADIUS)));
-      g.reach = size / slope;
-      g.turn_bearing = o.turn_bearing / slope;
-      g.turn_journal = o.turn_journal / slope;
-      g.rate = g.reach * dot(n, v) + g.turn_bearing * w_b + g.turn_journal * w_j;
+      g.delta = ws.delta;
+      g.normal = {ws.normal[0], ws.normal[1]};
+      g.point = add(g.at_bearing, scaled(g.normal, contacts(k, CONTACT_RADIUS)));
+      g.reach = ws.reach;
+      g.turn_bearing = ws.turn_bearing;
+      g.turn_journal = ws.turn_journal;
+      g.rate = g.reach * dot(g.normal, v) + g.turn_bearing * w_b + g.turn_journal * w_j;
+      g.approach = dot(V{ws.approach[0], ws.approach[1]}, v) + ws.approach_bearing * w_b
+                   + ws.approach_journal * w_j;
     }
   }
 
@@ -385,7 +371,7 @@ struct Engine
     }
     const double size = norm(e);
     const double delta = size - contacts(k, CONTACT_CLEARANCE);
-    if (contacts(k, CONTACT_BORE_WEAR) != 0.0 or contacts(k, CONTACT_PIN_WEAR) != 0.0)
+    if (is_worn(contacts, k))
     {   // the force between the centres: its velocities there
       Radial g{delta, axis<D>(0), pb, 0.0, pj, pb, along,
                sub(K::material_velocity(s, bj, pj), K::material_velocity(s, bb, pb))};
@@ -436,12 +422,12 @@ struct Engine
     if (kind == SLICED)
     {
       if constexpr (D == 3)
-        return sliced_depth(s, contacts, k);
+        return sliced_depth(args, s, k);
       else
         return {-std::numeric_limits<double>::infinity(), 0.0};   // the plane has none
     }
     const Radial g = radial_geometry(args, s, k);
-    return {g.delta, g.rate, g.normal};
+    return {g.delta, g.worn ? g.approach : g.rate, g.normal};
   }
 
   /// The held contact's row delta = 0 (its multiplier is the normal force).
@@ -1007,11 +993,77 @@ struct Engine
     return {f, g, dot(a0, f), dot(a0, g), dot(a1, f), dot(a1, g)};
   }
 
-  /// The deepest slice (an end slice) with the bore unmoved, and its approach rate.
-  static Depth sliced_depth(const Matrix<double>& s, const Rows& contacts, std::ptrdiff_t k)
+  /// A worn SLICED contact's frames ([theory/wear.md]): the bore's section frame f_b (its
+  /// reference direction, CONTACT_BEARING_REFERENCE, turned with the bore), g_b = u_b x f_b;
+  /// the pin's angle psi = atan2(f_j . g_b, f_j . f_b) of the journal's reference direction
+  /// f_j about the axis and its rate; the axis m = (u_b - (f_j . u_b) f_j) / (1 - (f_j . u_b)^2)
+  /// of the pin's turn (d psi = (dtheta_j - dtheta_b) . m of the two bodies' small turns;
+  /// u_b for an aligned journal); spin = w_b . u_b = f_b' . g_b.
+  struct WornFrame
   {
+    V f, g, m;
+    double psi, psi_rate, spin;
+  };
+  static WornFrame worn_frame(const Matrix<double>& s, const Rows& contacts, std::ptrdiff_t k)
+  {
+    const std::int64_t bb = body(contacts, k, CONTACT_BEARING_BODY),
+                       bj = body(contacts, k, CONTACT_JOURNAL_BODY);
+    const V bp = contacts.cell<D>(k, CONTACT_BEARING_POINT), jp = contacts.cell<D>(k, CONTACT_JOURNAL_POINT);
+    const auto ub = K::vector_state(s, bb, bp, contacts.cell<D>(k, CONTACT_BEARING_AXIS));
+    const auto fb = K::vector_state(s, bb, bp, contacts.cell<D>(k, CONTACT_BEARING_REFERENCE));
+    const auto fj = K::vector_state(s, bj, jp, contacts.cell<D>(k, CONTACT_JOURNAL_REFERENCE));
+    const V g = cross(ub.value, fb.value), g_rate = add(cross(ub.rate, fb.value), cross(ub.value, fb.rate));
+    const double a = dot(fj.value, g), b = dot(fj.value, fb.value);
+    const double a_rate = dot(fj.rate, g) + dot(fj.value, g_rate),
+                 b_rate = dot(fj.rate, fb.value) + dot(fj.value, fb.rate);
+    const double lean = dot(fj.value, ub.value), across = 1.0 - lean * lean;
+    return {fb.value, g, scaled(sub(ub.value, scaled(fj.value, lean)), 1.0 / across), std::atan2(a, b),
+            (b * a_rate - a * b_rate) / (a * a + b * b), dot(fb.rate, g)};
+  }
+
+  /// Slice z of a worn SLICED contact: its section (worn_section) at e_i = a0 + z a1 in the
+  /// bore's frame (e . f_b, e . g_b; phi_b = 0, phi_j = psi), the journal's axis point
+  /// X = P_j + z u_j, its foot B = X - e_i on the bore's axis, the normal n in space and the
+  /// rate d delta_p / dt = reach n . (v_J(X) - v_B(B)) + (turn_b + turn_j) w_b . u_b
+  /// + turn_j psi' (the section's angles turn with the bore: e's frame at w_b . u_b, the pin
+  /// at psi' against it); the deepest overlap's rate likewise.
+  struct WornSlice
+  {
+    WornSection section;
+    V normal, x, b;
+    double rate, approach;   // d delta_p / dt; the deepest overlap's rate
+  };
+  static WornSlice worn_slice(const Args& args, const Matrix<double>& s, std::ptrdiff_t k,
+                              const Bore& bore, const WornFrame& fr, double z)
+  {
+    const Rows& contacts = args.contacts;
+    const V e = add(bore.a0, scaled(bore.a1, z));
+    const WornSection ws = worn_section(args, k, {dot(e, fr.f), dot(e, fr.g)}, 0.0, fr.psi);
+    const V n = add(scaled(fr.f, ws.normal[0]), scaled(fr.g, ws.normal[1]));
+    const V x = add(bore.pj, scaled(bore.uj, z)), b = sub(x, e);
+    const V a = add(scaled(fr.f, ws.approach[0]), scaled(fr.g, ws.approach[1]));
+    return {ws, n, x, b,
+            ws.reach * slice_rate(s, contacts, k, n, x, b) + (ws.turn_bearing + ws.turn_journal) * fr.spin
+                + ws.turn_journal * fr.psi_rate,
+            slice_rate(s, contacts, k, a, x, b) + (ws.approach_bearing + ws.approach_journal) * fr.spin
+                + ws.approach_journal * fr.psi_rate};
+  }
+
+  /// The deepest slice (an end slice) with the bore unmoved, and its approach rate. A worn
+  /// contact's too: each angle's overlap is linear in z along the journal, so the overlap's
+  /// moment (a convex function of z) and its deepest point are largest at an end.
+  static Depth sliced_depth(const Args& args, const Matrix<double>& s, std::ptrdiff_t k)
+  {
+    const Rows& contacts = args.contacts;
     const Bore bore = bore_section(s, contacts, k);
     double zz = end_offset(contacts, k);
+    if (is_worn(contacts, k))
+    {
+      const WornFrame fr = worn_frame(s, contacts, k);
+      const WornSlice plus = worn_slice(args, s, k, bore, fr, zz), minus = worn_slice(args, s, k, bore, fr, -zz);
+      const WornSlice& deeper = minus.section.delta > plus.section.delta ? minus : plus;
+      return {deeper.section.delta, deeper.approach, deeper.normal};
+    }
     V plus = add(bore.a0, scaled(bore.a1, zz));
     const V minus = sub(bore.a0, scaled(bore.a1, zz));
     if (dot(minus, minus) > dot(plus, plus))
@@ -1036,6 +1088,30 @@ struct Engine
     double normal, power, tangential;
   };
 
+  /// Each slice's approach (a worn slice's penetration delta_p,i, worn_slice) and weight
+  /// a w_i (m), the potential's sum U = sum a w_i U_loc(delta_i) plus the bore's bulk
+  /// compliance; returns the bore's displacement d (global).
+  static V slice_penetrations(const Args& args, const Matrix<double>& s, std::ptrdiff_t k,
+                              std::span<double> approaches, std::span<double> weights)
+  {
+    const Rows& contacts = args.contacts;
+    const Bore bore = bore_section(s, contacts, k);
+    const Frame fr = section_frame(bore.ub, bore.a0, bore.a1);
+    const laws::Section sec = section(args, k, fr);
+    const double scale = contacts(k, CONTACT_SCALE), end_length = contacts(k, CONTACT_END_LENGTH);
+    const auto [dx, dy] = laws::bore_displacement(sec, end_length, scale, contacts(k, CONTACT_COMPLIANCE));
+    const bool worn = is_worn(contacts, k);
+    const WornFrame wf = worn ? worn_frame(s, contacts, k) : WornFrame{};
+    for (long i = 0; i < sec.slices; ++i)
+    {
+      const auto at = static_cast<std::size_t>(i);
+      approaches[at] = worn ? worn_slice(args, s, k, bore, wf, laws::slice_geometry(i, sec.length, sec.slices, 0.0).offset).section.delta
+                            : laws::slice_contact(i, dx, dy, sec).approach;
+      weights[at] = scale * laws::slice_geometry(i, sec.length, sec.slices, end_length).weight;
+    }
+    return add(scaled(fr.f, dx), scaled(fr.g, dy));
+  }
+
   /// A journal along its bore, cut into n slices (laws::slice_geometry: offset z_i from the
   /// mid-plane, weight w_i = L/n + e at each end slice). At slice i the journal's axis point
   /// X_i = P_j + z_i u_j is off the bore's axis by e_i across it: delta_i = |e_i| - c along
@@ -1045,6 +1121,11 @@ struct Engine
   /// C_i = B_i + R_b n_i. With a bulk compliance the bore's axis first moves across by d
   /// (laws::bore_displacement) and the slices see e_i - d. The deepest slice is an end slice:
   /// a journal whose end slices are free skips the slices.
+  /// A worn journal's slice (worn_slice: its section in the bore's frame, the profiles
+  /// extruded along the axis) carries f = a f_el(delta_p,i) (1 + chi delta_p,i'/v0) w_i, the
+  /// force f reach_i along n_i as above and the torques -f turn_j m on the journal and
+  /// -f (turn_b u_b + turn_j (u_b - m)) on the bore: the force of the potential of delta_p,i
+  /// (an elastic contact keeps the energy book); its bore takes no bulk compliance.
   /// apply = false: the forces are not pushed, only the slices' Iwan sliders held (in dy,
   /// the state y itself).
   static Sliced sliced_forces(const Args& args, const Work& w, std::span<const double> y,
@@ -1057,7 +1138,9 @@ struct Engine
     const double zz = end_offset(contacts, k);
     const V plus = add(bore.a0, scaled(bore.a1, zz)), minus = sub(bore.a0, scaled(bore.a1, zz));
     const double clearance = contacts(k, CONTACT_CLEARANCE);
-    if (std::max(dot(plus, plus), dot(minus, minus)) <= clearance * clearance)
+    const bool worn = is_worn(contacts, k);
+    const double free = clearance + (worn ? worn_lowest(args, k) : 0.0);
+    if (std::max(dot(plus, plus), dot(minus, minus)) <= free * free and free >= 0.0)
       return out;
     const Frame fr = section_frame(bore.ub, bore.a0, bore.a1);
     const laws::Section sec = section(args, k, fr);
@@ -1066,6 +1149,7 @@ struct Engine
     const auto [dx, dy_] = laws::bore_displacement(sec, end_length, scale, contacts(k, CONTACT_COMPLIANCE));
     if (not std::isfinite(dx))
       return {NaN, NaN, NaN};
+    const WornFrame wf = worn ? worn_frame(s, contacts, k) : WornFrame{};
     const std::int64_t bb = body(contacts, k, CONTACT_BEARING_BODY),
                        bj = body(contacts, k, CONTACT_JOURNAL_BODY);
     const double speed = args.speeds[k];
@@ -1076,16 +1160,33 @@ struct Engine
     const double total = length + 2.0 * end_length;
     for (long i = 0; i < sec.slices; ++i)
     {
-      const laws::SliceContact sc = laws::slice_contact(i, dx, dy_, sec);
-      if (sc.approach <= 0.0)
-        continue;
       const double weight = laws::slice_geometry(i, length, sec.slices, end_length).weight;
-      const V n = add(scaled(fr.f, sc.nx), scaled(fr.g, sc.ny));
-      const V x = add(bore.pj, scaled(bore.uj, sc.offset));
-      const V b = sub(x, scaled(n, sc.approach + clearance));
-      const double f_el = scale * weight * sc.force;
-      const double rate = slice_rate(s, contacts, k, n, x, b);
-      const double f_n = laws::hysteresis_force(f_el, rate, speed, chi);
+      V n, x, b;
+      double f_el, rate, arm;   // arm: |X_i - B_i|
+      WornSection ws{};
+      if (worn)
+      {
+        const WornSlice slice = worn_slice(args, s, k, bore, wf, laws::slice_geometry(i, length, sec.slices, 0.0).offset);
+        ws = slice.section;
+        if (ws.delta <= 0.0)
+          continue;
+        n = slice.normal, x = slice.x, b = slice.b, rate = slice.rate, arm = norm(sub(x, b));
+        f_el = scale * weight * elastic_force(args, k, ws.delta);
+      }
+      else
+      {
+        const laws::SliceContact sc = laws::slice_contact(i, dx, dy_, sec);
+        if (sc.approach <= 0.0)
+          continue;
+        n = add(scaled(fr.f, sc.nx), scaled(fr.g, sc.ny));
+        x = add(bore.pj, scaled(bore.uj, sc.offset));
+        arm = sc.approach + clearance;
+        b = sub(x, scaled(n, arm));
+        f_el = scale * weight * sc.force;
+        rate = slice_rate(s, contacts, k, n, x, b);
+      }
+      const double f = laws::hysteresis_force(f_el, rate, speed, chi);
+      const double f_n = f * ws.reach;   // the force between X_i and B_i
       const std::ptrdiff_t state = index + i * per_slice;
       const V c = add(b, scaled(n, contacts(k, CONTACT_RADIUS)));
       if (not apply)
@@ -1096,7 +1197,15 @@ struct Engine
       }
       K::push(w.force, s, bj, scaled(n, -f_n), x, args.offsets);
       K::push(w.force, s, bb, scaled(n, f_n), b, args.offsets);
-      double p = (f_n - f_el) * rate;
+      if (worn)
+      {
+        K::push_torque(w.force, s, bj, contacts.cell<D>(k, CONTACT_JOURNAL_POINT),
+                       scaled(wf.m, -f * ws.turn_journal), args.offsets);
+        K::push_torque(w.force, s, bb, contacts.cell<D>(k, CONTACT_BEARING_POINT),
+                       scaled(add(scaled(bore.ub, ws.turn_bearing), scaled(sub(bore.ub, wf.m), ws.turn_journal)), -f),
+                       args.offsets);
+      }
+      double p = (f - f_el) * rate;
       if (law != NO_FRICTION)
       {
         const V v = sub(K::material_velocity(s, bj, c), K::material_velocity(s, bb, c));
@@ -1105,7 +1214,7 @@ struct Engine
         {
           V wv = sub(K::material_velocity(s, bj, x), K::material_velocity(s, bb, x));
           wv = sub(wv, add(scaled(n, dot(n, wv)), scaled(bore.ub, dot(bore.ub, wv))));
-          spin = scaled(wv, 1.0 / (sc.approach + clearance));
+          spin = scaled(wv, 1.0 / arm);
         }
         const Friction r = spatial_friction(s, contacts, k, f_n, n, v, y, dy, state, spin,
                                             weight / total);

@@ -95,6 +95,11 @@ struct Overlap
   std::array<double, 2> gradient{0.0, 0.0};     // dPhi/de
   double turn_bearing = 0.0, turn_journal = 0.0;   // dPhi/dphi_b, dPhi/dphi_j
   double deepest = -std::numeric_limits<double>::infinity();   // the largest overlap (m)
+  // where the grid was visited: the deepest point's dd/de = u(phi_b + psi_k) and dd/dphi_b,
+  // dd/dphi_j (its surfaces' approach where they first touch)
+  bool located = false;
+  std::array<double, 2> deepest_direction{0.0, 0.0};
+  double deepest_turn_bearing = 0.0, deepest_turn_journal = 0.0;
 };
 
 /// The overlap of a worn journal and its bore at the bore's angles psi_k = -pi + k 2 pi / M
@@ -108,7 +113,8 @@ struct Overlap
 /// rows `bore` and `pin` of wear (-1: round), their splines evaluated with one set of weights
 /// a grid point of a profile's interval (the pin's shifted by phi_b - phi_j). Only the window where
 /// e . u can exceed c plus the least depths (`lowest`) is visited; where nothing overlaps,
-/// `deepest` is the largest d_k or, outside the window, the bound |e| - c - lowest.
+/// `deepest` is the largest d_k or, outside the window, the bound |e| - c - lowest; within
+/// it, the largest d_k's derivatives too (`located`).
 inline Overlap worn_overlap(const Rows& wear, std::ptrdiff_t bore, std::ptrdiff_t pin,
                             double lowest, const std::array<double, 2>& e, double phi_b,
                             double phi_j, double clearance)
@@ -175,6 +181,7 @@ inline Overlap worn_overlap(const Rows& wear, std::ptrdiff_t bore, std::ptrdiff_
   const double c1 = std::cos(step), s1 = std::sin(step);
   double c = std::cos(a0), sg = std::sin(a0);
   out.deepest = -std::numeric_limits<double>::infinity();
+  std::size_t best = 0;
   for (std::size_t i = 0; i < count; ++i)
   {
     const std::ptrdiff_t k = wrap(first + static_cast<std::ptrdiff_t>(i), total);
@@ -186,9 +193,17 @@ inline Overlap worn_overlap(const Rows& wear, std::ptrdiff_t bore, std::ptrdiff_
       hp = spline(pin, k / fine + shifts[r], pin_weights[r], hp1);
     cs[i] = c, sn[i] = sg, slope[i] = hp1;
     d[i] = e[0] * c + e[1] * sg - hb - hp - clearance;
-    out.deepest = std::max(out.deepest, d[i]);
+    if (d[i] > out.deepest)
+      out.deepest = d[i], best = i;
     const double cn = c * c1 - sg * s1;
     sg = sg * c1 + c * s1, c = cn;
+  }
+  if (count > 0 and std::isfinite(out.deepest))
+  {
+    out.located = true;
+    out.deepest_direction = {cs[best], sn[best]};
+    out.deepest_turn_bearing = -e[0] * sn[best] + e[1] * cs[best] - slope[best];
+    out.deepest_turn_journal = slope[best];
   }
   if (out.deepest <= 0.0)
     return out;
@@ -255,6 +270,76 @@ inline std::pair<double, double> moment_penetration(double moment, double cleara
   }
   const double delta = std::exp(log_delta);
   return {delta, round_moment(delta, clearance).second};
+}
+
+/// Whether contact k runs on worn profiles (CONTACT_BORE_WEAR or CONTACT_PIN_WEAR set).
+inline bool is_worn(const Rows& contacts, std::ptrdiff_t k)
+{
+  return contacts(k, CONTACT_BORE_WEAR) != 0.0 or contacts(k, CONTACT_PIN_WEAR) != 0.0;
+}
+
+/// The depth worn contact k's two profiles together never fall below (their worn_bounds; a
+/// round surface's 0): its journal cannot overlap its bore within |e| <= c + that.
+inline double worn_lowest(const Args& args, std::ptrdiff_t k)
+{
+  double lowest = 0.0;
+  for (const int column : {CONTACT_BORE_WEAR, CONTACT_PIN_WEAR})
+  {
+    const auto r = static_cast<std::ptrdiff_t>(args.contacts(k, column)) - 1;
+    lowest += r < 0 ? 0.0 : args.wear_bounds[static_cast<std::size_t>(r)].lowest;
+  }
+  return lowest;
+}
+
+/// A worn journal in its bore's section: its penetration delta_p = Phi_round^-1(Phi) on the
+/// round joint's scale (worn_overlap, moment_penetration) and its derivatives
+/// d delta_p / d(e, phi_b, phi_j) = dPhi / d(...) / Phi_round'(delta_p): `normal` along
+/// d delta_p / de (from the bore into the journal), `reach` its length, `turn_bearing`,
+/// `turn_journal` the two frames' angles'. e, phi_b, phi_j in any one frame of the section
+/// (the plane's: the planar joint; the bore's own, phi_b = 0: a spatial joint's slice).
+/// Where nothing overlaps (or Phi underflows, or the input is not finite) delta is the
+/// deepest (negative) overlap, the normal along e, reach 1 and no turn. `approach`,
+/// `approach_bearing`, `approach_journal`: the derivatives of the deepest overlap d_max in
+/// e and the two angles (along e, no turn, where the grid was not visited): its rate, the
+/// surfaces' approach where they first touch, is a contact's impact speed (on the grid's
+/// few points that overlap at the onset, delta_p's rate is not: the discrete moment grows
+/// as d_max^5 there, the round one as delta^4.5).
+struct WornSection
+{
+  double delta;
+  std::array<double, 2> normal;
+  double reach = 1.0, turn_bearing = 0.0, turn_journal = 0.0;
+  std::array<double, 2> approach{1.0, 0.0};
+  double approach_bearing = 0.0, approach_journal = 0.0;
+};
+
+inline WornSection worn_section(const Args& args, std::ptrdiff_t k, const std::array<double, 2>& e,
+                                double phi_b, double phi_j)
+{
+  const Rows& contacts = args.contacts;
+  const auto bore = static_cast<std::ptrdiff_t>(contacts(k, CONTACT_BORE_WEAR)) - 1;
+  const auto pin = static_cast<std::ptrdiff_t>(contacts(k, CONTACT_PIN_WEAR)) - 1;
+  const double clearance = contacts(k, CONTACT_CLEARANCE);
+  const Overlap o = worn_overlap(args.wear, bore, pin, worn_lowest(args, k), e, phi_b, phi_j, clearance);
+  const double r = std::hypot(e[0], e[1]);
+  const std::array<double, 2> along = r > 0.0 ? std::array<double, 2>{e[0] / r, e[1] / r}
+                                              : std::array<double, 2>{1.0, 0.0};
+  WornSection out{o.deepest, along};
+  if (o.located)
+    out.approach = o.deepest_direction, out.approach_bearing = o.deepest_turn_bearing,
+    out.approach_journal = o.deepest_turn_journal;
+  else
+    out.approach = along;
+  const double size = std::hypot(o.gradient[0], o.gradient[1]);
+  if (not (o.moment >= std::numeric_limits<double>::min() and size > 0.0))
+    return out;
+  const auto [delta, slope] = moment_penetration(o.moment, clearance);
+  out.delta = delta;
+  out.normal = {o.gradient[0] / size, o.gradient[1] / size};
+  out.reach = size / slope;
+  out.turn_bearing = o.turn_bearing / slope;
+  out.turn_journal = o.turn_journal / slope;
+  return out;
 }
 
 } // namespace pinbore::mechanism

@@ -59,12 +59,16 @@ CONTACT_SLICES = CONTACT_KIND + 24       # SLICED: slices n
 CONTACT_END_LENGTH = CONTACT_KIND + 25   # SLICED: end length e of a sliced law (m)
 CONTACT_SCALE = CONTACT_KIND + 26        # SLICED: stiffness factor a of a sliced law
 CONTACT_COMPLIANCE = CONTACT_KIND + 27   # SLICED: bulk compliance c_b (m^2/N; 0: none)
-# a worn planar journal (RADIAL): its bore's and its pin's profile (their row in Args.wear plus
-# one; 0: not worn): its penetration is the mean of order WORN_ORDER of the worn surfaces'
-# overlap on the round joint's scale (cpp/mechanism/worn.h)
+# a worn journal (a planar RADIAL contact, a spatial SLICED one): its bore's and its pin's
+# profile (their row in Args.wear plus one; 0: not worn): its penetration is the mean of order
+# WORN_ORDER of the worn surfaces' overlap on the round joint's scale (cpp/mechanism/worn.h)
 CONTACT_BORE_WEAR = CONTACT_KIND + 28
 CONTACT_PIN_WEAR = CONTACT_KIND + 29
-CONTACT_COLUMNS = CONTACT_KIND + 30
+# (3) a worn SLICED contact: the direction normal to the bore's axis (the journal's) in the
+# bearing's (journal's) body frame from which its profile's angle runs about the axis
+CONTACT_BEARING_REFERENCE = CONTACT_KIND + 30
+CONTACT_JOURNAL_REFERENCE = CONTACT_KIND + 33
+CONTACT_COLUMNS = CONTACT_KIND + 36
 WORN_ORDER = 4   # p of a worn journal's overlap mean, its penetration (cpp/mechanism/worn.h)
 RADIAL, SLICED, PLANE, AXIS_RADIAL = 0, 1, 2, 3   # AXIS_RADIAL: a journal point from the bore's axis
 

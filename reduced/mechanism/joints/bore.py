@@ -34,6 +34,18 @@ class Bore(Clearance):
                 CONTACT_CLEARANCE: c.bearing_radius - c.journal_radius,
                 CONTACT_RADIUS: c.bearing_radius}
 
+    def worn(self, base, source: str) -> dict:
+        """Its worn bore and pin (wear_file), if it has them: its first contact's (the planar
+        journal's RADIAL contact, the spatial journal's SLICED one)."""
+        if self.c.wear_file is None:
+            return {}
+        from pinbore.core.scene import named_file   # noqa: PLC0415
+        from pinbore.laws import wearfile   # noqa: PLC0415
+
+        profiles = wearfile.read(named_file(self.c.wear_file, base),
+                                 f"{source}: clearance joint {self.c.name}: wear_file")
+        return {0: (profiles.bore, profiles.pin)}
+
     def per_length_law(self, deltas, laws_data, source) -> np.ndarray:
         """The force per length (N/m) of the joint's per-length normal law at `deltas`: a law
         of pinbore.laws.elastic or the laws file's calibrated:<law>

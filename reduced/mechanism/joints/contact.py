@@ -164,6 +164,29 @@ class JointMaterials(Strict):
         return self
 
 
+class WornSurfaces(Strict):
+    """A journal's worn bore and pin (the revolute and the cylindrical joint's `wear_file`):
+    each surface's worn depth against the angle of its own body's frame (laws.wearfile), a
+    profile of the section, the same along a journal's axis. A worn journal meets its bore
+    through its continuous contact law (the overlap's mean of order 4 on the round joint's
+    scale, cpp/mechanism/worn.h): not with rigid impacts."""
+
+    wear_file: str | None = pydantic.Field(default=None, description=(
+        "a wear.csv (pinbore wear): the bore's and the pin's worn depth against angle in their "
+        "bodies' frames (in space: about the bore's and the journal's axis from each one's "
+        "reference direction, the body frame's x axis made normal to the axis, or y if the axis "
+        "lies near x; the profile the same along the axis); the journal then meets its bore "
+        "over the arc where the worn surfaces overlap (their overlap's mean of order 4 on the "
+        "round joint's scale), which keeps the joint's law on a round profile"))
+
+    @pydantic.model_validator(mode="after")
+    def _worn(self):
+        if self.wear_file is not None and self.impact != "continuous":
+            raise ValueError("wear_file: a worn joint's contact is continuous (impact = "
+                             "\"continuous\"), not a rigid impact")
+        return self
+
+
 def check_normal_law(law: str) -> None:
     """A normal law of the library or of the laws file."""
     if not (law in ELASTIC_LAWS or law.startswith(FILE_LAWS)):

@@ -9,15 +9,27 @@ import math
 
 import numpy as np
 
+from pinbore.core.errors import InputError
 from pinbore.laws import elastic
 from pinbore.reduced.mechanism.joints.bore import SpatialBore, sliced_parts
 from pinbore.reduced.mechanism.layout import (
-    AXIS_RADIAL, CONTACT_BEARING_AXIS, CONTACT_CLEARANCE, CONTACT_COMPLIANCE, CONTACT_END_LENGTH,
-    CONTACT_FRICTION_ON, CONTACT_JOURNAL_AXIS, CONTACT_JOURNAL_POINT, CONTACT_KIND, CONTACT_LENGTH,
-    CONTACT_SCALE, CONTACT_SIDE, CONTACT_SLICES, CONTACT_STIFFNESS, PLANE, SLICED)
+    AXIS_RADIAL, CONTACT_BEARING_AXIS, CONTACT_BEARING_REFERENCE, CONTACT_CLEARANCE,
+    CONTACT_COMPLIANCE, CONTACT_END_LENGTH, CONTACT_FRICTION_ON, CONTACT_JOURNAL_AXIS,
+    CONTACT_JOURNAL_POINT, CONTACT_JOURNAL_REFERENCE, CONTACT_KIND, CONTACT_LENGTH, CONTACT_SCALE,
+    CONTACT_SIDE, CONTACT_SLICES, CONTACT_STIFFNESS, PLANE, SLICED)
 from pinbore.reduced.mechanism.vectors import unit_axis
 
 PARALLEL = 1e-9   # |1 - |u_b . u_j|| below which a journal's axis is aligned with its bore's
+
+
+def reference(axis) -> np.ndarray:
+    """The direction normal to an axis u (a body frame's) from which its section's angle runs:
+    the frame's x axis made normal to u (y if u lies near x): x - (x . u) u, normalised. Along
+    z it is x, the planar joint's angle's origin."""
+    u = np.asarray(axis, float) / np.linalg.norm(axis)
+    helper = np.eye(3)[0] if abs(u[0]) < 0.9 else np.eye(3)[1]
+    f = helper - (helper @ u) * u
+    return f / np.linalg.norm(f)
 
 
 class CylindricalClearance(SpatialBore):
@@ -63,18 +75,26 @@ class CylindricalClearance(SpatialBore):
                               c.bearing_point, c.journal_point, u_b, u_j, "clearance_joints")
 
     def contacts(self, geometry, deltas, laws_data, source):
-        """The journal along its bore (SLICED; with rigid impacts its two ends against the
-        bore's axis, AXIS_RADIAL) and its shoulders (PLANE, two-sided, frictionless); the
-        force per length (N/m, per_length) its slices carry at `deltas`."""
+        """The journal along its bore (SLICED, with its bore's and its journal's reference
+        directions, the origins of a worn profile's angle; with rigid impacts its two ends
+        against the bore's axis, AXIS_RADIAL) and its shoulders (PLANE, two-sided,
+        frictionless); the force per length (N/m, per_length) its slices carry at `deltas`.
+        A worn journal's bore takes no bulk compliance (one InputError line)."""
         c = self.c
         radial = self.radial(geometry)
         u_b = unit_axis(c.bearing_axis, "bearing_axis")
         u_j = unit_axis(c.journal_axis, "journal_axis")
         if c.impact == "continuous":
             scale, end, bulk, table = self.per_length(deltas, laws_data, source)
+            if bulk > 0 and c.wear_file is not None:
+                raise InputError(f"{source}: clearance joint {c.name}: wear_file: a worn journal's "
+                                 f"bore takes no bulk compliance, and {c.normal_law!r} has "
+                                 f"{bulk:.3g} m^2/N; give a sliced law without it")
             out = [radial | {CONTACT_KIND: SLICED, CONTACT_BEARING_AXIS: u_b, CONTACT_JOURNAL_AXIS: u_j,
                              CONTACT_LENGTH: c.length, CONTACT_SLICES: c.slices,
-                             CONTACT_END_LENGTH: end, CONTACT_SCALE: scale, CONTACT_COMPLIANCE: bulk}]
+                             CONTACT_END_LENGTH: end, CONTACT_SCALE: scale, CONTACT_COMPLIANCE: bulk,
+                             CONTACT_BEARING_REFERENCE: list(reference(u_b)),
+                             CONTACT_JOURNAL_REFERENCE: list(reference(u_j))}]
         else:   # the journal's two ends against the bore's axis
             table = np.full(deltas.size, np.nan)   # rigid: no law, never evaluated
             out = [radial | {CONTACT_KIND: AXIS_RADIAL, CONTACT_BEARING_AXIS: u_b,
@@ -117,10 +137,8 @@ class CylindricalClearance(SpatialBore):
         return {"main": [k for k in rows if k not in axial], "axial": axial}
 
     def across(self) -> tuple:
-        """Two directions normal to the bore's axis u: the frame's x axis made normal to u (y
-        if u lies near x), and u x that."""
+        """Two directions normal to the bore's axis u: its reference direction f (reference)
+        and u x f."""
         u = np.asarray(self.c.bearing_axis, float) / np.linalg.norm(self.c.bearing_axis)
-        helper = np.eye(3)[0] if abs(u[0]) < 0.9 else np.eye(3)[1]
-        f = helper - (helper @ u) * u
-        f /= np.linalg.norm(f)
+        f = reference(u)
         return f, np.cross(u, f)

@@ -8,11 +8,12 @@ from typing import Literal
 import pydantic
 
 from pinbore.reduced.mechanism import joints
-from pinbore.reduced.mechanism.joints.contact import ContactLaw, JointMaterials, check_normal_law
+from pinbore.reduced.mechanism.joints.contact import (ContactLaw, JointMaterials, WornSurfaces,
+                                                     check_normal_law)
 from pinbore.reduced.mechanism.vectors import Vector3
 
 
-class SpatialClearanceJoint(JointMaterials, ContactLaw):
+class SpatialClearanceJoint(JointMaterials, ContactLaw, WornSurfaces):
     """cylindrical: a journal (axis journal_axis through journal_point) in a bore of `length`
     (axis bearing_axis through its mid-plane centre bearing_point), sliced into `slices`, with
     optional shoulders (axial_clearance, axial_stiffness); spherical: a ball (centre
@@ -20,7 +21,8 @@ class SpatialClearanceJoint(JointMaterials, ContactLaw):
     pinbore.laws.elastic, hertz_point (cylindrical: spread evenly over the length), or
     calibrated:/sliced: from the laws file; or rigid impacts (a cylindrical journal's two
     ends, and its shoulders). Radii, length, E, nu, bearing_E, bearing_nu: as in the planar
-    joint (JointMaterials). It starts closed (journal centred and aligned, ball centred:
+    joint (JointMaterials); a cylindrical journal's worn bore and pin: wear_file
+    (WornSurfaces). It starts closed (journal centred and aligned, ball centred:
     "ideal", moving with the ideal joint, or "free", velocities as given) or where the bodies
     put it ("placed")."""
 

@@ -12,14 +12,15 @@ import pydantic
 
 from pinbore.laws import elastic
 from pinbore.reduced.mechanism.joints.bore import Bore, sliced_parts
-from pinbore.reduced.mechanism.joints.contact import ContactLaw, JointMaterials, check_normal_law
+from pinbore.reduced.mechanism.joints.contact import (ContactLaw, JointMaterials, WornSurfaces,
+                                                     check_normal_law)
 from pinbore.reduced.mechanism.layout import (
     CONTACT_AT_CONTACT, CONTACT_KIND, POINT, PRIM_BODY_I, PRIM_BODY_J, PRIM_KIND, PRIM_S_I,
     PRIM_S_J, PRIMITIVE_COLUMNS, RADIAL, row)
 from pinbore.reduced.mechanism.vectors import Vector
 
 
-class ClearanceJoint(JointMaterials, ContactLaw):
+class ClearanceJoint(JointMaterials, ContactLaw, WornSurfaces):
     """A revolute joint with radial clearance: the journal (on journal_body) moves freely
     inside the bearing (on bearing_body) and meets its wall through the contact laws."""
 
@@ -32,18 +33,10 @@ class ClearanceJoint(JointMaterials, ContactLaw):
     # ideal: centred, moving with the ideal joint; free: centred, velocities as given;
     # placed: where the bodies' positions put it, velocities as given
     start: Literal["ideal", "free", "placed"] = "ideal"
-    wear_file: str | None = pydantic.Field(default=None, description=(
-        "a wear.csv (pinbore wear): the bore's and the pin's worn depth against angle in their "
-        "bodies' frames; the journal then meets its bore over the arc where the worn surfaces "
-        "overlap (their overlap's mean of order 4 on the round joint's scale), which keeps the "
-        "joint's law on a round profile"))
 
     @pydantic.model_validator(mode="after")
     def _normal_law(self):
         if self.impact != "continuous":
-            if self.wear_file is not None:
-                raise ValueError("wear_file: a worn joint's contact is continuous (impact = "
-                                 "\"continuous\"), not a rigid impact")
             return self
         check_normal_law(self.normal_law)
         if self.normal_law != "hertz_point" and self.length is None:
@@ -70,17 +63,6 @@ class RevoluteClearance(Bore):
         if c.impact != "continuous":
             return [radial], np.full(deltas.size, np.nan)   # rigid: no law, never evaluated
         return [radial], self.force(deltas, laws_data, source)
-
-    def worn(self, base, source: str) -> dict:
-        """Its worn bore and pin (wear_file), if it has them."""
-        if self.c.wear_file is None:
-            return {}
-        from pinbore.core.scene import named_file   # noqa: PLC0415
-        from pinbore.laws import wearfile   # noqa: PLC0415
-
-        profiles = wearfile.read(named_file(self.c.wear_file, base),
-                                 f"{source}: clearance joint {self.c.name}: wear_file")
-        return {0: (profiles.bore, profiles.pin)}
 
     def columns(self, across: dict, roles: dict, seen: dict) -> dict:
         """The journal's offset from the bearing's centre (ecc_x, ecc_y, m), then the columns

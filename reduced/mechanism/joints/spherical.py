@@ -15,12 +15,15 @@ class SphericalClearance(SpatialBore):
     """A spherical clearance joint (SpatialClearanceJoint of type "spherical")."""
 
     def check(self) -> None:
-        """No axes, length or shoulders; a continuous contact takes the point law, and not
-        the laws file's restitution."""
+        """No axes, length, shoulders or worn profile; a continuous contact takes the point
+        law, and not the laws file's restitution."""
         c = self.c
         if c.bearing_axis is not None or c.journal_axis is not None or \
                 c.length is not None or c.axial_clearance is not None:
             raise ValueError("a spherical clearance joint takes no axes, length or shoulders")
+        if c.wear_file is not None:
+            raise ValueError("wear_file: a spherical joint takes no worn profile (a worn bore and "
+                             "pin are a journal's: type = \"cylindrical\")")
         if c.impact != "continuous":
             return
         if c.normal_law != "hertz_point":
