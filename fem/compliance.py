@@ -66,7 +66,6 @@ def surface_compliance(el, facet_tags, pin_radius: float, bore_radius: float, di
     ksp.getPC().setFactorSolverType("mumps")
     u = el.K_bc.createVecRight()
     ksp.solve(b, u)
-    u.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
     owned = el.V.dofmap.index_map.size_local
     values = u.getArray(readonly=True).reshape(-1, 2)
     X = el.V.tabulate_dof_coordinates()[:, :2]

@@ -55,3 +55,8 @@ def test_two_ranks_match_one(write_scene, tmp_path, name):
     np.testing.assert_array_less(np.abs(mpi - one), 1e-8 * scale + 1e-300)
     picture = "contact.png" if name.startswith("2D") else "pressure_map.png"
     assert (tmp_path / "mpi" / picture).exists() and (tmp_path / "mpi" / "fields.xdmf").exists()
+    if (tmp_path / "serial" / "compliance.csv").exists():   # a 2D elastic joint's (fem.compliance)
+        from pinbore.fem import compliance
+
+        mpi, one = (compliance.read(tmp_path / run / "compliance.csv") for run in ("mpi", "serial"))
+        np.testing.assert_allclose(mpi, one, rtol=0, atol=1e-10 * np.abs(one).max())
