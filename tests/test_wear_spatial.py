@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 import tomli_w
 from conftest import ROOT, pinbore
-from test_planar_as_spatial import (ANGLE_TOL, FORCE_TOL, POSITION_TOL, differences, integrate,
-                                    sample_times, twins)
+from test_planar_as_spatial import (ANGLE_TOL, FORCE_TOL, LAWS, POSITION_TOL, differences, integrate,
+                                    observed, sample_times, twins)
 
 from pinbore.laws import wearfile
 from pinbore.reduced.mechanism.layout import LOG_RATE, LOG_TIME
@@ -43,9 +43,8 @@ def smooth_wear(folder) -> str:
     return profiles(folder, lambda t: 30e-6 * (1 + np.cos(2 * t)), lambda t: 20e-6 * (1 + np.sin(t)))
 
 
-@pytest.mark.parametrize("friction", [None, {"law": "coulomb_ambrosio", "mu": 0.1}],
-                         ids=["frictionless", "coulomb"])
-def test_an_aligned_worn_journal_is_the_planar_worn_joint(tmp_path, friction):
+@pytest.mark.parametrize("law", [None, "coulomb_ambrosio"])
+def test_an_aligned_worn_journal_is_the_planar_worn_joint(tmp_path, law):
     """The planar worn Flores slider-crank and its spatial twin (the rod's journal along z, 4
     slices) on the same wear.csv (smooth_wear) over the first impact, 4e-4 s at rtol 1e-10:
     the same onset, and at 600 instants the same positions, angles, normal and friction
@@ -56,12 +55,18 @@ def test_an_aligned_worn_journal_is_the_planar_worn_joint(tmp_path, friction):
     of the force each. So tests/test_planar_as_spatial.py's bounds hold (its docstring:
     5e-10 m, 1e-8 rad, 1e-6 of the peaks; onset 1e-8, impact speed 1e-6). The worn
     profiles act: the first impact comes later than the round joint's (the bore is worn
-    60 um deep along the stroke) by more than 1 us."""
+    60 um deep along the stroke) by more than 1 us. The onsets differ as the two models'
+    positions do, within POSITION_TOL over the impact speed (1e-10 s; measured 0 to 2.7e-12 s,
+    the most with the Iwan element, whose states dilute the error norm's mean). The Iwan element's sliders are returned at the steps' ends, which the two models
+    take at different times: its friction within tests/test_planar_as_spatial.py's 1e-2
+    (LAWS); its normal force must be the worn joint's (the law's times its reach, as its
+    friction's), in the planar return map as in the spatial slices'."""
+    friction, mu, friction_tol, *_ = LAWS[law] if law else (None, None, None)
     joint = {"wear_file": smooth_wear(tmp_path)} | ({"friction": friction} if friction else {})
     planar, spatial = (integrate(data) for data in twins(4e-4, joint))
     (_, p_run), (_, s_run) = planar, spatial
     assert p_run.impacts.shape[0] == s_run.impacts.shape[0] == 1
-    assert s_run.impacts[0, LOG_TIME] == pytest.approx(p_run.impacts[0, LOG_TIME], rel=1e-8)
+    assert abs(s_run.impacts[0, LOG_TIME] - p_run.impacts[0, LOG_TIME]) <= POSITION_TOL / p_run.impacts[0, LOG_RATE]
     assert s_run.impacts[0, LOG_RATE] == pytest.approx(p_run.impacts[0, LOG_RATE], rel=1e-6)
     round_onset = integrate(twins(4e-4, {})[0])[1].impacts[0, LOG_TIME]
     assert p_run.impacts[0, LOG_TIME] - round_onset > 1e-6
@@ -70,10 +75,30 @@ def test_an_aligned_worn_journal_is_the_planar_worn_joint(tmp_path, friction):
     assert positions < POSITION_TOL, positions
     assert angles < ANGLE_TOL, angles
     assert normal < FORCE_TOL * p[:, -2].max(), normal / p[:, -2].max()
-    if friction:
-        assert p[:, -1].max() > 0.05 * p[:, -2].max()   # it rubbed
-        assert tangential < FORCE_TOL * p[:, -1].max(), tangential / p[:, -1].max()
+    if friction:   # it slid somewhere: |F_t| at its law's mu times the worn joint's normal force
+        in_contact = p[:, -2] > 0
+        assert np.any(p[in_contact, -1] >= 0.999 * mu * p[in_contact, -2])
+        assert tangential < friction_tol * p[:, -1].max(), tangential / p[:, -1].max()
 
+
+
+def test_a_worn_joints_iwan_element_slides_at_mu_times_its_normal_force(tmp_path):
+    """The planar worn Flores joint with the bilinear Iwan element without its parallel spring
+    (a Jenkins element: k1 = 1e6 N/m, mu = 0.1) over the first impact: its slider caps the
+    friction at mu times the joint's normal force, the worn joint's (the law's force times
+    its reach, engine.h worn_contact), and reaches the cap where it slides: |F_t| <= mu F_n
+    (1 + 1e-9) at every sample in contact, >= 0.999 mu F_n somewhere. The slider's return map
+    (integrator.h) takes the same normal force as the friction law."""
+    friction, mu, *_ = LAWS["iwan_bilinear"]
+    joint = {"wear_file": smooth_wear(tmp_path), "friction": friction}
+    planar = integrate(twins(4e-4, joint)[0])
+    times = sample_times(planar[1], planar[1].impacts[0, LOG_TIME])
+    p, clean = observed(*planar, times)
+    f_t, f_n = p[clean, -1], p[clean, -2]
+    touching = f_n > 0
+    assert touching.sum() > 50
+    assert np.all(f_t[touching] <= mu * f_n[touching] * (1 + 1e-9))
+    assert np.any(f_t[touching] >= 0.999 * mu * f_n[touching])
 
 def misaligned_slider_crank() -> tuple:
     """The misaligned spatial slider-crank (its bore tilted 1 deg against the journal, 16

@@ -276,7 +276,7 @@ struct Hooks
           E::sliced_forces(args, w, y, y, k, false);
         continue;
       }
-      double delta, rate;
+      double delta, rate, reach = 1.0;
       typename K::V n;
       if (static_cast<int>(contacts(k, CONTACT_KIND)) == PLANE)
       {
@@ -284,16 +284,16 @@ struct Hooks
         delta = p.delta, rate = p.rate, n = p.normal;
       }
       else
-      {
+      {   // a worn journal's normal force is its law's times its reach (engine.h: worn_contact)
         const auto g = E::radial_geometry(args, w.bodies, k);
-        delta = g.delta, rate = g.rate, n = g.normal;
+        delta = g.delta, rate = g.rate, n = g.normal, reach = g.worn ? g.reach : 1.0;
       }
       double f_n = 0.0;
       if (delta > 0.0)
       {
         const double f_el = E::elastic_force(args, k, delta);
-        f_n = laws::hysteresis_force(f_el, rate, args.speeds[k],
-                                     E::contact_chi(contacts, k, args.speeds[k]));
+        f_n = reach * laws::hysteresis_force(f_el, rate, args.speeds[k],
+                                             E::contact_chi(contacts, k, args.speeds[k]));
       }
       changed |= E::iwan_return(w.bodies, contacts, k, f_n, n, y,
                                 static_cast<std::ptrdiff_t>(contacts(k, CONTACT_STATE)), 1.0);
