@@ -66,12 +66,15 @@ def ladder(base: dict, one_way: bool, tolerances, folder: Path, name: str) -> di
     last: the reference)."""
     runs = {}
     if one_way:
-        runs["one-way"] = run({k: v for k, v in base.items() if k != "coupling"}, folder, f"{name}_one_way")
+        runs["one-way"] = run({k: v for k, v in base.items() if k not in ("coupling", "compliance_file")},
+                              folder, f"{name}_one_way")
     plan = [(tolerances[-2], "new", f"{tolerances[-2] * 1e6:g} um, new joint's pressure")]
     plan += [(t, "worn", f"{t * 1e6:g} um") for t in tolerances]
     for tolerance, pressure, label in plan:
-        runs[label] = run(base | {"coupling": {"tolerance": tolerance, "pressure": pressure}}, folder,
-                          f"{name}_{pressure}_tol_{tolerance * 1e6:g}")
+        data = base | {"coupling": {"tolerance": tolerance, "pressure": pressure}}
+        if pressure == "new":
+            data.pop("compliance_file")
+        runs[label] = run(data, folder, f"{name}_{pressure}_tol_{tolerance * 1e6:g}")
         print(f"{name}, {label}: {runs[label]['wall']:.1f} s", file=sys.stderr)
     return runs
 

@@ -1,6 +1,6 @@
 r"""The surface compliance of a 2D joint's elastic bodies (plane strain, per unit length): how
 far a contact pressure opens the gap between pin and bore, the kernel a conformal contact is
-solved on (reduced.wear.pressure.Conformal).
+solved on (Conformal, below).
 
 A pressure p(theta) per unit of the bore's arc, pressing the pin inward and the bore outward
 at the angle theta about the bore's centre (on the pin the same force per radian,
@@ -25,6 +25,9 @@ import numpy as np
 from pinbore.core.errors import InputError
 
 SETTLED = 1e-6   # of the load: the loaded contact's resultant misses it by less
+FORCE_FLOOR = 1e-6   # N/m: and by no less than this (the gaps' rounding, 1e-18 m of 1e-2 m)
+LEAN_STEP = math.radians(5)   # the push's turns while it brackets the load's direction
+BRACKET = 1e-6   # rad: a bracket of the push's direction this narrow closes on a jump
 NEWTON = 100
 FIRST_PUSH = 1e-7   # of the bore's radius: the first push beyond touch
 SWAPS, PASSES = 20, 400   # active-set passes changing every sign at once, passes in all
@@ -173,38 +176,122 @@ class Conformal:
         p, active = self._solve(self.matrix(points), g, active)
         return p, theta, active
 
-    def loaded(self, force: float, direction: float, turn: float, points=None):
-        """(p, theta, e) at `points` (default: those facing the load) with the pin pushed along
-        `direction` (the unit vector u, the FE run's push: the pin held across it) until the
-        load per unit length along it, R(s) = sum_j p_j R_b Delta n_j . u (n_j = -d g_j / d e),
-        is `force` (N/m): from the rigid pin's touch e_0, e = e_0 + s u with s found by
-        Newton's method on R(s) (its slope the contact's stiffness
-        R_b Delta (N_A u)^T C_AA^-1 (N_A u) on the active set A) kept within a bracket."""
-        points = self.facing(direction, turn) if points is None else points
+    def loaded(self, force: float, direction: float, turn: float, start: float | None = None):
+        """(p, theta, e, R, phi) at the points facing the push under the load per unit length
+        `force` (N/m) along `direction` psi*: the pin's centre e where the pressure's resultant
+        R = sum_j p_j R_b Delta n_j (n_j = -d g_j / d e) is force u(psi*). The pin is pushed
+        from its rigid touch along a direction phi (`pushed_along`) until
+        R . u(phi) = force cos(psi* - phi), and phi turned until R's own direction psi(phi)
+        is psi* (then |R| = force): a worn joint's pressure leans toward where it conforms,
+        the push then off the load. The lean psi(phi) - psi* is bracketed and its root found
+        by the Illinois rule; on a rough profile under a light load it jumps where the contact
+        moves from one point of the pin to another, and where the bracket closes on such a
+        jump the pin rests on both: the two sides' pressures are combined so that their
+        resultant lies along psi*, scaled to the force. `start`: the push's first direction
+        (default psi*). ArithmeticError where it does not settle."""
         u = np.array([math.cos(direction), math.sin(direction)])
+        tolerance = max(SETTLED * force, FORCE_FLOOR)
+
+        def lean(phi):
+            out = self.pushed_along(force, direction, phi, turn) + (phi,)
+            resultant = out[3]
+            return math.remainder(math.atan2(resultant[1], resultant[0]) - direction, 2 * math.pi), out
+
+        def met(out):
+            return math.hypot(*(out[3] - force * u)) <= tolerance
+
+        a = direction if start is None else start
+        fa, out_a = lean(a)
+        if met(out_a):
+            return out_a
+        b = a - fa   # a round joint leans by the push's turn: d psi / d phi = 1
+        for _ in range(NEWTON):   # secant steps until the lean's sign changes
+            fb, out_b = lean(b)
+            if met(out_b):
+                return out_b
+            if fb * fa < 0:
+                break
+            slope = (fb - fa) / (b - a) if b != a else 1.0
+            step = -fb / slope if slope > 0 else -math.copysign(LEAN_STEP, fb)
+            a, fa, out_a = b, fb, out_b
+            b = b + max(-LEAN_STEP, min(LEAN_STEP, step))
+        else:
+            raise ArithmeticError(f"the load {force:.4g} N/m along {math.degrees(direction):.4g} deg: "
+                                  "no push brackets its direction")
+        side = 0
+        for _ in range(NEWTON):   # Illinois
+            c = (a * fb - b * fa) / (fb - fa)
+            fc, out_c = lean(c)
+            if met(out_c):
+                return out_c
+            if fc * fb < 0:
+                a, fa, out_a = b, fb, out_b
+                side = 0
+            else:
+                fa = 0.5 * fa if side == -1 else fa
+                side = -1
+            b, fb, out_b = c, fc, out_c
+            if abs(b - a) <= BRACKET:   # a jump of the contact's point: resting on both
+                return self._resting(force, u, out_a, out_b)
+        raise ArithmeticError(f"the load {force:.4g} N/m along {math.degrees(direction):.4g} deg was "
+                              f"not met in {NEWTON} turns of the push")
+
+    @staticmethod
+    def _resting(force, u, one, other):
+        """The pin resting on the contacts of two pushes a hair apart: their pressures
+        combined, (1 - w) one + w other, w making the resultant's part across u vanish, then
+        scaled to `force` along u."""
+        across = np.array([-u[1], u[0]])
+        a, b = one[3] @ across, other[3] @ across
+        w = a / (a - b)
+        resultant = (1 - w) * one[3] + w * other[3]
+        scale = force / (resultant @ u)
+        return (scale * ((1 - w) * one[0] + w * other[0]), one[1], (1 - w) * one[2] + w * other[2],
+                scale * resultant, one[4])
+
+    def pushed_along(self, force: float, direction: float, phi: float, turn: float):
+        """(p, theta, e, R) with the pin pushed along u(phi) from its rigid touch e_0,
+        e = e_0 + s u, until R . u = force cos(direction - phi): s by Newton's method on
+        R . u (its slope the contact's stiffness R_b Delta (N_A u)^T C_AA^-1 (N_A u) on the
+        active set A) within a bracket. ArithmeticError where it does not settle, or where
+        the contact reaches the ends of the points facing the push."""
+        points = self.facing(phi, turn)
+        u = np.array([math.cos(phi), math.sin(phi)])
+        target = force * math.cos(direction - phi)
         weight = self.bore_radius * self.spacing
+        tolerance = max(SETTLED * force, FORCE_FLOOR) * 0.1
         C = self.matrix(points)
         e0 = np.zeros(2)
         for _ in range(3):   # the rigid pin moved along u until its first point touches
             g, normal, _ = self.gap(e0, turn, points)
             ahead = normal @ u > 0.3
+            if not ahead.any():
+                raise ArithmeticError("no point of the pin faces the push")
             e0 = e0 + u * np.min(g[ahead] / (normal[ahead] @ u))
-        low, high, s, active = 0.0, math.inf, FIRST_PUSH * self.bore_radius, None
+        low, high, s, active = -math.inf, math.inf, FIRST_PUSH * self.bore_radius, None
         for _ in range(NEWTON):
             g, normal, theta = self.gap(e0 + s * u, turn, points)
             p, active = self._solve(C, g, active)
-            A = np.flatnonzero(active)
-            along = normal[A] @ u
-            miss = force - weight * (p[A] @ along)
-            if abs(miss) <= SETTLED * force:
-                return p, theta, e0 + s * u
+            N = normal[active]
+            resultant = weight * (p[active] @ N)
+            miss = target - resultant @ u
+            if abs(miss) <= tolerance:
+                if p[0] > 0 or p[-1] > 0:
+                    raise ArithmeticError("the contact reaches the ends of the points facing the push")
+                return p, theta, e0 + s * u, resultant
             low, high = (s, high) if miss > 0 else (low, s)
-            slope = weight * along @ np.linalg.solve(C[np.ix_(A, A)], along) if A.size else 0.0
+            along = N @ u
+            slope = weight * along @ np.linalg.solve(C[np.ix_(active, active)], along) if along.size else 0.0
             step = s + miss / slope if slope > 0 else math.inf
-            if not low < step < high:   # out of the bracket: double it, or halve it
-                step = 2 * s if math.isinf(high) else 0.5 * (low + high)
+            if not low < step < high:   # out of the bracket: double it (or back off), or halve it
+                if math.isinf(high):
+                    step = 2 * abs(s) + FIRST_PUSH * self.bore_radius
+                elif math.isinf(low):
+                    step = s - 2 * abs(s) - FIRST_PUSH * self.bore_radius
+                else:
+                    step = 0.5 * (low + high)
             s = step
-        raise ArithmeticError(f"the conformal contact's load was not met in {NEWTON} steps")
+        raise ArithmeticError(f"the push {target:.4g} N/m was not met in {NEWTON} steps")
 
     def on_bore(self, p: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """The pressure per unit of the bore's arc (Pa) at theta of the solution p at

@@ -209,20 +209,15 @@ BAD_WEAR = [
     (lambda folder, fe: {"mechanism_file": short_flores(folder)},
      "mechanism_file: duration 0.006 s is shorter than one forcing period"),
     ({"coupling": {"tolerance": 1e-6, "pressure": "old"}}, "coupling.pressure: Input should be 'new' or 'worn'"),
-    (lambda folder, fe: without_compliance(folder, fe), "coupling.pressure: \"worn\" needs the FE run's compliance.csv"),
+    ({"coupling": {"tolerance": 1e-6, "pressure": "worn"}},
+     'compliance_file: coupling.pressure = "worn" needs the FE run\'s compliance.csv'),
+    (lambda folder, fe: {"compliance_file": str(fe / "compliance.csv")},
+     'compliance_file: read only by coupling.pressure = "worn"'),
+    ({"compliance_file": "/no/such/compliance.csv", "coupling": {"tolerance": 1e-6, "pressure": "worn"}},
+     "/no/such/compliance.csv: cannot read"),
+    (lambda folder, fe: {"compliance_file": str(fe / "curve.csv"), "coupling": {"tolerance": 1e-6, "pressure": "worn"}},
+     "curve.csv: the header must be angle_deg,compliance_m_per_Pa"),
 ]
-
-
-def without_compliance(folder, fe) -> dict:
-    """The FE run `fe` copied without its compliance.csv, the worn joint's pressure asked."""
-    import shutil
-
-    copy = folder / "fe_copy"
-    copy.mkdir()
-    for name in ("pressure.csv", "curve.csv", "result.json"):
-        shutil.copy(fe / name, copy / name)
-    return {"pressure_file": str(copy / "pressure.csv"), "curve_file": str(copy / "curve.csv"),
-            "coupling": {"tolerance": 1e-6, "pressure": "worn"}}
 
 
 @pytest.mark.parametrize("change, message", BAD_WEAR, ids=[m for _, m in BAD_WEAR])
@@ -613,7 +608,7 @@ def test_the_worn_joints_own_pressure_wears_archards_volume(tmp_path, flores_fe)
     from pinbore.reduced.wear import run as wear_run
     from pinbore.reduced.wear.scene import WearScene
 
-    data = wear_scene(tmp_path, flores_fe, cycles=200.0,
+    data = wear_scene(tmp_path, flores_fe, cycles=200.0, compliance_file=str(flores_fe / "compliance.csv"),
                       coupling={"tolerance": 1e-3, "first_jump": 100.0, "pressure": "worn"})
     (tmp_path / "wear.toml").write_text(tomli_w.dumps(data))
     scene = scenes.load(WearScene, tmp_path / "wear.toml")
@@ -634,4 +629,37 @@ def test_the_worn_joints_own_pressure_wears_archards_volume(tmp_path, flores_fe)
     done = pinbore("wear", tmp_path / "wear.toml", "--out", tmp_path / "out")
     assert done.returncode == 0, done.stderr
     result = json.loads((tmp_path / "out" / "summary.json").read_text())
-    assert result["coupled"] and result["jumps"][-1]["cycles"] == 200.0
+    assert result["coupled"] and result["jumps"][-1]["cycles"] == 200.0 and result["pressure"] == "worn"
+
+
+def test_the_worn_joints_contact_meets_its_load_and_its_conditions(flores_fe):
+    """fem.compliance.Conformal loaded on the FE run's compliance, a bore worn 30 um along a
+    diameter and in an off-centre pocket, a pin worn on one side and turned 0.4 rad: at every
+    load (1e3 to 1e6 N/m) and direction the solution, checked here from its own definition,
+    has p >= 0, the gap g + C p >= 0 where p = 0 and = 0 where p > 0 (to 1e-12 m), and the
+    resultant R_b Delta sum p_j n_j = F u within 1e-6 F. A round joint's pressure turns with
+    its load and its pin (by whole steps of the kernel's angles)."""
+    from pinbore.fem import compliance
+
+    kernel = compliance.read(flores_fe / "compliance.csv")
+    table = pressure.read(flores_fe / "pressure.csv", flores_fe / "curve.csv", "test")
+    r_p, r_b = table.pin_radius, table.bore_radius
+    theta = profile.angles(720)
+    bore = 15e-6 * (1 + np.cos(2 * theta)) + 10e-6 * np.exp(-((theta - 2.2) / 0.3) ** 2)
+    pin = 10e-6 * (1 + np.sin(theta))
+    joint = compliance.Conformal(kernel, r_p, r_b, bore, pin)
+    for force in (1e3, 1e5, 1e6):
+        for direction in (0.3, 2.0, -2.5):
+            for turn in (0.0, 0.4):
+                p, _, e, _, push = joint.loaded(force, direction, turn)
+                points = joint.facing(push, turn)
+                g, normal, _ = joint.gap(e, turn, points)
+                opened = g + joint.matrix(points) @ p
+                assert np.all(p >= 0)
+                assert np.all(opened >= -1e-12) and np.all(np.abs(opened[p > 0]) <= 1e-12)
+                resultant = r_b * joint.spacing * (p @ normal)
+                u = np.array([math.cos(direction), math.sin(direction)])
+                assert np.hypot(*(resultant - force * u)) <= 1e-6 * force
+    round_joint = compliance.Conformal(kernel, r_p, r_b, np.zeros(720), np.zeros(720))
+    one, other = round_joint.loaded(5e5, 0.0, 0.0)[0], round_joint.loaded(5e5, math.pi / 2, math.radians(30))[0]
+    assert np.max(np.abs(np.sort(one) - np.sort(other))) <= 1e-6 * np.max(one)

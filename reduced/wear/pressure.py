@@ -133,9 +133,9 @@ def worn_tables(conformal, table: PressureTable, force_per_length, bore_angle, p
         mean_turn = math.atan2(np.sum(w * np.sin(turn[mine])), np.sum(w * np.cos(turn[mine])))
         direction = -math.pi + (s + 0.5) * SECTOR
         top = float(forces[mine].max())
-        rows = [np.zeros(grid.size)]
-        for level in LEVELS:
-            p, theta, _ = conformal.loaded(level * top, direction, mean_turn)
+        rows, push = [np.zeros(grid.size)], None
+        for level in LEVELS:   # each from the last one's push
+            p, theta, _, _, push = conformal.loaded(level * top, direction, mean_turn, push)
             p = conformal.on_bore(p, theta)
             alpha = np.mod(theta - direction + math.pi, 2 * math.pi) - math.pi
             order = np.argsort(alpha)

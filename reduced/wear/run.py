@@ -78,14 +78,10 @@ def run(scene_path, out) -> int:
     from pinbore.reduced.mechanism.model import laws_path   # noqa: PLC0415
 
     kernel_file, kernel = None, None
-    if scene.coupling is not None and scene.coupling.pressure == "worn":
+    if scene.compliance_file is not None:   # coupling.pressure = "worn" (the scene's rule)
         from pinbore.fem import compliance   # noqa: PLC0415
 
-        kernel_file = scenes.named_file(scene.curve_file, base).parent / "compliance.csv"
-        if not kernel_file.is_file():
-            raise InputError(f"{source}: coupling.pressure: \"worn\" needs the FE run's "
-                             f"compliance.csv beside its curve_file ({kernel_file}: no such file; "
-                             "run pinbore fem again)")
+        kernel_file = scenes.named_file(scene.compliance_file, base)
         kernel = compliance.read(kernel_file)
 
     at = profile.angles(scene.points)
@@ -111,7 +107,7 @@ def run(scene_path, out) -> int:
         print(f"pinbore wear: {source}: the joint's load reaches {result.peak_force_per_length_N_per_m:.4g} N/m, "
               f"beyond the FE run's {table.forces[-1]:.4g} N/m: the pressure there is the last "
               "step's scaled (extrapolated)", file=sys.stderr)
-    inputs = [mechanism_path, laws_path(mechanism, mechanism_path.parent), kernel_file]
+    inputs = [mechanism_path, laws_path(mechanism, mechanism_path.parent)]
     with atomic_directory(out, inputs=[p for p in inputs if p is not None]) as tmp:
         wearfile.write(tmp / "wear.csv", wearfile.Profiles(np.degrees(worn["angles"]), worn["bore"], worn["pin"]))
         wear_summary.write(tmp / wear_summary.SUMMARY, result)
@@ -165,8 +161,11 @@ class Cycle:
 
             joint = Conformal(self.kernel, self.table.pin_radius, self.table.bore_radius,
                               worn["bore"], worn["pin"])
-            tables = pressure.worn_tables(joint, self.table, load, cycle.bore_angle, cycle.pin_angle,
-                                          load * np.abs(cycle.sliding_speed))
+            try:
+                tables = pressure.worn_tables(joint, self.table, load, cycle.bore_angle, cycle.pin_angle,
+                                              load * np.abs(cycle.sliding_speed))
+            except ArithmeticError as err:
+                raise Stopped(f"the worn joint's contact pressure: {err}") from None
         rates = {name: profile.worn_depth(self.table, cycle.time, load, angle, cycle.sliding_speed,
                                           getattr(self.scene, name).wear_coefficient, self.at, radius,
                                           tables)
@@ -220,8 +219,8 @@ def summary(scene, source, mechanism_path, table, cycle, worn, period, periods: 
         cycles=scene.cycles, period_s=period, periods_averaged=periods, length_m=scene.length,
         sliding_distance_in_contact_per_cycle_m=slid, peak_force_per_length_N_per_m=peak,
         fe_force_range_N_per_m=[0.0, float(table.forces[-1])],
-        extrapolated=bool(peak > table.forces[-1]), **surfaces,
-        coupled=jumps is not None,
+        extrapolated=bool(peak > table.forces[-1]) and scene.compliance_file is None, **surfaces,
+        coupled=jumps is not None, pressure="new" if scene.compliance_file is None else "worn",
         mechanism_runs=1 if jumps is None else jumps.runs,
         refused_jumps=0 if jumps is None else jumps.refused,
         jumps=[] if jumps is None else [

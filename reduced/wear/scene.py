@@ -7,6 +7,7 @@ without the mechanism built or the FE files read.
     joint = "rod_slider"     its revolute clearance joint
     pressure_file = "..."    the joint's 2D FE run (pinbore fem): its pressure.csv
     curve_file = "..."       and its curve.csv (result.json beside it)
+    compliance_file = "..."  and its compliance.csv (with [coupling] pressure = "worn")
     length = 0.02            m, the pin's length in the bore
     cycles = 1e5             forcing periods of use
     [bore] / [pin]           wear_coefficient (m^2/N): Archard's K / H
@@ -42,8 +43,8 @@ class Coupling(Strict):
     pressure: Literal["new", "worn"] = pydantic.Field(default="new", description=(
         "the contact pressure the wear follows: \"new\", the FE run's of the new joint (its "
         "pressure_file) at every load; \"worn\", the joint's own as it wears, its worn "
-        "surfaces' contact solved on the FE run's surface compliance (compliance.csv beside "
-        "its curve_file; fem.compliance.Conformal) along the directions the load takes"))
+        "surfaces' contact solved on the FE run's surface compliance (the scene's "
+        "compliance_file; fem.compliance.Conformal) along the directions the load takes"))
 
 
 class WearScene(Strict):
@@ -55,6 +56,10 @@ class WearScene(Strict):
     joint: str
     pressure_file: str
     curve_file: str
+    compliance_file: str | None = pydantic.Field(default=None, description=(
+        "the FE run's compliance.csv (pinbore fem, a 2D elastic round joint): the surface "
+        "compliance the worn joint's pressure is solved on; read by coupling.pressure = "
+        "\"worn\" only, which needs it"))
     length: float = pydantic.Field(gt=0, le=10.0, description="m, the pin's length in its bore: "
                                    "the mechanism's force over it is the FE run's load per unit length")
     cycles: float = pydantic.Field(gt=0, le=1e10, description="periods of the forcing worn through")
@@ -68,3 +73,13 @@ class WearScene(Strict):
                                  description="angles around each surface the depth is given at")
     coupling: Coupling | None = pydantic.Field(default=None, description=(
         "the worn joint fed back into the mechanism (default: one-way, the new joint's motion)"))
+
+    @pydantic.model_validator(mode="after")
+    def _compliance(self):
+        worn = self.coupling is not None and self.coupling.pressure == "worn"
+        if worn and self.compliance_file is None:
+            raise ValueError("compliance_file: coupling.pressure = \"worn\" needs the FE run's "
+                             "compliance.csv (pinbore fem of the round joint)")
+        if not worn and self.compliance_file is not None:
+            raise ValueError("compliance_file: read only by coupling.pressure = \"worn\"")
+        return self

@@ -49,6 +49,9 @@ class WearSummary(Strict):
     bore: SurfaceWear
     pin: SurfaceWear
     coupled: bool = pydantic.Field(description="the mechanism ran on its worn joint (cycle jumping)")
+    pressure: str = pydantic.Field(default="new", description=(
+        "the contact pressure worn by: \"new\", the new joint's FE run's; \"worn\", the worn "
+        "joint's own on the FE's surface compliance"))
     mechanism_runs: int = pydantic.Field(ge=1)
     refused_jumps: int = pydantic.Field(ge=0)
     jumps: list[Jump]
