@@ -69,6 +69,8 @@ def surface_compliance(el, facet_tags, pin_radius: float, bore_radius: float, di
     ksp.getPC().setFactorSolverType("mumps")
     u = el.K_bc.createVecRight()
     ksp.solve(b, u)
+    if ksp.getConvergedReason() < 0:
+        raise ArithmeticError(f"the surface compliance's solve failed (PETSc reason {ksp.getConvergedReason()})")
     owned = el.V.dofmap.index_map.size_local
     values = u.getArray(readonly=True).reshape(-1, 2)
     X = el.V.tabulate_dof_coordinates()[:, :2]
@@ -86,7 +88,8 @@ def surface_compliance(el, facet_tags, pin_radius: float, bore_radius: float, di
         radial_u = np.concatenate([w for _, w in gathered])
         order = np.argsort(angle)
         opening += sign * np.interp(offsets, angle[order], radial_u[order], period=2 * math.pi)
-    ksp.destroy()
+    for obj in (ksp, u, b):
+        obj.destroy()
     return 0.5 * (opening + np.roll(opening[::-1], 1))   # even about the load: C(-a) = C(a)
 
 
@@ -116,10 +119,11 @@ def read(path) -> np.ndarray:
     except ValueError:
         raise InputError(f"{path}: a row is not two numbers (run pinbore fem again)") from None
     n = len(table)
-    if n < 36 or not np.allclose(table[:, 0], -180.0 + 360.0 * np.arange(n) / n, atol=1e-5) \
+    if n < 36 or n % 2 or not np.allclose(table[:, 0], -180.0 + 360.0 * np.arange(n) / n, atol=1e-5) \
             or not np.all(np.isfinite(table[:, 1])) or table[n // 2, 1] <= 0:
-        raise InputError(f"{path}: the angles must run evenly from -180 deg (at least 36) with a "
-                         "finite compliance, positive under the load (run pinbore fem again)")
+        raise InputError(f"{path}: the angles must run evenly from -180 deg (an even number, at "
+                         "least 36) with a finite compliance, positive under the load (run pinbore "
+                         "fem again)")
     return table[:, 1]
 
 

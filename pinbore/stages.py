@@ -220,7 +220,8 @@ STAGES = (
           outputs=("mesh.msh", "preview.png")),
     Stage(name="fem", summary="solve a 2D or 3D FE contact scene: curve.csv, pressure.csv, result.json",
           description="Solve the (frictional) pin-in-bore contact of an FE scene; write "
-                      "DIR/curve.csv, DIR/pressure.csv, DIR/result.json and, when the scene asks, "
+                      "DIR/curve.csv, DIR/pressure.csv, DIR/result.json, a 2D elastic round "
+                      "joint's surface compliance DIR/compliance.csv and, when the scene asks, "
                       "DIR/fields.xdmf and pictures (2D: contact.png; 3D: pressure_map.png, "
                       "axial_profile.png). Runs under mpiexec -n N.",
           kinds=("fem",), model="pinbore.fem.scene:FemScene", run="pinbore.fem.run:run",

@@ -81,7 +81,6 @@ def test_an_aligned_worn_journal_is_the_planar_worn_joint(tmp_path, law):
         assert tangential < friction_tol * p[:, -1].max(), tangential / p[:, -1].max()
 
 
-
 def test_a_worn_joints_iwan_element_slides_at_mu_times_its_normal_force(tmp_path):
     """The planar worn Flores joint with the bilinear Iwan element without its parallel spring
     (a Jenkins element: k1 = 1e6 N/m, mu = 0.1) over the first impact: its slider caps the

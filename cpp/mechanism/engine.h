@@ -640,6 +640,20 @@ struct Engine
                              static_cast<std::size_t>(args.tables.cols));
   }
 
+  struct Normal
+  {
+    double elastic, law, force;   // f_el, f = F(delta, delta') and the normal force f reach
+  };
+  /// A journal's normal force in its bore: the law's F(delta, delta') with its hysteresis,
+  /// and the normal force it gives, F times a worn journal's reach (1 on a round one); the
+  /// one the friction and the Iwan element's slider take (integrator.h).
+  static Normal radial_normal(const Args& args, std::ptrdiff_t k, const Radial& g, double speed)
+  {
+    const double f_el = elastic_force(args, k, g.delta);
+    const double f = laws::hysteresis_force(f_el, g.rate, speed, contact_chi(args.contacts, k, speed));
+    return {f_el, f, f * (g.worn ? g.reach : 1.0)};
+  }
+
   /// A worn journal's forces (worn_radial): the law's force F(delta_p, delta_p') of its
   /// penetration, -F d delta_p / de on the journal at its centre (its opposite on the
   /// bearing) with the torques -F d delta_p / dphi on the two frames (the force of the
@@ -659,11 +673,9 @@ struct Engine
         return NaN;
       if (g.delta <= 0.0)
         return 0.0;
-      const double f_el = elastic_force(args, k, g.delta);
-      const double f = laws::hysteresis_force(f_el, g.rate, speed, contact_chi(contacts, k, speed));
+      const auto [f_el, f, f_n] = radial_normal(args, k, g, speed);   // f_n: between the centres
       if (not std::isfinite(f))
         return NaN;
-      const double f_n = f * g.reach;   // the force between the centres
       w.normal[k] = f_n;
       K::push(w.force, s, bj, scaled(g.normal, -f_n), g.at_journal, args.offsets);
       K::push(w.force, s, bb, scaled(g.normal, f_n), g.at_bearing, args.offsets);

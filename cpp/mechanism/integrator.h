@@ -276,24 +276,22 @@ struct Hooks
           E::sliced_forces(args, w, y, y, k, false);
         continue;
       }
-      double delta, rate, reach = 1.0;
+      double f_n = 0.0;
       typename K::V n;
       if (static_cast<int>(contacts(k, CONTACT_KIND)) == PLANE)
       {
         const auto p = E::plane_geometry(w.bodies, contacts, k);
-        delta = p.delta, rate = p.rate, n = p.normal;
+        n = p.normal;
+        if (p.delta > 0.0)
+          f_n = laws::hysteresis_force(E::elastic_force(args, k, p.delta), p.rate, args.speeds[k],
+                                       E::contact_chi(contacts, k, args.speeds[k]));
       }
       else
-      {   // a worn journal's normal force is its law's times its reach (engine.h: worn_contact)
+      {   // the normal force the contact's friction takes (a worn journal's: times its reach)
         const auto g = E::radial_geometry(args, w.bodies, k);
-        delta = g.delta, rate = g.rate, n = g.normal, reach = g.worn ? g.reach : 1.0;
-      }
-      double f_n = 0.0;
-      if (delta > 0.0)
-      {
-        const double f_el = E::elastic_force(args, k, delta);
-        f_n = reach * laws::hysteresis_force(f_el, rate, args.speeds[k],
-                                             E::contact_chi(contacts, k, args.speeds[k]));
+        n = g.normal;
+        if (g.delta > 0.0)
+          f_n = E::radial_normal(args, k, g, args.speeds[k]).force;
       }
       changed |= E::iwan_return(w.bodies, contacts, k, f_n, n, y,
                                 static_cast<std::ptrdiff_t>(contacts(k, CONTACT_STATE)), 1.0);
