@@ -205,6 +205,7 @@ bench: build/study/calibration_2d/summary.json $(MODES_RUNS) build/fem/flores_we
 	$(PY) bench/continuation.py --out bench
 	$(PY) bench/wear.py --out bench
 	$(PY) bench/worn_order.py --out bench
+	$(PY) bench/worn_pressure.py --out bench
 
 stress: build/fem/flores_wear/curve.csv $(STAMP) ## the stress matrix and the reliability audit: bench/stress_*.csv, bench/stress.png, bench/audit.csv (about 7 + 3 min)
 	$(PY) bench/stress.py --out bench
