@@ -49,7 +49,7 @@ def run(scene_path, out, comm=MPI.COMM_WORLD, scene: FemScene | None = None) -> 
                                 scene.tilt_pivot[2], 2 if el.symmetric else 1)
             outputs.write_pressure(tmp / "pressure.csv", result, direction, sizing.arc_half_angle,
                                    contact)
-        if scene.geometry.dim == 2 and not scene.materials.plastic and worn is None:
+        if scene.output.compliance:
             # collective: the bodies' surface compliance (a conformal contact's kernel)
             kernel = compliance.surface_compliance(el, data.facet_tags, scene.geometry.pin_radius,
                                                    scene.geometry.bore_radius, scene.load.direction_deg)

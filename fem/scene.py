@@ -206,6 +206,10 @@ class Solver(Strict):
 class Output(Strict):
     fields: bool = False
     picture: bool = True
+    compliance: bool = pydantic.Field(default=False, description=(
+        "write compliance.csv, the bodies' surface compliance (fem.compliance: one more solve): "
+        "the kernel a worn joint's contact is solved on (a wear scene's compliance_file); a 2D "
+        "elastic round joint's only"))
 
 
 class FemScene(Strict):
@@ -220,6 +224,10 @@ class FemScene(Strict):
 
     @pydantic.model_validator(mode="after")
     def _consistent(self):
+        if self.output.compliance and (self.geometry.dim != 2 or self.materials.plastic
+                                       or self.geometry.wear_file is not None):
+            raise ValueError("output.compliance: the surface compliance is a 2D elastic round "
+                             "joint's (dim = 2, no yield_stress, no wear_file)")
         if self.geometry.dim == 2:
             for key in ("layers", "symmetry"):
                 if getattr(self.mesh, key) is not None:

@@ -92,7 +92,8 @@ def flores_fe(tmp_path_factory):
     to 2e-5 m (past 9e5 N/m, the slider-crank's load per unit length over 20 mm after its
     first impacts), coarse."""
     folder = tmp_path_factory.mktemp("fe")
-    data = with_clearance(0.5e-3, 10e-3, load={"max_approach": 2e-5, "steps": 6})
+    data = with_clearance(0.5e-3, 10e-3, load={"max_approach": 2e-5, "steps": 6},
+                          output={"compliance": True})
     (folder / "fe.toml").write_text(tomli_w.dumps(data))
     done = pinbore("fem", folder / "fe.toml", "--out", folder / "run")
     assert done.returncode == 0, done.stderr

@@ -288,7 +288,10 @@ def fem_command(tmp_path, data, command="fem"):
     ("fem", lambda d, p: d["geometry"].update(pin_frame_deg=10.0), "geometry: pin_frame_deg applies with wear_file only"),
     ("fem", lambda d, p: d["geometry"].update(dim=3, length=0.01, wear_file="w.csv"),
      "geometry: wear_file applies to dim = 2 only"),
-], ids=["missing", "missing-mesh", "through-housing", "through-pin", "frame-alone", "3d"])
+    ("fem", lambda d, p: d.update(output={"compliance": True}) or d["geometry"].update(
+        wear_file=write(p / "w.csv", np.full(N, 1e-6), np.zeros(N))),
+     "output.compliance: the surface compliance is a 2D elastic round joint's"),
+], ids=["missing", "missing-mesh", "through-housing", "through-pin", "frame-alone", "3d", "compliance-worn"])
 def test_bad_wear_input_is_one_line(tmp_path, command, edit, message):
     data = with_clearance(1e-4)
     edit(data, tmp_path)
@@ -354,8 +357,8 @@ def test_friction_on_a_worn_bore_keeps_the_work_balance(tmp_path):
 
 def test_the_worn_joints_contact_on_the_fe_compliance_is_the_worn_fe_run(tmp_path):
     """fem.compliance: the round joint's FE run writes its bodies' surface compliance
-    (compliance.csv); the contact of the worn joint solved on it (Conformal.pushed, the worn
-    surfaces' exact rigid gap) is the worn joint's own FE run (its mesh on the worn surfaces),
+    (output.compliance: compliance.csv); the contact of the worn joint solved on it
+    (Conformal.pushed, the worn surfaces' exact rigid gap) is the worn joint's own FE run (its mesh on the worn surfaces),
     pushed as far along the load: the force within 3 % (measured 0.3-1.9 % on the Flores
     joint), the pressure's centre within 1 deg, the pressure in 5 deg bins within 5 % of the
     largest bin (measured 1.4-2.1 %); and the round joint's own push within 2 %."""
@@ -366,13 +369,12 @@ def test_the_worn_joints_contact_on_the_fe_compliance_is_the_worn_fe_run(tmp_pat
     load = {"max_approach": 1.2e-5, "steps": 3}
     wear_file = smooth_wear(tmp_path)
     runs = {}
-    for name, scene in (("round", with_clearance(c, load=dict(load))),
+    for name, scene in (("round", with_clearance(c, load=dict(load), output={"compliance": True})),
                         ("worn", worn_scene(wear_file, c, load=dict(load)))):
         (tmp_path / f"{name}.toml").write_text(tomli_w.dumps(scene))
         done = pinbore("fem", tmp_path / f"{name}.toml", "--out", tmp_path / name)
         assert done.returncode == 0, done.stderr
         runs[name] = tmp_path / name
-    assert not (runs["worn"] / "compliance.csv").exists()   # the round bodies' alone
     kernel = compliance.read(runs["round"] / "compliance.csv")
     scene, worn = worn_joint(worn_scene(wear_file, c, load=dict(load)))
     direction = math.radians(scene.load.direction_deg)
