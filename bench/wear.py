@@ -9,9 +9,9 @@ joint over 1e5 crank revolutions, on two mechanisms:
   soft spring (bench/slider_crank_flores2004_loaded.toml: in contact throughout after the first
   revolution; 3 revolutions a run), at 2.5, 1, 0.5, 0.25 and 0.125 um.
 
-Every coupled run wears by the worn joint's own pressure (coupling.pressure = "worn", the
-shipped scene's); one more run per mechanism, at its second tightest tolerance, by the new
-joint's FE pressure ("new"): how far the pressure's model moves the profile against how far
+Every coupled run wears by the new joint's FE pressure (the shipped scene's); one more run
+per mechanism, at a tolerance of its ladder, by the worn joint's own pressure
+(coupling.pressure = "worn"): how far the pressure's model moves the profile against how far
 the jumps do.
 
 Per run: wall time, jumps kept and refused, mechanism runs, the bore's and the pin's deepest
@@ -40,10 +40,12 @@ from pinbore.laws import wearfile
 ROOT = Path(__file__).resolve().parent.parent
 SCENE = ROOT / "scenes" / "wear" / "slider_crank_flores2004_coupled.toml"
 LOADED = ROOT / "bench" / "slider_crank_flores2004_loaded.toml"
+COMPLIANCE = ROOT / "build" / "fem" / "flores_wear" / "compliance.csv"
 # mechanism -> (its wear scene's changes, one-way too, the jump tolerances (m))
-LADDERS = {"chaotic": ({}, True, [20e-6, 10e-6, 5e-6, 2.5e-6]),
+# and the tolerance of its one run by the worn joint's own pressure
+LADDERS = {"chaotic": ({}, True, [20e-6, 10e-6, 5e-6, 2.5e-6], 5e-6),
            "periodic": ({"mechanism_file": str(LOADED), "periods": 3}, False,
-                        [2.5e-6, 1e-6, 0.5e-6, 0.25e-6, 0.125e-6])}
+                        [2.5e-6, 1e-6, 0.5e-6, 0.25e-6, 0.125e-6], 2.5e-6)}
 
 
 def run(data: dict, folder: Path, name: str) -> dict:
@@ -60,20 +62,19 @@ def run(data: dict, folder: Path, name: str) -> dict:
             "profiles": wearfile.read(folder / name / "wear.csv")}
 
 
-def ladder(base: dict, one_way: bool, tolerances, folder: Path, name: str) -> dict:
-    """The runs of one mechanism: one-way if asked, coupled on the new joint's pressure at
-    the second tightest tolerance, then on the worn joint's at each tolerance (the tightest
-    last: the reference)."""
+def ladder(base: dict, one_way: bool, tolerances, worn_at: float, folder: Path, name: str) -> dict:
+    """The runs of one mechanism: one-way if asked, coupled on the worn joint's own pressure at
+    `worn_at`, then on the new joint's at each tolerance (the tightest last: the reference)."""
     runs = {}
+    common = {k: v for k, v in base.items() if k not in ("coupling", "compliance_file")}
     if one_way:
-        runs["one-way"] = run({k: v for k, v in base.items() if k not in ("coupling", "compliance_file")},
-                              folder, f"{name}_one_way")
-    plan = [(tolerances[-2], "new", f"{tolerances[-2] * 1e6:g} um, new joint's pressure")]
-    plan += [(t, "worn", f"{t * 1e6:g} um") for t in tolerances]
+        runs["one-way"] = run(common, folder, f"{name}_one_way")
+    plan = [(worn_at, "worn", f"{worn_at * 1e6:g} um, worn joint's pressure")]
+    plan += [(t, "new", f"{t * 1e6:g} um") for t in tolerances]
     for tolerance, pressure, label in plan:
-        data = base | {"coupling": {"tolerance": tolerance, "pressure": pressure}}
-        if pressure == "new":
-            data.pop("compliance_file")
+        data = common | {"coupling": {"tolerance": tolerance, "pressure": pressure}}
+        if pressure == "worn":
+            data["compliance_file"] = str(COMPLIANCE)
         runs[label] = run(data, folder, f"{name}_{pressure}_tol_{tolerance * 1e6:g}")
         print(f"{name}, {label}: {runs[label]['wall']:.1f} s", file=sys.stderr)
     return runs
@@ -105,8 +106,8 @@ def main() -> None:
     base = tomllib.loads(SCENE.read_text())
     rows, ladders = [], {}
     with tempfile.TemporaryDirectory(prefix="pinbore-bench-wear-") as folder:
-        for name, (changes, one_way, tolerances) in LADDERS.items():
-            ladders[name] = ladder(base | changes, one_way, tolerances, Path(folder), name)
+        for name, (changes, one_way, tolerances, worn_at) in LADDERS.items():
+            ladders[name] = ladder(base | changes, one_way, tolerances, worn_at, Path(folder), name)
             rows += rows_of(name, ladders[name], f"{tolerances[-1] * 1e6:g} um")
     with open(out / "wear.csv", "w", newline="") as f:
         writer = csv.DictWriter(f, fieldnames=list(rows[0]))
@@ -115,7 +116,7 @@ def main() -> None:
     fig, axes = plt.subplots(1, 3, figsize=(16, 4.5))
     for ax, (name, surface) in zip(axes[:2], (("chaotic", "bore"), ("periodic", "pin"))):
         for label, r in ladders[name].items():
-            if "new joint" in label:
+            if "worn joint" in label:
                 continue
             ax.plot(r["profiles"].angle_deg, getattr(r["profiles"], surface) * 1e6, lw=0.9, label=label)
         ax.set_xlabel(f"angle in the {surface}'s frame (deg)")
