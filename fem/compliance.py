@@ -28,7 +28,7 @@ SETTLED = 1e-6   # of the load: the loaded contact's resultant misses it by less
 FORCE_FLOOR = 1e-6   # N/m: and by no less than this (the gaps' rounding, 1e-18 m of 1e-2 m)
 LEAN_STEP = math.radians(5)   # the push's turns while it brackets the load's direction
 BRACKET = 1e-6   # rad: a bracket of the push's direction this narrow closes on a jump
-NEWTON = 100
+NEWTON = 100   # the most steps of each search (the push, its turn)
 FIRST_PUSH = 1e-7   # of the bore's radius: the first push beyond touch
 SWAPS, PASSES = 20, 400   # active-set passes changing every sign at once, passes in all
 POINTS = 720   # angles around the joint (0.5 degree): the hat's half-width and the kernel's spacing
@@ -138,9 +138,11 @@ class Conformal:
     position r_p(beta_i) u(beta_i + turn) + e from the bore's centre at the angle theta_i,
     the pin's centre at e and turned by `turn` in the bore's frame, r_b = R_b + h_b,
     r_p = R_p - h_p the worn radii (the profiles' Catmull-Rom splines, laws.wearfile). The
-    pin pushed to e (`pushed`) or loaded by a force per unit length (`loaded`, e found:
-    sum_j p_j R_b Delta u(theta_j) = F' u(direction)). Solved by the primal-dual active set
-    method, the gap linearised in e about the last iterate (exact at convergence)."""
+    pin pushed to e (`pushed`), or loaded by a force per unit length F' (`loaded`: e where
+    the resultant sum_j p_j R_b Delta n_j, n_j = -d g_j / d e, is F' u(direction)). Each
+    solve is the primal-dual active set method on the exact gaps at the given e
+    (`_solve`); p_i R_b Delta is point i's force (`on_bore`: its pressure on the bore's
+    arc)."""
 
     def __init__(self, kernel: np.ndarray, pin_radius: float, bore_radius: float,
                  bore_depth: np.ndarray, pin_depth: np.ndarray):
