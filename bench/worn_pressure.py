@@ -53,7 +53,7 @@ def main() -> None:
     fe, pressure = curve.read(WORN / "curve.csv"), curve.read_pressure(WORN / "pressure.csv")
     rows, shown = [], []
     for step, approach, force in zip(fe.step, fe.approach, fe.force):
-        p, theta, _ = joint.pushed((touch + approach) * u, 0.0, points)
+        p, theta = joint.pushed((touch + approach) * u, 0.0, points)
         alpha = np.degrees(np.remainder(theta - direction + math.pi, 2 * math.pi) - math.pi)
         arc = g.bore_radius * np.abs(np.gradient(np.unwrap(theta)))   # the bore's arc of each point
         mine = g.bore_radius * joint.spacing * p            # N/m: each point's force

@@ -23,6 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from pinbore.core.errors import InputError
+from pinbore.laws.wearfile import spline
 
 SETTLED = 1e-6   # of the load: the loaded contact's resultant misses it by less
 FORCE_FLOOR = 1e-6   # N/m: and by no less than this (the gaps' rounding, 1e-18 m of 1e-2 m)
@@ -146,15 +147,12 @@ class Conformal:
 
     def __init__(self, kernel: np.ndarray, pin_radius: float, bore_radius: float,
                  bore_depth: np.ndarray, pin_depth: np.ndarray):
-        from pinbore.laws.wearfile import spline   # noqa: PLC0415
-
         n = kernel.size
         self.n, self.spacing = n, 2 * math.pi / n
         self.by_offset = np.roll(kernel, -(n // 2))   # C at the offset d * spacing, d = 0..n-1
         self.bore_radius, self.bore_depth = bore_radius, np.asarray(bore_depth, float)
         self.beta = -math.pi + self.spacing * np.arange(n)
         self.pin_surface = pin_radius - spline(pin_depth, self.beta)[0]
-        self.spline = spline
 
     def gap(self, e, turn: float, points: np.ndarray):
         """(g_i (m), -d g_i / d e (the gap's closing direction: X_i / |X_i| less the worn
@@ -165,7 +163,7 @@ class Conformal:
         x, y = r * np.cos(b) + e[0], r * np.sin(b) + e[1]
         size = np.hypot(x, y)
         theta = np.arctan2(y, x)
-        depth, slope, _ = self.spline(self.bore_depth, theta)
+        depth, slope, _ = spline(self.bore_depth, theta)
         turning = slope / size   # d r_b / d theta times |d theta / d e|, along the tangent
         return (self.bore_radius + depth - size,
                 np.stack([(x + turning * y) / size, (y - turning * x) / size], axis=1), theta)
@@ -176,11 +174,10 @@ class Conformal:
         half = int(half_angle / self.spacing)
         return (centre + np.arange(-half, half + 1)) % self.n
 
-    def pushed(self, e, turn: float, points: np.ndarray, active=None):
-        """(p, theta, the active set) at `points` with the pin's centre at e."""
+    def pushed(self, e, turn: float, points: np.ndarray):
+        """(p, theta) at `points` with the pin's centre at e."""
         g, _, theta = self.gap(np.asarray(e, float), turn, points)
-        p, active = self._solve(self.matrix(points), g, active)
-        return p, theta, active
+        return self._solve(self.matrix(points), g)[0], theta
 
     def loaded(self, force: float, direction: float, turn: float, start: float | None = None):
         """(p, theta, e, R, phi) at the points facing the push under the load per unit length

@@ -387,7 +387,7 @@ def test_the_worn_joints_contact_on_the_fe_compliance_is_the_worn_fe_run(tmp_pat
         fe = fe_curve.read(runs[name] / "curve.csv")
         pressure = fe_curve.read_pressure(runs[name] / "pressure.csv")
         for step, approach, force in zip(fe.step, fe.approach, fe.force):
-            p, theta, _ = joint.pushed((start + approach) * u, 0.0, points)
+            p, theta = joint.pushed((start + approach) * u, 0.0, points)
             mine = R * joint.spacing * np.sum(p * np.cos(theta - direction))
             assert mine == pytest.approx(force, rel=0.02 if name == "round" else 0.03), (name, step)
             if name == "worn":

@@ -77,12 +77,11 @@ def run(scene_path, out) -> int:
     check_radii(table, joint, source)
     from pinbore.reduced.mechanism.model import laws_path   # noqa: PLC0415
 
-    kernel_file, kernel = None, None
+    kernel = None
     if scene.compliance_file is not None:   # coupling.pressure = "worn" (the scene's rule)
         from pinbore.fem import compliance   # noqa: PLC0415
 
-        kernel_file = scenes.named_file(scene.compliance_file, base)
-        kernel = compliance.read(kernel_file)
+        kernel = compliance.read(scenes.named_file(scene.compliance_file, base))
 
     at = profile.angles(scene.points)
     try:
