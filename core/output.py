@@ -291,14 +291,15 @@ def reserved(out: str | Path, comm=MPI.COMM_WORLD):
         held.enter_context(_stop_cleanly())
 
         def hold():
-            check_output(out)
-            missing, parent = [], out.absolute().parent
-            while not parent.exists():
-                missing.append(parent)
-                parent = parent.parent
-            out.absolute().parent.mkdir(parents=True, exist_ok=True)
-            held.callback(_remove_empty, missing)
-            held.enter_context(_lock(out))
+            with signals_held():   # what it makes is registered for removal before a stop lands
+                check_output(out)
+                missing, parent = [], out.absolute().parent
+                while not parent.exists():
+                    missing.append(parent)
+                    parent = parent.parent
+                out.absolute().parent.mkdir(parents=True, exist_ok=True)
+                held.callback(_remove_empty, missing)
+                held.enter_context(_lock(out))
 
         _on_rank0(comm, out, hold)
         token = _RESERVED.set(out.resolve())
@@ -321,14 +322,19 @@ def atomic_directory(out: str | Path, comm=MPI.COMM_WORLD, inputs=()):
         held.enter_context(_stop_cleanly())
 
         def start():
-            check_output(out, inputs)
-            out.parent.mkdir(parents=True, exist_ok=True)
-            if _RESERVED.get() != out.resolve():
-                held.enter_context(_lock(out))
-            check_output(out, inputs)   # again, now that no other run can change it
-            _sweep_stale(out)
-            return tempfile.mkdtemp(prefix=_temporary_prefix(out, os.getpid()), suffix=".tmp",
-                                    dir=out.parent)
+            # with stops held, so that what it makes (the lock, the temporary folder) has its
+            # removal registered before a stop lands; on success the folder is renamed
+            with signals_held():
+                check_output(out, inputs)
+                out.parent.mkdir(parents=True, exist_ok=True)
+                if _RESERVED.get() != out.resolve():
+                    held.enter_context(_lock(out))
+                check_output(out, inputs)   # again, now that no other run can change it
+                _sweep_stale(out)
+                tmp = tempfile.mkdtemp(prefix=_temporary_prefix(out, os.getpid()), suffix=".tmp",
+                                       dir=out.parent)
+                held.callback(shutil.rmtree, tmp, ignore_errors=True)
+                return tmp
 
         tmp = Path(_on_rank0(comm, out, start))
         failed = None
@@ -339,8 +345,6 @@ def atomic_directory(out: str | Path, comm=MPI.COMM_WORLD, inputs=()):
             failed = err
         # every rank gets here, so a rank that failed cannot leave the others waiting
         if not comm.allreduce(failed is None, op=MPI.LAND):
-            if comm.rank == 0:
-                shutil.rmtree(tmp, ignore_errors=True)
             if failed is not None:
                 raise failed
             raise RuntimeError("another MPI rank failed; nothing written")

@@ -224,6 +224,29 @@ def test_a_stopped_run_leaves_no_temporaries_and_one_line(home, sig, code, word)
     assert [p.name for p in home.iterdir() if p.name.startswith(".")] == []
 
 
+def test_a_stop_the_moment_the_temporary_folder_exists_removes_it(tmp_path, monkeypatch):
+    """SIGTERM delivered right as the output's temporary folder is made (the instant a user's
+    kill most likely lands, when the run has just begun writing) still removes it."""
+    import os
+    import tempfile
+
+    from pinbore.core import output
+
+    made, mkdtemp = [], tempfile.mkdtemp
+
+    def mkdtemp_then_stopped(**kw):
+        made.append(mkdtemp(**kw))
+        os.kill(os.getpid(), signal.SIGTERM)   # handled before mkdtemp could return
+        return made[-1]
+
+    monkeypatch.setattr(output.tempfile, "mkdtemp", mkdtemp_then_stopped)
+    with pytest.raises(output.Terminated):
+        with output.atomic_directory(tmp_path / "out") as tmp:
+            (tmp / "half.txt").write_text("half written")
+    assert made and not Path(made[0]).exists()
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
 @pytest.mark.parametrize("signum, group, code", [(signal.SIGTERM, False, 143), (signal.SIGINT, True, 130)],
                          ids=["SIGTERM", "Ctrl-C"])
 def test_a_run_stopped_in_the_compiled_core_ends_at_once(tmp_path, signum, group, code):
