@@ -598,10 +598,12 @@ def test_the_worn_joints_own_pressure_wears_archards_volume(tmp_path, flores_fe)
     """[coupling] pressure = "worn": the pressure of the joint as it wears, its contact solved
     on the FE run's surface compliance (fem.compliance.Conformal; tests/test_worn_fe.py checks
     it against the worn FE run). Archard's volume is k times the load times the distance slid
-    whatever the pressure's shape: on one run of the mechanism the cycle's volumes are the FE
-    table's within the share of the pressure's arc off the load (1 - cos alpha over the
-    contact's half-angle, under 1 %), the pin's twice the bore's; the bore's deepest wear lies
-    where the table's does, within 2 degrees. The scene runs through `pinbore wear`."""
+    whatever the pressure's shape: on one run of the mechanism (the Flores slider-crank at
+    150 rpm with friction, its joint loaded throughout: bench/wear.py's periodic one) the
+    cycle's volumes are the FE table's within the share of the pressure's arc off the load
+    (1 - cos alpha over the contact's half-angle, under 1 %), the pin's twice the bore's; the
+    bore's deepest wear lies where the table's does, within 2 degrees. The scene runs through
+    `pinbore wear`."""
     import json
 
     from pinbore.core import scene as scenes
@@ -610,7 +612,8 @@ def test_the_worn_joints_own_pressure_wears_archards_volume(tmp_path, flores_fe)
     from pinbore.reduced.wear.scene import WearScene
 
     data = wear_scene(tmp_path, flores_fe, cycles=200.0, compliance_file=str(flores_fe / "compliance.csv"),
-                      coupling={"tolerance": 1e-3, "first_jump": 100.0, "pressure": "worn"})
+                      coupling={"tolerance": 1e-3, "first_jump": 100.0, "pressure": "worn"},
+                      mechanism_file=str(ROOT / "bench/slider_crank_flores2004_loaded.toml"), periods=2)
     (tmp_path / "wear.toml").write_text(tomli_w.dumps(data))
     scene = scenes.load(WearScene, tmp_path / "wear.toml")
     mechanism, path, _, period = wear_run.mechanism_of(scene, tmp_path, "test")
@@ -664,3 +667,72 @@ def test_the_worn_joints_contact_meets_its_load_and_its_conditions(flores_fe):
     round_joint = compliance.Conformal(kernel, r_p, r_b, np.zeros(720), np.zeros(720))
     one, other = round_joint.loaded(5e5, 0.0, 0.0)[0], round_joint.loaded(5e5, math.pi / 2, math.radians(30))[0]
     assert np.max(np.abs(np.sort(one) - np.sort(other))) <= 1e-6 * np.max(one)
+
+
+def test_the_worn_joints_pressure_moves_continuously_with_the_history(flores_fe):
+    """The worn pressure a step wears by (wear.pressure.worn_tables) is a continuous function
+    of the joint's history, as the cycle jumping's error estimate, a difference of two runs'
+    rates, needs: a step whose load's direction in the bore's or in the pin's frame crosses a
+    node of the grid (where the tables change) has the same pressure on either side (to the
+    crossing's 1e-9 rad); a step's pressure does not depend on the other steps' loads (the
+    tables' loads are fixed); each step's pressure moves with the worn depth in proportion (a
+    change of 1e-6 and of 1e-4 of the depth: ratio 100 within 1 %)."""
+    from pinbore.fem import compliance
+
+    kernel = compliance.read(flores_fe / "compliance.csv")
+    table = pressure.read(flores_fe / "pressure.csv", flores_fe / "curve.csv", "test")
+    theta = profile.angles(720)
+    bore = 12e-6 * (1 + np.cos(theta - 0.4)) + 6e-6 * np.exp(-((theta - 1.2) / 0.3) ** 2)
+    pin = 8e-6 * (1 + np.sin(theta))
+
+    def rows(history, bore=bore):
+        joint = compliance.Conformal(kernel, table.pin_radius, table.bore_radius, bore, pin)
+        force, direction, pin_direction = (np.array(x, float) for x in history)
+        tables = pressure.worn_tables(joint, table, force, direction, pin_direction)
+        return np.array([[t.at(f) for t, f in zip(tables[name], force)] for name in ("bore", "pin")])
+
+    edge, load = -math.pi + 24 * pressure.NODE, 4e5   # a node of the grid
+    for crossing in (rows([[load, load], [edge - 1e-9, edge + 1e-9], [edge - 0.2, edge - 0.2]]),
+                     rows([[load, load], [edge + 0.02, edge + 0.02], [edge - 1e-9, edge + 1e-9]])):
+        assert np.abs(crossing[:, 0] - crossing[:, 1]).max() <= 1e-6 * crossing.max()
+    alone = rows([[load], [edge + 0.03], [edge - 0.17]])[:, 0]
+    beside = rows([[load, 50 * load], [edge + 0.03, edge + 0.05], [edge - 0.17, edge - 0.16]])[:, 0]
+    assert np.abs(alone - beside).max() <= 1e-9 * alone.max()
+    history = [[2e4, 3e5, 8e5], [0.5, 0.52, 0.61], [0.4, 0.40, 0.43]]
+    base = rows(history)
+    small, large = (np.abs(rows(history, bore * (1 + eps)) - base).max() for eps in (1e-6, 1e-4))
+    assert large / small == pytest.approx(100.0, rel=1e-2)
+
+
+def test_the_worn_pin_wears_where_it_touches(flores_fe):
+    """A pin with a notch 20 um deep and 6 degrees wide at the load (deeper than the contact's
+    elastic approach) rests on the notch's shoulders: the pin's pressure (wear.pressure.
+    worn_tables, a step on a node of the grid) is nil in the notch, lies on both shoulders
+    alike (its two halves' forces within 1 %) and carries the load (the pin's pressure's
+    resultant, over its arc, within 1 % of F). Turned 10 degrees in the bore (the same bore
+    direction), the pin is touched elsewhere on its own surface: its pressure lies where the
+    joint, solved there directly, touches it (within the grid's 0.5 degree)."""
+    from pinbore.fem import compliance
+
+    kernel = compliance.read(flores_fe / "compliance.csv")
+    table = pressure.read(flores_fe / "pressure.csv", flores_fe / "curve.csv", "test")
+    r_p, r_b = table.pin_radius, table.bore_radius
+    theta = profile.angles(720)
+    notch = 20e-6 * np.clip(1 - np.abs(theta) / math.radians(3), 0, 1) ** 0.5
+    joint = compliance.Conformal(kernel, r_p, r_b, np.zeros(720), notch)
+    load, node = 2e5, 0.0   # the load along the bore's 0 and the pin's 0: a node
+    tables = pressure.worn_tables(joint, table, np.array([load]), np.array([node]), np.array([node]))
+    on_pin = tables["pin"][0].at(load)
+    beta = tables["pin"][0].angles * r_b / r_p   # the pin's angle from the load
+    assert np.all(on_pin[np.abs(beta) < math.radians(2)] == 0)
+    halves = [np.trapezoid(np.where(side, on_pin, 0.0), beta) for side in (beta < 0, beta > 0)]
+    assert halves[0] == pytest.approx(halves[1], rel=1e-2)
+    resultant = np.trapezoid(on_pin * np.cos(beta), beta) * r_p
+    assert resultant == pytest.approx(load, rel=1e-2)
+    turned = math.radians(10)
+    tables = pressure.worn_tables(joint, table, np.array([load]), np.array([node]), np.array([node - turned]))
+    on_pin = tables["pin"][0].at(load)
+    p, _, _, _, push = joint.loaded(load, node, turned)
+    touched = joint.beta[joint.facing(push, turned)][p > 0]   # the pin's own angles in contact
+    pressed = beta[on_pin > 0] + node - turned
+    assert abs(np.mean(pressed) - np.mean(touched)) <= math.radians(0.5)

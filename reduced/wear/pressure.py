@@ -109,39 +109,105 @@ def _geometry(curve_file: Path, source: str) -> tuple[float, float]:
     return radii
 
 
-SECTOR = math.radians(5)   # rad: the load directions a worn joint's pressure is solved along
-LEVELS = (1 / 27, 1 / 9, 1 / 3, 1.0)   # of a sector's largest load: the loads it is solved under
+NODE = math.radians(5)   # rad: the grid of load directions in the bore's and in the pin's frame
+RATIO = 2.0              # between the loads a node is solved under, F_top RATIO^j (F_top: the FE run's top)
+LIGHTEST = -8            # the least j solved; lighter loads' pressure linear from it to none
 
 
-def worn_tables(conformal, table: PressureTable, force_per_length, bore_angle, pin_angle,
-                weight) -> list:
+@dataclass(frozen=True)
+class Blend:
+    """A weighted sum of pressure tables on the same angles, with PressureTable's calls."""
+
+    tables: tuple
+    weights: tuple
+
+    @property
+    def angles(self) -> np.ndarray:
+        return self.tables[0].angles
+
+    @property
+    def reach(self) -> float:
+        return max(t.reach for t in self.tables)
+
+    def at(self, force: float) -> np.ndarray:
+        return sum(w * t.at(force) for t, w in zip(self.tables, self.weights))
+
+    def integral_at(self, force: float) -> np.ndarray:
+        return sum(w * t.integral_at(force) for t, w in zip(self.tables, self.weights))
+
+
+def worn_tables(conformal, table: PressureTable, force_per_length, bore_angle, pin_angle) -> dict:
     """The pressure of the worn joint (fem.compliance.Conformal: the FE's compliance on the
-    worn surfaces) for each recorded step: per sector of SECTOR of the load's direction in the
-    bore's frame that the steps visit, the joint loaded along the sector's middle by LEVELS
-    of its steps' largest load, the pin turned by their mean turn (weighted by `weight`, the
-    steps' share of the wear), as a PressureTable on the angles from the load (the FE run's
-    radii of `table`); None for a step out of contact."""
+    worn surfaces) for each recorded step, on each surface: {"bore": [...], "pin": [...]},
+    a table per step (None out of contact) for wear.profile.worn_depth. Which parts of the
+    two worn surfaces meet is set by the load's direction in the bore's frame and in the
+    pin's (`bore_angle`, `pin_angle`): the joint is solved on a grid of both, NODE apart,
+    the pin turned by their difference, under the fixed loads F_top RATIO^j (F_top: `table`'s
+    top load; j from the load at or below its steps' lightest, not below LIGHTEST, to the one
+    at or above their heaviest). A node's bore table holds the pressure on the bore's arc
+    against the angle from the node's direction in the bore's frame; its pin table the
+    pressure on the pin's arc against the arc length from its direction in the pin's frame
+    (as an angle about the bore's centre: wear.profile's convention). A step's tables blend
+    its four nodes' bilinearly in its two directions: the pressure moves as continuously
+    with the history as the history moves with the wear (cycle jumping differences it)."""
     forces = np.asarray(force_per_length, float)
-    on = forces > 0
-    sector = np.floor((np.asarray(bore_angle) + math.pi) / SECTOR).astype(int)
-    turn = np.asarray(bore_angle) - np.asarray(pin_angle)
+    on = np.flatnonzero(forces > 0)
+    count = int(round(2 * math.pi / NODE))
+    corners = []   # per frame: (the lower node, the upper node's share) of every step
+    for angle in (bore_angle, pin_angle):
+        position = np.mod(np.asarray(angle, float) + math.pi, 2 * math.pi) / NODE
+        corners.append((np.floor(position).astype(int) % count, position - np.floor(position)))
+    (ib, sb), (ip, sp) = corners
+    shares = {}   # node -> [(step, its bilinear weight)]
+    for db, wb in ((0, 1.0 - sb), (1, sb)):
+        for dp, wp in ((0, 1.0 - sp), (1, sp)):
+            w = wb * wp
+            for k in on[w[on] > 0]:
+                shares.setdefault(((ib[k] + db) % count, (ip[k] + dp) % count), []).append((k, w[k]))
     grid = -math.pi + conformal.spacing * np.arange(conformal.n + 1)
-    out = [None] * forces.size
-    for s in np.unique(sector[on]):
-        mine = on & (sector == s)
-        w = np.asarray(weight)[mine] + 1e-300
-        mean_turn = math.atan2(np.sum(w * np.sin(turn[mine])), np.sum(w * np.cos(turn[mine])))
-        direction = -math.pi + (s + 0.5) * SECTOR
-        top = float(forces[mine].max())
-        rows, push = [np.zeros(grid.size)], None
-        for level in LEVELS:   # each from the last one's push
-            p, theta, _, _, push = conformal.loaded(level * top, direction, mean_turn, push)
-            p = conformal.on_bore(p, theta)
-            alpha = np.mod(theta - direction + math.pi, 2 * math.pi) - math.pi
-            order = np.argsort(alpha)
-            rows.append(np.interp(grid, alpha[order], p[order], left=0.0, right=0.0))
-        sector_table = PressureTable(top * np.array((0.0,) + LEVELS), grid, np.array(rows),
-                                     table.pin_radius, table.bore_radius)
-        for k in np.flatnonzero(mine):
-            out[k] = sector_table
+    scale = table.pin_radius / table.bore_radius   # the pin's arc as an angle about the bore's centre
+    top = float(table.forces[-1])
+    nodes = {}
+    for (i, j), members in shares.items():
+        loads = forces[[k for k, _ in members]]
+        first = max(LIGHTEST, math.floor(math.log(loads.min() / top, RATIO)))
+        last = max(first, math.ceil(math.log(loads.max() / top, RATIO) - 1e-9))
+        levels = top * RATIO ** np.arange(first, last + 1, dtype=float)
+        direction, pin_direction = -math.pi + i * NODE, -math.pi + j * NODE
+        turn = direction - pin_direction
+        rows = {"bore": [np.zeros(grid.size)], "pin": [np.zeros(grid.size)]}
+        push = None
+        for load in levels:   # each from the last one's push
+            p, theta, _, _, push = conformal.loaded(load, direction, turn, push)
+            force = p * conformal.bore_radius * conformal.spacing   # each point's (N/m)
+            rows["bore"].append(_spread(theta - direction, force, grid, conformal.bore_radius))
+            beta = conformal.beta[conformal.facing(push, turn)]   # the points' angles in the pin's frame
+            offset = np.mod(beta - pin_direction + math.pi, 2 * math.pi) - math.pi
+            rows["pin"].append(_spread(scale * offset, force, grid, conformal.bore_radius))
+        load_axis = np.concatenate([[0.0], levels])
+        nodes[(i, j)] = {name: PressureTable(load_axis, grid, np.array(r), table.pin_radius, table.bore_radius)
+                         for name, r in rows.items()}
+    out = {"bore": [None] * forces.size, "pin": [None] * forces.size}
+    for node, members in shares.items():
+        for k, w in members:
+            for name in out:
+                out[name][k] = (out[name][k] or []) + [(nodes[node][name], w)]
+    for name, per_step in out.items():
+        out[name] = [None if m is None else Blend(*zip(*m)) for m in per_step]
     return out
+
+
+def _spread(alpha, force, grid, radius: float) -> np.ndarray:
+    """The pressure (Pa) on the evenly spaced `grid` (rad, from -pi to pi) of point forces
+    per unit length `force` (N/m) at the angles `alpha` about a centre at `radius` (m): each
+    force shared by its two nodes linearly in its place between them, so that the pressure's
+    integral (trapezoidal, PressureTable's) is the forces' sum, and the pressure moves
+    continuously with the points."""
+    spacing = grid[1] - grid[0]
+    position = (np.mod(np.asarray(alpha) + math.pi, 2 * math.pi)) / spacing
+    lower = np.floor(position).astype(int)
+    upper_share = position - lower
+    row = np.zeros(grid.size)
+    np.add.at(row, lower, force * (1 - upper_share))
+    np.add.at(row, lower + 1, force * upper_share)
+    return row / (radius * spacing)

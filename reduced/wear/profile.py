@@ -41,7 +41,7 @@ def worn_depth(table, time, force_per_length, contact_angle, sliding_speed, coef
     after the history (arrays per recorded step: s, N/m, rad in the surface's frame, m/s) on
     the pressure table (wear.pressure.PressureTable). A step touches only the angles within
     the table's reach of its contact (the arc it sweeps added). `tables`: a table per step
-    (wear.pressure.worn_tables) in place of `table`."""
+    for this surface (wear.pressure.worn_tables) in place of `table`."""
     scale = radius / table.bore_radius
     depth = np.zeros(at.size)
     spacing = 2 * math.pi / at.size

@@ -161,13 +161,12 @@ class Cycle:
             joint = Conformal(self.kernel, self.table.pin_radius, self.table.bore_radius,
                               worn["bore"], worn["pin"])
             try:
-                tables = pressure.worn_tables(joint, self.table, load, cycle.bore_angle, cycle.pin_angle,
-                                              load * np.abs(cycle.sliding_speed))
+                tables = pressure.worn_tables(joint, self.table, load, cycle.bore_angle, cycle.pin_angle)
             except ArithmeticError as err:
                 raise Stopped(f"the worn joint's contact pressure: {err}") from None
         rates = {name: profile.worn_depth(self.table, cycle.time, load, angle, cycle.sliding_speed,
                                           getattr(self.scene, name).wear_coefficient, self.at, radius,
-                                          tables)
+                                          None if tables is None else tables[name])
                        / self.periods
                  for name, angle, radius in (("bore", cycle.bore_angle, self.table.bore_radius),
                                              ("pin", cycle.pin_angle, self.table.pin_radius))}

@@ -44,7 +44,8 @@ class Coupling(Strict):
         "the contact pressure the wear follows: \"new\", the FE run's of the new joint (its "
         "pressure_file) at every load; \"worn\", the joint's own as it wears, its worn "
         "surfaces' contact solved on the FE run's surface compliance (the scene's "
-        "compliance_file; fem.compliance.Conformal) along the directions the load takes"))
+        "compliance_file; fem.compliance.Conformal) on a grid of the load's directions in the "
+        "bore's and the pin's frames (reduced.wear.pressure.worn_tables)"))
 
 
 class WearScene(Strict):
