@@ -236,10 +236,11 @@ def test_a_stop_the_moment_the_temporary_folder_exists_removes_it(tmp_path, monk
 
     def mkdtemp_then_stopped(**kw):
         made.append(mkdtemp(**kw))
-        os.kill(os.getpid(), signal.SIGTERM)   # handled before mkdtemp could return
+        os.kill(os.getpid(), signal.SIGTERM)   # sent the moment the folder exists
         return made[-1]
 
     monkeypatch.setattr(output.tempfile, "mkdtemp", mkdtemp_then_stopped)
+    monkeypatch.setattr(output, "_stopped", [])   # the stop this test makes is forgotten after it
     with pytest.raises(output.Terminated):
         with output.atomic_directory(tmp_path / "out") as tmp:
             (tmp / "half.txt").write_text("half written")

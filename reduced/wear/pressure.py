@@ -112,6 +112,8 @@ def _geometry(curve_file: Path, source: str) -> tuple[float, float]:
 NODE = math.radians(5)   # rad: the grid of load directions in the bore's and in the pin's frame
 RATIO = 2.0              # between the loads a node is solved under, F_top RATIO^j (F_top: the FE run's top)
 LIGHTEST = -8            # the least j solved; lighter loads' pressure linear from it to none
+TINY = 1e-9              # a share of a node below it (rounding) is none
+NARROW = 3               # points of the compliance's grid: a contact patch on fewer is not resolved
 
 
 @dataclass(frozen=True)
@@ -136,10 +138,22 @@ class Blend:
         return sum(w * t.integral_at(force) for t, w in zip(self.tables, self.weights))
 
 
-def worn_tables(conformal, table: PressureTable, force_per_length, bore_angle, pin_angle) -> dict:
+@dataclass(frozen=True)
+class WornPressure:
+    """worn_tables' answer: per recorded step a table of each surface (None out of contact),
+    the loads solved, and how many of them pressed no patch of NARROW points or more (the
+    contact narrower than the compliance's grid resolves)."""
+
+    bore: list
+    pin: list
+    solves: int
+    narrow: int
+
+
+def worn_tables(conformal, table: PressureTable, force_per_length, bore_angle, pin_angle) -> WornPressure:
     """The pressure of the worn joint (fem.compliance.Conformal: the FE's compliance on the
-    worn surfaces) for each recorded step, on each surface: {"bore": [...], "pin": [...]},
-    a table per step (None out of contact) for wear.profile.worn_depth. Which parts of the
+    worn surfaces) for each recorded step, on each surface: a table per step (None out of
+    contact) for wear.profile.worn_depth (WornPressure). Which parts of the
     two worn surfaces meet is set by the load's direction in the bore's frame and in the
     pin's (`bore_angle`, `pin_angle`): the joint is solved on a grid of both, NODE apart,
     the pin turned by their difference, under the fixed loads F_top RATIO^j (F_top: `table`'s
@@ -158,6 +172,8 @@ def worn_tables(conformal, table: PressureTable, force_per_length, bore_angle, p
         position = np.mod(np.asarray(angle, float) + math.pi, 2 * math.pi) / NODE
         corners.append((np.floor(position).astype(int) % count, position - np.floor(position)))
     (ib, sb), (ip, sp) = corners
+    # a step's share of a node below TINY (a step on a node, to rounding) goes to the others
+    sb, sp = (np.where(x < TINY, 0.0, np.where(x > 1 - TINY, 1.0, x)) for x in (sb, sp))
     shares = {}   # node -> [(step, its bilinear weight)]
     for db, wb in ((0, 1.0 - sb), (1, sb)):
         for dp, wp in ((0, 1.0 - sp), (1, sp)):
@@ -167,7 +183,7 @@ def worn_tables(conformal, table: PressureTable, force_per_length, bore_angle, p
     grid = -math.pi + conformal.spacing * np.arange(conformal.n + 1)
     scale = table.pin_radius / table.bore_radius   # the pin's arc as an angle about the bore's centre
     top = float(table.forces[-1])
-    nodes = {}
+    nodes, solves, narrow = {}, 0, 0
     for (i, j), members in shares.items():
         loads = forces[[k for k, _ in members]]
         first = max(LIGHTEST, math.floor(math.log(loads.min() / top, RATIO)))
@@ -176,9 +192,9 @@ def worn_tables(conformal, table: PressureTable, force_per_length, bore_angle, p
         direction, pin_direction = -math.pi + i * NODE, -math.pi + j * NODE
         turn = direction - pin_direction
         rows = {"bore": [np.zeros(grid.size)], "pin": [np.zeros(grid.size)]}
-        push = None
-        for load in levels:   # each from the last one's push
-            p, theta, _, _, push = conformal.loaded(load, direction, turn, push)
+        for load in levels:   # each alone, from the push along the load (the same whichever others)
+            p, theta, _, _, push = conformal.loaded(load, direction, turn)
+            solves, narrow = solves + 1, narrow + (_widest_patch(p > 0) < NARROW)
             force = p * conformal.bore_radius * conformal.spacing   # each point's (N/m)
             rows["bore"].append(_spread(theta - direction, force, grid, conformal.bore_radius))
             beta = conformal.beta[conformal.facing(push, turn)]   # the points' angles in the pin's frame
@@ -194,20 +210,27 @@ def worn_tables(conformal, table: PressureTable, force_per_length, bore_angle, p
                 out[name][k] = (out[name][k] or []) + [(nodes[node][name], w)]
     for name, per_step in out.items():
         out[name] = [None if m is None else Blend(*zip(*m)) for m in per_step]
-    return out
+    return WornPressure(out["bore"], out["pin"], solves, narrow)
+
+
+def _widest_patch(pressed: np.ndarray) -> int:
+    """The most consecutive pressed points."""
+    edges = np.diff(np.concatenate([[0], pressed.astype(int), [0]]))
+    return int(np.max(np.flatnonzero(edges == -1) - np.flatnonzero(edges == 1), initial=0))
 
 
 def _spread(alpha, force, grid, radius: float) -> np.ndarray:
-    """The pressure (Pa) on the evenly spaced `grid` (rad, from -pi to pi) of point forces
-    per unit length `force` (N/m) at the angles `alpha` about a centre at `radius` (m): each
-    force shared by its two nodes linearly in its place between them, so that the pressure's
-    integral (trapezoidal, PressureTable's) is the forces' sum, and the pressure moves
-    continuously with the points."""
-    spacing = grid[1] - grid[0]
-    position = (np.mod(np.asarray(alpha) + math.pi, 2 * math.pi)) / spacing
+    """The pressure (Pa) on the evenly spaced `grid` (rad, from -pi to pi, its ends one
+    angle) of point forces per unit length `force` (N/m) at the angles `alpha` about a centre
+    at `radius` (m): each force shared by its two nodes linearly in its place between them,
+    so that the pressure's integral (trapezoidal, PressureTable's) is the forces' sum, and
+    the pressure moves continuously with the points."""
+    n = grid.size - 1
+    spacing = 2 * math.pi / n
+    position = np.mod(np.asarray(alpha) + math.pi, 2 * math.pi) / spacing
     lower = np.floor(position).astype(int)
     upper_share = position - lower
-    row = np.zeros(grid.size)
-    np.add.at(row, lower, force * (1 - upper_share))
-    np.add.at(row, lower + 1, force * upper_share)
-    return row / (radius * spacing)
+    row = np.zeros(n)
+    np.add.at(row, lower % n, force * (1 - upper_share))
+    np.add.at(row, (lower + 1) % n, force * upper_share)
+    return np.append(row, row[0]) / (radius * spacing)

@@ -101,7 +101,13 @@ def run(scene_path, out) -> int:
     except Stopped as err:
         print(f"pinbore wear: {mechanism_path}: {err}: nothing written", file=sys.stderr)
         return 1
-    result = summary(scene, source, mechanism_path, table, last, worn, period, cycle.periods, jumps)
+    result = summary(scene, source, mechanism_path, table, last, worn, period, cycle.periods, jumps,
+                     (cycle.solves, cycle.narrow))
+    if cycle.narrow:
+        print(f"pinbore wear: {source}: {cycle.narrow} of the worn joint's {cycle.solves} contacts "
+              f"solved press fewer than {pressure.NARROW} points of the compliance's "
+              f"{360 / kernel.size:g} degree grid: the pressure there, and the wear it lays, "
+              "are not resolved (docs/theory/wear.md)", file=sys.stderr)
     if result.extrapolated:
         print(f"pinbore wear: {source}: the joint's load reaches {result.peak_force_per_length_N_per_m:.4g} N/m, "
               f"beyond the FE run's {table.forces[-1]:.4g} N/m: the pressure there is the last "
@@ -131,6 +137,7 @@ class Cycle:
         self.kernel = kernel
         self.period, self.at, self.folder = period, at, folder
         self.last, self.periods = None, 1
+        self.solves = self.narrow = 0   # the worn joint's loads solved, and those unresolved
 
     def __call__(self, worn: dict | None):
         from pinbore.reduced.mechanism.model import build   # noqa: PLC0415
@@ -164,9 +171,10 @@ class Cycle:
                 tables = pressure.worn_tables(joint, self.table, load, cycle.bore_angle, cycle.pin_angle)
             except ArithmeticError as err:
                 raise Stopped(f"the worn joint's contact pressure: {err}") from None
+            self.solves, self.narrow = self.solves + tables.solves, self.narrow + tables.narrow
         rates = {name: profile.worn_depth(self.table, cycle.time, load, angle, cycle.sliding_speed,
                                           getattr(self.scene, name).wear_coefficient, self.at, radius,
-                                          None if tables is None else tables[name])
+                                          None if tables is None else getattr(tables, name))
                        / self.periods
                  for name, angle, radius in (("bore", cycle.bore_angle, self.table.bore_radius),
                                              ("pin", cycle.pin_angle, self.table.pin_radius))}
@@ -200,8 +208,9 @@ def averaged_periods(end: float, period: float) -> int:
 
 
 def summary(scene, source, mechanism_path, table, cycle, worn, period, periods: int,
-            jumps) -> wear_summary.WearSummary:
-    """What summary.json holds (the joint's history `cycle`: the last run's)."""
+            jumps, contacts=(0, 0)) -> wear_summary.WearSummary:
+    """What summary.json holds (the joint's history `cycle`: the last run's; `contacts`: the
+    worn joint's loads solved over the runs, and those narrower than the compliance's grid)."""
     peaks = [float(np.max(cycle.force))] + ([] if jumps is None else [r["peak_force_N"] for r in jumps.records])
     peak = max(peaks) / scene.length   # over every run of the worn joint
     slid = float(np.trapezoid(np.abs(cycle.sliding_speed) * (cycle.force > 0), cycle.time)) / periods
@@ -220,6 +229,7 @@ def summary(scene, source, mechanism_path, table, cycle, worn, period, periods: 
         extrapolated=bool(peak > table.forces[-1]) and scene.compliance_file is None, **surfaces,
         coupled=jumps is not None, pressure="new" if scene.compliance_file is None else "worn",
         mechanism_runs=1 if jumps is None else jumps.runs,
+        worn_contacts_solved=contacts[0], worn_contacts_unresolved=contacts[1],
         refused_jumps=0 if jumps is None else jumps.refused,
         jumps=[] if jumps is None else [
             wear_summary.Jump(cycles=n, size=d, error_m=e, **r)

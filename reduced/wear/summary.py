@@ -52,6 +52,11 @@ class WearSummary(Strict):
     pressure: str = pydantic.Field(default="new", description=(
         "the contact pressure worn by: \"new\", the new joint's FE run's; \"worn\", the worn "
         "joint's own on the FE's surface compliance"))
+    worn_contacts_solved: int = pydantic.Field(default=0, ge=0, description=(
+        "pressure \"worn\": the worn joint's loads solved over the runs"))
+    worn_contacts_unresolved: int = pydantic.Field(default=0, ge=0, description=(
+        "of those, the ones pressing no patch of 3 points or more of the compliance's grid "
+        "(the contact narrower than it resolves)"))
     mechanism_runs: int = pydantic.Field(ge=1)
     refused_jumps: int = pydantic.Field(ge=0)
     jumps: list[Jump]
