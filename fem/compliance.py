@@ -179,7 +179,7 @@ class Conformal:
         g, _, theta = self.gap(np.asarray(e, float), turn, points)
         return self._solve(self.matrix(points), g)[0], theta
 
-    def loaded(self, force: float, direction: float, turn: float, start: float | None = None):
+    def loaded(self, force: float, direction: float, turn: float):
         """(p, theta, e, R, phi) at the points facing the push under the load per unit length
         `force` (N/m) along `direction` psi*: the pin's centre e where the pressure's resultant
         R = sum_j p_j R_b Delta n_j (n_j = -d g_j / d e) is force u(psi*). The pin is pushed
@@ -190,8 +190,8 @@ class Conformal:
         by the Illinois rule; on a rough profile under a light load it jumps where the contact
         moves from one point of the pin to another, and where the bracket closes on such a
         jump the pin rests on both: the two sides' pressures are combined so that their
-        resultant lies along psi*, scaled to the force. `start`: the push's first direction
-        (default psi*). ArithmeticError where it does not settle."""
+        resultant lies along psi*, scaled to the force; the push starts along psi* (a
+        solution the same whatever else is solved). ArithmeticError where it does not settle."""
         u = np.array([math.cos(direction), math.sin(direction)])
         tolerance = max(SETTLED * force, FORCE_FLOOR)
 
@@ -203,7 +203,7 @@ class Conformal:
         def met(out):
             return math.hypot(*(out[3] - force * u)) <= tolerance
 
-        a = direction if start is None else start
+        a = direction
         fa, out_a = lean(a)
         if met(out_a):
             return out_a

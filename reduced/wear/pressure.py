@@ -192,7 +192,7 @@ def worn_tables(conformal, table: PressureTable, force_per_length, bore_angle, p
         direction, pin_direction = -math.pi + i * NODE, -math.pi + j * NODE
         turn = direction - pin_direction
         rows = {"bore": [np.zeros(grid.size)], "pin": [np.zeros(grid.size)]}
-        for load in levels:   # each alone, from the push along the load (the same whichever others)
+        for load in levels:   # each alone (Conformal.loaded: from the push along the load)
             p, theta, _, _, push = conformal.loaded(load, direction, turn)
             solves, narrow = solves + 1, narrow + (_widest_patch(p > 0) < NARROW)
             force = p * conformal.bore_radius * conformal.spacing   # each point's (N/m)
